@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Installs the Debian packages sheetmesh needs (only those missing), then configures and
+# builds the project in Release into ./build. Safe to run again: quick when all is in place.
+# Usage: tools/setup.sh            (as root on Debian 12, or with sudo available)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  # toolchain
+  cmake ninja-build g++ ccache pkg-config time git
+  # pipeline
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev libabsl-dev libtiff-dev
+  zlib1g-dev nlohmann-json3-dev tetgen
+  # service
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
+  # tests, fuzzing, benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev clang libfuzzer-14-dev
+  # Python tooling (always run with /usr/bin/python3)
+  python3 python3-numpy python3-scipy python3-vtk9 python3-skimage python3-meshio
+  python3-grpcio python3-protobuf python3-grpc-tools
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${#missing[@]} Debian packages: ${missing[*]}"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends \
+    "${missing[@]}" >/dev/null
+fi
+
+build_dir=${SHEETMESH_BUILD_DIR:-build}
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+if [ ! -f "$build_dir/build.ninja" ]; then
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
+fi
+cmake --build "$build_dir" -j "$(nproc)"

@@ -1,0 +1,513 @@
+#include "worker/pipeline/volume/tiff_io.h"
+
+#include <fcntl.h>
+#include <tiffio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh {
+namespace {
+
+// libtiff reports through global handlers; keep the last message per thread so that it
+// can go into the Status of the call that failed.
+thread_local std::string tls_tiff_error;
+
+void TiffErrorHandler(const char* module, const char* fmt, va_list ap) {
+  char buf[512];
+  vsnprintf(buf, sizeof(buf), fmt, ap);
+  tls_tiff_error = module != nullptr ? absl::StrCat(module, ": ", buf) : std::string(buf);
+}
+
+void TiffWarningHandler(const char*, const char*, va_list) {}
+
+void InstallHandlersOnce() {
+  static const bool installed = [] {
+    TIFFSetErrorHandler(TiffErrorHandler);
+    TIFFSetWarningHandler(TiffWarningHandler);
+    return true;
+  }();
+  (void)installed;
+}
+
+std::string LastTiffError() {
+  std::string e = tls_tiff_error.empty() ? std::string("libtiff failed") : tls_tiff_error;
+  tls_tiff_error.clear();
+  return e;
+}
+
+struct TiffCloser {
+  void operator()(TIFF* t) const {
+    if (t != nullptr) TIFFClose(t);
+  }
+};
+using TiffPtr = std::unique_ptr<TIFF, TiffCloser>;
+
+// The layout of one page.
+struct PageFormat {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  DType dtype = DType::kUInt8;
+  bool tiled = false;
+  bool min_is_white = false;  // integer samples are read as (max - stored)
+  friend bool operator==(const PageFormat&, const PageFormat&) = default;
+};
+
+absl::StatusOr<PageFormat> ReadPageFormat(TIFF* tif, const std::string& where) {
+  PageFormat f;
+  uint16_t bits = 0, spp = 1, format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG;
+  if (!TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &f.width) ||
+      !TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &f.height)) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": missing image width or length"));
+  }
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &format);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PLANARCONFIG, &planar);
+  if (f.width == 0 || f.height == 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": page size ", f.width, "x", f.height, " is empty"));
+  }
+  if (spp != 1) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        where, ": ", spp, " samples per pixel; only single-channel (grey) images are supported"));
+  }
+  if (bits == 8 && format == SAMPLEFORMAT_UINT) {
+    f.dtype = DType::kUInt8;
+  } else if (bits == 16 && format == SAMPLEFORMAT_UINT) {
+    f.dtype = DType::kUInt16;
+  } else if (bits == 32 && format == SAMPLEFORMAT_IEEEFP) {
+    f.dtype = DType::kFloat32;
+  } else {
+    const char* kind = format == SAMPLEFORMAT_INT      ? "signed integer"
+                       : format == SAMPLEFORMAT_IEEEFP ? "float"
+                                                       : "unsigned integer";
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": ", bits, "-bit ", kind,
+                     " samples are not supported; use 8- or 16-bit unsigned or 32-bit float"));
+  }
+  f.tiled = TIFFIsTiled(tif) != 0;
+  uint16_t photometric = PHOTOMETRIC_MINISBLACK;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PHOTOMETRIC, &photometric);
+  f.min_is_white = photometric == PHOTOMETRIC_MINISWHITE && f.dtype != DType::kFloat32;
+  return f;
+}
+
+absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte> out,
+                            const std::string& where);
+
+// Reads the current page into `out` (width*height voxels of f.dtype). A min-is-white page
+// stores 0 for white: as the TIFF specification says, its intensity is max - stored.
+absl::Status ReadPage(TIFF* tif, const PageFormat& f, std::span<std::byte> out,
+                      const std::string& where) {
+  SM_RETURN_IF_ERROR(ReadPageStored(tif, f, out, where));
+  if (!f.min_is_white) return absl::OkStatus();
+  if (f.dtype == DType::kUInt8) {
+    for (std::byte& b : out) b = ~b;
+  } else {
+    uint16_t* v = reinterpret_cast<uint16_t*>(out.data());
+    for (size_t i = 0; i < out.size() / 2; ++i) v[i] = static_cast<uint16_t>(~v[i]);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte> out,
+                      const std::string& where) {
+  const int bpv = BytesPerVoxel(f.dtype);
+  const size_t row_bytes = static_cast<size_t>(f.width) * bpv;
+  if (!f.tiled) {
+    if (static_cast<size_t>(TIFFScanlineSize64(tif)) != row_bytes) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": scanline of ",
+                                                     TIFFScanlineSize64(tif), " bytes, expected ",
+                                                     row_bytes));
+    }
+    for (uint32_t row = 0; row < f.height; ++row) {
+      if (TIFFReadScanline(tif, out.data() + row * row_bytes, row, 0) < 0) {
+        return absl::DataLossError(
+            absl::StrCat(where, ": row ", row, " is unreadable: ", LastTiffError()));
+      }
+    }
+    return absl::OkStatus();
+  }
+  uint32_t tw = 0, th = 0;
+  TIFFGetField(tif, TIFFTAG_TILEWIDTH, &tw);
+  TIFFGetField(tif, TIFFTAG_TILELENGTH, &th);
+  if (tw == 0 || th == 0) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": tile size ", tw, "x", th));
+  }
+  std::vector<std::byte> tile(static_cast<size_t>(TIFFTileSize64(tif)));
+  if (tile.size() < static_cast<size_t>(tw) * th * bpv) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": tile buffer too small"));
+  }
+  for (uint32_t ty = 0; ty < f.height; ty += th) {
+    for (uint32_t tx = 0; tx < f.width; tx += tw) {
+      if (TIFFReadTile(tif, tile.data(), tx, ty, 0, 0) < 0) {
+        return absl::DataLossError(absl::StrCat(where, ": tile at (", tx, ",", ty,
+                                                ") is unreadable: ", LastTiffError()));
+      }
+      const uint32_t w = std::min(tw, f.width - tx);
+      const uint32_t h = std::min(th, f.height - ty);
+      for (uint32_t r = 0; r < h; ++r) {
+        std::memcpy(out.data() + ((ty + r) * static_cast<size_t>(f.width) + tx) * bpv,
+                    tile.data() + static_cast<size_t>(r) * tw * bpv, static_cast<size_t>(w) * bpv);
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+// ImageJ writes "unit=micron\nspacing=2.5\n" into the description; XResolution holds
+// pixels per unit.
+void ReadPlacement(TIFF* tif, Placement* p) {
+  char* desc = nullptr;
+  if (!TIFFGetField(tif, TIFFTAG_IMAGEDESCRIPTION, &desc) || desc == nullptr) return;
+  if (std::strncmp(desc, "ImageJ=", 7) != 0) return;
+  for (absl::string_view line : absl::StrSplit(desc, '\n')) {
+    std::pair<absl::string_view, absl::string_view> kv = absl::StrSplit(line, '=');
+    double v = 0;
+    if (kv.first == "unit") {
+      p->unit = std::string(kv.second);
+    } else if (kv.first == "spacing" && absl::SimpleAtod(kv.second, &v) && v > 0) {
+      p->spacing.z = v;
+    }
+  }
+  float xr = 0, yr = 0;
+  if (TIFFGetField(tif, TIFFTAG_XRESOLUTION, &xr) && xr > 0) p->spacing.x = 1.0 / xr;
+  if (TIFFGetField(tif, TIFFTAG_YRESOLUTION, &yr) && yr > 0) p->spacing.y = 1.0 / yr;
+}
+
+absl::StatusOr<TiffPtr> OpenTiff(const std::string& path) {
+  InstallHandlersOnce();
+  if (::access(path.c_str(), R_OK) != 0) return ErrnoStatus(errno, path);
+  TiffPtr tif(TIFFOpen(path.c_str(), "r"));
+  if (tif == nullptr) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a readable TIFF: ", LastTiffError()));
+  }
+  return tif;
+}
+
+std::string FormatName(const PageFormat& f) {
+  return absl::StrCat(f.width, "x", f.height, " ", DTypeName(f.dtype));
+}
+
+class MultiPageSource : public VolumeSource {
+ public:
+  MultiPageSource(TiffPtr tif, PageFormat format, VolumeInfo info)
+      : tif_(std::move(tif)), format_(format) {
+    info_ = std::move(info);
+  }
+
+  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
+    const size_t page_bytes = static_cast<size_t>(format_.width) * format_.height *
+                              BytesPerVoxel(format_.dtype);
+    if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
+    }
+    for (int64_t k = 0; k < count; ++k) {
+      const int64_t z = z0 + k;
+      const std::string where = absl::StrCat(info_.path, " page ", z);
+      // Moving to the next directory is cheap; jumping re-walks the chain of pages.
+      const bool ok = (z == current_ + 1) ? TIFFReadDirectory(tif_.get())
+                                          : TIFFSetDirectory(tif_.get(), static_cast<tdir_t>(z));
+      if (!ok) {
+        return absl::DataLossError(absl::StrCat(where, ": cannot open page: ", LastTiffError()));
+      }
+      current_ = z;
+      // Pages agree in size and type (checked at open) but may differ in strips vs tiles.
+      SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif_.get(), where));
+      SM_RETURN_IF_ERROR(ReadPage(tif_.get(), f, out.subspan(k * page_bytes, page_bytes), where));
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  TiffPtr tif_;
+  PageFormat format_;
+  int64_t current_ = 0;  // the directory libtiff is on
+};
+
+class FolderSource : public VolumeSource {
+ public:
+  FolderSource(std::vector<std::string> files, PageFormat format, VolumeInfo info)
+      : files_(std::move(files)), format_(format) {
+    info_ = std::move(info);
+  }
+
+  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
+    const size_t page_bytes = static_cast<size_t>(format_.width) * format_.height *
+                              BytesPerVoxel(format_.dtype);
+    if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
+    }
+    for (int64_t k = 0; k < count; ++k) {
+      const std::string& file = files_[z0 + k];
+      SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));
+      SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), file));
+      if (!(f == format_)) {
+        return absl::InvalidArgumentError(absl::StrCat(file, ": slice is ", FormatName(f),
+                                                       " but the first slice is ",
+                                                       FormatName(format_)));
+      }
+      SM_RETURN_IF_ERROR(ReadPage(tif.get(), f, out.subspan(k * page_bytes, page_bytes), file));
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  std::vector<std::string> files_;
+  PageFormat format_;
+};
+
+// Orders names by their digit runs read as numbers, so "s2" < "s10".
+bool NaturalLess(const std::string& a, const std::string& b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (absl::ascii_isdigit(a[i]) && absl::ascii_isdigit(b[j])) {
+      size_t ie = i, je = j;
+      while (ie < a.size() && absl::ascii_isdigit(a[ie])) ++ie;
+      while (je < b.size() && absl::ascii_isdigit(b[je])) ++je;
+      absl::string_view da(a.data() + i, ie - i), db(b.data() + j, je - j);
+      while (da.size() > 1 && da[0] == '0') da.remove_prefix(1);
+      while (db.size() > 1 && db[0] == '0') db.remove_prefix(1);
+      if (da.size() != db.size()) return da.size() < db.size();
+      if (da != db) return da < db;
+      i = ie;
+      j = je;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+class TiffSink : public VolumeSink {
+ public:
+  TiffSink(TiffPtr tif, std::string part_path, VolumeInfo info, bool deflate)
+      : tif_(std::move(tif)), part_path_(std::move(part_path)), deflate_(deflate) {
+    info_ = std::move(info);
+  }
+  ~TiffSink() override {
+    if (tif_ != nullptr) {
+      tif_.reset();
+      ::unlink(part_path_.c_str());
+    }
+  }
+
+  absl::Status WriteSlices(int64_t count, std::span<const std::byte> data) override {
+    SM_RETURN_IF_ERROR(Advance(count, data.size()));
+    const size_t page = static_cast<size_t>(info_.dims.nx) * info_.dims.ny *
+                        BytesPerVoxel(info_.dtype);
+    for (int64_t k = 0; k < count; ++k) {
+      SM_RETURN_IF_ERROR(WritePage(tif_.get(), info_, data.subspan(k * page, page), deflate_,
+                                   part_path_));
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status Finish() override {
+    SM_RETURN_IF_ERROR(CheckComplete());
+    tif_.reset();  // TIFFClose flushes the last directory
+    const int fd = ::open(part_path_.c_str(), O_RDONLY);
+    if (fd >= 0) {
+      ::fsync(fd);
+      ::close(fd);
+    }
+    if (std::rename(part_path_.c_str(), info_.path.c_str()) != 0) {
+      return ErrnoStatus(errno, info_.path);
+    }
+    return absl::OkStatus();
+  }
+
+  static absl::Status WritePage(TIFF* tif, const VolumeInfo& info,
+                                std::span<const std::byte> data, bool deflate,
+                                const std::string& where) {
+    const uint32_t w = static_cast<uint32_t>(info.dims.nx);
+    const uint32_t h = static_cast<uint32_t>(info.dims.ny);
+    const int bpv = BytesPerVoxel(info.dtype);
+    TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, w);
+    TIFFSetField(tif, TIFFTAG_IMAGELENGTH, h);
+    TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, static_cast<uint16_t>(bpv * 8));
+    TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, static_cast<uint16_t>(1));
+    TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, static_cast<uint16_t>(
+                                                info.dtype == DType::kFloat32 ? SAMPLEFORMAT_IEEEFP
+                                                                              : SAMPLEFORMAT_UINT));
+    TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, static_cast<uint16_t>(PHOTOMETRIC_MINISBLACK));
+    TIFFSetField(tif, TIFFTAG_PLANARCONFIG, static_cast<uint16_t>(PLANARCONFIG_CONTIG));
+    TIFFSetField(tif, TIFFTAG_COMPRESSION,
+                 static_cast<uint16_t>(deflate ? COMPRESSION_ADOBE_DEFLATE : COMPRESSION_NONE));
+    const uint32_t rows_per_strip = std::max<uint32_t>(1, (64u << 10) / (w * bpv));
+    TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, std::min(rows_per_strip, h));
+    const std::string desc =
+        absl::StrCat("ImageJ=1.11a\nimages=", info.dims.nz, "\nslices=", info.dims.nz,
+                     "\nunit=", info.placement.unit.empty() ? "pixel" : info.placement.unit,
+                     "\nspacing=", info.placement.spacing.z, "\n");
+    TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, desc.c_str());
+    TIFFSetField(tif, TIFFTAG_RESOLUTIONUNIT, static_cast<uint16_t>(RESUNIT_NONE));
+    TIFFSetField(tif, TIFFTAG_XRESOLUTION, static_cast<float>(1.0 / info.placement.spacing.x));
+    TIFFSetField(tif, TIFFTAG_YRESOLUTION, static_cast<float>(1.0 / info.placement.spacing.y));
+    const size_t row_bytes = static_cast<size_t>(w) * bpv;
+    std::vector<std::byte> row(row_bytes);
+    for (uint32_t r = 0; r < h; ++r) {
+      // libtiff may encode in place, so hand it a copy.
+      std::memcpy(row.data(), data.data() + r * row_bytes, row_bytes);
+      if (TIFFWriteScanline(tif, row.data(), r, 0) < 0) {
+        return absl::InternalError(absl::StrCat(where, ": writing row ", r, ": ", LastTiffError()));
+      }
+    }
+    if (!TIFFWriteDirectory(tif)) {
+      return absl::InternalError(absl::StrCat(where, ": writing page: ", LastTiffError()));
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  TiffPtr tif_;
+  std::string part_path_;
+  bool deflate_;
+};
+
+class TiffFolderSink : public VolumeSink {
+ public:
+  explicit TiffFolderSink(VolumeInfo info) { info_ = std::move(info); }
+
+  absl::Status WriteSlices(int64_t count, std::span<const std::byte> data) override {
+    const int64_t first = slices_written_;
+    SM_RETURN_IF_ERROR(Advance(count, data.size()));
+    const size_t page = static_cast<size_t>(info_.dims.nx) * info_.dims.ny *
+                        BytesPerVoxel(info_.dtype);
+    for (int64_t k = 0; k < count; ++k) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "slice_%05lld.tif", static_cast<long long>(first + k));
+      const std::string path = (std::filesystem::path(info_.path) / name).string();
+      const std::string part = path + ".part";
+      TiffPtr tif(TIFFOpen(part.c_str(), "w"));
+      if (tif == nullptr) {
+        return absl::InternalError(absl::StrCat(part, ": cannot create: ", LastTiffError()));
+      }
+      VolumeInfo one = info_;
+      one.dims.nz = 1;
+      absl::Status st = TiffSink::WritePage(tif.get(), one, data.subspan(k * page, page), false,
+                                            part);
+      tif.reset();
+      if (!st.ok() || std::rename(part.c_str(), path.c_str()) != 0) {
+        ::unlink(part.c_str());
+        return st.ok() ? ErrnoStatus(errno, path) : st;
+      }
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status Finish() override { return CheckComplete(); }
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffVolume(const std::string& path,
+                                                             const VolumeLimits& limits) {
+  SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(path));
+  SM_ASSIGN_OR_RETURN(PageFormat first, ReadPageFormat(tif.get(), absl::StrCat(path, " page 0")));
+  VolumeInfo info;
+  info.path = path;
+  info.format = "tiff";
+  info.dtype = first.dtype;
+  ReadPlacement(tif.get(), &info.placement);
+  // Every page must agree with the first before any voxel is read.
+  int64_t pages = 1;
+  while (TIFFReadDirectory(tif.get())) {
+    const std::string where = absl::StrCat(path, " page ", pages);
+    SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), where));
+    if (!(f.width == first.width && f.height == first.height && f.dtype == first.dtype)) {
+      return absl::InvalidArgumentError(absl::StrCat(where, " is ", FormatName(f),
+                                                     " but page 0 is ", FormatName(first)));
+    }
+    ++pages;
+    if (pages > limits.max_extent) break;
+  }
+  info.dims = {first.width, first.height, pages};
+  SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, path));
+  if (!TIFFSetDirectory(tif.get(), 0)) {
+    return absl::DataLossError(absl::StrCat(path, ": cannot rewind: ", LastTiffError()));
+  }
+  return std::make_unique<MultiPageSource>(std::move(tif), first, std::move(info));
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffFolder(const std::string& folder,
+                                                             const VolumeLimits& limits) {
+  std::error_code ec;
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    const std::string ext = absl::AsciiStrToLower(entry.path().extension().string());
+    if (entry.is_regular_file() && (ext == ".tif" || ext == ".tiff")) {
+      files.push_back(entry.path().string());
+    }
+  }
+  if (ec) return ErrnoStatus(ec.value(), folder);
+  if (files.empty()) {
+    return absl::NotFoundError(absl::StrCat(folder, ": the folder holds no .tif/.tiff slices"));
+  }
+  std::sort(files.begin(), files.end(), NaturalLess);
+  SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(files[0]));
+  SM_ASSIGN_OR_RETURN(PageFormat first, ReadPageFormat(tif.get(), files[0]));
+  VolumeInfo info;
+  info.path = folder;
+  info.format = "tiff-folder";
+  info.dtype = first.dtype;
+  ReadPlacement(tif.get(), &info.placement);
+  info.dims = {first.width, first.height, static_cast<int64_t>(files.size())};
+  SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, folder));
+  // Check every slice's header up front so that a mismatch fails before any work.
+  for (size_t i = 1; i < files.size(); ++i) {
+    SM_ASSIGN_OR_RETURN(TiffPtr t, OpenTiff(files[i]));
+    SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(t.get(), files[i]));
+    if (!(f.width == first.width && f.height == first.height && f.dtype == first.dtype)) {
+      return absl::InvalidArgumentError(absl::StrCat(files[i], " is ", FormatName(f), " but ",
+                                                     files[0], " is ", FormatName(first)));
+    }
+  }
+  return std::make_unique<FolderSource>(std::move(files), first, std::move(info));
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSink>> CreateTiffWriter(const std::string& path,
+                                                             const VolumeInfo& info,
+                                                             bool deflate) {
+  InstallHandlersOnce();
+  const std::string part = path + ".part";
+  const int64_t bytes = info.dims.num_voxels() * BytesPerVoxel(info.dtype);
+  TiffPtr tif(TIFFOpen(part.c_str(), bytes > (int64_t{1} << 31) ? "w8" : "w"));
+  if (tif == nullptr) {
+    return absl::InvalidArgumentError(absl::StrCat(part, ": cannot create: ", LastTiffError()));
+  }
+  VolumeInfo out = info;
+  out.path = path;
+  out.format = "tiff";
+  return std::make_unique<TiffSink>(std::move(tif), part, std::move(out), deflate);
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSink>> CreateTiffFolderWriter(const std::string& folder,
+                                                                   const VolumeInfo& info) {
+  InstallHandlersOnce();
+  SM_RETURN_IF_ERROR(MakeDirs(folder));
+  VolumeInfo out = info;
+  out.path = folder;
+  out.format = "tiff-folder";
+  return std::make_unique<TiffFolderSink>(std::move(out));
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,316 @@
+#include "worker/pipeline/volume/vdb_io.h"
+
+#include <cstdio>
+#include <mutex>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Dense.h>
+
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh {
+namespace {
+
+void InitializeOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+constexpr char kDimsMeta[] = "sheetmesh_dims";
+constexpr char kDTypeMeta[] = "sheetmesh_dtype";
+constexpr char kUnitMeta[] = "sheetmesh_unit";
+
+openvdb::math::Transform::Ptr MakeTransform(const Placement& p) {
+  openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
+  m.setToScale(openvdb::Vec3d(p.spacing.x, p.spacing.y, p.spacing.z));
+  m.setTranslation(openvdb::Vec3d(p.origin.x, p.origin.y, p.origin.z));
+  return openvdb::math::Transform::createLinearTransform(m);
+}
+
+void SetVolumeMeta(openvdb::GridBase& grid, const Dims& dims, DType dtype, const Placement& p) {
+  grid.insertMeta(kDimsMeta, openvdb::Vec3IMetadata(openvdb::Vec3i(
+                                 static_cast<int>(dims.nx), static_cast<int>(dims.ny),
+                                 static_cast<int>(dims.nz))));
+  grid.insertMeta(kDTypeMeta, openvdb::StringMetadata(std::string(DTypeName(dtype))));
+  if (!p.unit.empty()) grid.insertMeta(kUnitMeta, openvdb::StringMetadata(p.unit));
+  grid.setTransform(MakeTransform(p));
+}
+
+// Writes `grids` to `path` through a `.part` file and a rename.
+absl::Status WriteGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids) {
+  const std::string part = path + ".part";
+  try {
+    openvdb::io::File file(part);
+    file.write(grids);
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    std::remove(part.c_str());
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB could not write: ", e.what()));
+  } catch (const std::exception& e) {
+    std::remove(part.c_str());
+    return absl::InternalError(absl::StrCat(path, ": could not write: ", e.what()));
+  }
+  if (std::rename(part.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(part.c_str());
+    return ErrnoStatus(err, path);
+  }
+  return absl::OkStatus();
+}
+
+template <class GridT>
+class VdbSource : public VolumeSource {
+ public:
+  VdbSource(typename GridT::ConstPtr grid, openvdb::Coord origin, VolumeInfo info)
+      : grid_(std::move(grid)), origin_(origin) {
+    info_ = std::move(info);
+  }
+
+  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
+    const Dims& d = info_.dims;
+    if (z0 < 0 || count < 0 || z0 + count > d.nz ||
+        out.size() != static_cast<size_t>(count * d.nx * d.ny * BytesPerVoxel(info_.dtype))) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
+    }
+    const openvdb::CoordBBox bbox(
+        origin_ + openvdb::Coord(0, 0, static_cast<int>(z0)),
+        origin_ + openvdb::Coord(static_cast<int>(d.nx - 1), static_cast<int>(d.ny - 1),
+                                 static_cast<int>(z0 + count - 1)));
+    try {
+      switch (info_.dtype) {
+        case DType::kUInt8:
+          Copy<uint8_t>(bbox, out);
+          break;
+        case DType::kUInt16:
+          Copy<uint16_t>(bbox, out);
+          break;
+        case DType::kFloat32:
+          Copy<float>(bbox, out);
+          break;
+      }
+    } catch (const openvdb::Exception& e) {
+      return absl::DataLossError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  template <class T>
+  void Copy(const openvdb::CoordBBox& bbox, std::span<std::byte> out) {
+    openvdb::tools::Dense<T, openvdb::tools::LayoutXYZ> dense(
+        bbox, reinterpret_cast<T*>(out.data()));
+    dense.fill(static_cast<T>(grid_->background()));
+    openvdb::tools::copyToDense(*grid_, dense);
+  }
+
+  typename GridT::ConstPtr grid_;
+  openvdb::Coord origin_;
+};
+
+// Bool and mask grids read as 1 where active: a BoolGrid with their topology, true on.
+template <class GridT>
+openvdb::BoolGrid::ConstPtr ActiveAsTrue(const GridT& grid) {
+  auto out = openvdb::BoolGrid::create(false);
+  out->tree().topologyUnion(grid.tree());
+  for (auto it = out->beginValueOn(); it; ++it) it.setValue(true);
+  return out;
+}
+
+template <class GridT>
+std::unique_ptr<VolumeSource> MakeSource(openvdb::GridBase::ConstPtr base,
+                                         openvdb::Coord origin, VolumeInfo info) {
+  return std::make_unique<VdbSource<GridT>>(openvdb::gridConstPtrCast<GridT>(base), origin,
+                                            std::move(info));
+}
+
+class VdbSink : public VolumeSink {
+ public:
+  explicit VdbSink(VolumeInfo info) {
+    info_ = std::move(info);
+    if (info_.dtype == DType::kFloat32) {
+      fgrid_ = openvdb::FloatGrid::create(0.0f);
+    } else {
+      igrid_ = openvdb::Int32Grid::create(0);
+    }
+  }
+
+  absl::Status WriteSlices(int64_t count, std::span<const std::byte> data) override {
+    const int64_t z0 = slices_written_;
+    SM_RETURN_IF_ERROR(Advance(count, data.size()));
+    const Dims& d = info_.dims;
+    const openvdb::CoordBBox bbox(
+        openvdb::Coord(0, 0, static_cast<int>(z0)),
+        openvdb::Coord(static_cast<int>(d.nx - 1), static_cast<int>(d.ny - 1),
+                       static_cast<int>(z0 + count - 1)));
+    try {
+      switch (info_.dtype) {
+        case DType::kUInt8:
+          From<uint8_t>(bbox, data, *igrid_);
+          break;
+        case DType::kUInt16:
+          From<uint16_t>(bbox, data, *igrid_);
+          break;
+        case DType::kFloat32:
+          From<float>(bbox, data, *fgrid_);
+          break;
+      }
+    } catch (const openvdb::Exception& e) {
+      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status Finish() override {
+    SM_RETURN_IF_ERROR(CheckComplete());
+    openvdb::GridBase::Ptr grid = fgrid_ ? openvdb::GridBase::Ptr(fgrid_) : igrid_;
+    grid->setName("volume");
+    SetVolumeMeta(*grid, info_.dims, info_.dtype, info_.placement);
+    return WriteGridsAtomically(info_.path, {grid});
+  }
+
+ private:
+  template <class T, class GridT>
+  static void From(const openvdb::CoordBBox& bbox, std::span<const std::byte> data, GridT& grid) {
+    // copyFromDense only reads, but Dense has no const-data constructor.
+    openvdb::tools::Dense<T, openvdb::tools::LayoutXYZ> dense(
+        bbox, const_cast<T*>(reinterpret_cast<const T*>(data.data())));
+    openvdb::tools::copyFromDense(dense, grid, typename GridT::ValueType(0));
+  }
+
+  openvdb::FloatGrid::Ptr fgrid_;
+  openvdb::Int32Grid::Ptr igrid_;
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& path,
+                                                            const std::string& grid_name,
+                                                            const VolumeLimits& limits) {
+  InitializeOpenVdb();
+  SM_RETURN_IF_ERROR(OpenForRead(path).status());
+  openvdb::GridBase::Ptr base;
+  try {
+    openvdb::io::File file(path);
+    file.open(/*delayLoad=*/false);
+    if (grid_name.empty()) {
+      openvdb::GridPtrVecPtr grids = file.getGrids();
+      for (const auto& g : *grids) {
+        if (g->isType<openvdb::FloatGrid>() || g->isType<openvdb::DoubleGrid>() ||
+            g->isType<openvdb::Int32Grid>() || g->isType<openvdb::Int64Grid>() ||
+            g->isType<openvdb::BoolGrid>() || g->isType<openvdb::MaskGrid>()) {
+          base = g;
+          break;
+        }
+      }
+      if (base == nullptr) {
+        return absl::NotFoundError(absl::StrCat(path, ": holds no scalar grid"));
+      }
+    } else {
+      if (!file.hasGrid(grid_name)) {
+        return absl::NotFoundError(absl::StrCat(path, ": has no grid named '", grid_name, "'"));
+      }
+      base = file.readGrid(grid_name);
+    }
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": not a readable .vdb: ", e.what()));
+  }
+
+  VolumeInfo info;
+  info.path = path;
+  info.format = "vdb";
+  openvdb::Coord origin(0, 0, 0);
+  const auto dims_meta = base->getMetadata<openvdb::Vec3IMetadata>(kDimsMeta);
+  const auto dtype_meta = base->getMetadata<openvdb::StringMetadata>(kDTypeMeta);
+  if (dims_meta) {
+    const openvdb::Vec3i v = dims_meta->value();
+    info.dims = {v.x(), v.y(), v.z()};
+  } else {
+    const openvdb::CoordBBox bbox = base->evalActiveVoxelBoundingBox();
+    if (bbox.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": the grid is empty"));
+    origin = bbox.min();
+    info.dims = {bbox.dim().x(), bbox.dim().y(), bbox.dim().z()};
+  }
+  const bool mask = base->isType<openvdb::BoolGrid>() || base->isType<openvdb::MaskGrid>();
+  if (dtype_meta && !mask) {
+    SM_ASSIGN_OR_RETURN(info.dtype, ParseDType(dtype_meta->value()));
+  } else {
+    info.dtype = mask ? DType::kUInt8 : DType::kFloat32;
+  }
+  SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, path));
+  const openvdb::math::Transform& xf = base->constTransform();
+  const openvdb::Vec3d vs = xf.voxelSize();
+  const openvdb::Vec3d o = xf.indexToWorld(origin);
+  info.placement.spacing = {vs.x(), vs.y(), vs.z()};
+  info.placement.origin = {o.x(), o.y(), o.z()};
+  if (const auto unit = base->getMetadata<openvdb::StringMetadata>(kUnitMeta)) {
+    info.placement.unit = unit->value();
+  }
+  if (base->isType<openvdb::FloatGrid>()) return MakeSource<openvdb::FloatGrid>(base, origin, info);
+  if (base->isType<openvdb::DoubleGrid>()) return MakeSource<openvdb::DoubleGrid>(base, origin, info);
+  if (base->isType<openvdb::Int32Grid>()) return MakeSource<openvdb::Int32Grid>(base, origin, info);
+  if (base->isType<openvdb::Int64Grid>()) return MakeSource<openvdb::Int64Grid>(base, origin, info);
+  if (base->isType<openvdb::BoolGrid>()) {
+    return MakeSource<openvdb::BoolGrid>(
+        ActiveAsTrue(*openvdb::gridConstPtrCast<openvdb::BoolGrid>(base)), origin, info);
+  }
+  if (base->isType<openvdb::MaskGrid>()) {
+    return MakeSource<openvdb::BoolGrid>(
+        ActiveAsTrue(*openvdb::gridConstPtrCast<openvdb::MaskGrid>(base)), origin, info);
+  }
+  return absl::InvalidArgumentError(absl::StrCat(path, ": grid '", base->getName(), "' of type ",
+                                                 base->valueType(), " is not a scalar grid"));
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVdbWriter(const std::string& path,
+                                                            const VolumeInfo& info) {
+  InitializeOpenVdb();
+  VolumeInfo out = info;
+  out.path = path;
+  out.format = "vdb";
+  return std::make_unique<VdbSink>(std::move(out));
+}
+
+absl::Status WriteVoxelSetVdb(const std::string& path, const VoxelSet& set,
+                              std::span<const int32_t> labels, const Placement& placement,
+                              const std::string& grid_name) {
+  InitializeOpenVdb();
+  if (!labels.empty() && labels.size() != set.size()) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": ", labels.size(),
+                                                   " labels for ", set.size(), " voxels"));
+  }
+  openvdb::GridPtrVec grids;
+  try {
+    auto mask = openvdb::MaskGrid::create();
+    openvdb::Int32Grid::Ptr label_grid;
+    if (!labels.empty()) label_grid = openvdb::Int32Grid::create(-1);
+    set.ForEachRun([&](int32_t y, int32_t z, const Run& run, uint64_t first) {
+      mask->tree().sparseFill(openvdb::CoordBBox(openvdb::Coord(run.x0, y, z),
+                                                 openvdb::Coord(run.x1 - 1, y, z)),
+                              true, true);
+      if (label_grid) {
+        auto lacc = label_grid->getAccessor();
+        for (int32_t x = run.x0; x < run.x1; ++x) {
+          lacc.setValue(openvdb::Coord(x, y, z), labels[first + (x - run.x0)]);
+        }
+      }
+    });
+    mask->setName(grid_name);
+    SetVolumeMeta(*mask, set.dims(), DType::kUInt8, placement);
+    grids.push_back(mask);
+    if (label_grid) {
+      label_grid->setName(grid_name + "_labels");
+      SetVolumeMeta(*label_grid, set.dims(), DType::kFloat32, placement);
+      grids.push_back(label_grid);
+    }
+  } catch (const openvdb::Exception& e) {
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB: ", e.what()));
+  }
+  return WriteGridsAtomically(path, grids);
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,216 @@
+#include "worker/pipeline/volume/volume_open.h"
+
+#include <cstring>
+#include <filesystem>
+#include <regex>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/volume/nrrd_io.h"
+#include "worker/pipeline/volume/tiff_io.h"
+#include "worker/pipeline/volume/vdb_io.h"
+
+namespace sheetmesh {
+namespace {
+
+// Applies the user's placement on top of what the file said.
+class PlacedSource : public VolumeSource {
+ public:
+  PlacedSource(std::unique_ptr<VolumeSource> inner, const OpenOptions& o)
+      : inner_(std::move(inner)) {
+    info_ = inner_->info();
+    if (o.spacing) info_.placement.spacing = *o.spacing;
+    if (o.origin) info_.placement.origin = *o.origin;
+    if (!o.unit.empty()) info_.placement.unit = o.unit;
+  }
+  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
+    return inner_->ReadSlices(z0, count, out);
+  }
+
+ private:
+  std::unique_ptr<VolumeSource> inner_;
+};
+
+}  // namespace
+
+std::optional<std::pair<Dims, DType>> DimsFromFileName(const std::string& path) {
+  static const std::regex kPattern(R"((\d+)x(\d+)x(\d+)(?:_(u8|u16|f32|uint8|uint16|float32))?)",
+                                   std::regex::icase);
+  const std::string name = std::filesystem::path(path).filename().string();
+  std::smatch m;
+  if (!std::regex_search(name, m, kPattern)) return std::nullopt;
+  Dims d;
+  if (!absl::SimpleAtoi(m[1].str(), &d.nx) || !absl::SimpleAtoi(m[2].str(), &d.ny) ||
+      !absl::SimpleAtoi(m[3].str(), &d.nz)) {
+    return std::nullopt;
+  }
+  DType t = DType::kUInt8;
+  if (m[4].matched) t = *ParseDType(m[4].str());
+  return std::make_pair(d, t);
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
+                                                         const OpenOptions& options) {
+  std::error_code ec;
+  const bool is_dir = std::filesystem::is_directory(path, ec);
+  std::string format = absl::AsciiStrToLower(options.format);
+  if (format.empty()) {
+    const std::string ext =
+        absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
+    if (is_dir) {
+      format = "tiff";
+    } else if (ext == ".raw" || ext == ".bin" || ext == ".dat" || ext == ".img") {
+      format = "raw";
+    } else if (ext == ".tif" || ext == ".tiff") {
+      format = "tiff";
+    } else if (ext == ".nrrd" || ext == ".nhdr") {
+      format = "nrrd";
+    } else if (ext == ".vdb") {
+      format = "vdb";
+    } else if (options.raw_dims) {
+      format = "raw";
+    } else {
+      return absl::InvalidArgumentError(absl::StrCat(
+          path, ": cannot tell the format from the extension '", ext,
+          "'; use .raw/.tif/.nrrd/.nhdr/.vdb or give the format (raw needs dims)"));
+    }
+  }
+  std::unique_ptr<VolumeSource> source;
+  if (format == "raw") {
+    RawOptions raw;
+    const auto from_name = DimsFromFileName(path);
+    if (options.raw_dims) {
+      raw.dims = *options.raw_dims;
+    } else if (from_name) {
+      raw.dims = from_name->first;
+    } else {
+      return absl::InvalidArgumentError(absl::StrCat(
+          path, ": a raw volume needs its dims (--dims NXxNYxNZ) or a name like "
+                "'rock_512x512x400_u8.raw'"));
+    }
+    raw.dtype = options.raw_dtype ? *options.raw_dtype
+                                  : (from_name ? from_name->second : DType::kUInt8);
+    raw.byte_order = options.raw_byte_order;
+    raw.header_bytes = options.raw_header_bytes;
+    SM_ASSIGN_OR_RETURN(source, OpenRawVolume(path, raw, options.limits));
+  } else if (format == "tiff") {
+    if (is_dir) {
+      SM_ASSIGN_OR_RETURN(source, OpenTiffFolder(path, options.limits));
+    } else {
+      SM_ASSIGN_OR_RETURN(source, OpenTiffVolume(path, options.limits));
+    }
+  } else if (format == "nrrd") {
+    SM_ASSIGN_OR_RETURN(source, OpenNrrdVolume(path, options.limits));
+  } else if (format == "vdb") {
+    SM_ASSIGN_OR_RETURN(source, OpenVdbVolume(path, options.vdb_grid, options.limits));
+  } else {
+    return absl::InvalidArgumentError(absl::StrCat(
+        path, ": format '", options.format, "' is not supported; use raw, tiff, nrrd or vdb"));
+  }
+  if (options.spacing) {
+    for (int k = 0; k < 3; ++k) {
+      if (!((*options.spacing)[k] > 0)) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": spacing component ", k, " = ",
+                                                       (*options.spacing)[k],
+                                                       " must be positive"));
+      }
+    }
+  }
+  if (!options.spacing && !options.origin && options.unit.empty()) return source;
+  return std::make_unique<PlacedSource>(std::move(source), options);
+}
+
+DenseVolume DenseVolume::Zeros(const Dims& dims, DType dtype) {
+  DenseVolume v;
+  v.info.dims = dims;
+  v.info.dtype = dtype;
+  v.data.assign(static_cast<size_t>(dims.num_voxels()) * BytesPerVoxel(dtype), std::byte{0});
+  return v;
+}
+
+double DenseVolume::At(int64_t x, int64_t y, int64_t z) const {
+  const Dims& d = info.dims;
+  const size_t i = static_cast<size_t>((z * d.ny + y) * d.nx + x);
+  switch (info.dtype) {
+    case DType::kUInt8:
+      return as<uint8_t>()[i];
+    case DType::kUInt16:
+      return as<uint16_t>()[i];
+    case DType::kFloat32:
+      return as<float>()[i];
+  }
+  return 0;
+}
+
+void DenseVolume::Set(int64_t x, int64_t y, int64_t z, double value) {
+  const Dims& d = info.dims;
+  const size_t i = static_cast<size_t>((z * d.ny + y) * d.nx + x);
+  switch (info.dtype) {
+    case DType::kUInt8:
+      as<uint8_t>()[i] = static_cast<uint8_t>(value);
+      break;
+    case DType::kUInt16:
+      as<uint16_t>()[i] = static_cast<uint16_t>(value);
+      break;
+    case DType::kFloat32:
+      as<float>()[i] = static_cast<float>(value);
+      break;
+  }
+}
+
+absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source, int64_t max_bytes) {
+  const VolumeInfo& info = source.info();
+  const int64_t bytes = info.dims.num_voxels() * BytesPerVoxel(info.dtype);
+  if (bytes > max_bytes) {
+    return absl::ResourceExhaustedError(absl::StrCat(info.path, ": ", bytes,
+                                                     " bytes do not fit the dense limit of ",
+                                                     max_bytes));
+  }
+  DenseVolume v;
+  v.info = info;
+  v.data.resize(static_cast<size_t>(bytes));
+  SM_RETURN_IF_ERROR(source.ReadSlices(0, info.dims.nz, v.data));
+  return v;
+}
+
+absl::Status WriteDense(const DenseVolume& volume, VolumeSink& sink) {
+  SM_RETURN_IF_ERROR(sink.WriteSlices(volume.info.dims.nz, volume.data));
+  return sink.Finish();
+}
+
+absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name) {
+  const std::string n = absl::AsciiStrToLower(name);
+  if (n == "raw") return VolumeFormat::kRaw;
+  if (n == "tiff" || n == "tif") return VolumeFormat::kTiff;
+  if (n == "tiff-folder") return VolumeFormat::kTiffFolder;
+  if (n == "nrrd") return VolumeFormat::kNrrd;
+  if (n == "nrrd-gzip") return VolumeFormat::kNrrdGzip;
+  if (n == "vdb") return VolumeFormat::kVdb;
+  return absl::InvalidArgumentError(absl::StrCat(
+      "volume format '", name, "' is not supported; use raw, tiff, tiff-folder, nrrd, "
+                               "nrrd-gzip or vdb"));
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,
+                                                               const VolumeInfo& info,
+                                                               VolumeFormat format) {
+  switch (format) {
+    case VolumeFormat::kRaw:
+      return CreateRawWriter(path, info);
+    case VolumeFormat::kTiff:
+      return CreateTiffWriter(path, info);
+    case VolumeFormat::kTiffFolder:
+      return CreateTiffFolderWriter(path, info);
+    case VolumeFormat::kNrrd:
+      return CreateNrrdWriter(path, info, NrrdEncoding::kRaw);
+    case VolumeFormat::kNrrdGzip:
+      return CreateNrrdWriter(path, info, NrrdEncoding::kGzip);
+    case VolumeFormat::kVdb:
+      return CreateVdbWriter(path, info);
+  }
+  return absl::InvalidArgumentError("unknown volume format");
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,72 @@
+// OpenVolume: picks the reader for a path (raw, TIFF file or folder, NRRD, VDB) and applies
+// the user's placement overrides. Also whole-volume helpers for small volumes and tests.
+#ifndef SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_OPEN_H_
+#define SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_OPEN_H_
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "worker/pipeline/volume/raw_io.h"
+#include "worker/pipeline/volume/volume_sink.h"
+#include "worker/pipeline/volume/volume_source.h"
+
+namespace sheetmesh {
+
+struct OpenOptions {
+  std::string format;                        // "", "raw", "tiff", "nrrd", "vdb" ("" = by name)
+  std::optional<Dims> raw_dims;              // raw: required unless the name says "_NxNxN_u8"
+  std::optional<DType> raw_dtype;            // raw: default uint8 or the name's "_u8/_u16/_f32"
+  ByteOrder raw_byte_order = ByteOrder::kLittle;
+  int64_t raw_header_bytes = 0;
+  std::string vdb_grid;                      // vdb: grid name ("" = first scalar grid)
+  std::optional<Vec3> spacing;               // overrides the file's spacing
+  std::optional<Vec3> origin;                // overrides the file's origin
+  std::string unit;                          // overrides the file's length unit when set
+  VolumeLimits limits;
+};
+
+// Opens `path`: a folder reads as TIFF slices; otherwise the extension decides (.raw .bin
+// .dat .img: raw; .tif .tiff: TIFF; .nrrd .nhdr: NRRD; .vdb: OpenVDB) unless
+// options.format says. kInvalidArgument for an unknown extension or a raw file without dims
+// (the message says how to give them).
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
+                                                         const OpenOptions& options = {});
+
+// Dims and dtype encoded in a file name like "rock_100x100x100_u8.raw"; nullopt if none.
+std::optional<std::pair<Dims, DType>> DimsFromFileName(const std::string& path);
+
+// A whole volume in memory: for small volumes, tests and the phantom's sample.
+struct DenseVolume {
+  VolumeInfo info;
+  std::vector<std::byte> data;  // x fastest, native byte order
+
+  static DenseVolume Zeros(const Dims& dims, DType dtype);
+  template <class T>
+  T* as() { return reinterpret_cast<T*>(data.data()); }
+  template <class T>
+  const T* as() const { return reinterpret_cast<const T*>(data.data()); }
+  // The value at (x, y, z) as a double.
+  double At(int64_t x, int64_t y, int64_t z) const;
+  void Set(int64_t x, int64_t y, int64_t z, double value);
+};
+
+// Reads all of `source`. kResourceExhausted above `max_bytes`.
+absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source,
+                                      int64_t max_bytes = int64_t{4} << 30);
+// Writes all of `volume` through `sink` and finishes it.
+absl::Status WriteDense(const DenseVolume& volume, VolumeSink& sink);
+
+// Output formats for CreateVolumeWriter.
+enum class VolumeFormat { kRaw, kTiff, kTiffFolder, kNrrd, kNrrdGzip, kVdb };
+absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name);
+absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,
+                                                               const VolumeInfo& info,
+                                                               VolumeFormat format);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_OPEN_H_

@@ -1,0 +1,79 @@
+#include "worker/pipeline/volume/volume_source.h"
+
+#include <limits>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+
+namespace sheetmesh {
+
+int BytesPerVoxel(DType dtype) {
+  switch (dtype) {
+    case DType::kUInt8:
+      return 1;
+    case DType::kUInt16:
+      return 2;
+    case DType::kFloat32:
+      return 4;
+  }
+  return 1;
+}
+
+absl::string_view DTypeName(DType dtype) {
+  switch (dtype) {
+    case DType::kUInt8:
+      return "uint8";
+    case DType::kUInt16:
+      return "uint16";
+    case DType::kFloat32:
+      return "float32";
+  }
+  return "?";
+}
+
+absl::StatusOr<DType> ParseDType(absl::string_view name) {
+  const std::string n = absl::AsciiStrToLower(name);
+  if (n == "uint8" || n == "u8") return DType::kUInt8;
+  if (n == "uint16" || n == "u16") return DType::kUInt16;
+  if (n == "float32" || n == "f32" || n == "float") return DType::kFloat32;
+  return absl::InvalidArgumentError(
+      absl::StrCat("dtype '", name, "' is not supported; use uint8, uint16 or float32"));
+}
+
+absl::StatusOr<ByteOrder> ParseByteOrder(absl::string_view name) {
+  const std::string n = absl::AsciiStrToLower(name);
+  if (n == "little" || n == "le") return ByteOrder::kLittle;
+  if (n == "big" || n == "be") return ByteOrder::kBig;
+  return absl::InvalidArgumentError(
+      absl::StrCat("byte order '", name, "' is not supported; use little or big"));
+}
+
+absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
+                       absl::string_view what) {
+  if (dims.nx <= 0 || dims.ny <= 0 || dims.nz <= 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(what, ": dims ", dims.nx, "x", dims.ny, "x", dims.nz,
+                     " must all be positive"));
+  }
+  for (int64_t e : {dims.nx, dims.ny, dims.nz}) {
+    if (e > limits.max_extent) {
+      return absl::InvalidArgumentError(absl::StrCat(what, ": dims ", dims.ToString(),
+                                                     " have an extent above the limit of ",
+                                                     limits.max_extent));
+    }
+  }
+  // Extents are each <= 2^20 here, so the product fits in 63 bits only if checked stepwise.
+  const int64_t kMax = std::numeric_limits<int64_t>::max() / 4;
+  if (dims.nx > kMax / dims.ny || dims.nx * dims.ny > kMax / dims.nz) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(what, ": dims ", dims.ToString(), " overflow a 64-bit voxel count"));
+  }
+  if (dims.num_voxels() > limits.max_voxels) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        what, ": dims ", dims.ToString(), " hold ", dims.num_voxels(), " voxels of ",
+        DTypeName(dtype), ", above the limit of ", limits.max_voxels, " voxels"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,72 @@
+// VolumeSource: a volume read slice by slice, so that no reader needs the whole box in
+// memory. Every reader (raw, TIFF, NRRD, VDB) implements it.
+#ifndef SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_SOURCE_H_
+#define SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_SOURCE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include "absl/strings/string_view.h"
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/types.h"
+
+namespace sheetmesh {
+
+// Voxel value types the readers accept.
+enum class DType { kUInt8, kUInt16, kFloat32 };
+
+// Bytes of one voxel of `dtype`.
+int BytesPerVoxel(DType dtype);
+// "uint8", "uint16", "float32".
+absl::string_view DTypeName(DType dtype);
+// Parses "uint8"/"u8", "uint16"/"u16", "float32"/"f32"/"float". kInvalidArgument otherwise,
+// naming the value and the accepted ones.
+absl::StatusOr<DType> ParseDType(absl::string_view name);
+
+enum class ByteOrder { kLittle, kBig };
+absl::StatusOr<ByteOrder> ParseByteOrder(absl::string_view name);  // "little"/"big"
+
+// What a reader knows about its volume before reading voxels.
+struct VolumeInfo {
+  std::string path;    // the file or folder, for messages
+  std::string format;  // "raw", "tiff", "tiff-folder", "nrrd", "vdb"
+  Dims dims;
+  DType dtype = DType::kUInt8;
+  Placement placement;
+};
+
+// Limits that protect readers from impossible requests.
+struct VolumeLimits {
+  int64_t max_voxels = int64_t{1} << 37;  // dims beyond this are kResourceExhausted
+  int64_t max_extent = int64_t{1} << 20;  // any one axis beyond this is kInvalidArgument
+};
+
+// Checks dims against `limits`: each extent positive, the product without overflow and
+// within max_voxels. `what` names the source in the message.
+absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
+                       absl::string_view what);
+
+// A volume readable slice by slice. Not thread-safe; one reader per thread.
+class VolumeSource {
+ public:
+  virtual ~VolumeSource() = default;
+
+  const VolumeInfo& info() const { return info_; }
+
+  // Reads slices [z0, z0 + count) into `out`, x fastest, then y, then z, in native byte
+  // order. Sequential reads in increasing z are fastest; readers of compressed streams may
+  // restart to go back. REQUIRES: out.size() == count * nx * ny * BytesPerVoxel(dtype),
+  // 0 <= z0, z0 + count <= nz. kInvalidArgument / kDataLoss when the file is broken
+  // (truncated, corrupt), naming the file and the slice.
+  virtual absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) = 0;
+
+ protected:
+  VolumeInfo info_;
+};
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_VOLUME_VOLUME_SOURCE_H_

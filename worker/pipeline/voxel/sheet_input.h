@@ -1,0 +1,41 @@
+// SheetInput: everything that says where a volume is and which voxels are the sheet phase;
+// LoadSheetPhase turns it into the sparse sheet set (and the rock mask when given).
+#ifndef SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_INPUT_H_
+#define SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_INPUT_H_
+
+#include <optional>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/volume/volume_open.h"
+#include "worker/pipeline/voxel/phase_selection.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh {
+
+struct SheetInput {
+  std::string path;                  // the volume (file or TIFF folder)
+  OpenOptions open;                  // format, raw dims, placement overrides, limits
+  PhaseSelection selection;          // the sheet phase S (default: non-zero voxels)
+  std::string mask_path;             // optional rock mask volume ("" = none)
+  PhaseSelection mask_selection;     // rock voxels of the mask volume (default: non-zero)
+  bool mask_from_volume = false;     // take the mask from `path` itself with mask_selection
+};
+
+struct SheetPhase {
+  VolumeInfo info;                   // of the volume (placement included)
+  VoxelSet sheet;                    // S, restricted to the mask when there is one
+  std::optional<VoxelSet> mask;      // rock voxels, when a mask was given
+  SelectionStats stats;
+  double read_seconds = 0;           // wall time of reading and selecting
+};
+
+// Opens the volume (and mask), selects S slab by slab. kInvalidArgument when S is empty
+// (the message names the file, the selection and the value range) or the mask's dims
+// differ; reader errors pass through; kCancelled if asked.
+absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_INPUT_H_

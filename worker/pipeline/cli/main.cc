@@ -13,6 +13,7 @@
 #include "absl/strings/str_split.h"
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/phantom_command.h"
+#include "worker/pipeline/core/huge_pages.h"
 #include "worker/pipeline/core/status_macros.h"
 
 // Volume input.
@@ -197,4 +198,7 @@ int Main(int argc, char** argv) {
 }  // namespace
 }  // namespace sheetmesh
 
-int main(int argc, char** argv) { return sheetmesh::Main(argc, argv); }
+int main(int argc, char** argv) {
+  sheetmesh::UseTransparentHugePages(argc, argv);
+  return sheetmesh::Main(argc, argv);
+}

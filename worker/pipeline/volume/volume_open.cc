@@ -28,6 +28,10 @@ class PlacedSource : public VolumeSource {
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     return inner_->ReadSlices(z0, count, out);
   }
+  bool CanMap() const override { return inner_->CanMap(); }
+  absl::StatusOr<MappedSlices> MapSlices(int64_t z0, int64_t count) override {
+    return inner_->MapSlices(z0, count);
+  }
 
  private:
   std::unique_ptr<VolumeSource> inner_;

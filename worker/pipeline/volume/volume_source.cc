@@ -1,11 +1,30 @@
 #include "worker/pipeline/volume/volume_source.h"
 
+#include <sys/mman.h>
+
 #include <limits>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 
 namespace sheetmesh {
+
+MappedSlices& MappedSlices::operator=(MappedSlices&& o) noexcept {
+  if (this != &o) {
+    if (base_ != nullptr) ::munmap(base_, length_);
+    base_ = o.base_;
+    length_ = o.length_;
+    data_ = o.data_;
+    o.base_ = nullptr;
+    o.length_ = 0;
+    o.data_ = {};
+  }
+  return *this;
+}
+
+MappedSlices::~MappedSlices() {
+  if (base_ != nullptr) ::munmap(base_, length_);
+}
 
 int BytesPerVoxel(DType dtype) {
   switch (dtype) {

@@ -49,10 +49,37 @@ struct VolumeLimits {
 absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
                        absl::string_view what);
 
+// Slices of a file mapped into memory; unmapped when destroyed. Movable.
+class MappedSlices {
+ public:
+  MappedSlices() = default;
+  MappedSlices(void* base, size_t length, std::span<const std::byte> data)
+      : base_(base), length_(length), data_(data) {}
+  MappedSlices(MappedSlices&& o) noexcept { *this = std::move(o); }
+  MappedSlices& operator=(MappedSlices&& o) noexcept;
+  ~MappedSlices();
+
+  std::span<const std::byte> data() const { return data_; }
+
+ private:
+  void* base_ = nullptr;
+  size_t length_ = 0;
+  std::span<const std::byte> data_;
+};
+
 // A volume readable slice by slice. Not thread-safe; one reader per thread.
 class VolumeSource {
  public:
   virtual ~VolumeSource() = default;
+
+  // Whether MapSlices() works: files whose voxels lie on disk as they are in memory.
+  virtual bool CanMap() const { return false; }
+  // Maps slices [z0, z0 + count) without copying (same layout as ReadSlices). Mapped pages
+  // leave the process when the result is destroyed, so memory stays at one slab.
+  // kUnimplemented unless CanMap().
+  virtual absl::StatusOr<MappedSlices> MapSlices(int64_t z0, int64_t count) {
+    return absl::UnimplementedError("this reader cannot map slices");
+  }
 
   const VolumeInfo& info() const { return info_; }
 

@@ -1,8 +1,11 @@
 #include "worker/pipeline/voxel/phase_selection.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "absl/strings/numbers.h"
@@ -89,84 +92,174 @@ bool Matches(const PhaseSelection& s, double v) {
   return false;
 }
 
-// Appends the runs of selected voxels of one row. For integer types a lookup table makes
-// the test one load per voxel.
-template <class T, class Pred>
-void RowRuns(const T* row, int64_t nx, Pred pred, std::vector<Run>* out) {
+// What one scanning task learns besides the runs: which values it saw (integers) or their
+// range (floats).
+struct ValueSeen {
+  std::vector<uint8_t> seen;  // integer voxels: seen[v] = 1
+  float lo = std::numeric_limits<float>::max();
+  float hi = std::numeric_limits<float>::lowest();
+};
+
+// Appends the runs of selected voxels of one row of 8- or 16-bit voxels. The table holds
+// the selection for every value. Stretches of one unselected value (the background of a
+// segmented image) are skipped eight bytes at a time.
+template <class T>
+void ScanIntegerRow(const T* row, int64_t nx, const uint8_t* table, uint8_t* seen,
+                    std::vector<Run>* out) {
+  constexpr int64_t kPerWord = 8 / sizeof(T);
   int64_t x = 0;
   while (x < nx) {
-    while (x < nx && !pred(row[x])) ++x;
-    if (x >= nx) break;
+    const T v = row[x];
+    seen[v] = 1;
+    if (table[v] == 0) {
+      uint64_t pattern = 0;
+      for (int64_t k = 0; k < kPerWord; ++k) pattern = (pattern << (8 * sizeof(T))) | v;
+      ++x;
+      // Four words per step: the compare of their xors is one branch per 32 bytes.
+      while (x + 4 * kPerWord <= nx) {
+        uint64_t w[4];
+        std::memcpy(w, row + x, 32);
+        if (((w[0] ^ pattern) | (w[1] ^ pattern) | (w[2] ^ pattern) | (w[3] ^ pattern)) != 0) {
+          break;
+        }
+        x += 4 * kPerWord;
+      }
+      while (x + kPerWord <= nx) {
+        uint64_t w;
+        std::memcpy(&w, row + x, 8);
+        if (w != pattern) break;
+        x += kPerWord;
+      }
+      continue;
+    }
     const int64_t start = x;
-    while (x < nx && pred(row[x])) ++x;
+    ++x;
+    while (x < nx && table[row[x]] != 0) {
+      seen[row[x]] = 1;
+      ++x;
+    }
     out->push_back({static_cast<int32_t>(start), static_cast<int32_t>(x)});
   }
 }
+
+void ScanFloatRow(const float* row, int64_t nx, const PhaseSelection& selection, ValueSeen* seen,
+                  std::vector<Run>* out) {
+  int64_t x = 0;
+  while (x < nx) {
+    seen->lo = std::min(seen->lo, row[x]);
+    seen->hi = std::max(seen->hi, row[x]);
+    if (!Matches(selection, row[x])) {
+      ++x;
+      continue;
+    }
+    const int64_t start = x;
+    while (x < nx && Matches(selection, row[x])) {
+      seen->lo = std::min(seen->lo, row[x]);
+      seen->hi = std::max(seen->hi, row[x]);
+      ++x;
+    }
+    out->push_back({static_cast<int32_t>(start), static_cast<int32_t>(x)});
+  }
+}
+
+// Runs of one slice: (y, run) pairs in increasing y.
+struct SliceRuns {
+  std::vector<std::pair<int32_t, Run>> runs;
+  uint64_t outside_mask = 0;
+};
 
 template <class T>
 absl::StatusOr<VoxelSet> SelectTyped(VolumeSource& source, const PhaseSelection& selection,
                                      const VoxelSet* mask, SelectionStats* stats,
                                      const Progress& progress) {
   const Dims& d = source.info().dims;
-  // Slabs of at most ~32 MiB keep the buffer small whatever the box.
   const int64_t slice_bytes = d.nx * d.ny * static_cast<int64_t>(sizeof(T));
-  const int64_t slab = std::clamp<int64_t>((int64_t{32} << 20) / std::max<int64_t>(1, slice_bytes),
-                                           1, d.nz);
-  std::vector<T> buffer(static_cast<size_t>(slab * d.nx * d.ny));
+  // Slabs of about 32 MiB keep memory flat whatever the box.
+  const int64_t slab =
+      std::clamp<int64_t>((int64_t{32} << 20) / std::max<int64_t>(1, slice_bytes), 1, d.nz);
+  const bool map = source.CanMap();
+  std::vector<T> buffer(map ? 0 : static_cast<size_t>(slab * d.nx * d.ny));
   VoxelSet::Builder builder(d);
-  std::vector<Run> runs, masked;
-  T lo = std::numeric_limits<T>::max();
-  T hi = std::numeric_limits<T>::lowest();
 
-  // For 8- and 16-bit voxels the selection is a table over all values.
   std::vector<uint8_t> table;
   if constexpr (std::is_integral_v<T>) {
     static_assert(sizeof(T) <= 2, "integer voxels are 8 or 16 bit");
     table.resize(size_t{1} << (8 * sizeof(T)));
     for (size_t v = 0; v < table.size(); ++v) table[v] = Matches(selection, double(v)) ? 1 : 0;
   }
+  ValueSeen all;
+  if constexpr (std::is_integral_v<T>) all.seen.assign(table.size(), 0);
+  std::vector<SliceRuns> slices(static_cast<size_t>(slab));
+  std::vector<ValueSeen> seen_per_slice(static_cast<size_t>(slab));
+
   for (int64_t z0 = 0; z0 < d.nz; z0 += slab) {
     const int64_t count = std::min(slab, d.nz - z0);
-    std::span<std::byte> bytes(reinterpret_cast<std::byte*>(buffer.data()),
-                               static_cast<size_t>(count * slice_bytes));
-    SM_RETURN_IF_ERROR(source.ReadSlices(z0, count, bytes));
-    for (int64_t k = 0; k < count; ++k) {
+    const T* data = nullptr;
+    MappedSlices mapped;
+    if (map) {
+      SM_ASSIGN_OR_RETURN(mapped, source.MapSlices(z0, count));
+      data = reinterpret_cast<const T*>(mapped.data().data());
+    } else {
+      std::span<std::byte> bytes(reinterpret_cast<std::byte*>(buffer.data()),
+                                 static_cast<size_t>(count * slice_bytes));
+      SM_RETURN_IF_ERROR(source.ReadSlices(z0, count, bytes));
+      data = buffer.data();
+    }
+    // Slices scan in parallel; their runs are appended in order afterwards.
+    tbb::parallel_for(int64_t{0}, count, [&](int64_t k) {
       const int64_t z = z0 + k;
+      SliceRuns& out = slices[k];
+      out.runs.clear();
+      out.outside_mask = 0;
+      ValueSeen& seen = seen_per_slice[k];
+      if constexpr (std::is_integral_v<T>) {
+        if (seen.seen.size() != table.size()) seen.seen.assign(table.size(), 0);
+      }
+      std::vector<Run> row_runs, masked;
       for (int64_t y = 0; y < d.ny; ++y) {
-        const T* row = buffer.data() + (k * d.ny + y) * d.nx;
-        for (int64_t x = 0; x < d.nx; ++x) {
-          lo = std::min(lo, row[x]);
-          hi = std::max(hi, row[x]);
-        }
-        runs.clear();
+        const T* row = data + (k * d.ny + y) * d.nx;
+        row_runs.clear();
         if constexpr (std::is_integral_v<T>) {
-          const uint8_t* tab = table.data();
-          RowRuns(row, d.nx, [tab](T v) { return tab[v] != 0; }, &runs);
+          ScanIntegerRow(row, d.nx, table.data(), seen.seen.data(), &row_runs);
         } else {
-          RowRuns(row, d.nx, [&selection](T v) { return Matches(selection, v); }, &runs);
+          ScanFloatRow(row, d.nx, selection, &seen, &row_runs);
         }
-        if (runs.empty()) continue;
-        const std::vector<Run>* keep = &runs;
+        if (row_runs.empty()) continue;
+        const std::vector<Run>* keep = &row_runs;
         if (mask != nullptr) {
           masked.clear();
-          IntersectRuns(runs, mask->RowRuns(y, z), &masked);
-          if (stats != nullptr) {
-            uint64_t before = 0, after = 0;
-            for (const Run& r : runs) before += r.length();
-            for (const Run& r : masked) after += r.length();
-            stats->outside_mask += before - after;
-          }
+          IntersectRuns(row_runs, mask->RowRuns(y, z), &masked);
+          uint64_t before = 0, after = 0;
+          for (const Run& r : row_runs) before += r.length();
+          for (const Run& r : masked) after += r.length();
+          out.outside_mask += before - after;
           keep = &masked;
         }
-        for (const Run& r : *keep) builder.AddRun(y, z, r.x0, r.x1);
+        for (const Run& r : *keep) out.runs.push_back({static_cast<int32_t>(y), r});
       }
+    });
+    for (int64_t k = 0; k < count; ++k) {
+      for (const auto& [y, r] : slices[k].runs) builder.AddRun(y, z0 + k, r.x0, r.x1);
+      if (stats != nullptr) stats->outside_mask += slices[k].outside_mask;
     }
     SM_RETURN_IF_ERROR(progress.Update(double(z0 + count) / d.nz));
   }
   VoxelSet set = std::move(builder).Build();
   if (stats != nullptr) {
-    stats->min_value = static_cast<double>(lo);
-    stats->max_value = static_cast<double>(hi);
+    for (const ValueSeen& s : seen_per_slice) {
+      all.lo = std::min(all.lo, s.lo);
+      all.hi = std::max(all.hi, s.hi);
+      for (size_t v = 0; v < s.seen.size(); ++v) all.seen[v] |= s.seen[v];
+    }
+    if constexpr (std::is_integral_v<T>) {
+      const auto first = std::find(all.seen.begin(), all.seen.end(), 1);
+      const auto last = std::find(all.seen.rbegin(), all.seen.rend(), 1);
+      stats->min_value = static_cast<double>(first - all.seen.begin());
+      stats->max_value = static_cast<double>(all.seen.rend() - last - 1);
+    } else {
+      stats->min_value = all.lo;
+      stats->max_value = all.hi;
+    }
     stats->selected = set.size();
   }
   return set;

@@ -1,6 +1,10 @@
 #include "worker/pipeline/voxel/thickness.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <climits>
 
 #include "worker/pipeline/core/status_macros.h"
 
@@ -8,59 +12,81 @@ namespace sheetmesh {
 namespace {
 
 constexpr uint32_t kSaturate = 65535;
+constexpr int32_t kNever = INT32_MIN;
 
-// Visits voxels as (index, x, y, z) in increasing or decreasing index order.
-template <class F>
-void Sweep(const VoxelSet& set, bool forward, F&& f) {
-  const Dims& d = set.dims();
-  const int64_t rows = d.num_rows();
-  for (int64_t rr = 0; rr < rows; ++rr) {
-    const int64_t row = forward ? rr : rows - 1 - rr;
-    const int32_t y = static_cast<int32_t>(row % d.ny);
-    const int32_t z = static_cast<int32_t>(row / d.ny);
-    const int64_t b = set.RowBegin(row), e = set.RowBegin(row + 1);
-    for (int64_t ii = b; ii < e; ++ii) {
-      const int64_t i = forward ? ii : e - 1 - (ii - b);
-      const Run& run = set.run(i);
-      const uint64_t first = set.RunFirstIndex(i);
-      for (int32_t k = 0; k < run.length(); ++k) {
-        const int32_t x = forward ? run.x0 + k : run.x1 - 1 - k;
-        f(first + (x - run.x0), x, y, z);
-      }
+// Per-column state of a sweep: where the column last held a voxel and how long its run was.
+struct ColumnState {
+  std::vector<int32_t> last;
+  std::vector<uint32_t> count;
+  explicit ColumnState(size_t n) : last(n, kNever), count(n, 0) {}
+  void Reset() { std::fill(last.begin(), last.end(), kNever); }
+};
+
+// Counts, for each voxel of a row, the voxels of its column run up to and including it
+// seen from the sweep's direction. `pos` is the row's position along the axis and `step`
+// +1 (forward) or -1 (backward). The sum of both directions minus one is the run.
+template <class Visit>
+void CountRow(const VoxelSet& set, int64_t row, int32_t pos, int32_t step, int64_t col0,
+              ColumnState* state, Visit visit) {
+  for (int64_t i = set.RowBegin(row); i < set.RowBegin(row + 1); ++i) {
+    const Run& run = set.run(i);
+    const uint64_t first = set.RunFirstIndex(i);
+    for (int32_t x = run.x0; x < run.x1; ++x) {
+      const int64_t col = col0 + x;
+      const uint32_t c =
+          state->last[col] == pos - step ? std::min(state->count[col] + 1, kSaturate) : 1;
+      state->last[col] = pos;
+      state->count[col] = c;
+      visit(first + (x - run.x0), c);
     }
   }
 }
 
-// Run lengths along y (axis 1) or z (axis 2): a forward sweep counts the voxels of the
-// run up to each voxel, a backward sweep from the other end; their sum minus one is the
-// whole run. `stamp` remembers, per column, which row last held a voxel.
-void AxisRuns(const VoxelSet& set, int axis, std::vector<uint16_t>* tau) {
+// Runs along y: slices are independent, so they run in parallel.
+void YRuns(const VoxelSet& set, std::vector<uint16_t>* partial, std::vector<uint16_t>* tau) {
   const Dims& d = set.dims();
-  const int64_t columns = axis == 1 ? d.nx : d.nx * d.ny;
-  std::vector<int64_t> stamp(static_cast<size_t>(columns));
-  std::vector<uint32_t> count(static_cast<size_t>(columns));
-  std::vector<uint16_t> partial(set.size());
-  for (int pass = 0; pass < 2; ++pass) {
-    const bool forward = pass == 0;
-    std::fill(stamp.begin(), stamp.end(), INT64_MIN);
-    Sweep(set, forward, [&](uint64_t i, int32_t x, int32_t y, int32_t z) {
-      // Position along the axis and column. For y the position is global over slices with
-      // a gap of one between them, so that runs never continue from one slice to the next
-      // and no reset is needed.
-      const int64_t pos = axis == 1 ? int64_t{z} * (d.ny + 1) + y : z;
-      const int64_t col = axis == 1 ? x : int64_t{y} * d.nx + x;
-      const int64_t prev = forward ? pos - 1 : pos + 1;
-      const uint32_t c = stamp[col] == prev ? std::min(count[col] + 1, kSaturate) : 1;
-      stamp[col] = pos;
-      count[col] = c;
-      if (forward) {
-        partial[i] = static_cast<uint16_t>(c);
-      } else {
-        const uint32_t run = std::min<uint32_t>(partial[i] + c - 1, kSaturate);
-        (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.nz), [&](const tbb::blocked_range<int64_t>& r) {
+    ColumnState state(static_cast<size_t>(d.nx));
+    for (int64_t z = r.begin(); z < r.end(); ++z) {
+      state.Reset();
+      for (int64_t y = 0; y < d.ny; ++y) {
+        CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), 1, 0, &state,
+                 [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
       }
-    });
-  }
+      state.Reset();
+      for (int64_t y = d.ny - 1; y >= 0; --y) {
+        CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), -1, 0, &state,
+                 [&](uint64_t i, uint32_t c) {
+                   const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
+                   (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
+                 });
+      }
+    }
+  });
+}
+
+// Runs along z: columns with different y are independent, so bands of y run in parallel.
+void ZRuns(const VoxelSet& set, std::vector<uint16_t>* partial, std::vector<uint16_t>* tau) {
+  const Dims& d = set.dims();
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.ny, 16), [&](const tbb::blocked_range<int64_t>& r) {
+    ColumnState state(static_cast<size_t>((r.end() - r.begin()) * d.nx));
+    for (int64_t z = 0; z < d.nz; ++z) {
+      for (int64_t y = r.begin(); y < r.end(); ++y) {
+        CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), 1, (y - r.begin()) * d.nx,
+                 &state, [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
+      }
+    }
+    state.Reset();
+    for (int64_t z = d.nz - 1; z >= 0; --z) {
+      for (int64_t y = r.begin(); y < r.end(); ++y) {
+        CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), -1, (y - r.begin()) * d.nx,
+                 &state, [&](uint64_t i, uint32_t c) {
+                   const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
+                   (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
+                 });
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -73,9 +99,10 @@ absl::StatusOr<std::vector<uint16_t>> ComputeThickness(const VoxelSet& set,
     std::fill(tau.begin() + first, tau.begin() + first + run.length(), len);
   });
   SM_RETURN_IF_ERROR(progress.Update(0.2));
-  AxisRuns(set, 1, &tau);
+  std::vector<uint16_t> partial(set.size());
+  YRuns(set, &partial, &tau);
   SM_RETURN_IF_ERROR(progress.Update(0.6));
-  AxisRuns(set, 2, &tau);
+  ZRuns(set, &partial, &tau);
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return tau;
 }

@@ -1,0 +1,62 @@
+// Replays the fuzz entry points on the checked-in corpus and on seeded random mutations of
+// it, so that the normal build keeps what the fuzzers proved.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "tests/fuzz/fuzz_targets.h"
+
+namespace sheetmesh::fuzz {
+namespace {
+
+std::vector<std::string> Corpus(const std::string& name) {
+  std::vector<std::string> out;
+  const std::filesystem::path dir = std::filesystem::path(SHEETMESH_FUZZ_CORPUS) / name;
+  if (!std::filesystem::exists(dir)) return out;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    out.push_back(ss.str());
+  }
+  return out;
+}
+
+void Replay(const std::string& name, void (*target)(const uint8_t*, size_t), int mutations) {
+  const std::vector<std::string> corpus = Corpus(name);
+  ASSERT_FALSE(corpus.empty()) << "no corpus for " << name;
+  std::mt19937 rng(42);
+  for (const std::string& input : corpus) {
+    target(reinterpret_cast<const uint8_t*>(input.data()), input.size());
+    for (int m = 0; m < mutations; ++m) {
+      std::string mutated = input;
+      const int edits = 1 + rng() % 4;
+      for (int e = 0; e < edits && !mutated.empty(); ++e) {
+        const size_t at = rng() % mutated.size();
+        switch (rng() % 3) {
+          case 0:
+            mutated[at] = static_cast<char>(rng());
+            break;
+          case 1:
+            mutated.erase(at, 1 + rng() % 16);
+            break;
+          default:
+            mutated.insert(at, std::string(1 + rng() % 4, static_cast<char>(rng())));
+        }
+      }
+      target(reinterpret_cast<const uint8_t*>(mutated.data()), mutated.size());
+    }
+  }
+}
+
+TEST(FuzzReplayTest, NrrdHeaderCorpusAndMutations) { Replay("nrrd_header", FuzzNrrdHeader, 300); }
+TEST(FuzzReplayTest, VolumeFileCorpusAndMutations) { Replay("volume_file", FuzzVolumeFile, 60); }
+TEST(FuzzReplayTest, TextParsersCorpusAndMutations) {
+  Replay("text_parsers", FuzzTextParsers, 300);
+}
+
+}  // namespace
+}  // namespace sheetmesh::fuzz

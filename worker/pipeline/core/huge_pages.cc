@@ -1,0 +1,25 @@
+#include "worker/pipeline/core/huge_pages.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <string>
+
+namespace sheetmesh {
+
+void UseTransparentHugePages(int argc, char** argv) {
+  (void)argc;
+  if (getenv("SHEETMESH_NO_HUGE_PAGES") != nullptr) return;
+  const char* current = getenv("GLIBC_TUNABLES");
+  if (current != nullptr && strstr(current, "glibc.malloc.hugetlb") != nullptr) return;
+  std::string tunables = "glibc.malloc.hugetlb=1";
+  if (current != nullptr && current[0] != '\0') tunables = std::string(current) + ":" + tunables;
+  setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
+  execv("/proc/self/exe", argv);
+  // The exec failed (no /proc?): carry on without huge pages. Unset the variable so that
+  // child processes are not surprised by it.
+  if (current == nullptr) unsetenv("GLIBC_TUNABLES");
+}
+
+}  // namespace sheetmesh

@@ -13,6 +13,7 @@
 #include "absl/strings/str_split.h"
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/phantom_command.h"
+#include "worker/pipeline/cli/surface_command.h"
 #include "worker/pipeline/core/huge_pages.h"
 #include "worker/pipeline/core/status_macros.h"
 
@@ -35,8 +36,28 @@ ABSL_FLAG(std::string, mask_labels, "", "rock mask: values that are rock (defaul
 ABSL_FLAG(bool, json, false, "print JSON");
 ABSL_FLAG(int, connectivity, 6, "component connectivity: 6, 18 or 26");
 ABSL_FLAG(int, largest, 10, "component sizes to list");
+// surface, score
+ABSL_FLAG(double, r, 7.0, "surface: SCVD cell radius r in voxels (formula 3)");
+ABSL_FLAG(double, target_similarity, -1, "surface: search the largest r reaching this similarity (paper: 0.6)");
+ABSL_FLAG(bool, search_best, false, "surface: search the r of best similarity");
+ABSL_FLAG(double, r_min, 2, "surface: smallest r of a search");
+ABSL_FLAG(double, r_max, 0, "surface: largest r of a search (0: a quarter of the largest extent)");
+ABSL_FLAG(int64_t, generators, 0, "surface: total generator count instead of formula 3");
+ABSL_FLAG(double, thickness, 0, "surface: mean thickness t in voxels for formula 3 (0: measured)");
+ABSL_FLAG(int, lloyd_max_iter, 20, "surface: Lloyd steps at most");
+ABSL_FLAG(double, lloyd_tol, 1e-3, "surface: Lloyd stop when the energy changes less (relative)");
+ABSL_FLAG(double, fold_angle, 50, "surface: reject triangles folding onto kept ones below this dihedral angle");
+ABSL_FLAG(std::string, method, "extended", "surface: extended (rim strip, centroid vertices, thickness along the normal) or paper (the plain reading)");
+ABSL_FLAG(std::string, placement, "", "surface: vertex placement generator or centroid (default: the method's)");
+ABSL_FLAG(std::string, thickness_measure, "", "surface: axis_runs or normal (default: the method's)");
+ABSL_FLAG(std::string, rim, "", "surface: true/false, close the rim band (default: the method's)");
+ABSL_FLAG(std::string, similarity_model, "face", "surface: face (one thickness per triangle) or vertex (linear shell)");
+ABSL_FLAG(bool, hausdorff, true, "surface/score: also compute the symmetric Hausdorff distance");
+ABSL_FLAG(std::string, grid_rates, "2,3,4", "surface: grid-model baselines to score (empty: none)");
+ABSL_FLAG(std::string, formats, "ply,vtp,obj", "surface: mesh files to write");
+ABSL_FLAG(bool, closed, false, "score: the mesh is a closed surface; score the volume it encloses");
 // phantom
-ABSL_FLAG(std::string, o, "", "output path");
+ABSL_FLAG(std::string, o, "", "output path (phantom: the volume file; surface: the folder)");
 ABSL_FLAG(std::string, out_format, "raw", "phantom output: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb");
 ABSL_FLAG(std::string, preset, "", "phantom preset: sample (the demo volume) or paper (1012x1024x931)");
 ABSL_FLAG(std::string, phantom_dims, "", "phantom dims NXxNYxNZ");
@@ -52,8 +73,11 @@ namespace {
 constexpr char kUsage[] =
     "sheetmesh-pipeline COMMAND [ARGS] [FLAGS]\n\n"
     "commands:\n"
-    "  info VOLUME        dims, sheet voxels, thickness and components of a volume\n"
-    "  phantom -o FILE    write a synthetic rock volume and its ground truth\n\n"
+    "  info VOLUME             dims, sheet voxels, thickness and components of a volume\n"
+    "  surface VOLUME -o DIR   mesh the sheets: --r R, or --target-similarity S, or --search-best\n"
+    "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed surfaces)\n"
+    "  phantom -o FILE         write a synthetic rock volume and its ground truth\n\n"
+    "Flags may be written with dashes or underscores (--target-similarity).\n"
     "Run with --help for every flag.";
 
 absl::StatusOr<Vec3> ParseVec3(const std::string& flag, const std::string& text) {
@@ -169,7 +193,113 @@ absl::Status Phantom(const std::vector<std::string>& args) {
   return RunPhantom(options, std::cout);
 }
 
+absl::Status Surface(const std::vector<std::string>& args) {
+  if (args.size() != 1) return absl::InvalidArgumentError("usage: surface VOLUME -o DIR [flags]");
+  PipelineOptions o;
+  SM_ASSIGN_OR_RETURN(o.input, InputFromFlags(args[0]));
+  const std::string method = absl::GetFlag(FLAGS_method);
+  if (method == "paper") {
+    o.surface = SurfaceOptions::Paper();
+  } else if (method != "extended") {
+    return absl::InvalidArgumentError(absl::StrCat("--method=", method, " is not known; use extended or paper"));
+  }
+  ScvdOptions& scvd = o.surface.scvd;
+  scvd.radius_voxels = absl::GetFlag(FLAGS_r);
+  scvd.seed = absl::GetFlag(FLAGS_seed);
+  scvd.generator_count = absl::GetFlag(FLAGS_generators);
+  scvd.mean_thickness_voxels = absl::GetFlag(FLAGS_thickness);
+  scvd.lloyd_max_iter = absl::GetFlag(FLAGS_lloyd_max_iter);
+  scvd.lloyd_tol = absl::GetFlag(FLAGS_lloyd_tol);
+  o.surface.triangles.fold_angle_degrees = absl::GetFlag(FLAGS_fold_angle);
+  const std::string placement = absl::GetFlag(FLAGS_placement);
+  if (placement == "generator") {
+    o.surface.placement = VertexPlacement::kGenerator;
+  } else if (placement == "centroid") {
+    o.surface.placement = VertexPlacement::kCentroid;
+  } else if (!placement.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--placement=", placement, " is not known; use generator or centroid"));
+  }
+  const std::string measure = absl::GetFlag(FLAGS_thickness_measure);
+  if (measure == "axis_runs") {
+    o.surface.thickness = ThicknessMeasure::kAxisRuns;
+  } else if (measure == "normal") {
+    o.surface.thickness = ThicknessMeasure::kNormal;
+  } else if (!measure.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--thickness_measure=", measure, " is not known; use axis_runs or normal"));
+  }
+  const std::string rim = absl::GetFlag(FLAGS_rim);
+  if (rim == "true" || rim == "false") {
+    o.surface.triangles.rim = rim == "true";
+  } else if (!rim.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat("--rim=", rim, " must be true or false"));
+  }
+  const std::string model = absl::GetFlag(FLAGS_similarity_model);
+  if (model == "vertex") {
+    o.score.height = PrismHeight::kVertex;
+    o.radius_search.height = PrismHeight::kVertex;
+  } else if (model != "face") {
+    return absl::InvalidArgumentError(absl::StrCat("--similarity_model=", model, " is not known; use face or vertex"));
+  }
+  if (absl::GetFlag(FLAGS_target_similarity) != -1) {
+    o.search_radius = true;
+    o.radius_search.goal = RadiusGoal::kTargetSimilarity;
+    o.radius_search.target_similarity = absl::GetFlag(FLAGS_target_similarity);
+  } else if (absl::GetFlag(FLAGS_search_best)) {
+    o.search_radius = true;
+    o.radius_search.goal = RadiusGoal::kBestSimilarity;
+  }
+  o.radius_search.min_radius_voxels = absl::GetFlag(FLAGS_r_min);
+  o.radius_search.max_radius_voxels = absl::GetFlag(FLAGS_r_max);
+  o.score.hausdorff = absl::GetFlag(FLAGS_hausdorff);
+  o.score.grid_rates.clear();
+  for (absl::string_view k : absl::StrSplit(absl::GetFlag(FLAGS_grid_rates), ',', absl::SkipEmpty())) {
+    int rate = 0;
+    if (!absl::SimpleAtoi(k, &rate) || rate < 1) {
+      return absl::InvalidArgumentError(absl::StrCat("--grid_rates: '", k, "' is not an integer >= 1"));
+    }
+    o.score.grid_rates.push_back(rate);
+  }
+  o.output.dir = absl::GetFlag(FLAGS_o);
+  if (o.output.dir.empty()) return absl::InvalidArgumentError("surface needs -o DIR");
+  o.output.ply = o.output.vtp = o.output.obj = false;
+  for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_formats), ',', absl::SkipEmpty())) {
+    if (f == "ply") {
+      o.output.ply = true;
+    } else if (f == "vtp") {
+      o.output.vtp = true;
+    } else if (f == "obj") {
+      o.output.obj = true;
+    } else {
+      return absl::InvalidArgumentError(absl::StrCat("--formats: '", f, "' is not ply, vtp or obj"));
+    }
+  }
+  return RunSurface(o, std::cout);
+}
+
+absl::Status Score(const std::vector<std::string>& args) {
+  if (args.size() != 2) return absl::InvalidArgumentError("usage: score VOLUME MESH [--closed] [--json]");
+  ScoreCommandOptions o;
+  SM_ASSIGN_OR_RETURN(o.input, InputFromFlags(args[0]));
+  o.mesh_path = args[1];
+  o.closed = absl::GetFlag(FLAGS_closed);
+  o.hausdorff = absl::GetFlag(FLAGS_hausdorff);
+  o.json = absl::GetFlag(FLAGS_json);
+  return RunScore(o, std::cout);
+}
+
+// absl flags take underscores; accept --target-similarity as well as --target_similarity.
+void NormalizeFlagNames(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    char* a = argv[i];
+    if (a[0] != '-' || a[1] != '-') continue;
+    for (char* c = a + 2; *c != '\0' && *c != '='; ++c) {
+      if (*c == '-') *c = '_';
+    }
+  }
+}
+
 int Main(int argc, char** argv) {
+  NormalizeFlagNames(argc, argv);
   absl::SetProgramUsageMessage(kUsage);
   std::vector<char*> rest = absl::ParseCommandLine(argc, argv);
   if (rest.size() < 2) {
@@ -183,6 +313,10 @@ int Main(int argc, char** argv) {
     status = Info(args);
   } else if (command == "phantom") {
     status = Phantom(args);
+  } else if (command == "surface") {
+    status = Surface(args);
+  } else if (command == "score") {
+    status = Score(args);
   } else {
     std::cerr << "unknown command '" << command << "'\n\n" << kUsage << "\n";
     return 2;

@@ -1,7 +1,5 @@
 #include "worker/pipeline/volume/volume_sink.h"
 
-#include <algorithm>
-
 #include "absl/strings/str_cat.h"
 
 namespace sheetmesh {
@@ -28,13 +26,6 @@ absl::Status VolumeSink::CheckComplete() const {
         info_.path, ": only ", slices_written_, " of ", info_.dims.nz, " slices were written"));
   }
   return absl::OkStatus();
-}
-
-void SwapBytes(std::span<std::byte> data, int width) {
-  if (width <= 1) return;
-  for (size_t i = 0; i + width <= data.size(); i += width) {
-    std::reverse(data.begin() + i, data.begin() + i + width);
-  }
 }
 
 }  // namespace sheetmesh

@@ -5,10 +5,10 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <bit>
 #include <span>
 
 #include "absl/status/status.h"
+#include "worker/pipeline/core/byte_order.h"
 #include "worker/pipeline/volume/volume_source.h"
 
 namespace sheetmesh {
@@ -35,13 +35,6 @@ class VolumeSink {
   VolumeInfo info_;
   int64_t slices_written_ = 0;
 };
-
-// Swaps the byte order of every `width`-byte element of `data` in place (width 1: no-op).
-void SwapBytes(std::span<std::byte> data, int width);
-// True when this machine is little-endian.
-constexpr bool NativeIsLittleEndian() {
-  return std::endian::native == std::endian::little;
-}
 
 }  // namespace sheetmesh
 

@@ -1,0 +1,192 @@
+#include "worker/pipeline/surface/surface_builder.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tests/testing/shapes.h"
+#include "tests/testing/status_matchers.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/similarity/mesh_model.h"
+#include "worker/pipeline/similarity/similarity.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::PlaneSlab;
+using ::sheetmesh::testing::ShapeSet;
+using ::sheetmesh::testing::StatusIs;
+
+struct Built {
+  SheetAnalysis sheet;
+  SurfaceResult surface;
+  TopologyReport topo;
+  SimilarityScore score;
+};
+
+Built Build(VoxelSet set, double r, SurfaceOptions o = {}) {
+  Built b;
+  auto a = AnalyzeSheet(std::move(set));
+  EXPECT_TRUE(a.ok()) << a.status();
+  b.sheet = std::move(a).value();
+  o.scvd.radius_voxels = r;
+  auto s = BuildSurface(b.sheet, o);
+  EXPECT_TRUE(s.ok()) << s.status();
+  b.surface = std::move(s).value();
+  b.topo = AnalyzeTopology(b.surface.mesh);
+  auto model = VoxelizePrisms(b.surface.mesh, b.sheet.set.dims());
+  EXPECT_TRUE(model.ok());
+  b.score = ScoreModel(*model, b.sheet.set);
+  return b;
+}
+
+// The invariants every surface must keep.
+void ExpectCleanMesh(const Built& b) {
+  const TriangleMesh& m = b.surface.mesh;
+  EXPECT_EQ(b.topo.duplicate_faces, 0u);
+  EXPECT_EQ(b.topo.degenerate_faces, 0u);
+  EXPECT_EQ(b.topo.unused_vertices, 0u);
+  EXPECT_EQ(b.topo.inconsistent_edges, 0u) << "orientation must agree within manifold pieces";
+  EXPECT_THAT(FindSelfIntersections(m, 10), ::testing::IsEmpty());
+  ASSERT_EQ(m.face_thickness.size(), m.num_faces());
+  ASSERT_EQ(m.face_piece.size(), m.num_faces());
+  for (float t : m.face_thickness) EXPECT_GE(t, 0.0f);
+}
+
+TEST(SurfaceBuilderTest, FlatSlabGivesOneLayerWithZNormals) {
+  const Built b = Build(PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), 7);
+  ASSERT_GT(b.surface.mesh.num_faces(), 20u);
+  ExpectCleanMesh(b);
+  EXPECT_EQ(b.topo.nonmanifold_edges, 0u);
+  EXPECT_EQ(b.topo.pieces, 1u);
+  EXPECT_EQ(b.topo.boundary_loops, 1u);
+  for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
+    const Vec3 n = UnitNormal(Corners(b.surface.mesh, f));
+    EXPECT_NEAR(std::abs(n.z), 1.0, 1e-9) << "face " << f;
+    EXPECT_NEAR(b.surface.mesh.face_thickness[f], 5.0, 1e-6);
+  }
+  // One layer: every vertex at the slab's mid-plane.
+  for (const Vec3& v : b.surface.mesh.vertices) EXPECT_NEAR(v.z, 8.0, 1e-9);
+  EXPECT_GE(b.score.similarity, 0.95);
+}
+
+TEST(SurfaceBuilderTest, TiltedSlabKeepsEveryVertexOnTheSheet) {
+  const Vec3 n = Normalized(Vec3(1, 0.5, 1.5));
+  const Built b = Build(PlaneSlab({64, 64, 64}, {32, 32, 32}, n, 5), 7);
+  ExpectCleanMesh(b);
+  EXPECT_EQ(b.topo.nonmanifold_edges, 0u);
+  EXPECT_EQ(b.topo.pieces, 1u);
+  for (const Vec3& v : b.surface.mesh.vertices) {
+    EXPECT_LE(std::abs(Dot(v - Vec3(32, 32, 32), n)), 2.5 + 0.5) << v.x << "," << v.y << "," << v.z;
+  }
+  for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
+    EXPECT_GT(std::abs(Dot(UnitNormal(Corners(b.surface.mesh, f)), n)), 0.9);
+  }
+  EXPECT_GE(b.score.similarity, 0.9);
+}
+
+TEST(SurfaceBuilderTest, CylindricalShellKeepsEveryVertexOnTheSheet) {
+  const double r = 30, t = 5;
+  const Built b = Build(testing::CylinderShell({80, 80, 40}, 40, 40, r, t, 3, 37), 7);
+  ExpectCleanMesh(b);
+  EXPECT_EQ(b.topo.nonmanifold_edges, 0u);
+  EXPECT_EQ(b.topo.boundary_loops, 2u) << "the top and bottom rims of the tube";
+  for (const Vec3& v : b.surface.mesh.vertices) {
+    EXPECT_LE(std::abs(std::hypot(v.x - 40, v.y - 40) - r), t / 2 + 0.5);
+  }
+  EXPECT_GE(b.score.similarity, 0.75);
+}
+
+TEST(SurfaceBuilderTest, DiscWithAHoleHasTwoBoundaryLoops) {
+  const VoxelSet annulus = ShapeSet({72, 72, 12}, [](double x, double y, double z) {
+    const double d = std::hypot(x - 36, y - 36);
+    return std::abs(z - 6) <= 2 && d <= 32 && d >= 12;
+  });
+  const Built b = Build(annulus, 5);
+  ExpectCleanMesh(b);
+  EXPECT_EQ(b.topo.boundary_loops, 2u);
+  EXPECT_EQ(b.topo.pieces, 1u);
+  // The hole stays a hole: no triangle covers its centre.
+  for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
+    const Triangle tri = Corners(b.surface.mesh, f);
+    EXPECT_GT(PointTriangleDistance2(Vec3(36, 36, 6), tri), 8.0 * 8.0);
+  }
+}
+
+TEST(SurfaceBuilderTest, CrossingSlabsAreNonManifoldOnlyAlongTheCrossing) {
+  const Dims d{64, 64, 48};
+  const VoxelSet cross = Union(PlaneSlab(d, {32, 32, 24}, {1, 0, 0}, 5),
+                               PlaneSlab(d, {32, 32, 24}, {0, 1, 0}, 5));
+  const double r = 7;
+  const Built b = Build(cross, r);
+  ExpectCleanMesh(b);
+  ASSERT_GT(b.topo.nonmanifold_edges, 0u) << "the sheets must share edges along the crossing";
+  for (const auto& [p, q] : b.topo.nonmanifold_edge_list) {
+    for (uint32_t v : {p, q}) {
+      const Vec3& x = b.surface.mesh.vertices[v];
+      EXPECT_LE(std::hypot(x.x - 32, x.y - 32), r + 1) << "non-manifold edge far from the crossing";
+    }
+  }
+}
+
+TEST(SurfaceBuilderTest, SameSeedGivesTheSameMesh) {
+  const VoxelSet s = PlaneSlab({48, 48, 48}, {24, 24, 24}, {1, 2, 3}, 4);
+  SurfaceOptions o;
+  o.scvd.seed = 9;
+  const Built a = Build(s, 6, o), b = Build(s, 6, o);
+  EXPECT_EQ(a.surface.mesh.faces, b.surface.mesh.faces);
+  EXPECT_EQ(a.surface.mesh.vertices, b.surface.mesh.vertices);
+  o.scvd.seed = 10;
+  const Built c = Build(s, 6, o);
+  EXPECT_NE(a.surface.mesh.vertices, c.surface.mesh.vertices);
+}
+
+TEST(SurfaceBuilderTest, PaperMethodPutsVerticesOnGeneratorVoxelsWithoutRim) {
+  const Built b = Build(PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), 7, SurfaceOptions::Paper());
+  ExpectCleanMesh(b);
+  EXPECT_EQ(b.surface.triangle_stats.rim_vertices, 0u);
+  for (const Vec3& v : b.surface.mesh.vertices) {
+    EXPECT_TRUE(b.sheet.set.Contains(std::llround(v.x), std::llround(v.y), std::llround(v.z)));
+    EXPECT_EQ(v.x, std::round(v.x));
+  }
+  // Without the rim strip a band along the rim is lost (ALGORITHM.md's measurement).
+  EXPECT_LT(b.score.similarity, 0.9);
+}
+
+TEST(SurfaceBuilderTest, ComponentTooSmallForATriangleIsReportedAsSkipped) {
+  const Dims d{64, 64, 16};
+  const VoxelSet s = Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 5),
+                           testing::BoxSet(d, {0, 0, 0}, {2, 2, 2}));
+  const Built b = Build(s, 7);
+  EXPECT_EQ(b.surface.components, 2u);
+  EXPECT_EQ(b.surface.skipped_components, 1u);
+  EXPECT_EQ(b.surface.skipped_voxels, 8u);
+  ASSERT_EQ(b.surface.largest_skipped.size(), 1u);
+  EXPECT_EQ(b.surface.largest_skipped[0].voxels, 8u);
+}
+
+TEST(SurfaceBuilderTest, FacesCarryTheirComponentAsPiece) {
+  const Dims d{64, 64, 40};
+  const VoxelSet s = Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 4), PlaneSlab(d, {32, 32, 30}, {0, 0, 1}, 4));
+  const Built b = Build(s, 7);
+  std::set<int32_t> pieces(b.surface.mesh.face_piece.begin(), b.surface.mesh.face_piece.end());
+  EXPECT_EQ(pieces, (std::set<int32_t>{0, 1}));
+  for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
+    const double z = Corners(b.surface.mesh, f)[0].z;
+    EXPECT_EQ(b.surface.mesh.face_piece[f] == b.surface.mesh.face_piece[0],
+              (z < 20) == (Corners(b.surface.mesh, 0)[0].z < 20));
+  }
+}
+
+TEST(SurfaceBuilderTest, BadRadiusIsInvalidArgument) {
+  auto a = AnalyzeSheet(PlaneSlab({32, 32, 8}, {16, 16, 4}, {0, 0, 1}, 3));
+  ASSERT_TRUE(a.ok());
+  SurfaceOptions o;
+  o.scvd.radius_voxels = 0;
+  EXPECT_THAT(BuildSurface(*a, o), StatusIs(absl::StatusCode::kInvalidArgument));
+  o.scvd.radius_voxels = 1e6;
+  EXPECT_THAT(BuildSurface(*a, o), StatusIs(absl::StatusCode::kInvalidArgument));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,91 @@
+#include "worker/pipeline/cli/surface_command.h"
+
+#include <nlohmann/json.hpp>
+
+#include "absl/strings/str_format.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/similarity/mesh_model.h"
+#include "worker/pipeline/similarity/similarity.h"
+
+namespace sheetmesh {
+
+absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
+  SM_ASSIGN_OR_RETURN(PipelineReport r, RunPipeline(options));
+  out << absl::StrFormat("sheet       %d voxels, t̄ = %.2f, %d components\n", r.sheet_voxels,
+                         r.thickness.mean, r.components);
+  if (options.search_radius) {
+    out << "r search   ";
+    for (const RadiusTrial& t : r.radius_choice.trials) {
+      out << absl::StrFormat(" r=%g:%.3f(%d)", t.radius, t.similarity, t.triangles);
+    }
+    out << absl::StrFormat("\n            chose r = %g%s\n", r.radius_choice.radius,
+                           r.radius_choice.target_reached ? "" : " (target not reached: best r)");
+  }
+  out << absl::StrFormat(
+      "surface     r = %g: %d generators (%d Lloyd steps), %d vertices, %d triangles, "
+      "element size %.2f voxels\n",
+      r.options.surface.scvd.radius_voxels, r.generators, r.lloyd_iterations, r.vertices,
+      r.triangles, r.element_size_voxels);
+  out << absl::StrFormat(
+      "topology    %d boundary loops, %d non-manifold edges, %d pieces; %d components "
+      "(%d voxels) too small for a triangle\n",
+      r.topology.boundary_loops, r.topology.nonmanifold_edges, r.topology.pieces,
+      r.skipped_components, r.skipped_voxels);
+  out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f", r.similarity.similarity,
+                         r.similarity.c_in, r.similarity.c_out, r.similarity.c_image, r.similarity.dice);
+  if (r.similarity.hausdorff >= 0) out << absl::StrFormat(", Hausdorff %.2f voxels", r.similarity.hausdorff);
+  out << absl::StrFormat("; other prism model %.4f\n", r.shell_similarity);
+  if (!r.grid.empty()) {
+    out << "grid models";
+    for (const GridFigure& g : r.grid) {
+      out << absl::StrFormat("  k=%d: %.4f (%d cells)", g.rate, g.similarity, g.grid_quantity);
+    }
+    out << "\n";
+  }
+  out << "time       ";
+  for (const StageTime& t : r.timings) out << absl::StrFormat(" %s %.2fs", t.stage, t.seconds);
+  out << "\n";
+  if (!options.output.dir.empty()) out << "wrote       " << options.output.dir << "/{";
+  for (size_t i = 0; i < r.files.size(); ++i) out << (i ? "," : "") << r.files[i];
+  if (!options.output.dir.empty()) out << "}\n";
+  return absl::OkStatus();
+}
+
+absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out) {
+  if (!options.closed && options.mesh_path.size() > 4 &&
+      options.mesh_path.substr(options.mesh_path.size() - 4) == ".obj") {
+    return absl::InvalidArgumentError(absl::StrCat(
+        options.mesh_path, ": OBJ carries no thickness; give --closed or score the PLY"));
+  }
+  SM_ASSIGN_OR_RETURN(SheetPhase phase, LoadSheetPhase(options.input));
+  SM_ASSIGN_OR_RETURN(TriangleMesh mesh, ReadMesh(options.mesh_path, phase.info.placement));
+  VoxelSet model;
+  if (options.closed) {
+    SM_ASSIGN_OR_RETURN(model, VoxelizeClosedSurface(mesh, phase.info.dims));
+  } else if (mesh.face_thickness.size() == mesh.faces.size()) {
+    SM_ASSIGN_OR_RETURN(model, VoxelizePrisms(mesh, phase.info.dims));
+  } else {
+    return absl::InvalidArgumentError(absl::StrCat(
+        options.mesh_path, ": has no per-face thickness to build sheet prisms from; give "
+                           "--closed to score a closed surface by the volume it encloses"));
+  }
+  SimilarityScore s = ScoreModel(model, phase.sheet);
+  if (options.hausdorff) {
+    SM_ASSIGN_OR_RETURN(s.hausdorff, HausdorffDistance(model, phase.sheet));
+  }
+  if (options.json) {
+    nlohmann::json j = {{"mesh", options.mesh_path}, {"volume", phase.info.path},
+                        {"triangles", mesh.num_faces()}, {"similarity", s.similarity},
+                        {"c_in", s.c_in}, {"c_out", s.c_out}, {"c_image", s.c_image},
+                        {"dice", s.dice}, {"hausdorff_voxels", s.hausdorff}};
+    out << j.dump(2) << "\n";
+    return absl::OkStatus();
+  }
+  out << absl::StrFormat("%s: %d triangles, similarity %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f, Hausdorff %.2f voxels\n",
+                         options.mesh_path, mesh.num_faces(), s.similarity, s.c_in, s.c_out,
+                         s.c_image, s.dice, s.hausdorff);
+  return absl::OkStatus();
+}
+
+}  // namespace sheetmesh

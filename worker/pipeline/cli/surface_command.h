@@ -1,0 +1,32 @@
+// `sheetmesh-pipeline surface` and `score`: mesh a volume's sheets (SCVD, triangles,
+// similarity, files), and score any mesh file against a volume.
+#ifndef SHEETMESH_WORKER_PIPELINE_CLI_SURFACE_COMMAND_H_
+#define SHEETMESH_WORKER_PIPELINE_CLI_SURFACE_COMMAND_H_
+
+#include <ostream>
+#include <string>
+
+#include "absl/status/status.h"
+#include "worker/pipeline/run/pipeline.h"
+
+namespace sheetmesh {
+
+// Runs the pipeline and prints a summary; files and report.json go to options.output.dir.
+absl::Status RunSurface(const PipelineOptions& options, std::ostream& out);
+
+struct ScoreCommandOptions {
+  SheetInput input;           // the image
+  std::string mesh_path;      // .ply or .obj, physical coordinates of the input
+  bool closed = false;        // score by enclosed volume (closed surfaces of other tools);
+                              // otherwise as sheet prisms from the PLY's face thickness
+  bool hausdorff = true;
+  bool json = false;
+};
+
+// Scores a mesh file against the volume's sheet phase with the same scorer the pipeline
+// uses, and prints the figures.
+absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_CLI_SURFACE_COMMAND_H_

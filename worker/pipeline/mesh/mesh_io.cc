@@ -1,0 +1,374 @@
+#include "worker/pipeline/mesh/mesh_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "worker/pipeline/core/byte_order.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/core/version.h"
+
+
+namespace sheetmesh {
+namespace {
+
+template <class T>
+void Put(std::string* out, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  if constexpr (sizeof(T) > 1) {
+    if (!NativeIsLittleEndian()) std::reverse(b, b + sizeof(T));
+  }
+  out->append(b, sizeof(T));
+}
+
+}  // namespace
+
+double PhysicalLength(double voxels, const Placement& p) {
+  return voxels * std::cbrt(std::abs(p.spacing.x * p.spacing.y * p.spacing.z));
+}
+
+absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+  const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
+  const bool fthick = mesh.face_thickness.size() == mesh.faces.size();
+  const bool fpiece = mesh.face_piece.size() == mesh.faces.size();
+  std::string out = absl::StrCat("ply\nformat binary_little_endian 1.0\ncomment sheetmesh ",
+                                 SHEETMESH_VERSION, "\n");
+  if (!placement.unit.empty()) absl::StrAppend(&out, "comment unit ", placement.unit, "\n");
+  absl::StrAppend(&out, "element vertex ", mesh.vertices.size(),
+                  "\nproperty float x\nproperty float y\nproperty float z\n");
+  if (vthick) out += "property float thickness\n";
+  absl::StrAppend(&out, "element face ", mesh.faces.size(), "\nproperty list uchar int vertex_indices\n");
+  if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
+  if (fpiece) out += "property int piece\n";
+  out += "end_header\n";
+  out.reserve(out.size() + mesh.vertices.size() * 16 + mesh.faces.size() * 25);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3 p = placement.ToPhysical(mesh.vertices[v]);
+    Put<float>(&out, static_cast<float>(p.x));
+    Put<float>(&out, static_cast<float>(p.y));
+    Put<float>(&out, static_cast<float>(p.z));
+    if (vthick) Put<float>(&out, static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
+  }
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    Put<uint8_t>(&out, 3);
+    for (uint32_t v : mesh.faces[f]) Put<int32_t>(&out, static_cast<int32_t>(v));
+    if (fthick) {
+      Put<float>(&out, static_cast<float>(PhysicalLength(mesh.face_thickness[f], placement)));
+      Put<float>(&out, mesh.face_thickness[f]);
+    }
+    if (fpiece) Put<int32_t>(&out, mesh.face_piece[f]);
+  }
+  return WriteFileAtomically(path, out);
+}
+
+absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+  std::string out;
+  absl::StrAppend(&out,
+                  "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "
+                  "byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"",
+                  mesh.vertices.size(), "\" NumberOfPolys=\"", mesh.faces.size(), "\">\n");
+  out += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const Vec3& v : mesh.vertices) {
+    const Vec3 p = placement.ToPhysical(v);
+    absl::StrAppendFormat(&out, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+  }
+  out += "</DataArray>\n</Points>\n";
+  if (mesh.vertex_thickness.size() == mesh.vertices.size()) {
+    out += "<PointData Scalars=\"thickness\">\n<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
+    for (float t : mesh.vertex_thickness) absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
+    out += "</DataArray>\n</PointData>\n";
+  }
+  out += "<CellData Scalars=\"thickness\">\n";
+  if (mesh.face_thickness.size() == mesh.faces.size()) {
+    out += "<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
+    for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
+    out += "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness_voxels\" format=\"ascii\">\n";
+    for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", t);
+    out += "</DataArray>\n";
+  }
+  if (mesh.face_piece.size() == mesh.faces.size()) {
+    out += "<DataArray type=\"Int32\" Name=\"piece\" format=\"ascii\">\n";
+    for (int32_t p : mesh.face_piece) absl::StrAppend(&out, p, "\n");
+    out += "</DataArray>\n";
+  }
+  out += "</CellData>\n<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (const Face& f : mesh.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
+  out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (size_t f = 0; f < mesh.faces.size(); ++f) absl::StrAppend(&out, 3 * (f + 1), "\n");
+  out += "</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return WriteFileAtomically(path, out);
+}
+
+absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+  std::string out = absl::StrCat("# sheetmesh ", SHEETMESH_VERSION, ": ", mesh.vertices.size(),
+                                 " vertices, ", mesh.faces.size(), " triangles\n");
+  if (!placement.unit.empty()) absl::StrAppend(&out, "# unit ", placement.unit, "\n");
+  for (const Vec3& v : mesh.vertices) {
+    const Vec3 p = placement.ToPhysical(v);
+    absl::StrAppendFormat(&out, "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
+  }
+  const bool pieces = mesh.face_piece.size() == mesh.faces.size();
+  std::vector<size_t> order(mesh.faces.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  if (pieces) {
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return mesh.face_piece[a] < mesh.face_piece[b]; });
+  }
+  int64_t group = INT64_MIN;
+  for (size_t f : order) {
+    if (pieces && mesh.face_piece[f] != group) {
+      group = mesh.face_piece[f];
+      absl::StrAppend(&out, "g piece_", group, "\n");
+    }
+    const Face& t = mesh.faces[f];
+    absl::StrAppend(&out, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
+  }
+  return WriteFileAtomically(path, out);
+}
+
+namespace {
+
+Vec3 ToIndex(const Vec3& p, const Placement& pl) {
+  return {(p.x - pl.origin.x) / pl.spacing.x, (p.y - pl.origin.y) / pl.spacing.y,
+          (p.z - pl.origin.z) / pl.spacing.z};
+}
+
+absl::Status AddPolygon(const std::vector<int64_t>& idx, size_t num_vertices,
+                        const std::string& where, TriangleMesh* mesh) {
+  for (int64_t i : idx) {
+    if (i < 0 || static_cast<size_t>(i) >= num_vertices) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": vertex index ", i,
+                                                     " outside 0..", num_vertices - 1));
+    }
+  }
+  for (size_t k = 1; k + 1 < idx.size(); ++k) {
+    mesh->faces.push_back({static_cast<uint32_t>(idx[0]), static_cast<uint32_t>(idx[k]),
+                           static_cast<uint32_t>(idx[k + 1])});
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<TriangleMesh> ReadObj(const std::string& path, const std::string& text,
+                                     const Placement& placement) {
+  TriangleMesh mesh;
+  std::vector<std::vector<int64_t>> polys;
+  int line_no = 0;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    ++line_no;
+    std::vector<absl::string_view> tok = absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
+    if (tok.empty()) continue;
+    if (tok[0] == "v") {
+      Vec3 p;
+      if (tok.size() < 4 || !absl::SimpleAtod(tok[1], &p.x) || !absl::SimpleAtod(tok[2], &p.y) ||
+          !absl::SimpleAtod(tok[3], &p.z)) {
+        return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": bad vertex '", line, "'"));
+      }
+      mesh.vertices.push_back(ToIndex(p, placement));
+    } else if (tok[0] == "f") {
+      std::vector<int64_t> idx;
+      for (size_t k = 1; k < tok.size(); ++k) {
+        int64_t i = 0;
+        const absl::string_view first = tok[k].substr(0, tok[k].find('/'));
+        if (!absl::SimpleAtoi(first, &i) || i == 0) {
+          return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": bad face '", line, "'"));
+        }
+        // Negative indices count back from the last vertex so far.
+        idx.push_back(i > 0 ? i - 1 : static_cast<int64_t>(mesh.vertices.size()) + i);
+      }
+      if (idx.size() < 3) {
+        return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": face with fewer than 3 vertices"));
+      }
+      polys.push_back(std::move(idx));
+    }
+  }
+  for (size_t k = 0; k < polys.size(); ++k) {
+    SM_RETURN_IF_ERROR(AddPolygon(polys[k], mesh.vertices.size(), absl::StrCat(path, " face ", k), &mesh));
+  }
+  return mesh;
+}
+
+struct PlyProperty {
+  std::string name;
+  std::string type;        // scalar type, or the item type of a list
+  std::string count_type;  // list count type; empty for scalars
+};
+struct PlyElement {
+  std::string name;
+  int64_t count = 0;
+  std::vector<PlyProperty> props;
+};
+
+int TypeSize(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+// Reads binary scalars and ascii tokens behind one interface.
+class PlyCursor {
+ public:
+  PlyCursor(const std::string& data, size_t pos, bool ascii, bool big)
+      : data_(data), pos_(pos), ascii_(ascii), big_(big) {}
+
+  bool Read(const std::string& type, double* out) {
+    if (ascii_) {
+      while (pos_ < data_.size() && absl::ascii_isspace(data_[pos_])) ++pos_;
+      size_t end = pos_;
+      while (end < data_.size() && !absl::ascii_isspace(data_[end])) ++end;
+      if (end == pos_) return false;
+      const bool ok = absl::SimpleAtod(absl::string_view(data_).substr(pos_, end - pos_), out);
+      pos_ = end;
+      return ok;
+    }
+    const int n = TypeSize(type);
+    if (n == 0 || pos_ + n > data_.size()) return false;
+    unsigned char b[8];
+    std::memcpy(b, data_.data() + pos_, n);
+    pos_ += n;
+    if (big_ == NativeIsLittleEndian()) std::reverse(b, b + n);
+    if (type == "char" || type == "int8") *out = static_cast<int8_t>(b[0]);
+    else if (type == "uchar" || type == "uint8") *out = b[0];
+    else if (type == "short" || type == "int16") { int16_t v; std::memcpy(&v, b, 2); *out = v; }
+    else if (type == "ushort" || type == "uint16") { uint16_t v; std::memcpy(&v, b, 2); *out = v; }
+    else if (type == "int" || type == "int32") { int32_t v; std::memcpy(&v, b, 4); *out = v; }
+    else if (type == "uint" || type == "uint32") { uint32_t v; std::memcpy(&v, b, 4); *out = v; }
+    else if (type == "float" || type == "float32") { float v; std::memcpy(&v, b, 4); *out = v; }
+    else { double v; std::memcpy(&v, b, 8); *out = v; }
+    return true;
+  }
+
+ private:
+  const std::string& data_;
+  size_t pos_;
+  bool ascii_, big_;
+};
+
+absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string& data,
+                                     const Placement& placement) {
+  const size_t end = data.find("end_header");
+  if (data.rfind("ply", 0) != 0 || end == std::string::npos) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": not a PLY file (no 'ply' magic or 'end_header')"));
+  }
+  size_t body = data.find('\n', end);
+  if (body == std::string::npos) return absl::InvalidArgumentError(absl::StrCat(path, ": header ends without a newline"));
+  ++body;
+  bool ascii = false, big = false;
+  std::vector<PlyElement> elements;
+  for (absl::string_view line : absl::StrSplit(absl::string_view(data).substr(0, end), '\n')) {
+    std::vector<absl::string_view> tok = absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
+    if (tok.empty()) continue;
+    if (tok[0] == "format" && tok.size() >= 2) {
+      ascii = tok[1] == "ascii";
+      big = tok[1] == "binary_big_endian";
+      if (!ascii && !big && tok[1] != "binary_little_endian") {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": PLY format '", tok[1], "' is unknown"));
+      }
+    } else if (tok[0] == "element" && tok.size() >= 3) {
+      PlyElement e;
+      e.name = std::string(tok[1]);
+      if (!absl::SimpleAtoi(tok[2], &e.count) || e.count < 0) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": element '", tok[1], "' count '", tok[2], "'"));
+      }
+      elements.push_back(e);
+    } else if (tok[0] == "property" && !elements.empty()) {
+      PlyProperty p;
+      if (tok.size() >= 5 && tok[1] == "list") {
+        p.count_type = std::string(tok[2]);
+        p.type = std::string(tok[3]);
+        p.name = std::string(tok[4]);
+      } else if (tok.size() >= 3) {
+        p.type = std::string(tok[1]);
+        p.name = std::string(tok[2]);
+      }
+      if (TypeSize(p.type) == 0 || (!p.count_type.empty() && TypeSize(p.count_type) == 0)) {
+        return absl::InvalidArgumentError(absl::StrCat(path, ": property '", line, "' has an unknown type"));
+      }
+      elements.back().props.push_back(p);
+    }
+  }
+  TriangleMesh mesh;
+  PlyCursor cur(data, body, ascii, big);
+  const double unit = PhysicalLength(1.0, placement);
+  std::vector<float> face_thick, face_thick_vox, vert_thick;
+  for (const PlyElement& e : elements) {
+    for (int64_t i = 0; i < e.count; ++i) {
+      Vec3 p;
+      std::vector<int64_t> idx;
+      for (const PlyProperty& prop : e.props) {
+        double v = 0;
+        if (prop.count_type.empty()) {
+          if (!cur.Read(prop.type, &v)) {
+            return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " property ", prop.name, " is truncated"));
+          }
+          if (e.name == "vertex") {
+            if (prop.name == "x") p.x = v;
+            if (prop.name == "y") p.y = v;
+            if (prop.name == "z") p.z = v;
+            if (prop.name == "thickness") vert_thick.push_back(static_cast<float>(v / unit));
+          } else if (e.name == "face") {
+            if (prop.name == "thickness") face_thick.push_back(static_cast<float>(v / unit));
+            if (prop.name == "thickness_voxels") face_thick_vox.push_back(static_cast<float>(v));
+            if (prop.name == "piece") mesh.face_piece.push_back(static_cast<int32_t>(v));
+          }
+          continue;
+        }
+        double n = 0;
+        if (!cur.Read(prop.count_type, &n) || n < 0 || n > 1e6) {
+          return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " list ", prop.name, " has a bad count"));
+        }
+        for (int k = 0; k < static_cast<int>(n); ++k) {
+          if (!cur.Read(prop.type, &v)) {
+            return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " list ", prop.name, " is truncated"));
+          }
+          if (e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
+            idx.push_back(static_cast<int64_t>(v));
+          }
+        }
+      }
+      if (e.name == "vertex") mesh.vertices.push_back(ToIndex(p, placement));
+      if (e.name == "face") {
+        if (idx.size() < 3) {
+          return absl::InvalidArgumentError(absl::StrCat(path, ": face ", i, " has fewer than 3 vertices"));
+        }
+        if (idx.size() != 3 && (!face_thick.empty() || !face_thick_vox.empty())) {
+          return absl::InvalidArgumentError(
+              absl::StrCat(path, ": face ", i, " is not a triangle but carries a thickness"));
+        }
+        SM_RETURN_IF_ERROR(AddPolygon(idx, mesh.vertices.size(), absl::StrCat(path, " face ", i), &mesh));
+      }
+    }
+  }
+  // Attributes only count when every element has them.
+  if (face_thick_vox.size() == mesh.faces.size()) {
+    mesh.face_thickness = std::move(face_thick_vox);
+  } else if (face_thick.size() == mesh.faces.size()) {
+    mesh.face_thickness = std::move(face_thick);
+  }
+  if (mesh.face_piece.size() != mesh.faces.size()) mesh.face_piece.clear();
+  if (vert_thick.size() == mesh.vertices.size()) mesh.vertex_thickness = std::move(vert_thick);
+  return mesh;
+}
+
+}  // namespace
+
+absl::StatusOr<TriangleMesh> ReadMesh(const std::string& path, const Placement& placement) {
+  SM_ASSIGN_OR_RETURN(std::string data, ReadFileToString(path, int64_t{4} << 30));
+  const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
+  if (ext == ".ply") return ReadPly(path, data, placement);
+  if (ext == ".obj") return ReadObj(path, data, placement);
+  return absl::InvalidArgumentError(
+      absl::StrCat(path, ": mesh format '", ext, "' is not readable; use .ply or .obj"));
+}
+
+}  // namespace sheetmesh

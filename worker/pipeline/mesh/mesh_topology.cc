@@ -1,0 +1,216 @@
+#include "worker/pipeline/mesh/mesh_topology.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "worker/pipeline/mesh/spatial_grid.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+
+namespace sheetmesh {
+namespace {
+
+uint64_t EdgeKey(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<uint64_t>(a) << 32) | b;
+}
+
+struct Dsu {
+  std::vector<uint32_t> p;
+  explicit Dsu(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0u); }
+  uint32_t Find(uint32_t a) {
+    while (p[a] != a) a = p[a] = p[p[a]];
+    return a;
+  }
+  void Union(uint32_t a, uint32_t b) { p[Find(a)] = Find(b); }
+};
+
+// +1 if face f walks a -> b, -1 if it walks b -> a.
+int Direction(const Face& f, uint32_t a, uint32_t b) {
+  for (int k = 0; k < 3; ++k) {
+    if (f[k] == a && f[(k + 1) % 3] == b) return 1;
+    if (f[k] == b && f[(k + 1) % 3] == a) return -1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+EdgeIndex::EdgeIndex(const TriangleMesh& mesh) {
+  std::vector<std::pair<uint64_t, uint32_t>> pairs;
+  pairs.reserve(mesh.faces.size() * 3);
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& t = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] != t[(k + 1) % 3]) pairs.emplace_back(EdgeKey(t[k], t[(k + 1) % 3]), f);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  faces_.reserve(pairs.size());
+  for (size_t i = 0; i < pairs.size();) {
+    size_t j = i;
+    Edge e;
+    e.a = static_cast<uint32_t>(pairs[i].first >> 32);
+    e.b = static_cast<uint32_t>(pairs[i].first & 0xFFFFFFFFu);
+    e.first = static_cast<uint32_t>(faces_.size());
+    while (j < pairs.size() && pairs[j].first == pairs[i].first) {
+      if (faces_.size() == e.first || faces_.back() != pairs[j].second) {
+        faces_.push_back(pairs[j].second);
+      }
+      ++j;
+    }
+    e.count = static_cast<uint32_t>(faces_.size() - e.first);
+    edges_.push_back(e);
+    i = j;
+  }
+}
+
+int64_t EdgeIndex::Find(uint32_t a, uint32_t b) const {
+  if (a > b) std::swap(a, b);
+  auto it = std::lower_bound(edges_.begin(), edges_.end(), std::make_pair(a, b),
+                             [](const Edge& e, const std::pair<uint32_t, uint32_t>& k) {
+                               return std::make_pair(e.a, e.b) < k;
+                             });
+  if (it == edges_.end() || it->a != a || it->b != b) return -1;
+  return it - edges_.begin();
+}
+
+TopologyReport AnalyzeTopology(const TriangleMesh& mesh) {
+  TopologyReport r;
+  r.vertices = mesh.vertices.size();
+  r.faces = mesh.faces.size();
+  std::vector<std::array<uint32_t, 3>> sorted(mesh.faces.begin(), mesh.faces.end());
+  for (auto& f : sorted) std::sort(f.begin(), f.end());
+  std::vector<uint32_t> order(sorted.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return sorted[a] < sorted[b]; });
+  for (size_t i = 1; i < order.size(); ++i) r.duplicate_faces += sorted[order[i]] == sorted[order[i - 1]];
+  std::vector<uint8_t> used(mesh.vertices.size(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& t = mesh.faces[f];
+    for (uint32_t v : t) used[v] = 1;
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || Area(Corners(mesh, f)) < 1e-12) {
+      ++r.degenerate_faces;
+    }
+  }
+  for (uint8_t u : used) r.unused_vertices += u == 0;
+
+  const EdgeIndex index(mesh);
+  r.edges = index.edges().size();
+  Dsu boundary(mesh.vertices.size());
+  std::vector<uint8_t> on_boundary(mesh.vertices.size(), 0);
+  Dsu pieces(mesh.faces.size());
+  for (const EdgeIndex::Edge& e : index.edges()) {
+    const uint32_t* fs = index.faces(e);
+    for (uint32_t k = 1; k < e.count; ++k) pieces.Union(fs[0], fs[k]);
+    if (e.count == 1) {
+      ++r.boundary_edges;
+      boundary.Union(e.a, e.b);
+      on_boundary[e.a] = on_boundary[e.b] = 1;
+    } else if (e.count == 2) {
+      ++r.manifold_edges;
+      if (Direction(mesh.faces[fs[0]], e.a, e.b) == Direction(mesh.faces[fs[1]], e.a, e.b)) {
+        ++r.inconsistent_edges;
+      }
+    } else {
+      ++r.nonmanifold_edges;
+      r.nonmanifold_edge_list.emplace_back(e.a, e.b);
+    }
+  }
+  for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (on_boundary[v] && boundary.Find(v) == v) ++r.boundary_loops;
+  }
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) r.pieces += pieces.Find(f) == f;
+  return r;
+}
+
+size_t OrientConsistently(TriangleMesh* mesh) {
+  const EdgeIndex index(*mesh);
+  // Face adjacency across manifold edges.
+  std::vector<std::vector<std::pair<uint32_t, int64_t>>> adj(mesh->faces.size());
+  for (size_t i = 0; i < index.edges().size(); ++i) {
+    const EdgeIndex::Edge& e = index.edges()[i];
+    if (e.count != 2) continue;
+    const uint32_t* fs = index.faces(e);
+    adj[fs[0]].emplace_back(fs[1], static_cast<int64_t>(i));
+    adj[fs[1]].emplace_back(fs[0], static_cast<int64_t>(i));
+  }
+  std::vector<uint8_t> seen(mesh->faces.size(), 0);
+  size_t non_orientable = 0;
+  std::vector<uint32_t> stack;
+  for (uint32_t start = 0; start < mesh->faces.size(); ++start) {
+    if (seen[start]) continue;
+    seen[start] = 1;
+    stack.push_back(start);
+    bool bad = false;
+    while (!stack.empty()) {
+      const uint32_t f = stack.back();
+      stack.pop_back();
+      for (const auto& [g, ei] : adj[f]) {
+        const EdgeIndex::Edge& e = index.edges()[ei];
+        const bool same = Direction(mesh->faces[f], e.a, e.b) == Direction(mesh->faces[g], e.a, e.b);
+        if (!seen[g]) {
+          if (same) std::swap(mesh->faces[g][1], mesh->faces[g][2]);
+          seen[g] = 1;
+          stack.push_back(g);
+        } else if (same) {
+          bad = true;
+        }
+      }
+    }
+    non_orientable += bad;
+  }
+  return non_orientable;
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleMesh& mesh,
+                                                                 size_t max_pairs,
+                                                                 double fold_angle_degrees) {
+  std::vector<std::pair<uint32_t, uint32_t>> out;
+  if (mesh.faces.empty()) return out;
+  const double cell = std::max(1.0, 2.0 * MeanEdgeLength(mesh));
+  SpatialGrid grid(cell);
+  std::vector<Vec3> lo(mesh.faces.size()), hi(mesh.faces.size());
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto c = Corners(mesh, f);
+    lo[f] = {std::min({c[0].x, c[1].x, c[2].x}), std::min({c[0].y, c[1].y, c[2].y}),
+             std::min({c[0].z, c[1].z, c[2].z})};
+    hi[f] = {std::max({c[0].x, c[1].x, c[2].x}), std::max({c[0].y, c[1].y, c[2].y}),
+             std::max({c[0].z, c[1].z, c[2].z})};
+    grid.Insert(f, lo[f], hi[f]);
+  }
+  std::vector<uint32_t> stamp(mesh.faces.size(), UINT32_MAX);
+  for (uint32_t f = 0; f < mesh.faces.size() && out.size() < max_pairs; ++f) {
+    const Face& a = mesh.faces[f];
+    const Triangle ta = Corners(mesh, f);
+    grid.Query(lo[f], hi[f], [&](uint32_t g) {
+      if (g <= f || stamp[g] == f || out.size() >= max_pairs) return;
+      stamp[g] = f;
+      const Face& b = mesh.faces[g];
+      for (int k = 0; k < 3; ++k) {
+        if (hi[f][k] < lo[g][k] || hi[g][k] < lo[f][k]) return;
+      }
+      int shared = 0;
+      uint32_t sv[3];
+      for (uint32_t u : a)
+        for (uint32_t v : b)
+          if (u == v) sv[shared++] = u;
+      const Triangle tb = Corners(mesh, g);
+      bool hit = false;
+      if (shared == 0) {
+        hit = TrianglesIntersect(ta, tb);
+      } else if (shared == 1) {
+        hit = TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
+      } else if (shared == 2) {
+        uint32_t ra = 0, rb = 0;
+        for (uint32_t u : a) if (u != sv[0] && u != sv[1]) ra = u;
+        for (uint32_t v : b) if (v != sv[0] && v != sv[1]) rb = v;
+        hit = DihedralAngleDegrees(mesh.vertices[sv[0]], mesh.vertices[sv[1]], mesh.vertices[ra],
+                                   mesh.vertices[rb]) < fold_angle_degrees;
+      }
+      if (hit) out.emplace_back(f, g);
+    });
+  }
+  return out;
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,45 @@
+// Geometry of single triangles: normals, areas, dihedral angles, distances, projections
+// and a triangle-triangle intersection test.
+#ifndef SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_
+#define SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_
+
+#include <array>
+
+#include "worker/pipeline/core/types.h"
+
+namespace sheetmesh {
+
+using Triangle = std::array<Vec3, 3>;
+
+// (b - a) x (c - a): twice the area, along the normal of counter-clockwise a, b, c.
+inline Vec3 AreaVector(const Triangle& t) { return Cross(t[1] - t[0], t[2] - t[0]); }
+inline double Area(const Triangle& t) { return 0.5 * Norm(AreaVector(t)); }
+inline Vec3 UnitNormal(const Triangle& t) { return Normalized(AreaVector(t)); }
+
+// The smallest interior angle, degrees (0 for a degenerate triangle).
+double MinAngleDegrees(const Triangle& t);
+
+// Dihedral angle at edge (p, q) between the half-planes towards r and towards s, measured
+// perpendicular to the edge, in degrees: 180 = flat continuation, 0 = folded back
+// (ALGORITHM §5). Orientation-free. 180 when either triangle is degenerate.
+double DihedralAngleDegrees(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+
+// Squared distance from `p` to the closed triangle.
+double PointTriangleDistance2(const Vec3& p, const Triangle& t);
+
+// Barycentric coordinates (u, v, w) of the projection of `p` onto the triangle's plane:
+// projection = u a + v b + w c. False for a degenerate triangle.
+bool ProjectBarycentric(const Vec3& p, const Triangle& t, double* u, double* v, double* w);
+
+// True when the two closed triangles intersect, by separating axes (both normals, the nine
+// edge cross products and the in-plane edge normals, so coplanar triangles work too).
+// Triangles that only touch within `tolerance` count as disjoint.
+bool TrianglesIntersect(const Triangle& a, const Triangle& b, double tolerance = 1e-9);
+
+// `t` shrunk towards its centroid by `fraction` of the way: used to test triangles that
+// share a vertex or an edge for overlap beyond it.
+Triangle Shrink(const Triangle& t, double fraction);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_

@@ -1,0 +1,39 @@
+// TriangleMesh: the surface mesh of sheets — vertices in voxel index coordinates, faces,
+// and the per-face attributes the method carries (thickness, piece).
+#ifndef SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_
+#define SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "worker/pipeline/core/types.h"
+
+namespace sheetmesh {
+
+using Face = std::array<uint32_t, 3>;
+
+struct TriangleMesh {
+  std::vector<Vec3> vertices;           // voxel index coordinates (not physical)
+  std::vector<Face> faces;
+  std::vector<float> face_thickness;    // per face, voxels; empty when not computed
+  std::vector<int32_t> face_piece;      // per face, object id; empty when not labelled
+  std::vector<float> vertex_thickness;  // per vertex, voxels; empty unless computed
+
+  size_t num_vertices() const { return vertices.size(); }
+  size_t num_faces() const { return faces.size(); }
+};
+
+// Corners of face `f`.
+inline std::array<Vec3, 3> Corners(const TriangleMesh& m, size_t f) {
+  return {m.vertices[m.faces[f][0]], m.vertices[m.faces[f][1]], m.vertices[m.faces[f][2]]};
+}
+
+// Mean edge length over all edges of all faces (the paper's "element size"), 0 if empty.
+double MeanEdgeLength(const TriangleMesh& mesh);
+// Total area.
+double SurfaceArea(const TriangleMesh& mesh);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_

@@ -1,0 +1,132 @@
+#include "worker/pipeline/run/pipeline.h"
+
+#include <filesystem>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+
+namespace sheetmesh {
+namespace {
+
+// Times a stage and appends it to the report.
+class StageTimer {
+ public:
+  StageTimer(PipelineReport* report, std::string stage)
+      : report_(report), stage_(std::move(stage)), start_(absl::Now()) {}
+  ~StageTimer() {
+    report_->timings.push_back({stage_, absl::ToDoubleSeconds(absl::Now() - start_)});
+  }
+
+ private:
+  PipelineReport* report_;
+  std::string stage_;
+  absl::Time start_;
+};
+
+}  // namespace
+
+std::vector<std::string> PlannedStages(const PipelineOptions& options) {
+  std::vector<std::string> stages = {"read", "analyze"};
+  if (options.search_radius) stages.push_back("search-r");
+  stages.insert(stages.end(), {"surface", "similarity"});
+  if (!options.output.dir.empty()) stages.push_back("write");
+  return stages;
+}
+
+absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
+                                           const Progress& progress) {
+  PipelineReport report;
+  report.options = options;
+  SheetPhase phase;
+  {
+    StageTimer t(&report, "read");
+    SM_ASSIGN_OR_RETURN(phase, LoadSheetPhase(options.input, progress.Stage("read")));
+  }
+  report.volume = phase.info;
+  report.sheet_voxels = phase.sheet.size();
+  SheetAnalysis sheet;
+  {
+    StageTimer t(&report, "analyze");
+    SM_ASSIGN_OR_RETURN(sheet, AnalyzeSheet(std::move(phase.sheet), progress.Stage("analyze")));
+  }
+  report.thickness = sheet.thickness_stats;
+  report.thickness.histogram.clear();
+  report.components = sheet.components.count();
+
+  SurfaceOptions surface = options.surface;
+  if (options.search_radius) {
+    StageTimer t(&report, "search-r");
+    SM_ASSIGN_OR_RETURN(report.radius_choice,
+                        SearchRadius(sheet, surface, options.radius_search, progress.Stage("search-r")));
+    surface.scvd.radius_voxels = report.radius_choice.radius;
+    report.options.surface.scvd.radius_voxels = report.radius_choice.radius;
+  }
+  SurfaceResult result;
+  {
+    StageTimer t(&report, "surface");
+    SM_ASSIGN_OR_RETURN(result, BuildSurface(sheet, surface, {}, progress.Stage("surface")));
+  }
+  const TriangleMesh& mesh = result.mesh;
+  report.generators = result.scvd.num_generators();
+  report.lloyd_iterations = result.scvd.iterations;
+  report.lloyd_converged = result.scvd.converged;
+  report.energy = result.scvd.energy.empty() ? 0 : result.scvd.energy.back();
+  report.vertices = mesh.num_vertices();
+  report.triangles = mesh.num_faces();
+  report.element_size_voxels = MeanEdgeLength(mesh);
+  report.area_voxels = SurfaceArea(mesh);
+  report.triangle_stats = result.triangle_stats;
+  report.topology = AnalyzeTopology(mesh);
+  report.topology.nonmanifold_edge_list.clear();
+  report.skipped_components = result.skipped_components;
+  report.skipped_voxels = result.skipped_voxels;
+
+  {
+    StageTimer t(&report, "similarity");
+    const Progress p = progress.Stage("similarity");
+    const PrismHeight other = options.score.height == PrismHeight::kFace ? PrismHeight::kVertex
+                                                                         : PrismHeight::kFace;
+    SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
+    report.similarity = ScoreModel(model, sheet.set);
+    if (options.score.hausdorff) {
+      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff, HausdorffDistance(model, sheet.set, p.Sub(0.2, 0.6)));
+    }
+    SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
+    report.shell_similarity = ScoreModel(shell, sheet.set).similarity;
+    for (int k : options.score.grid_rates) {
+      if (k < 1) return absl::InvalidArgumentError(absl::StrCat("grid rate ", k, " must be >= 1"));
+      report.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
+                             GridQuantity(sheet.set.dims(), k)});
+    }
+    SM_RETURN_IF_ERROR(p.Update(1.0));
+  }
+
+  if (!options.output.dir.empty()) {
+    StageTimer t(&report, "write");
+    const std::string& dir = options.output.dir;
+    SM_RETURN_IF_ERROR(MakeDirs(dir));
+    const Placement& pl = phase.info.placement;
+    auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
+    if (options.output.ply) {
+      SM_RETURN_IF_ERROR(WritePly(path("surface.ply"), mesh, pl));
+      report.files.push_back("surface.ply");
+    }
+    if (options.output.vtp) {
+      SM_RETURN_IF_ERROR(WriteVtp(path("surface.vtp"), mesh, pl));
+      report.files.push_back("surface.vtp");
+    }
+    if (options.output.obj) {
+      SM_RETURN_IF_ERROR(WriteObj(path("surface.obj"), mesh, pl));
+      report.files.push_back("surface.obj");
+    }
+    report.files.push_back("report.json");
+    SM_RETURN_IF_ERROR(WriteFileAtomically(path("report.json"), report.ToJson()));
+    SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
+  }
+  return report;
+}
+
+}  // namespace sheetmesh

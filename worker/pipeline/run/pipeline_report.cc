@@ -1,0 +1,114 @@
+// PipelineReport::ToJson: the report artifact.
+#include <nlohmann/json.hpp>
+
+#include "worker/pipeline/core/version.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/run/pipeline.h"
+
+namespace sheetmesh {
+namespace {
+
+nlohmann::json Vec(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+const char* PlacementName(VertexPlacement p) {
+  return p == VertexPlacement::kCentroid ? "centroid" : "generator";
+}
+const char* MeasureName(ThicknessMeasure m) {
+  return m == ThicknessMeasure::kNormal ? "normal" : "axis_runs";
+}
+const char* HeightName(PrismHeight h) { return h == PrismHeight::kVertex ? "vertex" : "face"; }
+
+}  // namespace
+
+std::string PipelineReport::ToJson() const {
+  const Placement& pl = volume.placement;
+  nlohmann::json j;
+  j["sheetmesh_version"] = SHEETMESH_VERSION;
+  j["input"] = {{"path", volume.path},
+                {"format", volume.format},
+                {"dims", {volume.dims.nx, volume.dims.ny, volume.dims.nz}},
+                {"dtype", std::string(DTypeName(volume.dtype))},
+                {"spacing", Vec(pl.spacing)},
+                {"origin", Vec(pl.origin)},
+                {"unit", pl.unit},
+                {"selection", options.input.selection.ToString()},
+                {"sheet_voxels", sheet_voxels},
+                {"components", components},
+                {"thickness_voxels",
+                 {{"mean", thickness.mean}, {"median", thickness.median},
+                  {"min", thickness.min}, {"max", thickness.max}}}};
+  const SurfaceOptions& s = options.surface;
+  j["parameters"] = {{"r", s.scvd.radius_voxels},
+                     {"seed", s.scvd.seed},
+                     {"generator_count", s.scvd.generator_count},
+                     {"mean_thickness", s.scvd.mean_thickness_voxels},
+                     {"lloyd_max_iter", s.scvd.lloyd_max_iter},
+                     {"lloyd_tol", s.scvd.lloyd_tol},
+                     {"fold_angle_degrees", s.triangles.fold_angle_degrees},
+                     {"rim", s.triangles.rim},
+                     {"vertex_placement", PlacementName(s.placement)},
+                     {"thickness_measure", MeasureName(s.thickness)},
+                     {"similarity_model", HeightName(options.score.height)}};
+  j["scvd"] = {{"generators", generators},
+               {"lloyd_iterations", lloyd_iterations},
+               {"lloyd_converged", lloyd_converged},
+               {"energy", energy}};
+  j["surface"] = {
+      {"vertices", vertices},
+      {"triangles", triangles},
+      {"element_size_voxels", element_size_voxels},
+      {"element_size", PhysicalLength(element_size_voxels, pl)},
+      {"area_voxels", area_voxels},
+      {"candidates", triangle_stats.candidates},
+      {"blocks_three_cells", triangle_stats.blocks_three},
+      {"blocks_amended", triangle_stats.blocks_amended},
+      {"rejected_fold", triangle_stats.rejected_fold},
+      {"rejected_intersection", triangle_stats.rejected_intersection},
+      {"rejected_degenerate", triangle_stats.rejected_degenerate},
+      {"rim_vertices", triangle_stats.rim_vertices},
+      {"rim_triangles", triangle_stats.rim_faces},
+      {"components_without_triangles", skipped_components},
+      {"voxels_without_triangles", skipped_voxels},
+      {"topology",
+       {{"edges", topology.edges},
+        {"boundary_edges", topology.boundary_edges},
+        {"nonmanifold_edges", topology.nonmanifold_edges},
+        {"boundary_loops", topology.boundary_loops},
+        {"pieces", topology.pieces},
+        {"inconsistent_edges", topology.inconsistent_edges},
+        {"duplicate_faces", topology.duplicate_faces},
+        {"degenerate_faces", topology.degenerate_faces}}}};
+  nlohmann::json sim = {{"against", "input sheet phase"},
+                        {"similarity", similarity.similarity},
+                        {"c_in", similarity.c_in},
+                        {"c_out", similarity.c_out},
+                        {"c_image", similarity.c_image},
+                        {"dice", similarity.dice},
+                        {"shell_similarity", shell_similarity}};
+  if (similarity.hausdorff >= 0) sim["hausdorff_voxels"] = similarity.hausdorff;
+  nlohmann::json grid_json = nlohmann::json::array();
+  for (const GridFigure& g : grid) {
+    grid_json.push_back({{"rate", g.rate}, {"similarity", g.similarity}, {"grid_quantity", g.grid_quantity}});
+  }
+  sim["grid_models"] = grid_json;
+  j["similarity"] = sim;
+  if (options.search_radius) {
+    nlohmann::json trials = nlohmann::json::array();
+    for (const RadiusTrial& t : radius_choice.trials) {
+      trials.push_back({{"r", t.radius}, {"triangles", t.triangles}, {"similarity", t.similarity}});
+    }
+    j["radius_search"] = {
+        {"goal", options.radius_search.goal == RadiusGoal::kBestSimilarity ? "best" : "target"},
+        {"target_similarity", options.radius_search.target_similarity},
+        {"chosen_r", radius_choice.radius},
+        {"target_reached", radius_choice.target_reached},
+        {"trials", trials}};
+  }
+  nlohmann::json times = nlohmann::json::object();
+  for (const StageTime& t : timings) times[t.stage] = t.seconds;
+  j["seconds"] = times;
+  j["files"] = files;
+  return j.dump(2);
+}
+
+}  // namespace sheetmesh

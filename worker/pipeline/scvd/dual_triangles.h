@@ -1,0 +1,73 @@
+// Triangles from an SCVD (paper §2.3.1, Figs. 8-9; ALGORITHM §4): every 2x2x2 block of
+// voxels whose sheet voxels belong to three cells gives the triangle of their generators;
+// blocks with four or more cells are resolved by the amending strategy — the cells form a
+// polygon along the adjacency recorded while growing, triangulated by its shorter
+// diagonals. Candidates are then kept greedily, most-voted first, unless they fold onto or
+// cut through a triangle already kept, so the mesh has no duplicate, degenerate or
+// self-intersecting faces, and non-manifold edges only where sheets cross.
+#ifndef SHEETMESH_WORKER_PIPELINE_SCVD_DUAL_TRIANGLES_H_
+#define SHEETMESH_WORKER_PIPELINE_SCVD_DUAL_TRIANGLES_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/scvd/scvd.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh {
+
+struct DualTriangleOptions {
+  double fold_angle_degrees = 50.0;  // a candidate meeting a kept face at a smaller dihedral
+                                     // angle along a shared edge folds onto it: rejected
+  bool reject_intersections = true;  // reject candidates that cut through kept faces
+  // Beyond the paper: the dual mesh stops at the outermost generators, leaving a band about
+  // half a cell wide uncovered along every rim (ALGORITHM, "where the paper loses
+  // fidelity"). With `rim`, each boundary cell gets a vertex at the centroid of its rim
+  // voxels and a strip of triangles joins the mesh boundary to them.
+  bool rim = true;
+  double rim_normal_cos = 0.4;       // a step d along the sheet has |d . n| / |d| below this
+                                     // (n: the vertex normal); a voxel from which such a step
+                                     // leaves the sheet is a rim voxel
+};
+
+struct DualTriangleStats {
+  uint64_t blocks_three = 0;         // blocks with exactly three cells
+  uint64_t blocks_amended = 0;       // blocks with four or more
+  uint64_t blocks_unresolved = 0;    // of those, blocks whose cells form no polygon
+  uint64_t candidates = 0;           // distinct candidate triangles
+  uint64_t kept = 0;
+  uint64_t rejected_degenerate = 0;
+  uint64_t rejected_fold = 0;
+  uint64_t rejected_intersection = 0;
+  uint64_t rim_vertices = 0;         // rim vertices added
+  uint64_t rim_faces = 0;            // of the kept faces, those on the rim strip
+};
+
+struct DualTriangulation {
+  // Vertex ids below the generator count G are generators; id G + k is rim vertex k.
+  std::vector<Face> faces;
+  std::vector<uint32_t> votes;       // blocks that voted for each face (0 for rim faces)
+  std::vector<Vec3> rim_positions;   // rim vertex k's position
+  std::vector<uint32_t> rim_cell;    // the cell (generator) whose rim it is
+  std::vector<float> rim_thickness;  // mean τ of its rim voxels
+  DualTriangleStats stats;
+};
+
+// Triangulates `scvd` of `set`; `positions` are the vertex positions of the generators
+// (their voxels, or cell centroids); `thickness` is τ per voxel (for rim vertices).
+// kCancelled if asked.
+absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
+                                                  const NeighborTable& neighbors,
+                                                  std::span<const uint16_t> thickness,
+                                                  const Scvd& scvd,
+                                                  std::span<const Vec3> positions,
+                                                  const DualTriangleOptions& options = {},
+                                                  const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SCVD_DUAL_TRIANGLES_H_

@@ -1,0 +1,310 @@
+#include "worker/pipeline/scvd/scvd.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/random.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/scvd/column_graph.h"
+
+namespace sheetmesh {
+
+double CellVolume(double mean_thickness, double radius) {
+  // Formula 3: a BFS (L1) disc of radius r - 1 has 1 + 2 r (r - 1) voxels per layer.
+  return mean_thickness * (1.0 + 2.0 * radius * (radius - 1.0));
+}
+
+int64_t GeneratorsForComponent(uint64_t voxels, double cell_volume) {
+  return std::max<int64_t>(1, std::llround(static_cast<double>(voxels) / cell_volume));
+}
+
+namespace {
+
+// Synchronous multi-source breadth-first growth over `num_nodes` nodes whose neighbours
+// `for_each_neighbor(v, f)` visits. A node joins the first cell to reach it; among cells
+// reaching it in the same round, the lowest id — so the result does not depend on the
+// order of the frontier.
+template <class ForEachNeighbor>
+absl::StatusOr<std::vector<uint32_t>> Grow(size_t num_nodes, ForEachNeighbor for_each_neighbor,
+                                           std::span<const uint32_t> seeds,
+                                           const Progress& progress) {
+  std::vector<uint32_t> cell(num_nodes, kNoCell);
+  std::vector<uint32_t> round(num_nodes, 0);
+  std::vector<uint32_t> frontier, next;
+  frontier.reserve(seeds.size());
+  for (size_t i = 0; i < seeds.size(); ++i) {
+    cell[seeds[i]] = static_cast<uint32_t>(i);
+    frontier.push_back(seeds[i]);
+  }
+  uint32_t r = 0;
+  size_t reached = frontier.size();
+  while (!frontier.empty()) {
+    ++r;
+    next.clear();
+    for (uint32_t v : frontier) {
+      const uint32_t c = cell[v];
+      for_each_neighbor(v, [&](uint32_t u) {
+        if (cell[u] == kNoCell) {
+          cell[u] = c;
+          round[u] = r;
+          next.push_back(u);
+        } else if (round[u] == r && c < cell[u]) {
+          cell[u] = c;
+        }
+      });
+    }
+    reached += next.size();
+    frontier.swap(next);
+    if ((r & 15) == 0) {
+      SM_RETURN_IF_ERROR(progress.Update(double(reached) / std::max<size_t>(1, num_nodes)));
+    }
+  }
+  return cell;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<uint32_t>> GrowCells(const NeighborTable& neighbors,
+                                                std::span<const uint32_t> seeds,
+                                                const Progress& progress) {
+  return Grow(
+      neighbors.size(),
+      [&](uint32_t v, auto&& f) {
+        for (uint32_t u : neighbors.of(v)) {
+          if (u != kNoNeighbor) f(u);
+        }
+      },
+      seeds, progress);
+}
+
+absl::StatusOr<std::vector<uint32_t>> GrowCells(const CsrGraph& graph,
+                                                std::span<const uint32_t> seeds,
+                                                const Progress& progress) {
+  return Grow(
+      graph.num_nodes(),
+      [&](uint32_t v, auto&& f) {
+        for (uint32_t u : graph.of(v)) f(u);
+      },
+      seeds, progress);
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> CellAdjacency(const NeighborTable& neighbors,
+                                                         std::span<const uint32_t> cell) {
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (uint32_t v = 0; v < neighbors.size(); ++v) {
+    const uint32_t a = cell[v];
+    if (a == kNoCell) continue;
+    for (int k : {1, 3, 5}) {  // each face once: the + directions
+      const uint32_t u = neighbors.at(v, k);
+      if (u == kNoNeighbor) continue;
+      const uint32_t b = cell[u];
+      if (b != a && b != kNoCell) pairs.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  tbb::parallel_sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+namespace {
+
+absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& o) {
+  if (!(o.radius_voxels > 0) || !std::isfinite(o.radius_voxels)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("SCVD radius r = ", o.radius_voxels, " voxels must be positive"));
+  }
+  if (!(thickness > 0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("SCVD mean thickness ", thickness, " voxels must be positive"));
+  }
+  if (set.empty()) return absl::InvalidArgumentError("SCVD of an empty sheet phase");
+  if (o.lloyd_max_iter < 0 || !(o.lloyd_tol >= 0)) {
+    return absl::InvalidArgumentError(absl::StrCat("SCVD lloyd_max_iter ", o.lloyd_max_iter,
+                                                   " and lloyd_tol ", o.lloyd_tol,
+                                                   " must not be negative"));
+  }
+  const Dims& d = set.dims();
+  const double box = static_cast<double>(std::max({d.nx, d.ny, d.nz}));
+  if (o.radius_voxels > 2 * box) {
+    return absl::InvalidArgumentError(absl::StrCat("SCVD radius r = ", o.radius_voxels,
+                                                   " voxels exceeds twice the volume's largest "
+                                                   "extent (", box, ")"));
+  }
+  return absl::OkStatus();
+}
+
+// Coordinates of every voxel, in index order.
+std::vector<Index3> Coordinates(const VoxelSet& set) {
+  std::vector<Index3> xyz(set.size());
+  set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) { xyz[i] = {x, y, z}; });
+  return xyz;
+}
+
+// Per cell sums for centroids and the energy against the current generators.
+struct CellStats {
+  std::vector<Vec3> sum;
+  std::vector<uint32_t> count;
+  double energy = 0;
+};
+
+CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>& cell,
+                     const std::vector<Index3>& generators) {
+  CellStats s;
+  s.sum.assign(generators.size(), Vec3());
+  s.count.assign(generators.size(), 0);
+  for (size_t v = 0; v < xyz.size(); ++v) {
+    const uint32_t c = cell[v];
+    if (c == kNoCell) continue;
+    const Index3& p = xyz[v];
+    s.sum[c] += Vec3(p.x, p.y, p.z);
+    ++s.count[c];
+    const double dx = p.x - generators[c].x, dy = p.y - generators[c].y,
+                 dz = p.z - generators[c].z;
+    s.energy += dx * dx + dy * dy + dz * dz;
+  }
+  return s;
+}
+
+}  // namespace
+
+absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbors,
+                               const Components& components, double mean_thickness,
+                               const ScvdOptions& options, const Progress& progress) {
+  const double t = options.mean_thickness_voxels > 0 ? options.mean_thickness_voxels
+                                                       : mean_thickness;
+  SM_RETURN_IF_ERROR(Validate(set, t, options));
+  Scvd scvd;
+  scvd.mean_thickness = t;
+  scvd.cell_volume = CellVolume(t, options.radius_voxels);
+  const uint32_t num_components = components.count();
+  if (options.generator_count > 0 && options.generator_count < num_components) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "SCVD generator_count ", options.generator_count, " is below the ", num_components,
+        " connected components of the sheet (each needs one)"));
+  }
+
+  // The nodes cells grow over: voxels, or columns of voxels.
+  const bool columns =
+      options.domain == ScvdDomain::kColumns ||
+      (options.domain == ScvdDomain::kAuto && options.radius_voxels < options.auto_column_ratio * t);
+  scvd.columns = columns;
+  ColumnGraph cg;
+  if (columns) {
+    const uint32_t cap = static_cast<uint32_t>(
+        std::max(1.0, std::floor(options.max_column_thickness * t)));
+    SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap));
+  }
+  const uint32_t num_nodes = columns ? cg.num_nodes() : static_cast<uint32_t>(set.size());
+  auto voxel_of = [&](uint32_t n) { return columns ? cg.node_voxel[n] : n; };
+
+  // Nodes of each component, grouped by a counting sort of the labels.
+  const std::vector<uint32_t> label = components.VoxelLabels(set);
+  std::vector<uint32_t> node_label(num_nodes);
+  for (uint32_t n = 0; n < num_nodes; ++n) node_label[n] = label[voxel_of(n)];
+  std::vector<uint64_t> start(num_components + 1, 0);
+  for (uint32_t l : node_label) ++start[l + 1];
+  for (uint32_t c = 0; c < num_components; ++c) start[c + 1] += start[c];
+  std::vector<uint32_t> members(num_nodes);
+  {
+    std::vector<uint64_t> fill(start.begin(), start.end() - 1);
+    for (uint32_t n = 0; n < num_nodes; ++n) members[fill[node_label[n]]++] = n;
+  }
+
+  // Seeds: n_c distinct nodes per component (formula 3 on its voxel count), drawn by a
+  // partial Fisher-Yates shuffle.
+  Rng rng(options.seed);
+  std::vector<uint32_t> seeds;
+  for (uint32_t c = 0; c < num_components; ++c) {
+    const uint64_t size = components.sizes[c];
+    const uint64_t nodes = start[c + 1] - start[c];
+    int64_t n = options.generator_count > 0
+                    ? std::max<int64_t>(1, std::llround(double(options.generator_count) * size /
+                                                        double(set.size())))
+                    : GeneratorsForComponent(size, scvd.cell_volume);
+    n = std::min<int64_t>(n, static_cast<int64_t>(nodes));
+    uint32_t* m = members.data() + start[c];
+    for (int64_t k = 0; k < n; ++k) {
+      const uint64_t j = k + rng.Below(nodes - k);
+      std::swap(m[k], m[j]);
+      seeds.push_back(m[k]);
+      scvd.generator_component.push_back(c);
+    }
+  }
+  if (seeds.size() >= kNoCell) {
+    return absl::ResourceExhaustedError(absl::StrCat(seeds.size(), " generators are too many"));
+  }
+  members = {};
+  node_label = {};
+
+  const std::vector<Index3> xyz = Coordinates(set);
+  std::vector<Index3> gen(seeds.size());
+  for (size_t i = 0; i < seeds.size(); ++i) gen[i] = xyz[voxel_of(seeds[i])];
+
+  const int max_growths = std::max(1, options.lloyd_max_iter + 1);
+  std::vector<uint32_t> cell(set.size());
+  CellStats stats;
+  for (int it = 0; it < max_growths; ++it) {
+    const Progress step = progress.Sub(double(it) / max_growths, double(it + 1) / max_growths);
+    std::vector<uint32_t> node_cell;
+    if (columns) {
+      SM_ASSIGN_OR_RETURN(node_cell, GrowCells(cg.graph, seeds, step));
+      for (uint32_t v = 0; v < cell.size(); ++v) cell[v] = node_cell[cg.node_of_voxel[v]];
+    } else {
+      SM_ASSIGN_OR_RETURN(cell, GrowCells(neighbors, seeds, step));
+    }
+    stats = Accumulate(xyz, cell, gen);
+    scvd.energy.push_back(stats.energy);
+    scvd.iterations = it + 1;
+    if (it > 0) {
+      const double prev = scvd.energy[it - 1];
+      if (prev <= 0 || std::abs(prev - stats.energy) / prev < options.lloyd_tol) {
+        scvd.converged = true;
+        break;
+      }
+    }
+    if (it + 1 == max_growths) break;
+    // Formula 2 with ρ = 1: the centroid; the generator moves to the node of its cell
+    // nearest to it, since the centroid of a curved sheet can fall off the sheet.
+    std::vector<double> best(gen.size(), std::numeric_limits<double>::max());
+    std::vector<uint32_t> moved(seeds);
+    for (uint32_t n = 0; n < num_nodes; ++n) {
+      const uint32_t v = voxel_of(n);
+      const uint32_t c = cell[v];
+      if (c == kNoCell) continue;
+      const Vec3 centroid = stats.sum[c] / stats.count[c];
+      const double d2 = Norm2(Vec3(xyz[v].x, xyz[v].y, xyz[v].z) - centroid);
+      // Ties go to the lower node, so the result does not depend on visiting order.
+      if (d2 < best[c]) {
+        best[c] = d2;
+        moved[c] = n;
+      }
+    }
+    if (moved == seeds) {
+      scvd.converged = true;
+      break;
+    }
+    seeds.swap(moved);
+    for (size_t i = 0; i < seeds.size(); ++i) gen[i] = xyz[voxel_of(seeds[i])];
+  }
+  scvd.generator_voxel.resize(seeds.size());
+  for (size_t i = 0; i < seeds.size(); ++i) scvd.generator_voxel[i] = voxel_of(seeds[i]);
+  scvd.generators = std::move(gen);
+  scvd.cell_size = std::move(stats.count);
+  scvd.centroid.resize(scvd.generators.size());
+  for (size_t c = 0; c < scvd.centroid.size(); ++c) {
+    scvd.centroid[c] = scvd.cell_size[c] > 0 ? stats.sum[c] / scvd.cell_size[c]
+                                             : Vec3::Of(scvd.generators[c]);
+  }
+  scvd.adjacency = CellAdjacency(neighbors, cell);
+  scvd.cell = std::move(cell);
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return scvd;
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,54 @@
+// Choosing r (paper §3, Fig. 13; ALGORITHM §12): similarity against r rises, then falls.
+// Search r for the best similarity, or for the largest r — the fewest triangles — that
+// still reaches a target similarity (the paper takes 60% as acceptable).
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_RADIUS_SEARCH_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_RADIUS_SEARCH_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/similarity/mesh_model.h"
+#include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/surface/surface_builder.h"
+
+namespace sheetmesh {
+
+enum class RadiusGoal {
+  kBestSimilarity,    // the r with the highest similarity
+  kTargetSimilarity,  // the largest r whose similarity reaches the target
+};
+
+struct RadiusSearchOptions {
+  RadiusGoal goal = RadiusGoal::kBestSimilarity;
+  double target_similarity = 0.60;  // kTargetSimilarity: the similarity to reach
+  double min_radius_voxels = 2.0;   // smallest r tried
+  double max_radius_voxels = 0.0;   // largest r tried; 0 = a quarter of the largest extent
+  int patience = 3;                 // trials past the peak (or below target) before stopping
+  PrismHeight height = PrismHeight::kFace;  // the model the similarity is computed on
+};
+
+struct RadiusTrial {
+  double radius = 0;
+  uint64_t triangles = 0;
+  double similarity = 0;
+};
+
+struct RadiusChoice {
+  double radius = 0;             // the chosen r
+  bool target_reached = true;    // kTargetSimilarity: false when no r reached the target (the
+                                 // best r is chosen then)
+  std::vector<RadiusTrial> trials;  // every r tried, in order of trial
+};
+
+// Searches r on `sheet` with the other settings of `surface`. kInvalidArgument for a
+// non-positive or inverted radius range or a target outside (-inf, 1]; errors of meshing
+// pass through; kCancelled if asked.
+absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const SurfaceOptions& surface,
+                                          const RadiusSearchOptions& options,
+                                          const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_RADIUS_SEARCH_H_

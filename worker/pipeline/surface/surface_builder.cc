@@ -1,0 +1,114 @@
+#include "worker/pipeline/surface/surface_builder.h"
+
+#include <algorithm>
+
+#include "absl/time/clock.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/surface/face_attributes.h"
+
+namespace sheetmesh {
+
+SurfaceOptions SurfaceOptions::Paper() {
+  SurfaceOptions o;
+  o.placement = VertexPlacement::kGenerator;
+  o.thickness = ThicknessMeasure::kAxisRuns;
+  o.triangles.rim = false;
+  o.scvd.domain = ScvdDomain::kVoxels;
+  return o;
+}
+
+absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet, const SurfaceOptions& options,
+                                           std::span<const int32_t> piece_of_voxel,
+                                           const Progress& progress) {
+  SurfaceResult out;
+  absl::Time t0 = absl::Now();
+  SM_ASSIGN_OR_RETURN(out.scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                          sheet.thickness_stats.mean, options.scvd,
+                                          progress.Sub(0, 0.7)));
+  out.scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  const Scvd& scvd = out.scvd;
+
+  t0 = absl::Now();
+  std::vector<Vec3> positions(scvd.num_generators());
+  for (uint32_t g = 0; g < scvd.num_generators(); ++g) {
+    positions[g] = options.placement == VertexPlacement::kCentroid ? scvd.centroid[g]
+                                                                   : Vec3::Of(scvd.generators[g]);
+  }
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd,
+                                      positions, options.triangles, progress.Sub(0.7, 0.9)));
+  // Rim vertices follow the generators in the vertex numbering of `tri`.
+  const uint32_t num_gen = scvd.num_generators();
+  for (size_t k = 0; k < tri.rim_positions.size(); ++k) positions.push_back(tri.rim_positions[k]);
+  out.triangle_stats = tri.stats;
+  out.triangles_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+
+  // Compact: only generators used by a face become vertices.
+  t0 = absl::Now();
+  std::vector<uint32_t> vertex_of(positions.size(), UINT32_MAX);
+  std::vector<uint32_t> source_of_vertex;  // id in `tri` numbering
+  TriangleMesh& mesh = out.mesh;
+  for (const Face& f : tri.faces) {
+    Face g;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& v = vertex_of[f[k]];
+      if (v == UINT32_MAX) {
+        v = static_cast<uint32_t>(mesh.vertices.size());
+        mesh.vertices.push_back(positions[f[k]]);
+        source_of_vertex.push_back(f[k]);
+        out.vertex_generator.push_back(f[k] < num_gen ? f[k] : tri.rim_cell[f[k] - num_gen]);
+      }
+      g[k] = v;
+    }
+    mesh.faces.push_back(g);
+  }
+  if (options.orient) OrientConsistently(&mesh);
+
+  mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+  // Vertex normals (faces are oriented now, or flipped to agree) for the per-vertex measure.
+  std::vector<Vec3> vnormal(mesh.vertices.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Vec3 n = AreaVector(Corners(mesh, f));
+    for (uint32_t v : mesh.faces[f]) vnormal[v] += Dot(vnormal[v], n) < 0 ? -n : n;
+  }
+  // Per-vertex thickness: the mean τ over the generator's cell.
+  std::vector<double> cell_tau(scvd.num_generators(), 0.0);
+  for (size_t v = 0; v < scvd.cell.size(); ++v) {
+    if (scvd.cell[v] != kNoCell) cell_tau[scvd.cell[v]] += sheet.thickness[v];
+  }
+  mesh.vertex_thickness.resize(mesh.vertices.size());
+  std::vector<int32_t> vertex_piece(mesh.vertices.size());
+  for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
+    const uint32_t g = out.vertex_generator[v];
+    const uint32_t src = source_of_vertex[v];
+    double tau = src >= num_gen ? tri.rim_thickness[src - num_gen]
+                                : (scvd.cell_size[g] > 0 ? cell_tau[g] / scvd.cell_size[g] : 0.0);
+    if (options.thickness == ThicknessMeasure::kNormal) {
+      tau *= AxisRunToNormalFactor(Normalized(vnormal[v]));
+    }
+    mesh.vertex_thickness[v] = static_cast<float>(tau);
+    vertex_piece[v] = piece_of_voxel.empty() ? static_cast<int32_t>(scvd.generator_component[g])
+                                             : piece_of_voxel[scvd.generator_voxel[g]];
+  }
+  mesh.face_piece = FaceLabels(mesh, vertex_piece);
+
+  // Components that gave no triangle.
+  out.components = sheet.components.count();
+  std::vector<uint8_t> meshed(out.components, 0);
+  for (uint32_t g : out.vertex_generator) meshed[scvd.generator_component[g]] = 1;
+  for (uint32_t c = 0; c < out.components; ++c) {
+    if (meshed[c]) continue;
+    ++out.skipped_components;
+    out.skipped_voxels += sheet.components.sizes[c];
+    if (out.largest_skipped.size() < 20) {
+      out.largest_skipped.push_back({c, sheet.components.sizes[c]});  // sizes are descending
+    }
+  }
+  out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
+}
+
+}  // namespace sheetmesh

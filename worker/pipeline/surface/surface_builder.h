@@ -1,0 +1,67 @@
+// BuildSurface: the surface mesh of a sheet set (paper §2.3.1, ALGORITHM §8): SCVD with
+// radius r, dual triangles, then per-face thickness and piece.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_SURFACE_BUILDER_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_SURFACE_BUILDER_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/scvd/scvd.h"
+#include "worker/pipeline/surface/face_attributes.h"
+#include "worker/pipeline/surface/sheet_analysis.h"
+
+namespace sheetmesh {
+
+enum class VertexPlacement {
+  kGenerator,  // the generator's voxel centre (the paper)
+  kCentroid,   // the centroid of the generator's cell (off-voxel, on the mid-surface of flat
+               // sheets)
+};
+
+struct SurfaceOptions {
+  ScvdOptions scvd;                          // r, seed, Lloyd settings
+  DualTriangleOptions triangles;             // candidate selection
+  VertexPlacement placement = VertexPlacement::kCentroid;
+  ThicknessMeasure thickness = ThicknessMeasure::kNormal;
+  bool orient = true;                        // orient faces consistently per manifold piece
+
+  // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
+  static SurfaceOptions Paper();
+};
+
+// A component that gave no triangle: too small for three cells at this r.
+struct SkippedComponent {
+  uint32_t component = 0;
+  uint64_t voxels = 0;
+};
+
+struct SurfaceResult {
+  TriangleMesh mesh;                         // face_thickness, face_piece, vertex_thickness set
+  std::vector<uint32_t> vertex_generator;    // SCVD generator of each mesh vertex
+  Scvd scvd;
+  DualTriangleStats triangle_stats;
+  uint32_t components = 0;                   // 6-connected components of the sheet
+  uint32_t skipped_components = 0;           // of those, components with no triangle
+  uint64_t skipped_voxels = 0;
+  std::vector<SkippedComponent> largest_skipped;  // up to 20, largest first
+  double scvd_seconds = 0;
+  double triangles_seconds = 0;
+  double attributes_seconds = 0;
+};
+
+// Meshes `sheet`. `piece_of_voxel`, when not empty, labels each voxel with its object id
+// (faces take their vertices' majority); otherwise faces carry their component id.
+// Errors of BuildScvd pass through (kInvalidArgument for r <= 0 or r beyond the volume);
+// kCancelled if asked.
+absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet, const SurfaceOptions& options,
+                                           std::span<const int32_t> piece_of_voxel = {},
+                                           const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_SURFACE_BUILDER_H_

@@ -79,7 +79,8 @@ bool ProjectBarycentric(const Vec3& p, const Triangle& t, double* u, double* v, 
 
 namespace {
 
-// True when `axis` separates the triangles (their projections are apart by > tolerance).
+// True when `axis` separates the triangles: their projections are more than `tolerance`
+// apart.
 bool Separates(const Vec3& axis, const Triangle& a, const Triangle& b, double tolerance) {
   const double len = Norm(axis);
   if (len < 1e-12) return false;
@@ -94,7 +95,7 @@ bool Separates(const Vec3& axis, const Triangle& a, const Triangle& b, double to
     bmin = std::min(bmin, d);
     bmax = std::max(bmax, d);
   }
-  return amax < bmin + tolerance || bmax < amin + tolerance;
+  return amax < bmin - tolerance || bmax < amin - tolerance;
 }
 
 }  // namespace

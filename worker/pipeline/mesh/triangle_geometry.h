@@ -33,7 +33,8 @@ bool ProjectBarycentric(const Vec3& p, const Triangle& t, double* u, double* v, 
 
 // True when the two closed triangles intersect, by separating axes (both normals, the nine
 // edge cross products and the in-plane edge normals, so coplanar triangles work too).
-// Triangles that only touch within `tolerance` count as disjoint.
+// Triangles that touch, or come within `tolerance`, count as intersecting (test shrunken
+// copies of triangles that share a vertex).
 bool TrianglesIntersect(const Triangle& a, const Triangle& b, double tolerance = 1e-9);
 
 // `t` shrunk towards its centroid by `fraction` of the way: used to test triangles that

@@ -1,0 +1,113 @@
+#include "worker/pipeline/run/pipeline.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "tests/testing/shared_data.h"
+#include "tests/testing/status_matchers.h"
+#include "tests/testing/temp_dir.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/phantom/phantom.h"
+#include "worker/pipeline/volume/raw_io.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::StatusIs;
+using ::sheetmesh::testing::TempDir;
+
+std::string SmallPhantom(const TempDir& tmp) {
+  PhantomOptions o;
+  o.dims = {64, 56, 48};
+  o.num_sheets = 2;
+  o.num_specks = 5;
+  o.aperture_voxels = 4;
+  PhantomTruth truth = *PlanPhantom(o);
+  const std::string path = tmp.File("p_64x56x48_u8.raw");
+  VolumeInfo info;
+  info.dims = o.dims;
+  auto sink = *CreateRawWriter(path, info);
+  EXPECT_TRUE(GeneratePhantom(&truth, *sink).ok());
+  return path;
+}
+
+class Stages : public ProgressObserver {
+ public:
+  bool OnProgress(absl::string_view stage, double, absl::string_view) override {
+    if (seen.empty() || seen.back() != stage) seen.emplace_back(stage);
+    return !(cancel_at == stage);
+  }
+  std::vector<std::string> seen;
+  std::string cancel_at;
+};
+
+TEST(PipelineTest, RunWritesMeshesAndAReport) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = 6;
+  Stages stages;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
+  EXPECT_EQ(stages.seen, PlannedStages(o));
+  EXPECT_GT(r.triangles, 50u);
+  EXPECT_GT(r.similarity.similarity, 0.5);
+  EXPECT_GE(r.similarity.hausdorff, 0);
+  ASSERT_EQ(r.grid.size(), 3u);
+  for (const char* f : {"surface.ply", "surface.vtp", "surface.obj", "report.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
+  }
+  SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("out/report.json")));
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j["surface"]["triangles"].get<uint64_t>(), r.triangles);
+  EXPECT_DOUBLE_EQ(j["similarity"]["similarity"].get<double>(), r.similarity.similarity);
+  EXPECT_EQ(j["parameters"]["r"].get<double>(), 6);
+  EXPECT_TRUE(j["seconds"].contains("surface"));
+  SM_ASSERT_OK_AND_ASSIGN(TriangleMesh back, ReadMesh(tmp.File("out/surface.ply")));
+  EXPECT_EQ(back.faces.size(), r.triangles);
+}
+
+TEST(PipelineTest, CancelledRunLeavesNoFiles) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  Stages stages;
+  stages.cancel_at = "similarity";
+  EXPECT_THAT(RunPipeline(o, Progress(&stages, "")), StatusIs(absl::StatusCode::kCancelled));
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/report.json")));
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/surface.ply")));
+}
+
+TEST(PipelineTest, EmptySelectionFailsNamingTheFile) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.input.selection = PhaseSelection::Labels({7});
+  EXPECT_THAT(RunPipeline(o), StatusIs(absl::StatusCode::kInvalidArgument,
+                                       ::testing::HasSubstr("p_64x56x48_u8.raw")));
+}
+
+TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
+  SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
+  PipelineOptions o;
+  o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
+  o.input.selection = PhaseSelection::Labels({255});
+  o.surface.scvd.radius_voxels = 7;
+  o.score.hausdorff = false;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  EXPECT_EQ(r.sheet_voxels, 84595u);
+  EXPECT_EQ(r.components, 63u);
+  // One sheet: the 62 small pieces are too small for a triangle at r = 7.
+  EXPECT_EQ(r.skipped_components, 62u);
+  EXPECT_GT(r.similarity.similarity, 0.7);
+  EXPECT_EQ(r.topology.duplicate_faces, 0u);
+  EXPECT_EQ(r.topology.inconsistent_edges, 0u);
+}
+
+}  // namespace
+}  // namespace sheetmesh

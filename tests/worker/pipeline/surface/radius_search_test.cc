@@ -1,0 +1,86 @@
+#include "worker/pipeline/surface/radius_search.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tests/testing/shapes.h"
+#include "tests/testing/status_matchers.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::StatusIs;
+
+SheetAnalysis Sheet() {
+  // A rough, holed sheet: similarity falls with r.
+  return *AnalyzeSheet(testing::ShapeSet({72, 72, 20}, [](double x, double y, double z) {
+    const double mid = 10 + 2 * std::sin(x / 6) * std::cos(y / 7);
+    return x > 2 && y > 2 && x < 70 && y < 70 && std::abs(z - mid) <= 2 &&
+           std::hypot(x - 30, y - 40) > 7;
+  }));
+}
+
+TEST(RadiusSearchTest, BestGoalReturnsTheBestTrial) {
+  const SheetAnalysis sheet = Sheet();
+  RadiusSearchOptions o;
+  o.goal = RadiusGoal::kBestSimilarity;
+  o.max_radius_voxels = 14;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
+  ASSERT_GE(c.trials.size(), 3u);
+  double best = -1;
+  for (const RadiusTrial& t : c.trials) best = std::max(best, t.similarity);
+  for (const RadiusTrial& t : c.trials) {
+    if (t.radius == c.radius) EXPECT_EQ(t.similarity, best);
+  }
+}
+
+TEST(RadiusSearchTest, TargetGoalReturnsTheLargestRadiusReachingIt) {
+  const SheetAnalysis sheet = Sheet();
+  RadiusSearchOptions o;
+  o.goal = RadiusGoal::kTargetSimilarity;
+  o.target_similarity = 0.8;
+  o.max_radius_voxels = 20;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
+  ASSERT_TRUE(c.target_reached);
+  double chosen_sim = -1, fewest = 1e18;
+  for (const RadiusTrial& t : c.trials) {
+    if (t.radius == c.radius) {
+      chosen_sim = t.similarity;
+      fewest = t.triangles;
+    }
+  }
+  EXPECT_GE(chosen_sim, 0.8);
+  // Every larger r tried fell short of the target.
+  for (const RadiusTrial& t : c.trials) {
+    if (t.radius > c.radius) EXPECT_LT(t.similarity, 0.8) << "r = " << t.radius;
+    if (t.similarity >= 0.8) EXPECT_GE(t.triangles, fewest);
+  }
+}
+
+TEST(RadiusSearchTest, UnreachableTargetFallsBackToTheBestRadius) {
+  const SheetAnalysis sheet = Sheet();
+  RadiusSearchOptions o;
+  o.goal = RadiusGoal::kTargetSimilarity;
+  o.target_similarity = 0.9999;
+  o.max_radius_voxels = 8;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
+  EXPECT_FALSE(c.target_reached);
+  EXPECT_GT(c.radius, 0);
+}
+
+TEST(RadiusSearchTest, BadRangesAreInvalidArgument) {
+  const SheetAnalysis sheet = Sheet();
+  RadiusSearchOptions o;
+  o.min_radius_voxels = 0;
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+  o.min_radius_voxels = 9;
+  o.max_radius_voxels = 4;
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+  o = {};
+  o.goal = RadiusGoal::kTargetSimilarity;
+  o.target_similarity = 1.5;
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -76,7 +76,8 @@ constexpr char kUsage[] =
     "  info VOLUME             dims, sheet voxels, thickness and components of a volume\n"
     "  surface VOLUME -o DIR   mesh the sheets: --r R, or --target-similarity S, or --search-best\n"
     "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed surfaces)\n"
-    "  phantom -o FILE         write a synthetic rock volume and its ground truth\n\n"
+    "  phantom -o FILE         write a synthetic rock volume and its ground truth\n"
+    "  convert VOLUME -o FILE  copy a volume into --out_format (raw, tiff, nrrd, vdb, ...)\n\n"
     "Flags may be written with dashes or underscores (--target-similarity).\n"
     "Run with --help for every flag.";
 
@@ -191,6 +192,14 @@ absl::Status Phantom(const std::vector<std::string>& args) {
   SM_ASSIGN_OR_RETURN(options.format, ParseVolumeFormat(absl::GetFlag(FLAGS_out_format)));
   options.truth_path = absl::GetFlag(FLAGS_truth);
   return RunPhantom(options, std::cout);
+}
+
+absl::Status Convert(const std::vector<std::string>& args) {
+  if (args.size() != 1) return absl::InvalidArgumentError("usage: convert VOLUME -o FILE --out_format=F");
+  SM_ASSIGN_OR_RETURN(SheetInput in, InputFromFlags(args[0]));
+  SM_ASSIGN_OR_RETURN(VolumeFormat format, ParseVolumeFormat(absl::GetFlag(FLAGS_out_format)));
+  if (absl::GetFlag(FLAGS_o).empty()) return absl::InvalidArgumentError("convert needs -o FILE");
+  return RunConvert(in.path, in.open, absl::GetFlag(FLAGS_o), format, std::cout);
 }
 
 absl::Status Surface(const std::vector<std::string>& args) {
@@ -313,6 +322,8 @@ int Main(int argc, char** argv) {
     status = Info(args);
   } else if (command == "phantom") {
     status = Phantom(args);
+  } else if (command == "convert") {
+    status = Convert(args);
   } else if (command == "surface") {
     status = Surface(args);
   } else if (command == "score") {

@@ -41,4 +41,23 @@ absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out)
   return absl::OkStatus();
 }
 
+absl::Status RunConvert(const std::string& input, const OpenOptions& open,
+                        const std::string& output, VolumeFormat format, std::ostream& out) {
+  SM_ASSIGN_OR_RETURN(auto source, OpenVolume(input, open));
+  const VolumeInfo& info = source->info();
+  SM_ASSIGN_OR_RETURN(auto sink, CreateVolumeWriter(output, info, format));
+  const int64_t slice = info.dims.nx * info.dims.ny * BytesPerVoxel(info.dtype);
+  const int64_t slab = std::max<int64_t>(1, (int64_t{32} << 20) / slice);
+  std::vector<std::byte> buffer(static_cast<size_t>(std::min(slab, info.dims.nz) * slice));
+  for (int64_t z = 0; z < info.dims.nz; z += slab) {
+    const int64_t n = std::min(slab, info.dims.nz - z);
+    std::span<std::byte> part(buffer.data(), static_cast<size_t>(n * slice));
+    SM_RETURN_IF_ERROR(source->ReadSlices(z, n, part));
+    SM_RETURN_IF_ERROR(sink->WriteSlices(n, part));
+  }
+  SM_RETURN_IF_ERROR(sink->Finish());
+  out << absl::StrFormat("wrote %s (%s %s)\n", output, info.dims.ToString(), DTypeName(info.dtype));
+  return absl::OkStatus();
+}
+
 }  // namespace sheetmesh

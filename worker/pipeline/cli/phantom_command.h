@@ -1,4 +1,5 @@
-// `sheetmesh-pipeline phantom`: writes a synthetic rock volume and its JSON ground truth.
+// `sheetmesh-pipeline phantom` and `convert`: write a synthetic rock volume with its JSON
+// ground truth, or copy a volume into another format.
 #ifndef SHEETMESH_WORKER_PIPELINE_CLI_PHANTOM_COMMAND_H_
 #define SHEETMESH_WORKER_PIPELINE_CLI_PHANTOM_COMMAND_H_
 
@@ -24,6 +25,10 @@ PhantomOptions SamplePhantomOptions();
 
 // Generates and writes the phantom, then prints a one-line summary to `out`.
 absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out);
+
+// `sheetmesh-pipeline convert`: copies a volume into another format slab by slab.
+absl::Status RunConvert(const std::string& input, const OpenOptions& open,
+                        const std::string& output, VolumeFormat format, std::ostream& out);
 
 }  // namespace sheetmesh
 

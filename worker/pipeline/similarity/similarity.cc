@@ -1,6 +1,7 @@
 #include "worker/pipeline/similarity/similarity.h"
 
 #include <tbb/blocked_range.h>
+#include <nanoflann.hpp>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -9,7 +10,6 @@
 #include <limits>
 #include <vector>
 
-#include "absl/container/flat_hash_map.h"
 #include "worker/pipeline/core/status_macros.h"
 
 namespace sheetmesh {
@@ -29,52 +29,47 @@ SimilarityScore ScoreModel(const VoxelSet& model, const VoxelSet& image) {
 namespace {
 
 // Voxels of `set` with a face neighbour outside it: the only candidates for the nearest
-// voxel to a point outside the set. Bucketed on a coarse grid for ring searches.
+// voxel to a point outside the set; kept in a k-d tree.
 class NearestIndex {
  public:
-  static constexpr int kBucket = 8;
-
-  explicit NearestIndex(const VoxelSet& set) {
+  explicit NearestIndex(const VoxelSet& set) : tree_(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)) {
     set.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
       const bool inner = set.Contains(x - 1, y, z) && set.Contains(x + 1, y, z) &&
                          set.Contains(x, y - 1, z) && set.Contains(x, y + 1, z) &&
                          set.Contains(x, y, z - 1) && set.Contains(x, y, z + 1);
-      if (!inner) buckets_[Key(x / kBucket, y / kBucket, z / kBucket)].push_back({x, y, z});
+      if (!inner) cloud_.pts.push_back({x, y, z});
     });
-    const Dims& d = set.dims();
-    max_ring_ = static_cast<int>(std::max({d.nx, d.ny, d.nz}) / kBucket + 2);
+    tree_.buildIndex();
   }
 
   // Squared distance from p to the nearest indexed voxel (infinity if none).
   double Nearest2(const Index3& p) const {
-    const int bx = p.x / kBucket, by = p.y / kBucket, bz = p.z / kBucket;
-    double best = std::numeric_limits<double>::infinity();
-    for (int ring = 0; ring <= max_ring_; ++ring) {
-      // Every voxel in a bucket of ring >= 1 is at least (ring - 1) * kBucket away.
-      const double floor_dist = std::max(0, ring - 1) * double(kBucket);
-      if (floor_dist * floor_dist > best) break;
-      for (int dz = -ring; dz <= ring; ++dz)
-        for (int dy = -ring; dy <= ring; ++dy)
-          for (int dx = -ring; dx <= ring; ++dx) {
-            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
-            auto it = buckets_.find(Key(bx + dx, by + dy, bz + dz));
-            if (it == buckets_.end()) continue;
-            for (const Index3& q : it->second) {
-              const double ddx = q.x - p.x, ddy = q.y - p.y, ddz = q.z - p.z;
-              best = std::min(best, ddx * ddx + ddy * ddy + ddz * ddz);
-            }
-          }
-    }
-    return best;
+    if (cloud_.pts.empty()) return std::numeric_limits<double>::infinity();
+    const double q[3] = {double(p.x), double(p.y), double(p.z)};
+    uint32_t index = 0;
+    double d2 = 0;
+    nanoflann::KNNResultSet<double, uint32_t, uint32_t> result(1);
+    result.init(&index, &d2);
+    tree_.findNeighbors(result, q, nanoflann::SearchParams());
+    return d2;
   }
 
  private:
-  static uint64_t Key(int64_t x, int64_t y, int64_t z) {
-    return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
-           (static_cast<uint64_t>(y & 0x1FFFFF) << 21) | static_cast<uint64_t>(z & 0x1FFFFF);
-  }
-  absl::flat_hash_map<uint64_t, std::vector<Index3>> buckets_;
-  int max_ring_ = 0;
+  struct Cloud {
+    std::vector<Index3> pts;
+    size_t kdtree_get_point_count() const { return pts.size(); }
+    double kdtree_get_pt(size_t i, size_t dim) const {
+      return dim == 0 ? pts[i].x : (dim == 1 ? pts[i].y : pts[i].z);
+    }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const {
+      return false;
+    }
+  };
+  using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>,
+                                                   Cloud, 3, uint32_t>;
+  Cloud cloud_;
+  Tree tree_;
 };
 
 // Largest distance from a voxel of `from` (not in `to`) to `to`.
@@ -83,14 +78,13 @@ double Directed(const VoxelSet& from, const VoxelSet& to) {
   if (outside.empty()) return 0.0;
   const NearestIndex index(to);
   const std::vector<Index3> pts = outside.ToIndices();
-  const double worst2 = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, pts.size(), 1024), 0.0,
+  return std::sqrt(tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, pts.size(), 4096), 0.0,
       [&](const tbb::blocked_range<size_t>& r, double acc) {
         for (size_t i = r.begin(); i < r.end(); ++i) acc = std::max(acc, index.Nearest2(pts[i]));
         return acc;
       },
-      [](double a, double b) { return std::max(a, b); });
-  return std::sqrt(worst2);
+      [](double a, double b) { return std::max(a, b); }));
 }
 
 }  // namespace

@@ -10,7 +10,7 @@ packages=(
   cmake ninja-build g++ ccache pkg-config time git
   # pipeline
   libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev libabsl-dev libtiff-dev
-  zlib1g-dev nlohmann-json3-dev libnanoflann-dev tetgen
+  zlib1g-dev nlohmann-json3-dev libnanoflann-dev libeigen3-dev tetgen
   # service
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
   # tests, fuzzing, benchmarks

@@ -2,11 +2,13 @@
 //   sheetmesh-pipeline info VOLUME [selection flags] [--json]
 //   sheetmesh-pipeline phantom -o FILE [--preset sample|paper] [phantom flags]
 #include <iostream>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
+#include "absl/flags/reflection.h"
 #include "absl/flags/usage.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -16,6 +18,8 @@
 #include "worker/pipeline/cli/surface_command.h"
 #include "worker/pipeline/core/huge_pages.h"
 #include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/run/pipeline_config.h"
 
 // Volume input.
 ABSL_FLAG(std::string, format, "", "volume format: raw, tiff, nrrd, vdb (default: by extension)");
@@ -56,6 +60,24 @@ ABSL_FLAG(bool, hausdorff, true, "surface/score: also compute the symmetric Haus
 ABSL_FLAG(std::string, grid_rates, "2,3,4", "surface: grid-model baselines to score (empty: none)");
 ABSL_FLAG(std::string, formats, "ply,vtp,obj", "surface: mesh files to write");
 ABSL_FLAG(bool, closed, false, "score: the mesh is a closed surface; score the volume it encloses");
+// run (feature extraction; every flag here overrides --config)
+ABSL_FLAG(std::string, config, "", "run/surface: JSON config file with any parameter (flags override it)");
+ABSL_FLAG(bool, refine, true, "run: refine (closing/opening)");
+ABSL_FLAG(int, refine_close, 1, "run: closing radius in voxels");
+ABSL_FLAG(int, refine_open, 0, "run: opening radius in voxels");
+ABSL_FLAG(bool, detect, true, "run: detect potential objects by extending");
+ABSL_FLAG(double, detect_t, 1.5, "run: t of formula 4 for detection");
+ABSL_FLAG(double, detect_R, 7, "run: R of formula 4 for detection");
+ABSL_FLAG(int, detect_rounds, 1, "run: detection rounds");
+ABSL_FLAG(uint64_t, M, 0, "run: volume criterion M in voxels (0: three separation cells)");
+ABSL_FLAG(bool, separate, true, "run: separate crossings (Algorithm 2)");
+ABSL_FLAG(double, r_sep, 5, "run: SCVD radius for separation and extending");
+ABSL_FLAG(double, D_ang, 150, "run: dihedral angle threshold of Algorithm 2, degrees");
+ABSL_FLAG(bool, remove_minor, true, "run: remove pieces below M");
+ABSL_FLAG(bool, recover, true, "run: recover cut gaps by extending within the image");
+ABSL_FLAG(double, recover_t, 1.5, "run: t of formula 4 for recovery");
+ABSL_FLAG(double, recover_R, 7, "run: R of formula 4 for recovery");
+ABSL_FLAG(int, recover_rounds, 10, "run: recovery rounds at most");
 // phantom
 ABSL_FLAG(std::string, o, "", "output path (phantom: the volume file; surface: the folder)");
 ABSL_FLAG(std::string, out_format, "raw", "phantom output: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb");
@@ -75,6 +97,8 @@ constexpr char kUsage[] =
     "commands:\n"
     "  info VOLUME             dims, sheet voxels, thickness and components of a volume\n"
     "  surface VOLUME -o DIR   mesh the sheets: --r R, or --target-similarity S, or --search-best\n"
+    "  run VOLUME -o DIR       extract the major sheets (Fig. 3), then mesh and score them;\n"
+    "                          --config FILE sets any parameter, flags override it\n"
     "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed surfaces)\n"
     "  phantom -o FILE         write a synthetic rock volume and its ground truth\n"
     "  convert VOLUME -o FILE  copy a volume into --out_format (raw, tiff, nrrd, vdb, ...)\n\n"
@@ -202,24 +226,54 @@ absl::Status Convert(const std::vector<std::string>& args) {
   return RunConvert(in.path, in.open, absl::GetFlag(FLAGS_o), format, std::cout);
 }
 
-absl::Status Surface(const std::vector<std::string>& args) {
-  if (args.size() != 1) return absl::InvalidArgumentError("usage: surface VOLUME -o DIR [flags]");
+// Flags named on the command line (recorded before parsing), so that only they override
+// a config file.
+std::set<std::string>& GivenFlags() {
+  static std::set<std::string> given;
+  return given;
+}
+
+bool Given(const std::string& flag) { return GivenFlags().count(flag) > 0; }
+
+// Defaults, then --config, then every flag given on the command line.
+absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, bool extract) {
   PipelineOptions o;
-  SM_ASSIGN_OR_RETURN(o.input, InputFromFlags(args[0]));
-  const std::string method = absl::GetFlag(FLAGS_method);
-  if (method == "paper") {
-    o.surface = SurfaceOptions::Paper();
-  } else if (method != "extended") {
-    return absl::InvalidArgumentError(absl::StrCat("--method=", method, " is not known; use extended or paper"));
+  o.extract = extract;
+  SM_ASSIGN_OR_RETURN(SheetInput input, InputFromFlags(volume));
+  if (!absl::GetFlag(FLAGS_config).empty()) {
+    SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(absl::GetFlag(FLAGS_config)));
+    SM_RETURN_IF_ERROR(ApplyPipelineConfig(text, absl::GetFlag(FLAGS_config), &o));
+  }
+  // The volume's path always comes from the command line; the rest of the input only
+  // where a flag says so.
+  o.input.path = input.path;
+  for (const char* f : {"format", "dims", "dtype", "byte_order", "header_bytes", "vdb_grid",
+                        "spacing", "origin", "unit", "max_voxels"}) {
+    if (Given(f)) {
+      o.input.open = input.open;
+      break;
+    }
+  }
+  if (Given("labels") || Given("window")) o.input.selection = input.selection;
+  if (Given("mask")) o.input.mask_path = input.mask_path;
+  if (Given("mask_labels")) o.input.mask_selection = input.mask_selection;
+
+  if (Given("method")) {
+    const std::string method = absl::GetFlag(FLAGS_method);
+    if (method == "paper") {
+      o.surface = SurfaceOptions::Paper();
+    } else if (method != "extended") {
+      return absl::InvalidArgumentError(absl::StrCat("--method=", method, " is not known; use extended or paper"));
+    }
   }
   ScvdOptions& scvd = o.surface.scvd;
-  scvd.radius_voxels = absl::GetFlag(FLAGS_r);
-  scvd.seed = absl::GetFlag(FLAGS_seed);
-  scvd.generator_count = absl::GetFlag(FLAGS_generators);
-  scvd.mean_thickness_voxels = absl::GetFlag(FLAGS_thickness);
-  scvd.lloyd_max_iter = absl::GetFlag(FLAGS_lloyd_max_iter);
-  scvd.lloyd_tol = absl::GetFlag(FLAGS_lloyd_tol);
-  o.surface.triangles.fold_angle_degrees = absl::GetFlag(FLAGS_fold_angle);
+  if (Given("r")) scvd.radius_voxels = absl::GetFlag(FLAGS_r);
+  if (Given("seed")) scvd.seed = absl::GetFlag(FLAGS_seed);
+  if (Given("generators")) scvd.generator_count = absl::GetFlag(FLAGS_generators);
+  if (Given("thickness")) scvd.mean_thickness_voxels = absl::GetFlag(FLAGS_thickness);
+  if (Given("lloyd_max_iter")) scvd.lloyd_max_iter = absl::GetFlag(FLAGS_lloyd_max_iter);
+  if (Given("lloyd_tol")) scvd.lloyd_tol = absl::GetFlag(FLAGS_lloyd_tol);
+  if (Given("fold_angle")) o.surface.triangles.fold_angle_degrees = absl::GetFlag(FLAGS_fold_angle);
   const std::string placement = absl::GetFlag(FLAGS_placement);
   if (placement == "generator") {
     o.surface.placement = VertexPlacement::kGenerator;
@@ -242,14 +296,15 @@ absl::Status Surface(const std::vector<std::string>& args) {
   } else if (!rim.empty()) {
     return absl::InvalidArgumentError(absl::StrCat("--rim=", rim, " must be true or false"));
   }
-  const std::string model = absl::GetFlag(FLAGS_similarity_model);
-  if (model == "vertex") {
-    o.score.height = PrismHeight::kVertex;
-    o.radius_search.height = PrismHeight::kVertex;
-  } else if (model != "face") {
-    return absl::InvalidArgumentError(absl::StrCat("--similarity_model=", model, " is not known; use face or vertex"));
+  if (Given("similarity_model")) {
+    const std::string model = absl::GetFlag(FLAGS_similarity_model);
+    if (model != "vertex" && model != "face") {
+      return absl::InvalidArgumentError(absl::StrCat("--similarity_model=", model, " is not known; use face or vertex"));
+    }
+    o.score.height = model == "vertex" ? PrismHeight::kVertex : PrismHeight::kFace;
+    o.radius_search.height = o.score.height;
   }
-  if (absl::GetFlag(FLAGS_target_similarity) != -1) {
+  if (Given("target_similarity")) {
     o.search_radius = true;
     o.radius_search.goal = RadiusGoal::kTargetSimilarity;
     o.radius_search.target_similarity = absl::GetFlag(FLAGS_target_similarity);
@@ -257,31 +312,65 @@ absl::Status Surface(const std::vector<std::string>& args) {
     o.search_radius = true;
     o.radius_search.goal = RadiusGoal::kBestSimilarity;
   }
-  o.radius_search.min_radius_voxels = absl::GetFlag(FLAGS_r_min);
-  o.radius_search.max_radius_voxels = absl::GetFlag(FLAGS_r_max);
-  o.score.hausdorff = absl::GetFlag(FLAGS_hausdorff);
-  o.score.grid_rates.clear();
-  for (absl::string_view k : absl::StrSplit(absl::GetFlag(FLAGS_grid_rates), ',', absl::SkipEmpty())) {
-    int rate = 0;
-    if (!absl::SimpleAtoi(k, &rate) || rate < 1) {
-      return absl::InvalidArgumentError(absl::StrCat("--grid_rates: '", k, "' is not an integer >= 1"));
+  if (Given("r_min")) o.radius_search.min_radius_voxels = absl::GetFlag(FLAGS_r_min);
+  if (Given("r_max")) o.radius_search.max_radius_voxels = absl::GetFlag(FLAGS_r_max);
+  if (Given("hausdorff")) o.score.hausdorff = absl::GetFlag(FLAGS_hausdorff);
+  if (Given("grid_rates")) {
+    o.score.grid_rates.clear();
+    for (absl::string_view k : absl::StrSplit(absl::GetFlag(FLAGS_grid_rates), ',', absl::SkipEmpty())) {
+      int rate = 0;
+      if (!absl::SimpleAtoi(k, &rate) || rate < 1) {
+        return absl::InvalidArgumentError(absl::StrCat("--grid_rates: '", k, "' is not an integer >= 1"));
+      }
+      o.score.grid_rates.push_back(rate);
     }
-    o.score.grid_rates.push_back(rate);
   }
+  if (Given("formats")) {
+    o.output.ply = o.output.vtp = o.output.obj = false;
+    for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_formats), ',', absl::SkipEmpty())) {
+      if (f == "ply") {
+        o.output.ply = true;
+      } else if (f == "vtp") {
+        o.output.vtp = true;
+      } else if (f == "obj") {
+        o.output.obj = true;
+      } else {
+        return absl::InvalidArgumentError(absl::StrCat("--formats: '", f, "' is not ply, vtp or obj"));
+      }
+    }
+  }
+  ExtractionOptions& x = o.extraction;
+  if (Given("refine")) x.refine = absl::GetFlag(FLAGS_refine);
+  if (Given("refine_close")) x.refine_close_radius = absl::GetFlag(FLAGS_refine_close);
+  if (Given("refine_open")) x.refine_open_radius = absl::GetFlag(FLAGS_refine_open);
+  if (Given("detect")) x.detect = absl::GetFlag(FLAGS_detect);
+  if (Given("detect_t")) x.detect_extend.half_thickness_voxels = absl::GetFlag(FLAGS_detect_t);
+  if (Given("detect_R")) x.detect_extend.radius_voxels = absl::GetFlag(FLAGS_detect_R);
+  if (Given("detect_rounds")) x.detect_extend.max_rounds = absl::GetFlag(FLAGS_detect_rounds);
+  if (Given("M")) x.min_object_voxels = absl::GetFlag(FLAGS_M);
+  if (Given("separate")) x.separate = absl::GetFlag(FLAGS_separate);
+  if (Given("r_sep")) {
+    x.separation.radius_voxels = absl::GetFlag(FLAGS_r_sep);
+    x.detect_extend.scvd_radius_voxels = x.recover_extend.scvd_radius_voxels = x.separation.radius_voxels;
+  }
+  if (Given("D_ang")) x.separation.dihedral_degrees = absl::GetFlag(FLAGS_D_ang);
+  if (Given("remove_minor")) x.remove_minor = absl::GetFlag(FLAGS_remove_minor);
+  if (Given("recover")) x.recover = absl::GetFlag(FLAGS_recover);
+  if (Given("recover_t")) x.recover_extend.half_thickness_voxels = absl::GetFlag(FLAGS_recover_t);
+  if (Given("recover_R")) x.recover_extend.radius_voxels = absl::GetFlag(FLAGS_recover_R);
+  if (Given("recover_rounds")) x.recover_extend.max_rounds = absl::GetFlag(FLAGS_recover_rounds);
   o.output.dir = absl::GetFlag(FLAGS_o);
-  if (o.output.dir.empty()) return absl::InvalidArgumentError("surface needs -o DIR");
-  o.output.ply = o.output.vtp = o.output.obj = false;
-  for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_formats), ',', absl::SkipEmpty())) {
-    if (f == "ply") {
-      o.output.ply = true;
-    } else if (f == "vtp") {
-      o.output.vtp = true;
-    } else if (f == "obj") {
-      o.output.obj = true;
-    } else {
-      return absl::InvalidArgumentError(absl::StrCat("--formats: '", f, "' is not ply, vtp or obj"));
-    }
+  if (o.output.dir.empty()) return absl::InvalidArgumentError("needs -o DIR");
+  SM_RETURN_IF_ERROR(ValidatePipelineOptions(o));
+  return o;
+}
+
+absl::Status Surface(const std::vector<std::string>& args, bool extract) {
+  if (args.size() != 1) {
+    return absl::InvalidArgumentError(absl::StrCat("usage: ", extract ? "run" : "surface",
+                                                   " VOLUME -o DIR [flags]"));
   }
+  SM_ASSIGN_OR_RETURN(PipelineOptions o, PipelineFromFlags(args[0], extract));
   return RunSurface(o, std::cout);
 }
 
@@ -297,13 +386,19 @@ absl::Status Score(const std::vector<std::string>& args) {
 }
 
 // absl flags take underscores; accept --target-similarity as well as --target_similarity.
+// Records which flags were given.
 void NormalizeFlagNames(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     char* a = argv[i];
-    if (a[0] != '-' || a[1] != '-') continue;
-    for (char* c = a + 2; *c != '\0' && *c != '='; ++c) {
-      if (*c == '-') *c = '_';
+    if (a[0] != '-') continue;
+    char* name = a + (a[1] == '-' ? 2 : 1);
+    char* c = name;
+    for (; *c != '\0' && *c != '='; ++c) {
+      if (*c == '-' && a[1] == '-') *c = '_';
     }
+    std::string flag(name, c);
+    if (flag.rfind("no", 0) == 0 && absl::FindCommandLineFlag(flag) == nullptr) flag = flag.substr(2);
+    GivenFlags().insert(flag);
   }
 }
 
@@ -325,7 +420,9 @@ int Main(int argc, char** argv) {
   } else if (command == "convert") {
     status = Convert(args);
   } else if (command == "surface") {
-    status = Surface(args);
+    status = Surface(args, /*extract=*/false);
+  } else if (command == "run") {
+    status = Surface(args, /*extract=*/true);
   } else if (command == "score") {
     status = Score(args);
   } else {

@@ -12,8 +12,24 @@ namespace sheetmesh {
 
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   SM_ASSIGN_OR_RETURN(PipelineReport r, RunPipeline(options));
-  out << absl::StrFormat("sheet       %d voxels, t̄ = %.2f, %d components\n", r.sheet_voxels,
-                         r.thickness.mean, r.components);
+  out << absl::StrFormat("sheet       %d voxels of %s\n", r.sheet_voxels,
+                         r.options.input.selection.ToString());
+  if (r.options.extract) {
+    for (const ExtractionStep& s : r.extraction_steps) {
+      if (!s.ran) {
+        out << absl::StrFormat("  %-13s skipped\n", s.name);
+        continue;
+      }
+      out << absl::StrFormat("  %-13s voxels %d -> %d (+%d -%d), objects %d -> %d, %.2f s\n", s.name,
+                             s.voxels_before, s.voxels_after, s.added, s.removed,
+                             s.objects_before, s.objects_after, s.seconds);
+    }
+    out << absl::StrFormat("model       %d pieces, %d voxels (M = %d)\n", r.pieces, r.model_voxels,
+                           r.min_object_voxels);
+  }
+  out << absl::StrFormat("meshed set  %d voxels, t̄ = %.2f, %d components\n",
+                         r.options.extract ? r.model_voxels : r.sheet_voxels, r.thickness.mean,
+                         r.components);
   if (options.search_radius) {
     out << "r search   ";
     for (const RadiusTrial& t : r.radius_choice.trials) {
@@ -36,6 +52,17 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
                          r.similarity.c_in, r.similarity.c_out, r.similarity.c_image, r.similarity.dice);
   if (r.similarity.hausdorff >= 0) out << absl::StrFormat(", Hausdorff %.2f voxels", r.similarity.hausdorff);
   out << absl::StrFormat("; other prism model %.4f\n", r.shell_similarity);
+  if (r.options.extract) {
+    out << absl::StrFormat("            against the raw phase: %.4f (C_in %d, C_out %d, C_image %d)\n",
+                           r.similarity_raw.similarity, r.similarity_raw.c_in,
+                           r.similarity_raw.c_out, r.similarity_raw.c_image);
+    out << "pieces      (piece: voxels, dip/dip direction, mean aperture)\n";
+    for (size_t i = 0; i < r.geology.size() && i < 10; ++i) {
+      const PieceGeology& g = r.geology[i];
+      out << absl::StrFormat("            %d: %d voxels, %.0f/%03.0f, %.2f\n", g.piece, g.voxels,
+                             g.dip_degrees, g.dip_direction_degrees, g.mean_aperture);
+    }
+  }
   if (!r.grid.empty()) {
     out << "grid models";
     for (const GridFigure& g : r.grid) {

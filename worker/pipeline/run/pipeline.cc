@@ -7,6 +7,9 @@
 #include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/run/pipeline_config.h"
+#include "worker/pipeline/volume/label_volume.h"
+#include "worker/pipeline/volume/vdb_io.h"
 
 namespace sheetmesh {
 namespace {
@@ -29,7 +32,16 @@ class StageTimer {
 }  // namespace
 
 std::vector<std::string> PlannedStages(const PipelineOptions& options) {
-  std::vector<std::string> stages = {"read", "analyze"};
+  std::vector<std::string> stages = {"read"};
+  if (options.extract) {
+    const ExtractionOptions& e = options.extraction;
+    if (e.refine) stages.push_back("refine");
+    if (e.detect) stages.push_back("detect");
+    if (e.separate) stages.push_back("separate");
+    if (e.remove_minor) stages.push_back("remove_minor");
+    if (e.recover) stages.push_back("recover");
+  }
+  stages.push_back("analyze");
   if (options.search_radius) stages.push_back("search-r");
   stages.insert(stages.end(), {"surface", "similarity"});
   if (!options.output.dir.empty()) stages.push_back("write");
@@ -38,6 +50,7 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
 
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress) {
+  SM_RETURN_IF_ERROR(ValidatePipelineOptions(options));
   PipelineReport report;
   report.options = options;
   SheetPhase phase;
@@ -47,10 +60,26 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   }
   report.volume = phase.info;
   report.sheet_voxels = phase.sheet.size();
+  // The set that is meshed: the extracted model, or the input's sheet phase as it is.
+  VoxelSet meshed = phase.sheet;
+  std::vector<int32_t> piece_of_voxel;
+  LabelledVoxels model;
+  if (options.extract) {
+    StageTimer t(&report, "extract");
+    SM_ASSIGN_OR_RETURN(ExtractionResult ex,
+                        ExtractFeatures(phase.sheet, options.extraction, progress));
+    report.extraction_steps = ex.steps;
+    report.min_object_voxels = ex.min_object_voxels;
+    model = std::move(ex.model);
+    report.model_voxels = model.set.size();
+    report.pieces = model.CountLabels();
+    meshed = model.set;
+    piece_of_voxel = model.label;
+  }
   SheetAnalysis sheet;
   {
     StageTimer t(&report, "analyze");
-    SM_ASSIGN_OR_RETURN(sheet, AnalyzeSheet(std::move(phase.sheet), progress.Stage("analyze")));
+    SM_ASSIGN_OR_RETURN(sheet, AnalyzeSheet(std::move(meshed), progress.Stage("analyze")));
   }
   report.thickness = sheet.thickness_stats;
   report.thickness.histogram.clear();
@@ -67,7 +96,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   SurfaceResult result;
   {
     StageTimer t(&report, "surface");
-    SM_ASSIGN_OR_RETURN(result, BuildSurface(sheet, surface, {}, progress.Stage("surface")));
+    SM_ASSIGN_OR_RETURN(result,
+                        BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   const TriangleMesh& mesh = result.mesh;
   report.generators = result.scvd.num_generators();
@@ -89,13 +119,18 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     const Progress p = progress.Stage("similarity");
     const PrismHeight other = options.score.height == PrismHeight::kFace ? PrismHeight::kVertex
                                                                          : PrismHeight::kFace;
-    SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
-    report.similarity = ScoreModel(model, sheet.set);
+    SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
+    report.similarity = ScoreModel(prisms, sheet.set);
     if (options.score.hausdorff) {
-      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff, HausdorffDistance(model, sheet.set, p.Sub(0.2, 0.6)));
+      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff, HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
     }
     SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
     report.shell_similarity = ScoreModel(shell, sheet.set).similarity;
+    if (options.extract) {
+      report.similarity_raw = ScoreModel(prisms, phase.sheet);
+      report.geology = ComputePieceGeology(LabelledVoxels{sheet.set, piece_of_voxel},
+                                           sheet.thickness, mesh, phase.info.placement);
+    }
     for (int k : options.score.grid_rates) {
       if (k < 1) return absl::InvalidArgumentError(absl::StrCat("grid rate ", k, " must be >= 1"));
       report.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
@@ -121,6 +156,15 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     if (options.output.obj) {
       SM_RETURN_IF_ERROR(WriteObj(path("surface.obj"), mesh, pl));
       report.files.push_back("surface.obj");
+    }
+    if (options.extract && options.output.model) {
+      SM_RETURN_IF_ERROR(WriteVoxelSetVdb(path("model.vdb"), model.set, model.label, pl, "model"));
+      report.files.push_back("model.vdb");
+      const std::string labels = absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
+      SM_RETURN_IF_ERROR(WriteLabelVolume(model, path(labels.c_str()), VolumeFormat::kRaw, pl));
+      report.files.push_back(labels);
+      SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report.geology)));
+      report.files.push_back("pieces.csv");
     }
     report.files.push_back("report.json");
     SM_RETURN_IF_ERROR(WriteFileAtomically(path("report.json"), report.ToJson()));

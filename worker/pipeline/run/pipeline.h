@@ -10,6 +10,8 @@
 
 #include "absl/status/statusor.h"
 #include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/extract/extraction.h"
+#include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
@@ -31,10 +33,14 @@ struct OutputOptions {
   bool ply = true;        // surface.ply
   bool vtp = true;        // surface.vtp
   bool obj = true;        // surface.obj
+  bool model = true;      // with extraction: model.vdb (mask + labels) and
+                          // model_labels_<dims>_u16.raw, and pieces.csv
 };
 
 struct PipelineOptions {
   SheetInput input;
+  bool extract = false;                   // run the feature extraction (Fig. 3) first
+  ExtractionOptions extraction;
   SurfaceOptions surface;                 // r = surface.scvd.radius_voxels unless searched
   bool search_radius = false;             // choose r with `radius_search`
   RadiusSearchOptions radius_search;
@@ -75,8 +81,16 @@ struct PipelineReport {
   TopologyReport topology;
   uint32_t skipped_components = 0;
   uint64_t skipped_voxels = 0;
+  // extraction (when run)
+  std::vector<ExtractionStep> extraction_steps;
+  uint64_t min_object_voxels = 0;    // M as used
+  uint64_t model_voxels = 0;         // voxels of the extracted model
+  uint32_t pieces = 0;
+  std::vector<PieceGeology> geology;
   // similarity
-  SimilarityScore similarity;        // against the input's sheet phase, model of `score.height`
+  SimilarityScore similarity;        // against the meshed set (the extracted model, or the
+                                     // input's sheet phase), model of `score.height`
+  SimilarityScore similarity_raw;    // against the input's sheet phase (with extraction)
   double shell_similarity = 0;       // the other prism model (per-vertex if height is face)
   std::vector<GridFigure> grid;
   RadiusChoice radius_choice;        // when r was searched

@@ -91,6 +91,46 @@ std::string PipelineReport::ToJson() const {
     grid_json.push_back({{"rate", g.rate}, {"similarity", g.similarity}, {"grid_quantity", g.grid_quantity}});
   }
   sim["grid_models"] = grid_json;
+  if (options.extract) {
+    sim["against"] = "extracted model";
+    sim["raw"] = {{"against", "input sheet phase"},
+                  {"similarity", similarity_raw.similarity},
+                  {"c_in", similarity_raw.c_in},
+                  {"c_out", similarity_raw.c_out},
+                  {"c_image", similarity_raw.c_image},
+                  {"dice", similarity_raw.dice}};
+    const ExtractionOptions& e = options.extraction;
+    nlohmann::json steps = nlohmann::json::array();
+    for (const ExtractionStep& s : extraction_steps) {
+      steps.push_back({{"step", s.name}, {"ran", s.ran}, {"voxels_before", s.voxels_before},
+                       {"voxels_after", s.voxels_after}, {"added", s.added},
+                       {"removed", s.removed}, {"objects_before", s.objects_before},
+                       {"objects_after", s.objects_after}, {"seconds", s.seconds}});
+    }
+    j["extraction"] = {
+        {"parameters",
+         {{"refine", e.refine}, {"refine_close_radius", e.refine_close_radius},
+          {"refine_open_radius", e.refine_open_radius}, {"detect", e.detect},
+          {"detect_t", e.detect_extend.half_thickness_voxels}, {"detect_R", e.detect_extend.radius_voxels},
+          {"detect_rounds", e.detect_extend.max_rounds}, {"M", min_object_voxels},
+          {"separate", e.separate}, {"separate_r", e.separation.radius_voxels},
+          {"D_ang", e.separation.dihedral_degrees}, {"remove_minor", e.remove_minor},
+          {"recover", e.recover}, {"recover_t", e.recover_extend.half_thickness_voxels},
+          {"recover_R", e.recover_extend.radius_voxels}, {"recover_rounds", e.recover_extend.max_rounds}}},
+        {"steps", steps},
+        {"model_voxels", model_voxels},
+        {"pieces", pieces}};
+    nlohmann::json geo = nlohmann::json::array();
+    for (const PieceGeology& g : geology) {
+      geo.push_back({{"piece", g.piece}, {"voxels", g.voxels}, {"triangles", g.triangles},
+                     {"area", g.area}, {"mean_aperture", g.mean_aperture},
+                     {"max_aperture", g.max_aperture}, {"normal", Vec(g.normal)},
+                     {"dip_degrees", g.dip_degrees},
+                     {"dip_direction_degrees", g.dip_direction_degrees},
+                     {"planarity", g.planarity}, {"centroid", Vec(g.centroid)}});
+    }
+    j["pieces"] = geo;
+  }
   j["similarity"] = sim;
   if (options.search_radius) {
     nlohmann::json trials = nlohmann::json::array();

@@ -16,6 +16,8 @@
 #include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
+#include "worker/pipeline/scvd/rim_test.h"
 
 namespace sheetmesh {
 namespace {
@@ -311,39 +313,15 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
     }
   }
   if (boundary.empty()) return;
-  // Normals of boundary vertices: the mean of their faces' normals, each flipped to agree
-  // with the first (the faces are not oriented yet).
   std::vector<uint8_t> on_boundary(num_gen, 0);
   for (const auto& [p, q] : boundary) on_boundary[p] = on_boundary[q] = 1;
-  std::vector<Vec3> normal(num_gen);
-  std::vector<uint8_t> has_normal(num_gen, 0);
-  for (const Face& f : selector->faces()) {
-    const Vec3 n = UnitNormal({(*pos)[f[0]], (*pos)[f[1]], (*pos)[f[2]]});
-    for (uint32_t v : f) {
-      if (!on_boundary[v]) continue;
-      normal[v] += has_normal[v] && Dot(normal[v], n) < 0 ? -n : n;
-      has_normal[v] = 1;
-    }
-  }
-  for (uint32_t g = 0; g < num_gen; ++g) normal[g] = Normalized(normal[g]);
-  // Rim voxels: voxels of boundary cells from which a step along the sheet (among the 26
-  // neighbour directions, those nearly perpendicular to the normal) leaves the sheet. A
-  // step across it would also leave on the faces of a stepped, tilted sheet, so only
-  // tangent steps count.
-  std::vector<Vec3> dirs;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx)
-        if (dx != 0 || dy != 0 || dz != 0) dirs.emplace_back(dx, dy, dz);
+  // Normals of the generators (the faces are not oriented yet).
+  const std::vector<Vec3> normal =
+      VertexNormals(std::span<const Vec3>(pos->data(), num_gen), selector->faces());
+  // Rim voxels of the boundary cells.
+  const RimTest rim(set, options.rim_normal_cos);
   auto is_rim = [&](int32_t x, int32_t y, int32_t z, uint32_t c) {
-    for (const Vec3& d : dirs) {
-      if (std::abs(Dot(d, normal[c])) >= options.rim_normal_cos * Norm(d)) continue;
-      if (!set.Contains(x + static_cast<int32_t>(d.x), y + static_cast<int32_t>(d.y),
-                        z + static_cast<int32_t>(d.z))) {
-        return true;
-      }
-    }
-    return false;
+    return rim.IsRim(x, y, z, normal[c]);
   };
   std::vector<Vec3> sum(num_gen);
   std::vector<double> tau(num_gen, 0.0);

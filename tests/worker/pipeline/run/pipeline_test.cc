@@ -71,6 +71,30 @@ TEST(PipelineTest, RunWritesMeshesAndAReport) {
   EXPECT_EQ(back.faces.size(), r.triangles);
 }
 
+TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.extract = true;
+  o.score.hausdorff = false;
+  Stages stages;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
+  EXPECT_EQ(stages.seen, PlannedStages(o));
+  EXPECT_GE(r.pieces, 2u);
+  EXPECT_EQ(r.geology.size(), r.pieces);
+  EXPECT_GT(r.similarity_raw.similarity, 0.4);
+  for (const char* f : {"model.vdb", "model_labels_64x56x48_u16.raw", "pieces.csv"}) {
+    EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
+  }
+  EXPECT_EQ(std::filesystem::file_size(tmp.File("out/model_labels_64x56x48_u16.raw")), 64u * 56 * 48 * 2);
+  const nlohmann::json j =
+      nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
+  EXPECT_EQ(j["extraction"]["steps"].size(), 5u);
+  EXPECT_EQ(j["pieces"].size(), r.pieces);
+  EXPECT_EQ(j["similarity"]["against"], "extracted model");
+}
+
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {
   TempDir tmp;
   PipelineOptions o;

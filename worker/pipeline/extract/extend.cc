@@ -1,0 +1,159 @@
+#include "worker/pipeline/extract/extend.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
+#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/scvd/rim_test.h"
+#include "worker/pipeline/surface/sheet_analysis.h"
+
+namespace sheetmesh {
+namespace {
+
+struct Claim {
+  uint64_t key;      // linear voxel index
+  float off_plane;   // |v . n|
+  int32_t label;
+  bool operator<(const Claim& o) const {
+    if (key != o.key) return key < o.key;
+    if (off_plane != o.off_plane) return off_plane < o.off_plane;
+    return label < o.label;
+  }
+};
+
+// One round: the claims of every rim generator's cylinder.
+absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const ExtendOptions& o,
+                                         const VoxelSet* within, const Progress& progress) {
+  const Dims& d = patch.set.dims();
+  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
+  ScvdOptions so;
+  so.radius_voxels = o.scvd_radius_voxels;
+  so.seed = o.seed;
+  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                           sheet.thickness_stats.mean, so, progress.Sub(0.2, 0.6)));
+  std::vector<Vec3> pos(scvd.num_generators());
+  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
+  DualTriangleOptions to;
+  to.rim = false;
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
+                                                             sheet.thickness, scvd, pos, to));
+  // Formula 4's n: the normalised mean of the generator's triangles' normals.
+  const std::vector<Vec3> normal = VertexNormals(pos, tri.faces);
+  // Cells on the rim (the outer edge or a hole's): the only ones whose cylinder can reach
+  // beyond the patch in its plane.
+  std::vector<uint8_t> rim_cell(scvd.num_generators(), 0);
+  const RimTest rim(sheet.set, 0.4);
+  sheet.set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+    const uint32_t c = scvd.cell[v];
+    if (!rim_cell[c] && Norm2(normal[c]) > 0 && rim.IsRim(x, y, z, normal[c])) rim_cell[c] = 1;
+  });
+  std::vector<uint32_t> active;
+  for (uint32_t g = 0; g < scvd.num_generators(); ++g) {
+    if (rim_cell[g]) active.push_back(g);
+  }
+  const double t = o.half_thickness_voxels, R = o.radius_voxels;
+  const int64_t reach = static_cast<int64_t>(std::ceil(R + t));
+  tbb::combinable<std::vector<Claim>> parts;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
+                    [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<Claim>& out = parts.local();
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const uint32_t g = active[i];
+      const Index3 z = scvd.generators[g];
+      const Vec3& n = normal[g];
+      const int32_t label = patch.label[scvd.generator_voxel[g]];
+      for (int64_t dz = -reach; dz <= reach; ++dz) {
+        for (int64_t dy = -reach; dy <= reach; ++dy) {
+          for (int64_t dx = -reach; dx <= reach; ++dx) {
+            const int64_t x = z.x + dx, y = z.y + dy, zz = z.z + dz;
+            if (!d.Contains(x, y, zz)) continue;
+            const Vec3 v(dx, dy, dz);
+            const double along = std::abs(Dot(v, n));
+            if (along >= t) continue;
+            if (Norm2(v) - along * along >= R * R) continue;
+            if (patch.set.Contains(x, y, zz)) continue;
+            if (within != nullptr && !within->Contains(x, y, zz)) continue;
+            out.push_back({static_cast<uint64_t>((zz * d.ny + y) * d.nx + x),
+                           static_cast<float>(along), label});
+          }
+        }
+      }
+    }
+  });
+  std::vector<Claim> claims;
+  parts.combine_each([&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
+  tbb::parallel_sort(claims.begin(), claims.end());
+  // The first claim of each voxel is the nearest plane's (ties: the lower label).
+  claims.erase(std::unique(claims.begin(), claims.end(),
+                           [](const Claim& a, const Claim& b) { return a.key == b.key; }),
+               claims.end());
+  return claims;
+}
+
+// `patch` with the claimed voxels added.
+LabelledVoxels Merge(const LabelledVoxels& patch, const std::vector<Claim>& claims) {
+  const Dims& d = patch.set.dims();
+  VoxelSet::Builder b(d);
+  LabelledVoxels out;
+  out.label.reserve(patch.label.size() + claims.size());
+  // Walk the old voxels and the claims (both in linear order) together.
+  std::vector<std::pair<uint64_t, int32_t>> merged;
+  merged.reserve(patch.label.size() + claims.size());
+  size_t c = 0;
+  patch.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+    const uint64_t key = (static_cast<uint64_t>(z) * d.ny + y) * d.nx + x;
+    while (c < claims.size() && claims[c].key < key) {
+      merged.emplace_back(claims[c].key, claims[c].label);
+      ++c;
+    }
+    merged.emplace_back(key, patch.label[i]);
+  });
+  for (; c < claims.size(); ++c) merged.emplace_back(claims[c].key, claims[c].label);
+  for (const auto& [key, label] : merged) {
+    const int64_t x = static_cast<int64_t>(key % d.nx);
+    const int64_t row = static_cast<int64_t>(key / d.nx);
+    b.AddVoxel(x, row % d.ny, row / d.ny);
+    out.label.push_back(label);
+  }
+  out.set = std::move(b).Build();
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
+                                    const VoxelSet* within, const Progress& progress) {
+  if (!(options.half_thickness_voxels > 0) || !(options.radius_voxels > 0) ||
+      !(options.scvd_radius_voxels > 0)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "extend t = ", options.half_thickness_voxels, ", R = ", options.radius_voxels,
+        " and r = ", options.scvd_radius_voxels, " must all be positive"));
+  }
+  if (within != nullptr && !(within->dims() == patch.set.dims())) {
+    return absl::InvalidArgumentError("extend: the original image's dims differ from the patch's");
+  }
+  ExtendResult out;
+  out.patch = patch;
+  if (patch.set.empty()) return out;
+  for (int round = 0; round < options.max_rounds; ++round) {
+    const Progress p = progress.Sub(double(round) / options.max_rounds,
+                                    double(round + 1) / options.max_rounds);
+    SM_ASSIGN_OR_RETURN(std::vector<Claim> claims, Round(out.patch, options, within, p));
+    if (claims.empty()) break;
+    out.added += claims.size();
+    ++out.rounds;
+    out.patch = Merge(out.patch, claims);
+  }
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
+}
+
+}  // namespace sheetmesh

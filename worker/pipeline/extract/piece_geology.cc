@@ -1,0 +1,92 @@
+#include "worker/pipeline/extract/piece_geology.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <map>
+
+#include "absl/strings/str_format.h"
+#include "worker/pipeline/core/orientation.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/surface/face_attributes.h"
+
+namespace sheetmesh {
+
+std::vector<PieceGeology> ComputePieceGeology(const LabelledVoxels& model,
+                                              std::span<const uint16_t> thickness,
+                                              const TriangleMesh& mesh, const Placement& pl) {
+  struct Acc {
+    uint64_t n = 0;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    double tau_sum = 0;
+    uint16_t tau_max = 0;
+  };
+  std::map<int32_t, Acc> acc;
+  model.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+    Acc& a = acc[model.label[i]];
+    const Vec3 p = pl.ToPhysical(Vec3(x, y, z));
+    const Eigen::Vector3d v(p.x, p.y, p.z);
+    ++a.n;
+    a.sum += v;
+    a.outer += v * v.transpose();
+    a.tau_sum += thickness[i];
+    a.tau_max = std::max(a.tau_max, thickness[i]);
+  });
+  std::map<int32_t, std::pair<uint64_t, double>> faces;  // triangles, area
+  const Vec3 scale = pl.spacing;
+  for (size_t f = 0; f < mesh.faces.size() && mesh.face_piece.size() == mesh.faces.size(); ++f) {
+    Triangle t = Corners(mesh, f);
+    for (Vec3& c : t) c = {c.x * scale.x, c.y * scale.y, c.z * scale.z};
+    auto& e = faces[mesh.face_piece[f]];
+    ++e.first;
+    e.second += Area(t);
+  }
+  std::vector<PieceGeology> out;
+  for (const auto& [label, a] : acc) {
+    PieceGeology g;
+    g.piece = label;
+    g.voxels = a.n;
+    const Eigen::Vector3d mean = a.sum / double(a.n);
+    g.centroid = {mean.x(), mean.y(), mean.z()};
+    const Eigen::Matrix3d cov = a.outer / double(a.n) - mean * mean.transpose();
+    // The normal of the least-squares plane: the eigenvector of the smallest eigenvalue.
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    const Eigen::Vector3d n = eig.eigenvectors().col(0);
+    g.normal = Normalized(Vec3(n.x(), n.y(), n.z()));
+    if (g.normal.z < 0) g.normal = -g.normal;
+    const Eigen::Vector3d lambda = eig.eigenvalues();
+    g.planarity = lambda(1) > 0 ? 1.0 - lambda(0) / lambda(1) : 0.0;
+    const Orientation o = OrientationOf(g.normal);
+    g.dip_degrees = o.dip_degrees;
+    g.dip_direction_degrees = o.dip_direction_degrees;
+    // τ is the shortest axis run; along the plane normal a slab is that times max |n_k|.
+    const double factor = AxisRunToNormalFactor(g.normal);
+    g.mean_aperture = PhysicalLength(factor * a.tau_sum / a.n, pl);
+    g.max_aperture = PhysicalLength(factor * a.tau_max, pl);
+    auto it = faces.find(label);
+    if (it != faces.end()) {
+      g.triangles = it->second.first;
+      g.area = it->second.second;
+    }
+    out.push_back(g);
+  }
+  return out;
+}
+
+std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces) {
+  std::string out =
+      "piece,voxels,triangles,area,mean_aperture,max_aperture,normal_x,normal_y,normal_z,"
+      "dip,dip_direction,planarity,centroid_x,centroid_y,centroid_z\n";
+  for (const PieceGeology& g : pieces) {
+    absl::StrAppendFormat(&out, "%d,%d,%d,%.6g,%.6g,%.6g,%.6f,%.6f,%.6f,%.3f,%.3f,%.4f,%.6g,%.6g,%.6g\n",
+                          g.piece, g.voxels, g.triangles, g.area, g.mean_aperture, g.max_aperture,
+                          g.normal.x, g.normal.y, g.normal.z, g.dip_degrees,
+                          g.dip_direction_degrees, g.planarity, g.centroid.x, g.centroid.y,
+                          g.centroid.z);
+  }
+  return out;
+}
+
+}  // namespace sheetmesh

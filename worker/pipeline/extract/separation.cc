@@ -1,0 +1,108 @@
+#include "worker/pipeline/extract/separation.h"
+
+#include <algorithm>
+
+#include "absl/container/flat_hash_map.h"
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/surface/sheet_analysis.h"
+
+namespace sheetmesh {
+
+std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<const Face> faces,
+                                  double dihedral_degrees) {
+  std::vector<uint8_t> flat(positions.size(), 1);
+  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
+  auto key = [](uint32_t a, uint32_t b) {
+    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+  };
+  for (uint32_t f = 0; f < faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) edge_faces[key(faces[f][k], faces[f][(k + 1) % 3])].push_back(f);
+  }
+  for (const auto& [k, fs] : edge_faces) {
+    const uint32_t p = static_cast<uint32_t>(k >> 32), q = static_cast<uint32_t>(k);
+    bool bent = fs.size() >= 3;  // a crossing
+    for (size_t i = 0; i < fs.size() && !bent; ++i) {
+      for (size_t j = i + 1; j < fs.size() && !bent; ++j) {
+        auto third = [&](const Face& f) {
+          return f[0] != p && f[0] != q ? f[0] : (f[1] != p && f[1] != q ? f[1] : f[2]);
+        };
+        bent = DihedralAngleDegrees(positions[p], positions[q], positions[third(faces[fs[i]])],
+                                    positions[third(faces[fs[j]])]) < dihedral_degrees;
+      }
+    }
+    if (bent) flat[p] = flat[q] = 0;
+  }
+  return flat;
+}
+
+absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
+                                          const Progress& progress) {
+  if (!(options.dihedral_degrees > 0 && options.dihedral_degrees <= 180)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "separation D_ang = ", options.dihedral_degrees, " degrees must be in (0, 180]"));
+  }
+  SeparationResult out;
+  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(set, progress.Sub(0, 0.2)));
+  ScvdOptions so;
+  so.radius_voxels = options.radius_voxels;
+  so.seed = options.seed;
+  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                           sheet.thickness_stats.mean, so, progress.Sub(0.2, 0.7)));
+  std::vector<Vec3> pos(scvd.num_generators());
+  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
+  // Triangles folding back onto each other (below the selection's fold angle, 50° by
+  // default) are noise of the discrete diagram, not crossings; crossings meet at wider
+  // angles and survive the selection to fail Algorithm 2's test.
+  DualTriangleOptions to;
+  to.rim = false;
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
+                                                             sheet.thickness, scvd, pos, to,
+                                                             progress.Sub(0.7, 0.9)));
+  const std::vector<uint8_t> flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
+  out.generators = scvd.num_generators();
+  for (uint8_t f : flat) out.nonflat_generators += f == 0;
+
+  // Algorithm 2: flood over flat, unmarked generators through mesh edges.
+  std::vector<std::vector<uint32_t>> adj(scvd.num_generators());
+  for (const Face& f : tri.faces) {
+    for (int k = 0; k < 3; ++k) {
+      adj[f[k]].push_back(f[(k + 1) % 3]);
+      adj[f[(k + 1) % 3]].push_back(f[k]);
+    }
+  }
+  std::vector<int32_t> piece(scvd.num_generators(), -1);
+  int32_t next = 0;
+  std::vector<uint32_t> stack;
+  for (uint32_t z = 0; z < scvd.num_generators(); ++z) {
+    if (piece[z] >= 0 || !flat[z]) continue;
+    piece[z] = next;
+    stack.push_back(z);
+    while (!stack.empty()) {
+      const uint32_t v = stack.back();
+      stack.pop_back();
+      for (uint32_t u : adj[v]) {
+        if (piece[u] < 0 && flat[u]) {
+          piece[u] = next;
+          stack.push_back(u);
+        }
+      }
+    }
+    ++next;
+  }
+  // Voxels of non-flat cells are removed; the rest take their cell's piece.
+  std::vector<uint8_t> keep(sheet.set.size());
+  for (size_t v = 0; v < keep.size(); ++v) keep[v] = piece[scvd.cell[v]] >= 0;
+  out.pieces.set = sheet.set.Filter(keep);
+  for (size_t v = 0; v < keep.size(); ++v) {
+    if (keep[v]) out.pieces.label.push_back(piece[scvd.cell[v]]);
+  }
+  out.removed_voxels = sheet.set.size() - out.pieces.set.size();
+  out.pieces.RelabelBySize();
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,44 @@
+// Separation (paper §2.2.1, Algorithm 2; ALGORITHM §5): cut crossing structures apart.
+// A generator is flat when every pair of its triangles that share an edge meets at a
+// dihedral angle of at least D_ang and none of its edges has three or more triangles;
+// pieces are floods over flat generators through mesh edges; voxels of non-flat cells go.
+#ifndef SHEETMESH_WORKER_PIPELINE_EXTRACT_SEPARATION_H_
+#define SHEETMESH_WORKER_PIPELINE_EXTRACT_SEPARATION_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/voxel/labelled_voxels.h"
+
+namespace sheetmesh {
+
+struct SeparationOptions {
+  double radius_voxels = 5.0;       // r of the SCVD built for separation (Fig. 4: r = 5)
+  double dihedral_degrees = 150.0;  // D_ang: below this, two triangles are not flat
+  uint64_t seed = 1;                // SCVD seed
+};
+
+// Flat flags per vertex of `faces` over `positions` (Algorithm 2's test). Vertices with no
+// face are flat.
+std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<const Face> faces,
+                                  double dihedral_degrees);
+
+struct SeparationResult {
+  LabelledVoxels pieces;            // one label per flood, largest first
+  uint64_t removed_voxels = 0;      // voxels of non-flat cells
+  uint32_t generators = 0;
+  uint32_t nonflat_generators = 0;
+};
+
+// Separates `set`. kInvalidArgument for r <= 0 or D_ang outside (0, 180]; errors of the
+// SCVD pass through; kCancelled if asked.
+absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
+                                          const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_EXTRACT_SEPARATION_H_

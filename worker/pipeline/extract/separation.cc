@@ -1,6 +1,7 @@
 #include "worker/pipeline/extract/separation.h"
 
 #include <algorithm>
+#include <map>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
@@ -61,11 +62,8 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
   SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
                                                              sheet.thickness, scvd, pos, to,
                                                              progress.Sub(0.7, 0.9)));
-  const std::vector<uint8_t> flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
-  out.generators = scvd.num_generators();
-  for (uint8_t f : flat) out.nonflat_generators += f == 0;
-
-  // Algorithm 2: flood over flat, unmarked generators through mesh edges.
+  const std::vector<uint8_t> truly_flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
+  std::vector<uint8_t> flat = truly_flat;
   std::vector<std::vector<uint32_t>> adj(scvd.num_generators());
   for (const Face& f : tri.faces) {
     for (int k = 0; k < 3; ++k) {
@@ -73,6 +71,18 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
       adj[f[(k + 1) % 3]].push_back(f[k]);
     }
   }
+  for (int ring = 0; ring < options.widen_rings; ++ring) {
+    std::vector<uint8_t> next = flat;
+    for (uint32_t z = 0; z < flat.size(); ++z) {
+      if (flat[z]) continue;
+      for (uint32_t u : adj[z]) next[u] = 0;
+    }
+    flat.swap(next);
+  }
+  out.generators = scvd.num_generators();
+  for (uint8_t f : truly_flat) out.nonflat_generators += f == 0;
+
+  // Algorithm 2: flood over flat, unmarked generators through mesh edges.
   std::vector<int32_t> piece(scvd.num_generators(), -1);
   int32_t next = 0;
   std::vector<uint32_t> stack;
@@ -91,6 +101,27 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
       }
     }
     ++next;
+  }
+  // The widening ring decided connectivity only: its cells, flat themselves, rejoin the
+  // piece most of their flooded neighbours belong to, so the cut stays as narrow as
+  // Algorithm 2's.
+  for (int ring = 0; ring < options.widen_rings; ++ring) {
+    std::vector<int32_t> next = piece;
+    for (uint32_t z = 0; z < piece.size(); ++z) {
+      if (piece[z] >= 0 || !truly_flat[z]) continue;
+      std::map<int32_t, int> votes;
+      for (uint32_t u : adj[z]) {
+        if (piece[u] >= 0) ++votes[piece[u]];
+      }
+      int best = 0;
+      for (const auto& [p, n] : votes) {
+        if (n > best) {
+          best = n;
+          next[z] = p;
+        }
+      }
+    }
+    piece.swap(next);
   }
   // Voxels of non-flat cells are removed; the rest take their cell's piece.
   std::vector<uint8_t> keep(sheet.set.size());

@@ -20,6 +20,11 @@ struct SeparationOptions {
   double radius_voxels = 5.0;       // r of the SCVD built for separation (Fig. 4: r = 5)
   double dihedral_degrees = 150.0;  // D_ang: below this, two triangles are not flat
   uint64_t seed = 1;                // SCVD seed
+  int widen_rings = 1;              // beyond the paper: for the flood, generators within
+                                    // this many mesh edges of a non-flat one count as
+                                    // non-flat too, so that one missed cell along a crossing
+                                    // cannot join two sheets; afterwards they rejoin the
+                                    // piece of most of their neighbours (0: the paper)
 };
 
 // Flat flags per vertex of `faces` over `positions` (Algorithm 2's test). Vertices with no

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <map>
 
+#include <Eigen/Dense>
+
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "worker/pipeline/core/status_macros.h"
@@ -39,6 +41,49 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
   return flat;
 }
 
+namespace {
+
+// Floods over `ok` generators (restricted to `within` when it is not empty), numbering new
+// pieces from *next.
+void Flood(const std::vector<std::vector<uint32_t>>& adj, const std::vector<uint8_t>& ok,
+           const std::vector<uint8_t>& within, std::vector<int32_t>* piece, int32_t* next) {
+  std::vector<uint32_t> stack;
+  auto allowed = [&](uint32_t z) { return ok[z] && (within.empty() || within[z]); };
+  for (uint32_t z = 0; z < piece->size(); ++z) {
+    if ((*piece)[z] >= 0 || !allowed(z)) continue;
+    (*piece)[z] = *next;
+    stack.push_back(z);
+    while (!stack.empty()) {
+      const uint32_t v = stack.back();
+      stack.pop_back();
+      for (uint32_t u : adj[v]) {
+        if ((*piece)[u] < 0 && allowed(u)) {
+          (*piece)[u] = *next;
+          stack.push_back(u);
+        }
+      }
+    }
+    ++*next;
+  }
+}
+
+// 1 - λ_min / λ_mid of the positions' covariance: near 1 for points on a plane.
+double Planarity(const std::vector<Vec3>& pos, const std::vector<uint32_t>& ids) {
+  if (ids.size() < 4) return 1.0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (uint32_t z : ids) mean += Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z);
+  mean /= double(ids.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (uint32_t z : ids) {
+    const Eigen::Vector3d d = Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::Vector3d l = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+  return l(1) > 0 ? 1.0 - l(0) / l(1) : 1.0;
+}
+
+}  // namespace
+
 absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
                                           const Progress& progress) {
   if (!(options.dihedral_degrees > 0 && options.dihedral_degrees <= 180)) {
@@ -62,8 +107,7 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
   SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
                                                              sheet.thickness, scvd, pos, to,
                                                              progress.Sub(0.7, 0.9)));
-  const std::vector<uint8_t> truly_flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
-  std::vector<uint8_t> flat = truly_flat;
+  const std::vector<uint8_t> flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
   std::vector<std::vector<uint32_t>> adj(scvd.num_generators());
   for (const Face& f : tri.faces) {
     for (int k = 0; k < 3; ++k) {
@@ -71,57 +115,66 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
       adj[f[(k + 1) % 3]].push_back(f[k]);
     }
   }
-  for (int ring = 0; ring < options.widen_rings; ++ring) {
-    std::vector<uint8_t> next = flat;
-    for (uint32_t z = 0; z < flat.size(); ++z) {
-      if (flat[z]) continue;
-      for (uint32_t u : adj[z]) next[u] = 0;
-    }
-    flat.swap(next);
-  }
   out.generators = scvd.num_generators();
-  for (uint8_t f : truly_flat) out.nonflat_generators += f == 0;
+  for (uint8_t f : flat) out.nonflat_generators += f == 0;
 
   // Algorithm 2: flood over flat, unmarked generators through mesh edges.
   std::vector<int32_t> piece(scvd.num_generators(), -1);
   int32_t next = 0;
-  std::vector<uint32_t> stack;
-  for (uint32_t z = 0; z < scvd.num_generators(); ++z) {
-    if (piece[z] >= 0 || !flat[z]) continue;
-    piece[z] = next;
-    stack.push_back(z);
-    while (!stack.empty()) {
-      const uint32_t v = stack.back();
-      stack.pop_back();
-      for (uint32_t u : adj[v]) {
-        if (piece[u] < 0 && flat[u]) {
-          piece[u] = next;
-          stack.push_back(u);
-        }
-      }
-    }
-    ++next;
-  }
-  // The widening ring decided connectivity only: its cells, flat themselves, rejoin the
-  // piece most of their flooded neighbours belong to, so the cut stays as narrow as
-  // Algorithm 2's.
-  for (int ring = 0; ring < options.widen_rings; ++ring) {
-    std::vector<int32_t> next = piece;
+  Flood(adj, flat, {}, &piece, &next);
+
+  // One missed cell along a crossing lets a flood pass from one sheet into another; such a
+  // piece is not planar. Those pieces are flooded again with the non-flat set widened, and
+  // the widening ring then rejoins the piece most of its neighbours belong to, so the cut
+  // stays as narrow as Algorithm 2's.
+  if (options.widen_rings > 0) {
+    std::vector<uint8_t> suspect(next, 0);
+    std::vector<std::vector<uint32_t>> members(next);
     for (uint32_t z = 0; z < piece.size(); ++z) {
-      if (piece[z] >= 0 || !truly_flat[z]) continue;
-      std::map<int32_t, int> votes;
-      for (uint32_t u : adj[z]) {
-        if (piece[u] >= 0) ++votes[piece[u]];
+      if (piece[z] >= 0) members[piece[z]].push_back(z);
+    }
+    for (int32_t p = 0; p < next; ++p) {
+      bool touches = false;
+      for (uint32_t z : members[p]) {
+        for (uint32_t u : adj[z]) touches |= !flat[u];
       }
-      int best = 0;
-      for (const auto& [p, n] : votes) {
-        if (n > best) {
-          best = n;
-          next[z] = p;
+      suspect[p] = touches && Planarity(pos, members[p]) < options.planarity_threshold;
+    }
+    std::vector<uint8_t> narrowed = flat;  // flat, outside the widening of suspect pieces
+    std::vector<uint8_t> redo(piece.size(), 0);
+    for (uint32_t z = 0; z < piece.size(); ++z) redo[z] = piece[z] >= 0 && suspect[piece[z]];
+    for (int ring = 0; ring < options.widen_rings; ++ring) {
+      std::vector<uint8_t> step = narrowed;
+      for (uint32_t z = 0; z < narrowed.size(); ++z) {
+        if (narrowed[z]) continue;
+        for (uint32_t u : adj[z]) {
+          if (redo[u]) step[u] = 0;
         }
       }
+      narrowed.swap(step);
     }
-    piece.swap(next);
+    for (uint32_t z = 0; z < piece.size(); ++z) {
+      if (redo[z]) piece[z] = -1;
+    }
+    Flood(adj, narrowed, redo, &piece, &next);
+    for (int ring = 0; ring < options.widen_rings; ++ring) {
+      std::vector<int32_t> joined = piece;
+      for (uint32_t z = 0; z < piece.size(); ++z) {
+        if (piece[z] >= 0 || !flat[z] || !redo[z]) continue;
+        std::map<int32_t, int> votes;
+        for (uint32_t u : adj[z]) {
+          if (piece[u] >= 0) ++votes[piece[u]];
+        }
+        int best = 0;
+        for (const auto& [p, n] : votes) {
+          if (n > best) {
+            best = n;
+            joined[z] = p;
+          }
+        }
+      }
+      piece.swap(joined);
+    }
   }
   // Voxels of non-flat cells are removed; the rest take their cell's piece.
   std::vector<uint8_t> keep(sheet.set.size());

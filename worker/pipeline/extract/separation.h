@@ -20,11 +20,12 @@ struct SeparationOptions {
   double radius_voxels = 5.0;       // r of the SCVD built for separation (Fig. 4: r = 5)
   double dihedral_degrees = 150.0;  // D_ang: below this, two triangles are not flat
   uint64_t seed = 1;                // SCVD seed
-  int widen_rings = 1;              // beyond the paper: for the flood, generators within
-                                    // this many mesh edges of a non-flat one count as
-                                    // non-flat too, so that one missed cell along a crossing
-                                    // cannot join two sheets; afterwards they rejoin the
-                                    // piece of most of their neighbours (0: the paper)
+  int widen_rings = 1;              // beyond the paper: a piece that is not planar and
+                                    // touches non-flat generators leaked through a missed
+                                    // cell; it is flooded again with the non-flat set widened
+                                    // by this many mesh edges, and the ring then rejoins the
+                                    // piece of most of its neighbours (0: the paper)
+  double planarity_threshold = 0.9; // pieces below this planarity count as leaked
 };
 
 // Flat flags per vertex of `faces` over `positions` (Algorithm 2's test). Vertices with no

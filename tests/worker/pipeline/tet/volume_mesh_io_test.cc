@@ -1,0 +1,126 @@
+#include "worker/pipeline/tet/volume_mesh_io.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <memory>
+
+#include "absl/strings/str_split.h"
+#include "tests/testing/status_matchers.h"
+#include "tests/testing/temp_dir.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::IsOk;
+using ::sheetmesh::testing::TempDir;
+
+// Runs /usr/bin/python3 on `script`; returns the last line it prints (meshio may print
+// notices first), or nullopt when meshio is missing.
+std::optional<std::string> Python(const std::string& script) {
+  if (std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") != 0) return std::nullopt;
+  std::string out;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(
+      popen(("/usr/bin/python3 -W ignore -c '" + script + "'").c_str(), "r"), pclose);
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get()) != nullptr) {
+    if (std::string(buf.data()) != "\n") out = buf.data();
+  }
+  return out;
+}
+
+// A box with two sheets (pieces 0 and 3).
+TetMesh SampleMesh() {
+  TriangleMesh sheets;
+  for (int s = 0; s < 2; ++s) {
+    const double z = s == 0 ? 6 : 13;
+    const uint32_t b = static_cast<uint32_t>(sheets.vertices.size());
+    sheets.vertices.insert(sheets.vertices.end(), {{4, 4, z}, {15, 4, z}, {15, 15, z}, {4, 15, z}});
+    sheets.faces.push_back({b, b + 1, b + 2});
+    sheets.faces.push_back({b, b + 2, b + 3});
+    sheets.face_piece.insert(sheets.face_piece.end(), {s == 0 ? 0 : 3, s == 0 ? 0 : 3});
+    sheets.face_thickness.insert(sheets.face_thickness.end(), {2.5f, 2.5f});
+  }
+  auto r = BuildVolumeMesh(sheets, {20, 20, 20}, {}, {});
+  EXPECT_TRUE(r.ok()) << r.status();
+  return r->mesh;
+}
+
+struct Counts {
+  size_t tets = 0, sheet0 = 0, sheet3 = 0, boundary = 0;
+};
+
+Counts Expected(const TetMesh& m) {
+  Counts c;
+  c.tets = m.tets.size();
+  for (int32_t p : m.face_piece) {
+    c.sheet0 += p == 0;
+    c.sheet3 += p == 3;
+    c.boundary += p < 0;
+  }
+  return c;
+}
+
+TEST(VolumeMeshIoTest, VtuReadsBackInMeshio) {
+  TempDir tmp;
+  const TetMesh m = SampleMesh();
+  ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
+  const auto out = Python(
+      "import meshio, numpy as np\n"
+      "m = meshio.read(\"" + tmp.File("m.vtu") + "\")\n"
+      "piece = np.concatenate(m.cell_data[\"piece\"])\n"
+      "kind = np.concatenate(m.cell_data[\"kind\"])\n"
+      "print(len(m.points), m.cells_dict[\"tetra\"].shape[0], m.cells_dict[\"triangle\"].shape[0], "
+      "int((piece == 0).sum()), int((piece == 3).sum()), int((kind == 2).sum()))");
+  if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  const Counts c = Expected(m);
+  EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", m.faces.size(), " ", c.sheet0, " ",
+                               c.sheet3, " ", c.boundary, "\n"));
+}
+
+TEST(VolumeMeshIoTest, GmshReadsBackInMeshioWithPhysicalGroups) {
+  TempDir tmp;
+  const TetMesh m = SampleMesh();
+  ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
+  const auto out = Python(
+      "import meshio, numpy as np\n"
+      "m = meshio.read(\"" + tmp.File("m.msh") + "\")\n"
+      "tags = {}\n"
+      "for block, phys in zip(m.cells, m.cell_data[\"gmsh:physical\"]):\n"
+      "    for t in phys: tags[(block.type, int(t))] = tags.get((block.type, int(t)), 0) + 1\n"
+      "names = {k: int(v[0]) for k, v in m.field_data.items()}\n"
+      "print(len(m.points), tags.get((\"tetra\", 1), 0), tags.get((\"triangle\", 100), 0), "
+      "tags.get((\"triangle\", 103), 0), tags.get((\"triangle\", 2), 0), "
+      "names.get(\"rock\"), names.get(\"sheet_3\"), names.get(\"boundary\"))");
+  if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  const Counts c = Expected(m);
+  EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", c.sheet0, " ", c.sheet3, " ",
+                               c.boundary, " 1 103 2\n"));
+}
+
+TEST(VolumeMeshIoTest, AbaqusReadsBackInMeshioWithElementSets) {
+  TempDir tmp;
+  const TetMesh m = SampleMesh();
+  ASSERT_THAT(WriteAbaqus(tmp.File("m.inp"), m), IsOk());
+  const auto out = Python(
+      "import meshio\n"
+      "m = meshio.read(\"" + tmp.File("m.inp") + "\")\n"
+      "sizes = {k: sum(len(x) for x in v) for k, v in m.cell_sets.items()}\n"
+      "print(len(m.points), m.cells_dict[\"tetra\"].shape[0], m.cells_dict[\"triangle\"].shape[0], "
+      "sizes.get(\"ROCK\"), sizes.get(\"SHEET_0\"), sizes.get(\"SHEET_3\"), sizes.get(\"BOUNDARY\"))");
+  if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  const Counts c = Expected(m);
+  EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", m.faces.size(), " ", c.tets, " ",
+                               c.sheet0, " ", c.sheet3, " ", c.boundary, "\n"));
+  // The surfaces name a tetrahedron face for every sheet face.
+  const std::string inp = *ReadFileToString(tmp.File("m.inp"));
+  EXPECT_THAT(inp, ::testing::HasSubstr("*SURFACE, TYPE=ELEMENT, NAME=SURF_SHEET_3"));
+  EXPECT_THAT(inp, ::testing::HasSubstr("*SURFACE, TYPE=ELEMENT, NAME=SURF_BOUNDARY"));
+}
+
+}  // namespace
+}  // namespace sheetmesh

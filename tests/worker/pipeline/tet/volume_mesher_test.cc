@@ -1,0 +1,210 @@
+#include "worker/pipeline/tet/volume_mesher.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+#include "tests/testing/status_matchers.h"
+#include "tests/testing/temp_dir.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::StatusIs;
+using ::sheetmesh::testing::TempDir;
+using ::testing::HasSubstr;
+
+// A square sheet of n x n quads at height z, spanning [a, b] in x and y (voxel coordinates).
+TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 0, float thick = 3,
+                    int axis = 2) {
+  TriangleMesh m;
+  auto put = [&](double u, double v) {
+    Vec3 p;
+    p[axis] = z;
+    p[(axis + 1) % 3] = u;
+    p[(axis + 2) % 3] = v;
+    m.vertices.push_back(p);
+  };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) put(a + (b - a) * i / n, a + (b - a) * j / n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t v = j * (n + 1) + i;
+      m.faces.push_back({v, v + 1, v + n + 2});
+      m.faces.push_back({v, v + n + 2, v + n + 1});
+    }
+  m.face_piece.assign(m.faces.size(), piece);
+  m.face_thickness.assign(m.faces.size(), thick);
+  return m;
+}
+
+TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
+  const uint32_t off = static_cast<uint32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Face f : b.faces) a.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
+  a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
+  a.face_thickness.insert(a.face_thickness.end(), b.face_thickness.begin(), b.face_thickness.end());
+  return a;
+}
+
+TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
+  Placement pl;
+  pl.spacing = {0.5, 0.5, 0.5};
+  pl.origin = {1, 2, 3};
+  VolumeMeshOptions o;
+  o.tetgen.min_dihedral_degrees = 12;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, pl, o));
+  // The tetrahedra fill the box exactly.
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_DOUBLE_EQ(r.box_volume, 10.0 * 10 * 10);
+  EXPECT_EQ(r.quality.inverted, 0u);
+  // Every sheet triangle is the union of tagged faces of the mesh.
+  EXPECT_EQ(r.conformity.sheet_triangles, 32u);
+  EXPECT_EQ(r.conformity.conforming, 32u);
+  EXPECT_GE(r.mesh.num_sheet_faces(), 32u);
+  for (size_t f = 0; f < r.mesh.faces.size(); ++f) {
+    if (r.mesh.face_marker[f] < kFirstSheetMarker) continue;
+    EXPECT_EQ(r.mesh.face_piece[f], 0);
+    EXPECT_FLOAT_EQ(r.mesh.face_thickness[f], 3.0f);
+    EXPECT_NEAR(r.mesh.nodes[r.mesh.faces[f][0]].z, 3 + 10 * 0.5, 1e-12);
+  }
+  // The angle asked for holds.
+  EXPECT_GE(r.quality.min_dihedral.min, 12.0 - 1e-6);
+  EXPECT_GT(r.quality.min_dihedral.mean, 40.0);
+}
+
+TEST(VolumeMesherTest, WithoutSteinerPointsOnSheetsEachTriangleStaysOneFace) {
+  VolumeMeshOptions o;
+  o.tetgen.steiner_on_sheets = false;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, o));
+  EXPECT_EQ(r.mesh.num_sheet_faces(), 32u);
+  EXPECT_EQ(r.conformity.conforming, 32u);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+}
+
+TEST(VolumeMesherTest, CrossingSheetsMeetingAlongAnEdge) {
+  // Two sheets crossing along the line y = 10, z = 10: the horizontal one is split along the
+  // line so that both share its edges.
+  TriangleMesh horizontal;
+  {
+    TriangleMesh left = Square(4, 10, 10, 3), right = Square(10, 16, 10, 3);
+    // Squares span [a, b] in both x and y; keep x over [4, 16] by building two halves in y.
+    horizontal = Append(left, right);
+  }
+  TriangleMesh vertical = Square(4, 16, 10, 6, /*piece=*/1, 2, /*axis=*/1);  // plane y = 10
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Append(horizontal, vertical), {20, 20, 20}, {}, {}));
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  std::set<int32_t> pieces;
+  for (int32_t p : r.mesh.face_piece) pieces.insert(p);
+  EXPECT_EQ(pieces, (std::set<int32_t>{-1, 0, 1}));
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+}
+
+TEST(VolumeMesherTest, SheetsReachingTheBoxEndOnIt) {
+  // A sheet from wall to wall: its rim vertices sit on the outermost voxel centres and snap
+  // onto the box faces.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(0, 19, 10, 5), {20, 20, 20}, {}, {}));
+  EXPECT_GT(r.snapped_vertices, 0u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+}
+
+TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
+  // A vertical square piercing a horizontal one without sharing edges.
+  TriangleMesh m = Append(Square(4, 15, 10, 2), Square(5, 14, 9.5, 2, 1, 3, /*axis=*/0));
+  auto r = BuildVolumeMesh(m, {20, 20, 20}, {}, {});
+  EXPECT_THAT(r, StatusIs(absl::StatusCode::kFailedPrecondition,
+                          ::testing::AllOf(HasSubstr("intersect"), HasSubstr("triangles"))));
+  VolumeMeshOptions repair;
+  repair.plc.repair = true;
+  auto fixed = BuildVolumeMesh(m, {20, 20, 20}, {}, repair);
+  // Removing one triangle of each pair is not enough for a full piercing: still refused,
+  // with the reason, and nothing is passed to TetGen.
+  if (!fixed.ok()) {
+    EXPECT_THAT(fixed, StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("still intersect")));
+  } else {
+    EXPECT_GT(fixed->repaired_triangles, 0u);
+  }
+}
+
+TEST(VolumeMesherTest, RepairRemovesASimpleClash) {
+  // One small triangle cutting through a sheet: removing it is the whole repair.
+  TriangleMesh m = Square(4, 15, 10, 2);
+  const uint32_t base = static_cast<uint32_t>(m.vertices.size());
+  m.vertices.push_back({8, 8, 9});
+  m.vertices.push_back({9, 8, 11});
+  m.vertices.push_back({8.5, 9, 11});
+  m.faces.push_back({base, base + 1, base + 2});
+  m.face_piece.push_back(1);
+  m.face_thickness.push_back(1);
+  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, {}), StatusIs(absl::StatusCode::kFailedPrecondition));
+  VolumeMeshOptions o;
+  o.plc.repair = true;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
+  EXPECT_EQ(r.repaired_triangles, 1u);
+  EXPECT_EQ(r.conformity.sheet_triangles, 8u);
+}
+
+// A stand-in TetGen: a script that behaves badly.
+std::string FakeTetgen(const TempDir& tmp, const std::string& body) {
+  const std::string path = tmp.File("fake-tetgen");
+  EXPECT_TRUE(WriteFileAtomically(path, "#!/bin/sh\n" + body + "\n").ok());
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+  return path;
+}
+
+TEST(VolumeMesherTest, TetgenThatHangsIsKilledAtTheTimeLimit) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "sleep 30");
+  o.tetgen.time_limit_seconds = 0.5;
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kDeadlineExceeded, HasSubstr("time limit of 0.5 s")));
+}
+
+TEST(VolumeMesherTest, TetgenThatIsKilledOrFailsGivesTheDocumentedErrors) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "echo dying; kill -9 $$");
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kInternal, ::testing::AllOf(HasSubstr("signal 9"), HasSubstr("dying"))));
+  o.tetgen.program = FakeTetgen(tmp, "echo 'Error: self-intersection'; exit 3");
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kInternal, ::testing::AllOf(HasSubstr("code 3"), HasSubstr("self-intersection"))));
+  o.tetgen.program = "no-such-tetgen-program";
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kNotFound));
+}
+
+TEST(VolumeMesherTest, CancellationKillsTetgen) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "sleep 30");
+  struct Stop : ProgressObserver {
+    bool OnProgress(absl::string_view, double, absl::string_view) override { return false; }
+  } stop;
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o, Progress(&stop, "volume")),
+              StatusIs(absl::StatusCode::kCancelled));
+}
+
+TEST(TetQualityTest, RegularTetrahedronScoresOne) {
+  const double s = 1.0 / std::sqrt(2.0);
+  const TetShape q = MeasureTet({1, 0, -s}, {-1, 0, -s}, {0, 1, s}, {0, -1, s});
+  EXPECT_NEAR(q.min_dihedral_degrees, 70.5288, 1e-3);
+  EXPECT_NEAR(q.gamma, 1.0, 1e-9);
+  EXPECT_NEAR(q.edge_aspect, 1.0, 1e-9);
+  EXPECT_NEAR(q.radius_aspect, 1.0, 1e-9);
+  const TetShape flat = MeasureTet({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3, 0.3, 1e-3});
+  EXPECT_LT(flat.min_dihedral_degrees, 1.0);
+  EXPECT_LT(flat.radius_aspect, 0.05);
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,273 @@
+#include "worker/pipeline/tet/plc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include "absl/container/flat_hash_map.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+
+namespace sheetmesh {
+namespace {
+
+// Face k of the box: axis k / 2, low side when k is even.
+int Axis(int face) { return face / 2; }
+bool Low(int face) { return face % 2 == 0; }
+
+}  // namespace
+
+std::string Plc::ToPoly() const {
+  std::string out = absl::StrCat("# sheetmesh PLC: box + ", sheet_triangles.size(),
+                                 " sheet triangles\n", vertices.size(), " 3 0 0\n");
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    absl::StrAppendFormat(&out, "%d %.17g %.17g %.17g\n", i, vertices[i].x, vertices[i].y,
+                          vertices[i].z);
+  }
+  absl::StrAppend(&out, facets.size(), " 1\n");
+  for (const PlcFacet& f : facets) {
+    absl::StrAppend(&out, f.polygons.size(), " 0 ", f.marker, "\n");
+    for (const auto& poly : f.polygons) {
+      out += std::to_string(poly.size());
+      for (uint32_t v : poly) absl::StrAppend(&out, " ", v);
+      out += "\n";
+    }
+  }
+  out += "0\n0\n";
+  return out;
+}
+
+absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
+                             const Placement& placement, const PlcOptions& options,
+                             std::vector<Clash>* clashes) {
+  if (dims.nx <= 0 || dims.ny <= 0 || dims.nz <= 0) {
+    return absl::InvalidArgumentError(absl::StrCat("volume mesh box ", dims.ToString(), " is empty"));
+  }
+  Plc plc;
+  // The box spans the voxels' extent, in index coordinates [-0.5, n - 0.5].
+  const Vec3 lo(-0.5, -0.5, -0.5), hi(dims.nx - 0.5, dims.ny - 0.5, dims.nz - 0.5);
+  plc.box_lo = placement.ToPhysical(lo);
+  plc.box_hi = placement.ToPhysical(hi);
+
+  // Snap vertices onto box faces; note which faces each lies on.
+  std::vector<Vec3> v = sheets.vertices;
+  std::vector<uint8_t> on_face(v.size(), 0);  // bit k: on box face k
+  for (size_t i = 0; i < v.size(); ++i) {
+    bool moved = false;
+    for (int k = 0; k < 3; ++k) {
+      if (v[i][k] - lo[k] < options.snap_voxels) {
+        moved |= v[i][k] != lo[k];
+        v[i][k] = lo[k];
+        on_face[i] |= 1 << (2 * k);
+      } else if (hi[k] - v[i][k] < options.snap_voxels) {
+        moved |= v[i][k] != hi[k];
+        v[i][k] = hi[k];
+        on_face[i] |= 1 << (2 * k + 1);
+      }
+    }
+    plc.snapped_vertices += moved;
+  }
+  // Merge near-duplicates (snapping can bring vertices together).
+  std::vector<uint32_t> rep(v.size());
+  std::iota(rep.begin(), rep.end(), 0u);
+  {
+    absl::flat_hash_map<uint64_t, std::vector<uint32_t>> cells;
+    const double cell = std::max(options.merge_voxels, 1e-9) * 2;
+    auto key = [&](int64_t x, int64_t y, int64_t z) {
+      return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<uint64_t>(y & 0x1FFFFF) << 21) |
+             static_cast<uint64_t>(z & 0x1FFFFF);
+    };
+    for (uint32_t i = 0; i < v.size(); ++i) {
+      const int64_t cx = std::llround(v[i].x / cell), cy = std::llround(v[i].y / cell),
+                    cz = std::llround(v[i].z / cell);
+      bool merged = false;
+      for (int dz = -1; dz <= 1 && !merged; ++dz)
+        for (int dy = -1; dy <= 1 && !merged; ++dy)
+          for (int dx = -1; dx <= 1 && !merged; ++dx) {
+            auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
+            if (it == cells.end()) continue;
+            for (uint32_t j : it->second) {
+              if (Norm(v[i] - v[j]) <= options.merge_voxels) {
+                rep[i] = j;
+                on_face[j] |= on_face[i];
+                merged = true;
+                break;
+              }
+            }
+          }
+      if (merged) {
+        ++plc.merged_vertices;
+      } else {
+        cells[key(cx, cy, cz)].push_back(i);
+      }
+    }
+  }
+  // Keep triangles that are still triangles and do not lie in a box face.
+  TriangleMesh kept;
+  std::vector<uint32_t> source;  // input face of each kept triangle
+  std::set<std::array<uint32_t, 3>> seen;
+  for (size_t f = 0; f < sheets.faces.size(); ++f) {
+    Face t = {rep[sheets.faces[f][0]], rep[sheets.faces[f][1]], rep[sheets.faces[f][2]]};
+    std::array<uint32_t, 3> s = t;
+    std::sort(s.begin(), s.end());
+    const bool in_face = (on_face[t[0]] & on_face[t[1]] & on_face[t[2]]) != 0;
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || in_face || !seen.insert(s).second ||
+        Area({v[t[0]], v[t[1]], v[t[2]]}) < 1e-9) {
+      ++plc.dropped_triangles;
+      continue;
+    }
+    kept.faces.push_back(t);
+    source.push_back(static_cast<uint32_t>(f));
+  }
+  kept.vertices = v;
+
+  // Facets must not cut through each other: check before TetGen, and name the clashes.
+  std::vector<std::pair<uint32_t, uint32_t>> pairs = FindSelfIntersections(kept, 10000, 1.0);
+  if (!pairs.empty()) {
+    if (clashes != nullptr) {
+      for (const auto& [a, b] : pairs) {
+        Clash c{source[a], source[b], Corners(kept, a), Corners(kept, b)};
+        for (Vec3& p : c.ta) p = placement.ToPhysical(p);
+        for (Vec3& p : c.tb) p = placement.ToPhysical(p);
+        clashes->push_back(c);
+      }
+    }
+    if (!options.repair) {
+      std::string list;
+      for (size_t i = 0; i < pairs.size() && i < 5; ++i) {
+        const auto [a, b] = pairs[i];
+        const Triangle ta = Corners(kept, a), tb = Corners(kept, b);
+        auto fmt = [&](const Triangle& t) {
+          std::string s;
+          for (const Vec3& p0 : t) {
+            const Vec3 p = placement.ToPhysical(p0);
+            absl::StrAppendFormat(&s, "(%.4g,%.4g,%.4g)", p.x, p.y, p.z);
+          }
+          return s;
+        };
+        absl::StrAppendFormat(&list, "; triangles %d %s and %d %s", source[a], fmt(ta), source[b], fmt(tb));
+      }
+      return absl::FailedPreconditionError(absl::StrCat(
+          pairs.size(), " pairs of sheet triangles intersect", list,
+          pairs.size() > 5 ? "; ..." : "", " (the repair option removes the smaller of each pair)"));
+    }
+    // Repair: drop the smaller triangle of each clashing pair.
+    std::vector<uint8_t> drop(kept.faces.size(), 0);
+    for (const auto& [a, b] : pairs) {
+      if (drop[a] || drop[b]) continue;
+      drop[Area(Corners(kept, a)) < Area(Corners(kept, b)) ? a : b] = 1;
+    }
+    TriangleMesh fixed;
+    fixed.vertices = kept.vertices;
+    std::vector<uint32_t> fixed_source;
+    for (size_t f = 0; f < kept.faces.size(); ++f) {
+      if (drop[f]) {
+        ++plc.repaired_triangles;
+        continue;
+      }
+      fixed.faces.push_back(kept.faces[f]);
+      fixed_source.push_back(source[f]);
+    }
+    if (!FindSelfIntersections(fixed, 1, 1.0).empty()) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          "sheet triangles still intersect after removing ", plc.repaired_triangles,
+          " clashing ones; the intersections are not simple"));
+    }
+    kept = std::move(fixed);
+    source = std::move(fixed_source);
+  }
+
+  // Compact the used vertices; the 8 box corners go first.
+  std::vector<uint32_t> index(v.size(), UINT32_MAX);
+  for (int c = 0; c < 8; ++c) {
+    plc.vertices.push_back(placement.ToPhysical(Vec3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z)));
+  }
+  for (const Face& t : kept.faces) {
+    Face out;
+    for (int k = 0; k < 3; ++k) {
+      if (index[t[k]] == UINT32_MAX) {
+        index[t[k]] = static_cast<uint32_t>(plc.vertices.size());
+        plc.vertices.push_back(placement.ToPhysical(v[t[k]]));
+      }
+      out[k] = index[t[k]];
+    }
+    plc.sheet_triangles.push_back(out);
+    const uint32_t f = source[plc.sheet_triangles.size() - 1];
+    plc.sheet_piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
+    plc.sheet_thickness.push_back(sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
+  }
+  // Box faces. Corner c has bit 0 = x high, bit 1 = y high, bit 2 = z high. Each face is a
+  // polygon through its 4 corners and the sheet vertices on its edges, in order, plus the
+  // sheet edges and vertices that lie in it.
+  for (int face = 0; face < 6; ++face) {
+    const int k = Axis(face);
+    const int bit = Low(face) ? 0 : 1;
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    // Corners of the face in cyclic order over axes a, b.
+    auto corner = [&](int ca, int cb) {
+      int c = 0;
+      if (bit) c |= 1 << k;
+      if (ca) c |= 1 << a;
+      if (cb) c |= 1 << b;
+      return static_cast<uint32_t>(c);
+    };
+    const uint32_t cyc[4] = {corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)};
+    std::vector<uint32_t> polygon;
+    for (int e = 0; e < 4; ++e) {
+      const uint32_t p = cyc[e], q = cyc[(e + 1) % 4];
+      polygon.push_back(p);
+      // Sheet vertices on edge p-q: on this face and on the face of the other varying axis.
+      std::vector<std::pair<double, uint32_t>> along;
+      const Vec3 pp = plc.vertices[p], qq = plc.vertices[q];
+      const Vec3 dir = qq - pp;
+      for (uint32_t i = 0; i < v.size(); ++i) {
+        if (index[i] == UINT32_MAX || !(on_face[i] & (1 << face))) continue;
+        const Vec3 x = placement.ToPhysical(v[i]);
+        const double t = Dot(x - pp, dir) / Norm2(dir);
+        if (t <= 1e-12 || t >= 1 - 1e-12) continue;
+        if (Norm(x - (pp + dir * t)) > 1e-9 * (1 + Norm(dir))) continue;
+        along.emplace_back(t, index[i]);
+      }
+      std::sort(along.begin(), along.end());
+      for (const auto& [t, id] : along) polygon.push_back(id);
+    }
+    PlcFacet facet;
+    facet.marker = kBoundaryMarker;
+    facet.polygons.push_back(polygon);
+    std::set<uint32_t> on_polygon(polygon.begin(), polygon.end());
+    std::set<std::pair<uint32_t, uint32_t>> segments;
+    std::set<uint32_t> points;
+    for (size_t f = 0; f < kept.faces.size(); ++f) {
+      const Face& t = kept.faces[f];
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t s = t[e], u = t[(e + 1) % 3];
+        if ((on_face[s] & on_face[u] & (1 << face)) != 0) {
+          segments.insert({std::min(index[s], index[u]), std::max(index[s], index[u])});
+        }
+      }
+      for (uint32_t s : t) {
+        if ((on_face[s] & (1 << face)) && !on_polygon.count(index[s])) points.insert(index[s]);
+      }
+    }
+    for (const auto& [s, u] : segments) {
+      if (on_polygon.count(s) && on_polygon.count(u)) continue;  // lies on the outline
+      facet.polygons.push_back({s, u});
+      points.erase(s);
+      points.erase(u);
+    }
+    for (uint32_t p : points) facet.polygons.push_back({p});
+    plc.facets.push_back(std::move(facet));
+  }
+  for (size_t t = 0; t < plc.sheet_triangles.size(); ++t) {
+    const Face& f = plc.sheet_triangles[t];
+    plc.facets.push_back({{{f[0], f[1], f[2]}}, kFirstSheetMarker + static_cast<int32_t>(t)});
+  }
+  return plc;
+}
+
+}  // namespace sheetmesh

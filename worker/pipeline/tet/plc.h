@@ -1,0 +1,67 @@
+// The piecewise-linear complex (PLC) handed to TetGen (paper §2.3.1, Fig. 10; ALGORITHM
+// §10): the domain box plus the sheet triangles as internal facets, in physical units.
+// Sheets that reach the box end on it: their vertices within a snapping distance of a box
+// face move onto it, and their edges and points there are embedded in that face's facet.
+#ifndef SHEETMESH_WORKER_PIPELINE_TET_PLC_H_
+#define SHEETMESH_WORKER_PIPELINE_TET_PLC_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/types.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+
+namespace sheetmesh {
+
+// A facet: one or more polygons (a polygon of 2 vertices is an embedded segment, of 1 an
+// embedded point) with a boundary marker.
+struct PlcFacet {
+  std::vector<std::vector<uint32_t>> polygons;
+  int32_t marker = 0;
+};
+
+inline constexpr int32_t kBoundaryMarker = 1;      // the box faces
+inline constexpr int32_t kFirstSheetMarker = 10;   // sheet triangle t has marker 10 + t
+
+struct Plc {
+  std::vector<Vec3> vertices;           // physical units
+  std::vector<PlcFacet> facets;         // the 6 box faces first, then one per sheet triangle
+  std::vector<Face> sheet_triangles;    // the sheet triangles as kept, in `vertices`
+  std::vector<int32_t> sheet_piece;     // per kept sheet triangle
+  std::vector<float> sheet_thickness;   // per kept sheet triangle, voxels
+  Vec3 box_lo, box_hi;                  // physical
+  uint32_t snapped_vertices = 0;        // moved onto a box face
+  uint32_t merged_vertices = 0;         // merged into a near-duplicate
+  uint32_t dropped_triangles = 0;       // degenerate after snapping, or lying in a box face
+  uint32_t repaired_triangles = 0;      // removed because they clashed (repair mode)
+
+  // The PLC as a TetGen .poly file (0-based numbering).
+  std::string ToPoly() const;
+};
+
+struct PlcOptions {
+  double snap_voxels = 0.75;    // vertices this close to a box face move onto it
+  double merge_voxels = 1e-3;   // vertices this close merge
+  bool repair = false;          // remove clashing triangles (the smaller of each pair)
+                                // instead of failing
+};
+
+// A pair of sheet triangles (indices into the input mesh) that cut through each other.
+struct Clash {
+  uint32_t a = 0, b = 0;
+  std::array<Vec3, 3> ta, tb;   // their corners, physical units
+};
+
+// Builds the PLC of `sheets` (voxel index coordinates; face_piece and face_thickness used
+// when present) in the box of `dims` placed by `placement`. kFailedPrecondition listing
+// the first clashing triangles (ids and coordinates) when sheet facets intersect and
+// options.repair is off; kInvalidArgument for empty dims.
+absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
+                             const Placement& placement, const PlcOptions& options = {},
+                             std::vector<Clash>* clashes = nullptr);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_TET_PLC_H_

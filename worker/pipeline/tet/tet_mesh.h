@@ -1,0 +1,32 @@
+// TetMesh: a tetrahedral mesh of the rock block whose sheet triangles are internal faces
+// tagged with their piece and thickness (ALGORITHM §10), in physical units.
+#ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_
+#define SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "worker/pipeline/core/types.h"
+
+namespace sheetmesh {
+
+using Tet = std::array<uint32_t, 4>;
+
+struct TetMesh {
+  std::vector<Vec3> nodes;                       // physical units
+  std::vector<Tet> tets;
+  std::vector<std::array<uint32_t, 3>> faces;    // faces on the PLC's facets
+  std::vector<int32_t> face_marker;              // per face: 1 = box, >= 10 sheet triangle
+  std::vector<int32_t> face_piece;               // per face: sheet piece, -1 on the box
+  std::vector<float> face_thickness;             // per face: sheet thickness (physical), 0 on the box
+
+  size_t num_sheet_faces() const;
+};
+
+// Signed volume of a tetrahedron: ((b - a) x (c - a)) . (d - a) / 6.
+double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_

@@ -1,0 +1,239 @@
+#include "worker/pipeline/tet/tetgen_runner.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+#include <vector>
+
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh {
+namespace {
+
+// The absolute path of `program` (searched on PATH when it has no slash).
+absl::StatusOr<std::string> Resolve(const std::string& program) {
+  if (program.find('/') != std::string::npos) {
+    if (::access(program.c_str(), X_OK) == 0) return program;
+    return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' is not executable"));
+  }
+  const char* path = getenv("PATH");
+  for (absl::string_view dir : absl::StrSplit(path ? path : "/usr/bin:/bin", ':', absl::SkipEmpty())) {
+    const std::string candidate = absl::StrCat(dir, "/", program);
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return absl::NotFoundError(absl::StrCat("TetGen program '", program,
+                                          "' was not found on PATH (Debian package tetgen)"));
+}
+
+std::string Tail(const std::string& path, size_t bytes = 600) {
+  auto text = ReadFileToString(path);
+  if (!text.ok()) return "";
+  std::string s = *text;
+  if (s.size() > bytes) s = "..." + s.substr(s.size() - bytes);
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+// Removes the scratch folder unless asked to keep it.
+class Scratch {
+ public:
+  static absl::StatusOr<Scratch> Create(const std::string& parent, bool keep) {
+    std::string base = parent;
+    if (base.empty()) base = getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp";
+    std::string templ = base + "/sheetmesh-tetgen-XXXXXX";
+    if (::mkdtemp(templ.data()) == nullptr) return ErrnoStatus(errno, templ);
+    return Scratch(templ, keep);
+  }
+  Scratch(Scratch&& o) noexcept : dir_(std::move(o.dir_)), keep_(o.keep_) { o.dir_.clear(); }
+  ~Scratch() {
+    if (!dir_.empty() && !keep_) {
+      std::error_code ec;
+      std::filesystem::remove_all(dir_, ec);
+    }
+  }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  Scratch(std::string dir, bool keep) : dir_(std::move(dir)), keep_(keep) {}
+  std::string dir_;
+  bool keep_;
+};
+
+// Lines of a TetGen output file without comments and blank lines.
+absl::StatusOr<std::vector<std::vector<double>>> ReadTable(const std::string& path) {
+  SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(path, int64_t{16} << 30));
+  std::vector<std::vector<double>> rows;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    const size_t hash = line.find('#');
+    if (hash != absl::string_view::npos) line = line.substr(0, hash);
+    std::vector<double> row;
+    for (absl::string_view tok : absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty())) {
+      double v = 0;
+      if (!absl::SimpleAtod(tok, &v)) {
+        return absl::InternalError(absl::StrCat(path, ": unreadable number '", tok, "'"));
+      }
+      row.push_back(v);
+    }
+    if (!row.empty()) rows.push_back(std::move(row));
+  }
+  if (rows.empty()) return absl::InternalError(absl::StrCat(path, ": empty TetGen output"));
+  return rows;
+}
+
+absl::StatusOr<TetMesh> ReadOutput(const std::string& stem, const Plc& plc) {
+  TetMesh m;
+  SM_ASSIGN_OR_RETURN(auto nodes, ReadTable(stem + ".node"));
+  SM_ASSIGN_OR_RETURN(auto eles, ReadTable(stem + ".ele"));
+  SM_ASSIGN_OR_RETURN(auto faces, ReadTable(stem + ".face"));
+  const size_t n = static_cast<size_t>(nodes[0][0]);
+  if (nodes.size() != n + 1) return absl::InternalError(absl::StrCat(stem, ".node: ", nodes.size() - 1, " rows for ", n, " nodes"));
+  for (size_t i = 1; i <= n; ++i) {
+    if (nodes[i].size() < 4) return absl::InternalError(absl::StrCat(stem, ".node: short row ", i));
+    m.nodes.push_back({nodes[i][1], nodes[i][2], nodes[i][3]});
+  }
+  const size_t e = static_cast<size_t>(eles[0][0]);
+  if (eles.size() != e + 1) return absl::InternalError(absl::StrCat(stem, ".ele: ", eles.size() - 1, " rows for ", e, " tetrahedra"));
+  for (size_t i = 1; i <= e; ++i) {
+    if (eles[i].size() < 5) return absl::InternalError(absl::StrCat(stem, ".ele: short row ", i));
+    Tet t;
+    for (int k = 0; k < 4; ++k) {
+      const double id = eles[i][k + 1];
+      if (id < 0 || id >= n) return absl::InternalError(absl::StrCat(stem, ".ele: node ", id, " out of range"));
+      t[k] = static_cast<uint32_t>(id);
+    }
+    m.tets.push_back(t);
+  }
+  const size_t f = static_cast<size_t>(faces[0][0]);
+  if (faces.size() != f + 1) return absl::InternalError(absl::StrCat(stem, ".face: ", faces.size() - 1, " rows for ", f, " faces"));
+  for (size_t i = 1; i <= f; ++i) {
+    if (faces[i].size() < 5) return absl::InternalError(absl::StrCat(stem, ".face: row ", i, " has no marker"));
+    std::array<uint32_t, 3> t;
+    for (int k = 0; k < 3; ++k) t[k] = static_cast<uint32_t>(faces[i][k + 1]);
+    const int32_t marker = static_cast<int32_t>(faces[i][4]);
+    if (marker == 0) continue;  // a face on no facet
+    m.faces.push_back(t);
+    m.face_marker.push_back(marker);
+    const int64_t s = marker - kFirstSheetMarker;
+    if (s >= 0 && s < static_cast<int64_t>(plc.sheet_triangles.size())) {
+      m.face_piece.push_back(plc.sheet_piece[s]);
+      m.face_thickness.push_back(plc.sheet_thickness[s]);
+    } else {
+      m.face_piece.push_back(-1);
+      m.face_thickness.push_back(0.0f);
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+size_t TetMesh::num_sheet_faces() const {
+  size_t n = 0;
+  for (int32_t m : face_marker) n += m >= kFirstSheetMarker;
+  return n;
+}
+
+double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return Dot(Cross(b - a, c - a), d - a) / 6.0;
+}
+
+std::string TetgenSwitches(const TetgenOptions& o) {
+  std::string s = "-pzQ";
+  if (o.max_radius_edge_ratio > 0) {
+    absl::StrAppend(&s, "q", o.max_radius_edge_ratio, "/", o.min_dihedral_degrees);
+  }
+  if (o.max_volume > 0) absl::StrAppend(&s, "a", o.max_volume);
+  if (!o.steiner_on_sheets) s += "Y";
+  return s;
+}
+
+absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
+                                  const Progress& progress) {
+  SM_ASSIGN_OR_RETURN(const std::string program, Resolve(options.program));
+  SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
+  const std::string poly = scratch.dir() + "/plc.poly";
+  SM_RETURN_IF_ERROR(WriteFileAtomically(poly, plc.ToPoly()));
+  const std::string log = scratch.dir() + "/tetgen.log";
+  const std::string switches = TetgenSwitches(options);
+
+  // Everything the child needs is prepared before fork: after it, only async-signal-safe
+  // calls until exec.
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (out < 0) return ErrnoStatus(errno, log);
+  std::vector<std::string> args = {program, switches, poly};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  struct rlimit mem;
+  mem.rlim_cur = mem.rlim_max = options.memory_limit_bytes;
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(out);
+    return ErrnoStatus(errno, "fork for TetGen");
+  }
+  if (pid == 0) {
+    ::dup2(out, 1);
+    ::dup2(out, 2);
+    ::setrlimit(RLIMIT_AS, &mem);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  ::close(out);
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  for (;;) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) return ErrnoStatus(errno, "waiting for TetGen");
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    absl::Status cancel = progress.Update(std::min(0.99, elapsed / options.time_limit_seconds),
+                                          "TetGen running");
+    if (elapsed > options.time_limit_seconds || !cancel.ok()) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      if (!cancel.ok()) return cancel;
+      return absl::DeadlineExceededError(absl::StrCat(
+          "TetGen exceeded the time limit of ", options.time_limit_seconds, " s and was killed"));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    const std::string tail = Tail(log);
+    if (tail.find("bad_alloc") != std::string::npos || tail.find("memory") != std::string::npos) {
+      return absl::ResourceExhaustedError(absl::StrCat(
+          "TetGen ran out of memory (limit ", options.memory_limit_bytes, " bytes): ", tail));
+    }
+    return absl::InternalError(absl::StrCat("TetGen crashed with signal ", sig, " (",
+                                            strsignal(sig), "); its last output: ", tail));
+  }
+  const int code = WEXITSTATUS(status);
+  if (code == 127 && Tail(log).empty()) {
+    return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' could not be started"));
+  }
+  if (code != 0) {
+    return absl::InternalError(absl::StrCat("TetGen exited with code ", code,
+                                            " running '", switches, "': ", Tail(log)));
+  }
+  auto mesh = ReadOutput(scratch.dir() + "/plc.1", plc);
+  if (!mesh.ok()) {
+    return absl::InternalError(absl::StrCat("TetGen output unreadable: ", mesh.status().message(),
+                                            "; its log: ", Tail(log)));
+  }
+  return mesh;
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,54 @@
+// BuildVolumeMesh: the tetrahedral mesh of the rock block with the sheets as tagged
+// internal faces (paper §2.3.1, Figs. 10 and 14): PLC, TetGen, a conformity check that
+// every sheet triangle is made of tetrahedron faces, and the quality of Table 3.
+#ifndef SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESHER_H_
+#define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESHER_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/core/progress.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/tet_quality.h"
+#include "worker/pipeline/tet/tetgen_runner.h"
+
+namespace sheetmesh {
+
+struct VolumeMeshOptions {
+  PlcOptions plc;
+  TetgenOptions tetgen;
+};
+
+struct Conformity {
+  uint64_t sheet_triangles = 0;       // in the PLC
+  uint64_t conforming = 0;            // exactly covered by tetrahedron faces on them
+  double worst_area_error = 0;        // relative, over all sheet triangles
+  std::vector<uint32_t> missing;      // PLC sheet triangles not covered (first 20)
+};
+
+struct VolumeMeshResult {
+  TetMesh mesh;
+  TetQuality quality;
+  Conformity conformity;
+  uint32_t snapped_vertices = 0;
+  uint32_t merged_vertices = 0;
+  uint32_t dropped_triangles = 0;
+  uint32_t repaired_triangles = 0;
+  double box_volume = 0;              // physical units^3
+  double tetgen_seconds = 0;
+};
+
+// Meshes the box of `dims` (placed by `placement`) with `sheets` (voxel index coordinates)
+// as internal faces. kFailedPrecondition when sheet triangles intersect (naming them);
+// kInternal when the output does not conform (naming the first sheet triangle not
+// covered) or the tetrahedra do not fill the box; TetGen's errors pass through.
+absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
+                                                 const Placement& placement,
+                                                 const VolumeMeshOptions& options,
+                                                 const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESHER_H_

@@ -78,6 +78,19 @@ ABSL_FLAG(bool, recover, true, "run: recover cut gaps by extending within the im
 ABSL_FLAG(double, recover_t, 1.5, "run: t of formula 4 for recovery");
 ABSL_FLAG(double, recover_R, 7, "run: R of formula 4 for recovery");
 ABSL_FLAG(int, recover_rounds, 10, "run: recovery rounds at most");
+// volume mesh (run, surface --volume_mesh, volume)
+ABSL_FLAG(bool, volume_mesh, false, "run/surface: also tetrahedralize the box with the sheets inside (TetGen)");
+ABSL_FLAG(double, tet_ratio, 1.5, "volume: TetGen radius-edge ratio bound (-q; 0: no quality bound)");
+ABSL_FLAG(double, tet_min_dihedral, 10, "volume: smallest dihedral angle asked of TetGen, degrees");
+ABSL_FLAG(double, tet_max_volume, 0, "volume: largest tetrahedron volume, physical units^3 (0: none)");
+ABSL_FLAG(bool, tet_steiner, true, "volume: allow TetGen to add points on the sheets (false: -Y)");
+ABSL_FLAG(double, tet_time_limit, 600, "volume: seconds before TetGen is killed");
+ABSL_FLAG(double, tet_memory_gb, 8, "volume: memory limit of TetGen, GiB");
+ABSL_FLAG(std::string, tetgen, "tetgen", "volume: the TetGen program");
+ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
+ABSL_FLAG(std::string, volume_formats, "vtu,msh,inp", "volume: files to write");
+ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
+ABSL_FLAG(std::string, volume, "", "volume: the image whose box, spacing and origin the mesh fills");
 // phantom
 ABSL_FLAG(std::string, o, "", "output path (phantom: the volume file; surface: the folder)");
 ABSL_FLAG(std::string, out_format, "raw", "phantom output: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb");
@@ -98,7 +111,9 @@ constexpr char kUsage[] =
     "  info VOLUME             dims, sheet voxels, thickness and components of a volume\n"
     "  surface VOLUME -o DIR   mesh the sheets: --r R, or --target-similarity S, or --search-best\n"
     "  run VOLUME -o DIR       extract the major sheets (Fig. 3), then mesh and score them;\n"
-    "                          --config FILE sets any parameter, flags override it\n"
+    "                          --volume_mesh adds the TetGen volume mesh; --config FILE sets\n"
+    "                          any parameter, flags override it\n"
+    "  volume SURFACE.ply -o DIR  tetrahedralize the box (--volume VOL or --box) around a surface\n"
     "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed surfaces)\n"
     "  phantom -o FILE         write a synthetic rock volume and its ground truth\n"
     "  convert VOLUME -o FILE  copy a volume into --out_format (raw, tiff, nrrd, vdb, ...)\n\n"
@@ -235,6 +250,36 @@ std::set<std::string>& GivenFlags() {
 
 bool Given(const std::string& flag) { return GivenFlags().count(flag) > 0; }
 
+// The volume-mesh flags given on the command line.
+absl::Status VolumeFromFlags(PipelineOptions* o) {
+  TetgenOptions& t = o->volume.tetgen;
+  if (Given("tet_ratio")) t.max_radius_edge_ratio = absl::GetFlag(FLAGS_tet_ratio);
+  if (Given("tet_min_dihedral")) t.min_dihedral_degrees = absl::GetFlag(FLAGS_tet_min_dihedral);
+  if (Given("tet_max_volume")) t.max_volume = absl::GetFlag(FLAGS_tet_max_volume);
+  if (Given("tet_steiner")) t.steiner_on_sheets = absl::GetFlag(FLAGS_tet_steiner);
+  if (Given("tet_time_limit")) t.time_limit_seconds = absl::GetFlag(FLAGS_tet_time_limit);
+  if (Given("tet_memory_gb")) {
+    t.memory_limit_bytes = static_cast<uint64_t>(absl::GetFlag(FLAGS_tet_memory_gb) * (1ull << 30));
+  }
+  if (Given("tetgen")) t.program = absl::GetFlag(FLAGS_tetgen);
+  if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
+  if (Given("volume_formats")) {
+    o->output.vtu = o->output.msh = o->output.inp = false;
+    for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_volume_formats), ',', absl::SkipEmpty())) {
+      if (f == "vtu") {
+        o->output.vtu = true;
+      } else if (f == "msh") {
+        o->output.msh = true;
+      } else if (f == "inp") {
+        o->output.inp = true;
+      } else {
+        return absl::InvalidArgumentError(absl::StrCat("--volume_formats: '", f, "' is not vtu, msh or inp"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
 // Defaults, then --config, then every flag given on the command line.
 absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, bool extract) {
   PipelineOptions o;
@@ -359,6 +404,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   if (Given("recover_t")) x.recover_extend.half_thickness_voxels = absl::GetFlag(FLAGS_recover_t);
   if (Given("recover_R")) x.recover_extend.radius_voxels = absl::GetFlag(FLAGS_recover_R);
   if (Given("recover_rounds")) x.recover_extend.max_rounds = absl::GetFlag(FLAGS_recover_rounds);
+  SM_RETURN_IF_ERROR(VolumeFromFlags(&o));
+  if (Given("volume_mesh")) o.volume_mesh = absl::GetFlag(FLAGS_volume_mesh);
   o.output.dir = absl::GetFlag(FLAGS_o);
   if (o.output.dir.empty()) return absl::InvalidArgumentError("needs -o DIR");
   SM_RETURN_IF_ERROR(ValidatePipelineOptions(o));
@@ -372,6 +419,35 @@ absl::Status Surface(const std::vector<std::string>& args, bool extract) {
   }
   SM_ASSIGN_OR_RETURN(PipelineOptions o, PipelineFromFlags(args[0], extract));
   return RunSurface(o, std::cout);
+}
+
+// `volume SURFACE.ply (--volume VOL | --box NXxNYxNZ) -o DIR`: the volume mesh of a
+// surface file already made.
+absl::Status Volume(const std::vector<std::string>& args) {
+  if (args.size() != 1) return absl::InvalidArgumentError("usage: volume SURFACE.ply (--volume VOL | --box NXxNYxNZ) -o DIR");
+  PipelineOptions o;
+  if (!absl::GetFlag(FLAGS_config).empty()) {
+    SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(absl::GetFlag(FLAGS_config)));
+    SM_RETURN_IF_ERROR(ApplyPipelineConfig(text, absl::GetFlag(FLAGS_config), &o));
+  }
+  SM_RETURN_IF_ERROR(VolumeFromFlags(&o));
+  SM_RETURN_IF_ERROR(ValidatePipelineOptions(o));
+  VolumeInfo box;
+  if (!absl::GetFlag(FLAGS_volume).empty()) {
+    SM_ASSIGN_OR_RETURN(SheetInput in, InputFromFlags(absl::GetFlag(FLAGS_volume)));
+    SM_ASSIGN_OR_RETURN(auto source, OpenVolume(in.path, in.open));
+    box = source->info();
+  } else if (!absl::GetFlag(FLAGS_box).empty()) {
+    SM_ASSIGN_OR_RETURN(box.dims, ParseDims("box", absl::GetFlag(FLAGS_box)));
+    SM_ASSIGN_OR_RETURN(SheetInput in, InputFromFlags(""));
+    if (in.open.spacing) box.placement.spacing = *in.open.spacing;
+    if (in.open.origin) box.placement.origin = *in.open.origin;
+  } else {
+    return absl::InvalidArgumentError("volume needs the box: --volume VOL or --box NXxNYxNZ");
+  }
+  o.output.dir = absl::GetFlag(FLAGS_o);
+  if (o.output.dir.empty()) return absl::InvalidArgumentError("volume needs -o DIR");
+  return RunVolume(args[0], box, o, std::cout);
 }
 
 absl::Status Score(const std::vector<std::string>& args) {
@@ -423,6 +499,8 @@ int Main(int argc, char** argv) {
     status = Surface(args, /*extract=*/false);
   } else if (command == "run") {
     status = Surface(args, /*extract=*/true);
+  } else if (command == "volume") {
+    status = Volume(args);
   } else if (command == "score") {
     status = Score(args);
   } else {

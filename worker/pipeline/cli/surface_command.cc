@@ -4,7 +4,9 @@
 
 #include "absl/strings/str_format.h"
 #include "worker/pipeline/core/status_macros.h"
+#include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
 
@@ -70,12 +72,78 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
     }
     out << "\n";
   }
+  if (r.has_volume_mesh) {
+    const TetQuality& q = r.volume_quality;
+    out << absl::StrFormat(
+        "volume mesh %d nodes, %d tetrahedra (1 : %.0f of the voxels), %d sheet faces; all %d sheet "
+        "triangles conform\n",
+        r.volume_nodes, r.volume_tets, r.voxels_per_tet, r.volume_sheet_faces,
+        r.volume_conformity.conforming);
+    out << absl::StrFormat(
+        "  quality   min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
+        "radius aspect %.2f/%.2f (min/mean)\n",
+        q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
+        q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+  }
   out << "time       ";
   for (const StageTime& t : r.timings) out << absl::StrFormat(" %s %.2fs", t.stage, t.seconds);
   out << "\n";
   if (!options.output.dir.empty()) out << "wrote       " << options.output.dir << "/{";
   for (size_t i = 0; i < r.files.size(); ++i) out << (i ? "," : "") << r.files[i];
   if (!options.output.dir.empty()) out << "}\n";
+  return absl::OkStatus();
+}
+
+absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
+                       const PipelineOptions& options, std::ostream& out) {
+  SM_ASSIGN_OR_RETURN(TriangleMesh mesh, ReadMesh(surface, box.placement));
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult r,
+                      BuildVolumeMesh(mesh, box.dims, box.placement, options.volume));
+  SM_RETURN_IF_ERROR(MakeDirs(options.output.dir));
+  const std::string dir = options.output.dir;
+  std::vector<std::string> files;
+  if (options.output.vtu) {
+    SM_RETURN_IF_ERROR(WriteVtu(dir + "/volume.vtu", r.mesh));
+    files.push_back("volume.vtu");
+  }
+  if (options.output.msh) {
+    SM_RETURN_IF_ERROR(WriteGmsh(dir + "/volume.msh", r.mesh));
+    files.push_back("volume.msh");
+  }
+  if (options.output.inp) {
+    SM_RETURN_IF_ERROR(WriteAbaqus(dir + "/volume.inp", r.mesh));
+    files.push_back("volume.inp");
+  }
+  const TetQuality& q = r.quality;
+  nlohmann::json j;
+  auto stat = [](const QualityStat& s) {
+    return nlohmann::json{{"min", s.min}, {"mean", s.mean}, {"histogram_range", {s.lo, s.hi}},
+                          {"histogram", s.histogram}};
+  };
+  j["surface"] = surface;
+  j["box"] = {box.dims.nx, box.dims.ny, box.dims.nz};
+  j["tetgen_switches"] = TetgenSwitches(options.volume.tetgen);
+  j["nodes"] = r.mesh.nodes.size();
+  j["tetrahedra"] = r.mesh.tets.size();
+  j["sheet_faces"] = r.mesh.num_sheet_faces();
+  j["voxels_per_tetrahedron"] = double(box.dims.num_voxels()) / std::max<size_t>(1, r.mesh.tets.size());
+  j["conformity"] = {{"sheet_triangles", r.conformity.sheet_triangles}, {"conforming", r.conformity.conforming}};
+  j["quality"] = {{"min_dihedral_degrees", stat(q.min_dihedral)}, {"gamma", stat(q.gamma)},
+                  {"edge_aspect", stat(q.edge_aspect)}, {"radius_aspect", stat(q.radius_aspect)}};
+  j["snapped_vertices"] = r.snapped_vertices;
+  j["repaired_triangles"] = r.repaired_triangles;
+  j["tetgen_seconds"] = r.tetgen_seconds;
+  files.push_back("volume_report.json");
+  j["files"] = files;
+  SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", j.dump(2)));
+  out << absl::StrFormat(
+      "volume mesh %d nodes, %d tetrahedra, %d sheet faces; %d of %d sheet triangles conform\n"
+      "quality     min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
+      "radius aspect %.2f/%.2f (min/mean)\nwrote       %s\n",
+      r.mesh.nodes.size(), r.mesh.tets.size(), r.mesh.num_sheet_faces(), r.conformity.conforming,
+      r.conformity.sheet_triangles, q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min,
+      q.gamma.mean, q.edge_aspect.min, q.edge_aspect.mean, q.radius_aspect.min,
+      q.radius_aspect.mean, dir);
   return absl::OkStatus();
 }
 

@@ -14,6 +14,12 @@ namespace sheetmesh {
 // Runs the pipeline and prints a summary; files and report.json go to options.output.dir.
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out);
 
+// Tetrahedralizes the box of `box` (dims and placement) around the sheets of the surface
+// file `surface` (PLY with thickness and piece from `surface`/`run`, or OBJ), writes the
+// volume files of options.output and a volume_report.json, and prints a summary.
+absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
+                       const PipelineOptions& options, std::ostream& out);
+
 struct ScoreCommandOptions {
   SheetInput input;           // the image
   std::string mesh_path;      // .ply or .obj, physical coordinates of the input

@@ -9,6 +9,7 @@
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/pipeline_config.h"
 #include "worker/pipeline/volume/label_volume.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
 
 namespace sheetmesh {
@@ -44,6 +45,7 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
   stages.push_back("analyze");
   if (options.search_radius) stages.push_back("search-r");
   stages.insert(stages.end(), {"surface", "similarity"});
+  if (options.volume_mesh) stages.push_back("volume");
   if (!options.output.dir.empty()) stages.push_back("write");
   return stages;
 }
@@ -139,6 +141,24 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     SM_RETURN_IF_ERROR(p.Update(1.0));
   }
 
+  VolumeMeshResult volume;
+  if (options.volume_mesh) {
+    StageTimer t(&report, "volume");
+    SM_ASSIGN_OR_RETURN(volume, BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement,
+                                                options.volume, progress.Stage("volume")));
+    report.has_volume_mesh = true;
+    report.volume_nodes = volume.mesh.nodes.size();
+    report.volume_tets = volume.mesh.tets.size();
+    report.volume_sheet_faces = volume.mesh.num_sheet_faces();
+    report.volume_quality = volume.quality;
+    report.volume_conformity = volume.conformity;
+    report.volume_snapped = volume.snapped_vertices;
+    report.volume_repaired = volume.repaired_triangles;
+    report.voxels_per_tet = report.volume_tets > 0
+                                ? double(phase.info.dims.num_voxels()) / report.volume_tets
+                                : 0.0;
+  }
+
   if (!options.output.dir.empty()) {
     StageTimer t(&report, "write");
     const std::string& dir = options.output.dir;
@@ -165,6 +185,20 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
       report.files.push_back(labels);
       SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report.geology)));
       report.files.push_back("pieces.csv");
+    }
+    if (report.has_volume_mesh) {
+      if (options.output.vtu) {
+        SM_RETURN_IF_ERROR(WriteVtu(path("volume.vtu"), volume.mesh));
+        report.files.push_back("volume.vtu");
+      }
+      if (options.output.msh) {
+        SM_RETURN_IF_ERROR(WriteGmsh(path("volume.msh"), volume.mesh));
+        report.files.push_back("volume.msh");
+      }
+      if (options.output.inp) {
+        SM_RETURN_IF_ERROR(WriteAbaqus(path("volume.inp"), volume.mesh));
+        report.files.push_back("volume.inp");
+      }
     }
     report.files.push_back("report.json");
     SM_RETURN_IF_ERROR(WriteFileAtomically(path("report.json"), report.ToJson()));

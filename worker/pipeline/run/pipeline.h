@@ -17,6 +17,7 @@
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/radius_search.h"
 #include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/tet/volume_mesher.h"
 #include "worker/pipeline/voxel/sheet_input.h"
 #include "worker/pipeline/voxel/thickness.h"
 
@@ -35,6 +36,9 @@ struct OutputOptions {
   bool obj = true;        // surface.obj
   bool model = true;      // with extraction: model.vdb (mask + labels) and
                           // model_labels_<dims>_u16.raw, and pieces.csv
+  bool vtu = true;        // with a volume mesh: volume.vtu
+  bool msh = true;        // volume.msh (Gmsh 4.1)
+  bool inp = true;        // volume.inp (Abaqus)
 };
 
 struct PipelineOptions {
@@ -45,6 +49,8 @@ struct PipelineOptions {
   bool search_radius = false;             // choose r with `radius_search`
   RadiusSearchOptions radius_search;
   ScoreOptions score;
+  bool volume_mesh = false;               // tetrahedralize the box with the sheets inside
+  VolumeMeshOptions volume;
   OutputOptions output;
 };
 
@@ -94,6 +100,16 @@ struct PipelineReport {
   double shell_similarity = 0;       // the other prism model (per-vertex if height is face)
   std::vector<GridFigure> grid;
   RadiusChoice radius_choice;        // when r was searched
+  // volume mesh (when made)
+  bool has_volume_mesh = false;
+  uint64_t volume_nodes = 0;
+  uint64_t volume_tets = 0;
+  uint64_t volume_sheet_faces = 0;
+  TetQuality volume_quality;
+  Conformity volume_conformity;
+  uint32_t volume_snapped = 0;
+  uint32_t volume_repaired = 0;
+  double voxels_per_tet = 0;         // the paper's 1 : 6704 is 6704 here
   std::vector<StageTime> timings;
   std::vector<std::string> files;    // written, relative to output.dir
 

@@ -297,6 +297,20 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
               }},
          });
        }},
+      {"volume_mesh", [&](const Json& v, const std::string& p) {
+         return rd.Object(v, p, {
+             {"enabled", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume_mesh); }},
+             {"radius_edge_ratio", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.max_radius_edge_ratio); }},
+             {"min_dihedral", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.min_dihedral_degrees); }},
+             {"max_volume", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.max_volume); }},
+             {"steiner_on_sheets", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume.tetgen.steiner_on_sheets); }},
+             {"time_limit_seconds", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.time_limit_seconds); }},
+             {"memory_limit_bytes", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &o->volume.tetgen.memory_limit_bytes); }},
+             {"tetgen", [&](const Json& w, const std::string& q) { return rd.String(w, q, &o->volume.tetgen.program); }},
+             {"repair", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume.plc.repair); }},
+             {"snap_voxels", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.snap_voxels); }},
+         });
+       }},
       {"output", [&](const Json& v, const std::string& p) {
          return rd.Object(v, p, {
              {"formats", [&](const Json& w, const std::string& q) {
@@ -312,6 +326,18 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                 return absl::OkStatus();
               }},
              {"model", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->output.model); }},
+             {"volume_formats", [&](const Json& w, const std::string& q) {
+                if (!w.is_array()) return rd.Error(q, w, "must be a list of vtu, msh, inp");
+                o->output.vtu = o->output.msh = o->output.inp = false;
+                for (const Json& f : w) {
+                  const std::string n = f.is_string() ? f.get<std::string>() : "";
+                  if (n == "vtu") o->output.vtu = true;
+                  else if (n == "msh") o->output.msh = true;
+                  else if (n == "inp") o->output.inp = true;
+                  else return rd.Error(q, w, "must be a list of vtu, msh, inp");
+                }
+                return absl::OkStatus();
+              }},
          });
        }},
   };
@@ -354,6 +380,16 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
     if (!(r.target_similarity <= 1.0)) return bad("target_similarity", r.target_similarity, "must be at most 1");
     if (!(r.min_radius_voxels > 0)) return bad("r_min", r.min_radius_voxels, "must be positive");
   }
+  const TetgenOptions& tg = o.volume.tetgen;
+  if (tg.max_radius_edge_ratio != 0 && !(tg.max_radius_edge_ratio >= 1.0)) {
+    return bad("volume_mesh.radius_edge_ratio", tg.max_radius_edge_ratio, "must be 0 (none) or at least 1");
+  }
+  if (!(tg.min_dihedral_degrees >= 0 && tg.min_dihedral_degrees < 70)) {
+    return bad("volume_mesh.min_dihedral", tg.min_dihedral_degrees, "must be in [0, 70)");
+  }
+  if (!(tg.max_volume >= 0)) return bad("volume_mesh.max_volume", tg.max_volume, "must not be negative");
+  if (!(tg.time_limit_seconds > 0)) return bad("volume_mesh.time_limit_seconds", tg.time_limit_seconds, "must be positive");
+  if (!(o.volume.plc.snap_voxels >= 0)) return bad("volume_mesh.snap_voxels", o.volume.plc.snap_voxels, "must not be negative");
   for (int k : o.score.grid_rates) {
     if (k < 1) return bad("grid_rates", k, "must be >= 1");
   }

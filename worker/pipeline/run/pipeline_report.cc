@@ -67,6 +67,7 @@ std::string PipelineReport::ToJson() const {
       {"rejected_degenerate", triangle_stats.rejected_degenerate},
       {"rim_vertices", triangle_stats.rim_vertices},
       {"rim_triangles", triangle_stats.rim_faces},
+      {"crack_triangles", triangle_stats.crack_faces},
       {"components_without_triangles", skipped_components},
       {"voxels_without_triangles", skipped_voxels},
       {"topology",
@@ -143,6 +144,37 @@ std::string PipelineReport::ToJson() const {
         {"chosen_r", radius_choice.radius},
         {"target_reached", radius_choice.target_reached},
         {"trials", trials}};
+  }
+  if (has_volume_mesh) {
+    auto stat = [](const QualityStat& q) {
+      return nlohmann::json{{"min", q.min}, {"mean", q.mean}, {"histogram_range", {q.lo, q.hi}},
+                            {"histogram", q.histogram}};
+    };
+    const TetgenOptions& tg = options.volume.tetgen;
+    j["volume_mesh"] = {
+        {"parameters",
+         {{"max_radius_edge_ratio", tg.max_radius_edge_ratio},
+          {"min_dihedral_degrees", tg.min_dihedral_degrees},
+          {"max_volume", tg.max_volume},
+          {"steiner_on_sheets", tg.steiner_on_sheets},
+          {"tetgen_switches", TetgenSwitches(tg)},
+          {"repair", options.volume.plc.repair}}},
+        {"nodes", volume_nodes},
+        {"tetrahedra", volume_tets},
+        {"sheet_faces", volume_sheet_faces},
+        {"voxels_per_tetrahedron", voxels_per_tet},
+        {"volume", volume_quality.volume},
+        {"snapped_vertices", volume_snapped},
+        {"repaired_triangles", volume_repaired},
+        {"conformity",
+         {{"sheet_triangles", volume_conformity.sheet_triangles},
+          {"conforming", volume_conformity.conforming},
+          {"worst_area_error", volume_conformity.worst_area_error}}},
+        {"quality",
+         {{"min_dihedral_degrees", stat(volume_quality.min_dihedral)},
+          {"gamma", stat(volume_quality.gamma)},
+          {"edge_aspect", stat(volume_quality.edge_aspect)},
+          {"radius_aspect", stat(volume_quality.radius_aspect)}}}};
   }
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;

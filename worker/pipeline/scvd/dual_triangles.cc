@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
@@ -405,6 +406,74 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
   }
 }
 
+// The fraction of the triangle's area whose nearest voxel is a sheet voxel, sampled on a
+// grid of about half a voxel.
+double SheetCoverage(const VoxelSet& set, const Triangle& t) {
+  const double longest = std::max({Norm(t[1] - t[0]), Norm(t[2] - t[1]), Norm(t[0] - t[2])});
+  const int n = std::max(2, static_cast<int>(std::ceil(longest * 2)));
+  int inside = 0, total = 0;
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; i + j <= n; ++j) {
+      const double u = double(i) / n, v = double(j) / n;
+      const Vec3 p = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
+      ++total;
+      inside += set.Contains(std::llround(p.x), std::llround(p.y), std::llround(p.z));
+    }
+  }
+  return total > 0 ? double(inside) / total : 0.0;
+}
+
+// Closes cracks (see DualTriangleOptions::close_cracks), a few passes so that a notch
+// closes ear by ear.
+void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
+                 const std::vector<Vec3>& pos, FaceSelector* selector, DualTriangulation* out) {
+  double edge_sum = 0;
+  size_t edges = 0;
+  for (const Face& f : selector->faces()) {
+    for (int k = 0; k < 3; ++k) {
+      edge_sum += Norm(pos[f[k]] - pos[f[(k + 1) % 3]]);
+      ++edges;
+    }
+  }
+  if (edges == 0) return;
+  const double max_edge = 1.5 * edge_sum / edges;
+  for (int pass = 0; pass < 4; ++pass) {
+    // Boundary edges, directed as their one face walks them; the loop continues at the
+    // edge leaving the end vertex.
+    std::map<uint32_t, std::vector<uint32_t>> next;  // vertex -> boundary successors
+    std::map<uint32_t, std::vector<uint32_t>> prev;
+    for (const Face& f : selector->faces()) {
+      for (int k = 0; k < 3; ++k) {
+        const auto* fs = selector->EdgeFaces(f[k], f[(k + 1) % 3]);
+        if (fs != nullptr && fs->size() == 1) {
+          next[f[k]].push_back(f[(k + 1) % 3]);
+          prev[f[(k + 1) % 3]].push_back(f[k]);
+        }
+      }
+    }
+    uint64_t closed = 0;
+    for (const auto& [v, succ] : next) {
+      // Only plain boundary vertices: one edge in, one edge out.
+      if (succ.size() != 1 || prev[v].size() != 1) continue;
+      const uint32_t w = succ[0], u = prev[v][0];
+      if (u == w) continue;
+      const Vec3 a = pos[u] - pos[v], b = pos[w] - pos[v];
+      const double angle = std::acos(std::clamp(Dot(a, b) / (Norm(a) * Norm(b)), -1.0, 1.0)) * 180.0 / M_PI;
+      if (angle >= options.crack_angle_degrees || Norm(pos[w] - pos[u]) > max_edge) continue;
+      // The boundary runs u -> v -> w inside faces; the ear walks the edges the other way.
+      const Face ear = {w, v, u};
+      if (SheetCoverage(set, {pos[u], pos[v], pos[w]}) < 0.5) continue;
+      if (selector->TryAdd(ear) == FaceSelector::Verdict::kKept) {
+        ++closed;
+        ++out->stats.crack_faces;
+        ++out->stats.kept;
+        out->votes.push_back(0);
+      }
+    }
+    if (closed == 0) break;
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
@@ -486,6 +555,7 @@ absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
     Count(v, &result.stats);
     if (v == FaceSelector::Verdict::kKept) result.votes.push_back(ranked[i].votes);
   }
+  if (options.close_cracks) CloseCracks(set, options, pos, &selector, &result);
   if (options.rim) AddRim(set, neighbors, thickness, scvd, options, &pos, &selector, &result);
   result.faces = selector.faces();
   SM_RETURN_IF_ERROR(progress.Update(1.0));

@@ -29,6 +29,12 @@ struct DualTriangleOptions {
   // fidelity"). With `rim`, each boundary cell gets a vertex at the centroid of its rim
   // voxels and a strip of triangles joins the mesh boundary to them.
   bool rim = true;
+  // Beyond the paper: triangles rejected by the selection leave cracks — narrow notches in
+  // the mesh boundary. A notch whose opening angle at a boundary vertex is below
+  // crack_angle_degrees, whose closing edge is short and whose ear triangle lies on sheet
+  // voxels is closed by that triangle; real holes (over empty space) stay open.
+  bool close_cracks = true;
+  double crack_angle_degrees = 60.0;
   double rim_normal_cos = 0.4;       // a step d along the sheet has |d . n| / |d| below this
                                      // (n: the vertex normal); a voxel from which such a step
                                      // leaves the sheet is a rim voxel
@@ -45,6 +51,7 @@ struct DualTriangleStats {
   uint64_t rejected_intersection = 0;
   uint64_t rim_vertices = 0;         // rim vertices added
   uint64_t rim_faces = 0;            // of the kept faces, those on the rim strip
+  uint64_t crack_faces = 0;          // of the kept faces, those closing cracks
 };
 
 struct DualTriangulation {

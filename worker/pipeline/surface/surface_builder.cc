@@ -15,6 +15,7 @@ SurfaceOptions SurfaceOptions::Paper() {
   o.placement = VertexPlacement::kGenerator;
   o.thickness = ThicknessMeasure::kAxisRuns;
   o.triangles.rim = false;
+  o.triangles.close_cracks = false;
   o.scvd.domain = ScvdDomain::kVoxels;
   return o;
 }

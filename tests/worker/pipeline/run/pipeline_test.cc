@@ -95,6 +95,28 @@ TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
   EXPECT_EQ(j["similarity"]["against"], "extracted model");
 }
 
+TEST(PipelineTest, VolumeStageWritesTheFemFormats) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.extract = true;
+  o.volume_mesh = true;
+  o.score.hausdorff = false;
+  Stages stages;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
+  EXPECT_EQ(stages.seen, PlannedStages(o));
+  EXPECT_GT(r.volume_tets, 100u);
+  EXPECT_EQ(r.volume_conformity.conforming, r.volume_conformity.sheet_triangles);
+  EXPECT_NEAR(r.volume_quality.volume, 64.0 * 56 * 48, 1e-6 * 64 * 56 * 48);
+  for (const char* f : {"volume.vtu", "volume.msh", "volume.inp"}) {
+    EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
+  }
+  const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
+  EXPECT_EQ(j["volume_mesh"]["tetrahedra"].get<uint64_t>(), r.volume_tets);
+  EXPECT_TRUE(j["volume_mesh"]["quality"].contains("radius_aspect"));
+}
+
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {
   TempDir tmp;
   PipelineOptions o;

@@ -1,0 +1,244 @@
+#include "client/client.h"
+
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/generic/generic_stub.h>
+
+#include <condition_variable>
+#include <mutex>
+
+#include <thread>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/sha256.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh::client {
+namespace {
+
+absl::Status FromGrpc(const grpc::Status& s) {
+  if (s.ok()) return absl::OkStatus();
+  return absl::Status(static_cast<absl::StatusCode>(s.error_code()), s.error_message());
+}
+
+constexpr int64_t kPiece = int64_t{1} << 20;
+
+}  // namespace
+
+std::string JobName(const std::string& n) { return n.rfind("jobs/", 0) == 0 ? n : "jobs/" + n; }
+
+absl::StatusOr<std::unique_ptr<SheetmeshClient>> SheetmeshClient::Connect(const ClientOptions& o) {
+  std::shared_ptr<grpc::ChannelCredentials> creds = grpc::InsecureChannelCredentials();
+  if (o.tls || !o.tls_root_cert.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    if (!o.tls_root_cert.empty()) {
+      SM_ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadFileToString(o.tls_root_cert));
+    }
+    creds = grpc::SslCredentials(ssl);
+  }
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(4 << 20);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 30000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  auto c = std::unique_ptr<SheetmeshClient>(new SheetmeshClient());
+  c->options_ = o;
+  c->channel_ = grpc::CreateCustomChannel(o.address, creds, args);
+  c->jobs_ = v1::JobService::NewStub(c->channel_);
+  c->blobs_ = v1::BlobService::NewStub(c->channel_);
+  c->volumes_ = v1::VolumeService::NewStub(c->channel_);
+  return c;
+}
+
+std::unique_ptr<grpc::ClientContext> SheetmeshClient::Context() const {
+  auto ctx = std::make_unique<grpc::ClientContext>();
+  if (!options_.auth_token.empty()) ctx->AddMetadata("authorization", "Bearer " + options_.auth_token);
+  return ctx;
+}
+
+absl::StatusOr<v1::Digest> SheetmeshClient::Upload(const std::string& path,
+                                                   const std::function<void(int64_t, int64_t)>& progress) {
+  SM_ASSIGN_OR_RETURN(FileHash h, HashFile(path));
+  v1::Digest digest;
+  digest.set_hash(h.hex);
+  digest.set_size_bytes(h.size);
+  {
+    v1::FindMissingBlobsRequest req;
+    *req.add_digests() = digest;
+    v1::FindMissingBlobsResponse resp;
+    SM_RETURN_IF_ERROR(FromGrpc(blobs_->FindMissingBlobs(Context().get(), req, &resp)));
+    if (resp.missing_size() == 0) {
+      if (progress) progress(h.size, h.size);
+      return digest;
+    }
+  }
+  // The upload is named by the content, so that running the upload again resumes it.
+  const std::string resource = absl::StrCat("uploads/u", h.hex.substr(0, 32), "/blobs/", h.hex, "/", h.size);
+  SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
+  std::vector<std::byte> buf(kPiece);
+  absl::Status last;
+  for (int attempt = 0; attempt <= options_.upload_retries; ++attempt) {
+    v1::QueryWriteStatusRequest q;
+    q.set_resource_name(resource);
+    v1::QueryWriteStatusResponse qs;
+    SM_RETURN_IF_ERROR(FromGrpc(blobs_->QueryWriteStatus(Context().get(), q, &qs)));
+    if (qs.complete()) return digest;
+    int64_t offset = qs.committed_size();
+    auto ctx = Context();
+    v1::WriteResponse resp;
+    std::unique_ptr<grpc::ClientWriter<v1::WriteRequest>> writer = blobs_->Write(ctx.get(), &resp);
+    bool broken = false;
+    v1::WriteRequest req;
+    req.set_resource_name(resource);
+    do {
+      const int64_t n = std::min(kPiece, h.size - offset);
+      SM_RETURN_IF_ERROR(ReadFullyAt(fd.get(), offset, std::span<std::byte>(buf.data(), n), path));
+      req.set_write_offset(offset);
+      req.set_data(reinterpret_cast<const char*>(buf.data()), n);
+      req.set_finish_write(offset + n == h.size);
+      if (!writer->Write(req)) {
+        broken = true;
+        break;
+      }
+      req.clear_resource_name();
+      offset += n;
+      if (progress) progress(offset, h.size);
+    } while (offset < h.size);
+    writer->WritesDone();
+    last = FromGrpc(writer->Finish());
+    if (last.ok() && !broken) return digest;
+    if (!last.ok() && last.code() != absl::StatusCode::kUnavailable &&
+        last.code() != absl::StatusCode::kDeadlineExceeded && last.code() != absl::StatusCode::kCancelled) {
+      return last;  // the server refused: retrying would not help
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200 << std::min(attempt, 5)));
+  }
+  return absl::UnavailableError(absl::StrCat("upload of ", path, " did not complete after ",
+                                             options_.upload_retries + 1, " attempts: ", last.message()));
+}
+
+absl::StatusOr<v1::Job> SheetmeshClient::CreateJob(const v1::CreateJobRequest& request) {
+  v1::Job job;
+  SM_RETURN_IF_ERROR(FromGrpc(jobs_->CreateJob(Context().get(), request, &job)));
+  return job;
+}
+
+absl::StatusOr<v1::Job> SheetmeshClient::GetJob(const std::string& name) {
+  v1::GetJobRequest req;
+  req.set_name(JobName(name));
+  v1::Job job;
+  SM_RETURN_IF_ERROR(FromGrpc(jobs_->GetJob(Context().get(), req, &job)));
+  return job;
+}
+
+absl::StatusOr<v1::ListJobsResponse> SheetmeshClient::ListJobs(const v1::ListJobsRequest& request) {
+  v1::ListJobsResponse resp;
+  SM_RETURN_IF_ERROR(FromGrpc(jobs_->ListJobs(Context().get(), request, &resp)));
+  return resp;
+}
+
+absl::StatusOr<v1::Job> SheetmeshClient::CancelJob(const std::string& name) {
+  v1::CancelJobRequest req;
+  req.set_name(JobName(name));
+  v1::Job job;
+  SM_RETURN_IF_ERROR(FromGrpc(jobs_->CancelJob(Context().get(), req, &job)));
+  return job;
+}
+
+absl::Status SheetmeshClient::DeleteJob(const std::string& name) {
+  v1::DeleteJobRequest req;
+  req.set_name(JobName(name));
+  v1::DeleteJobResponse resp;
+  return FromGrpc(jobs_->DeleteJob(Context().get(), req, &resp));
+}
+
+absl::StatusOr<v1::Job> SheetmeshClient::Watch(const std::string& name,
+                                               const std::function<void(const v1::WatchJobResponse&)>& on_update) {
+  v1::WatchJobRequest req;
+  req.set_name(JobName(name));
+  for (int retry = 0;; ++retry) {
+    auto ctx = Context();
+    std::unique_ptr<grpc::ClientReader<v1::WatchJobResponse>> reader = jobs_->WatchJob(ctx.get(), req);
+    v1::WatchJobResponse msg;
+    v1::Job last;
+    while (reader->Read(&msg)) {
+      last = msg.job();
+      if (on_update) on_update(msg);
+    }
+    const grpc::Status st = reader->Finish();
+    const v1::JobState s = last.state();
+    if (s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED) return last;
+    if (!st.ok() && st.error_code() != grpc::StatusCode::UNAVAILABLE) return FromGrpc(st);
+    if (retry >= 30) return absl::UnavailableError("the watch kept breaking; the job goes on");
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+}
+
+absl::Status SheetmeshClient::Download(const v1::Digest& digest, const std::string& path) {
+  SM_ASSIGN_OR_RETURN(AtomicFileWriter out, AtomicFileWriter::Create(path));
+  int64_t offset = 0;
+  // Ranged reads of 64 MiB, each resumable where the last stopped.
+  constexpr int64_t kRange = int64_t{64} << 20;
+  Sha256 sha;
+  int failures = 0;
+  while (offset < digest.size_bytes()) {
+    v1::ReadRequest req;
+    *req.mutable_digest() = digest;
+    req.set_read_offset(offset);
+    req.set_read_limit(std::min(kRange, digest.size_bytes() - offset));
+    auto ctx = Context();
+    std::unique_ptr<grpc::ClientReader<v1::ReadResponse>> reader = blobs_->Read(ctx.get(), req);
+    v1::ReadResponse resp;
+    while (reader->Read(&resp)) {
+      SM_RETURN_IF_ERROR(out.Append(resp.data()));
+      sha.Update(resp.data().data(), resp.data().size());
+      offset += resp.data().size();
+    }
+    const grpc::Status st = reader->Finish();
+    if (!st.ok()) {
+      if (st.error_code() != grpc::StatusCode::UNAVAILABLE || ++failures > 5) return FromGrpc(st);
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
+  if (sha.Hex() != digest.hash()) {
+    return absl::DataLossError(absl::StrCat(path, ": the downloaded bytes do not match digest ", digest.hash()));
+  }
+  return out.Commit();
+}
+
+absl::StatusOr<std::string> SheetmeshClient::Health() {
+  // The health service's messages are hand-encoded: a HealthCheckRequest with an empty
+  // service name is an empty message; the response's field 1 is the status enum.
+  grpc::GenericStub stub(channel_);
+  auto ctx = Context();
+  ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  grpc::ByteBuffer request;
+  grpc::Slice empty("", 0);
+  request = grpc::ByteBuffer(&empty, 1);
+  grpc::ByteBuffer response;
+  std::mutex mu;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(ctx.get(), "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) {
+                   std::lock_guard<std::mutex> lock(mu);
+                   status = s;
+                   done = true;
+                   cv.notify_all();
+                 });
+  std::unique_lock<std::mutex> lock(mu);
+  cv.wait(lock, [&] { return done; });
+  SM_RETURN_IF_ERROR(FromGrpc(status));
+  std::vector<grpc::Slice> slices;
+  response.Dump(&slices);
+  std::string bytes;
+  for (const auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  // 0x08 <status>: 1 SERVING, 2 NOT_SERVING.
+  if (bytes.size() >= 2 && bytes[0] == 0x08) {
+    return bytes[1] == 1 ? std::string("SERVING") : (bytes[1] == 2 ? "NOT_SERVING" : "UNKNOWN");
+  }
+  return std::string("UNKNOWN");
+}
+
+}  // namespace sheetmesh::client

@@ -1,0 +1,68 @@
+// SheetmeshClient: the sheetmesh service from a program — resumable uploads, jobs,
+// watching, artifact downloads. The CLI `sheetmesh` is built on it.
+#ifndef SHEETMESH_CLIENT_CLIENT_H_
+#define SHEETMESH_CLIENT_CLIENT_H_
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "sheetmesh/v1/blobs.grpc.pb.h"
+#include "sheetmesh/v1/jobs.grpc.pb.h"
+#include "sheetmesh/v1/volumes.grpc.pb.h"
+
+namespace sheetmesh::client {
+
+struct ClientOptions {
+  std::string address = "127.0.0.1:50051";
+  std::string auth_token;       // sent as "authorization: Bearer <token>"
+  bool tls = false;             // TLS with the system's roots, or...
+  std::string tls_root_cert;    // ...with this PEM file
+  int upload_retries = 5;       // broken upload streams resumed this many times
+};
+
+// Thread-compatible: one client per thread, or guard it.
+class SheetmeshClient {
+ public:
+  static absl::StatusOr<std::unique_ptr<SheetmeshClient>> Connect(const ClientOptions& options);
+
+  // Uploads `path` unless the server holds it already; resumes an interrupted upload of
+  // the same file. `progress(sent, total)` is called as pieces go.
+  absl::StatusOr<v1::Digest> Upload(const std::string& path,
+                                    const std::function<void(int64_t, int64_t)>& progress = {});
+  absl::StatusOr<v1::Job> CreateJob(const v1::CreateJobRequest& request);
+  absl::StatusOr<v1::Job> GetJob(const std::string& name);
+  absl::StatusOr<v1::ListJobsResponse> ListJobs(const v1::ListJobsRequest& request);
+  absl::StatusOr<v1::Job> CancelJob(const std::string& name);
+  absl::Status DeleteJob(const std::string& name);
+  // Watches until the job ends, calling `on_update` for every message; returns the final
+  // job. A stream that breaks is watched again (a watch never cancels the job).
+  absl::StatusOr<v1::Job> Watch(const std::string& name,
+                                const std::function<void(const v1::WatchJobResponse&)>& on_update);
+  // Downloads a blob to `path` (atomically), by ranged reads.
+  absl::Status Download(const v1::Digest& digest, const std::string& path);
+  // grpc.health.v1 status of the server ("SERVING").
+  absl::StatusOr<std::string> Health();
+
+  v1::JobService::Stub* jobs() { return jobs_.get(); }
+  v1::BlobService::Stub* blobs() { return blobs_.get(); }
+  v1::VolumeService::Stub* volumes() { return volumes_.get(); }
+  // A context carrying the token.
+  std::unique_ptr<grpc::ClientContext> Context() const;
+
+ private:
+  ClientOptions options_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::JobService::Stub> jobs_;
+  std::unique_ptr<v1::BlobService::Stub> blobs_;
+  std::unique_ptr<v1::VolumeService::Stub> volumes_;
+};
+
+// "jobs/..." from "jobs/..." or a bare id.
+std::string JobName(const std::string& name_or_id);
+
+}  // namespace sheetmesh::client
+
+#endif  // SHEETMESH_CLIENT_CLIENT_H_

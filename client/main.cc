@@ -1,0 +1,283 @@
+// sheetmesh: the command-line client of the sheetmesh service.
+//   sheetmesh mesh VOLUME -o DIR [--reference] [--r R] [--extract] [--volume_mesh] ...
+//   sheetmesh upload FILE
+//   sheetmesh jobs list|get|watch|cancel|delete [JOB]
+//   sheetmesh artifacts get JOB [-o DIR] [--name FILE]
+//   sheetmesh health
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <random>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
+#include "client/client.h"
+#include "google/protobuf/util/json_util.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+
+ABSL_FLAG(std::string, server, "127.0.0.1:50051", "the server's host:port");
+ABSL_FLAG(std::string, token, "", "bearer token (or $SHEETMESH_TOKEN)");
+ABSL_FLAG(bool, tls, false, "use TLS (system roots)");
+ABSL_FLAG(std::string, tls_root_cert, "", "PEM root certificate for TLS");
+ABSL_FLAG(std::string, o, "", "output folder");
+ABSL_FLAG(bool, reference, false, "mesh: name the volume by its path on the server instead of uploading it");
+ABSL_FLAG(std::string, config, "", "mesh: the pipeline's JSON config file (as for sheetmesh-pipeline)");
+ABSL_FLAG(std::string, labels, "", "mesh: sheet-phase values, e.g. 255");
+ABSL_FLAG(std::string, dims, "", "mesh: raw volume dims NXxNYxNZ");
+ABSL_FLAG(std::string, dtype, "", "mesh: raw volume dtype");
+ABSL_FLAG(double, r, 0, "mesh: SCVD cell radius r (0: the server's default, 7)");
+ABSL_FLAG(bool, extract, false, "mesh: run the feature extraction first");
+ABSL_FLAG(bool, volume_mesh, false, "mesh: also make the TetGen volume mesh");
+ABSL_FLAG(std::string, method, "", "mesh: extended or paper");
+ABSL_FLAG(bool, no_cache, false, "mesh: run even when identical work is done");
+ABSL_FLAG(std::string, state, "", "jobs list: only jobs in this state (QUEUED, RUNNING, ...)");
+ABSL_FLAG(int, page_size, 50, "jobs list: jobs per page");
+ABSL_FLAG(bool, all_pages, false, "jobs list: follow every page");
+ABSL_FLAG(std::string, name, "", "artifacts get: only this file");
+ABSL_FLAG(bool, json, false, "print jobs as JSON");
+
+namespace sheetmesh::client {
+namespace {
+
+constexpr char kUsage[] =
+    "sheetmesh COMMAND [ARGS] [--server=host:port]\n\n"
+    "  mesh VOLUME -o DIR        upload (or --reference) a volume, run a job, download its files\n"
+    "  upload FILE               upload a file, print its digest\n"
+    "  jobs list|get|watch|cancel|delete [JOB]\n"
+    "  artifacts get JOB -o DIR  download a job's files (--name FILE for one)\n"
+    "  health                    the server's health\n";
+
+std::string NewRequestId() {
+  std::random_device rd;
+  std::mt19937_64 rng((uint64_t(rd()) << 32) ^ rd() ^ absl::GetCurrentTimeNanos());
+  return absl::StrFormat("%016x%016x", rng(), rng());
+}
+
+std::string StateName(v1::JobState s) { return v1::JobState_Name(s); }
+
+void PrintJob(const v1::Job& j) {
+  if (absl::GetFlag(FLAGS_json)) {
+    std::string out;
+    google::protobuf::util::JsonPrintOptions o;
+    o.add_whitespace = true;
+    (void)google::protobuf::util::MessageToJsonString(j, &out, o);
+    std::cout << out << "\n";
+    return;
+  }
+  std::cout << absl::StrFormat("%s  %-9s", j.name(), StateName(j.state()));
+  if (j.state() == v1::RUNNING) {
+    std::cout << absl::StrFormat("  stage %d/%d %s %3.0f%%", j.progress().stage_index(),
+                                 j.progress().stage_count(), j.progress().stage(), 100 * j.progress().fraction());
+  }
+  if (!j.cached_from().empty()) std::cout << "  (cached from " << j.cached_from() << ")";
+  if (j.has_error() && j.error().code() != 0) std::cout << "  error: " << j.error().message();
+  std::cout << "\n";
+}
+
+// Progress as a bar on a terminal, as lines otherwise.
+class Reporter {
+ public:
+  Reporter() : tty_(::isatty(1)) {}
+  void Update(const v1::WatchJobResponse& m) {
+    const v1::Job& j = m.job();
+    const v1::JobProgress& p = j.progress();
+    if (tty_) {
+      const int width = 30;
+      const int fill = static_cast<int>(p.fraction() * width);
+      std::cout << absl::StrFormat("\r%-9s [%s%s] stage %d/%d %-12s %3.0f%%", StateName(j.state()),
+                                   std::string(fill, '#'), std::string(width - fill, ' '),
+                                   p.stage_index(), p.stage_count(), p.stage(), 100 * p.fraction())
+                << std::flush;
+      return;
+    }
+    const std::string line = absl::StrFormat("%s stage %d/%d %s", StateName(j.state()), p.stage_index(),
+                                             p.stage_count(), p.stage());
+    if (line != last_) std::cout << line << std::endl;
+    last_ = line;
+  }
+  void Done() {
+    if (tty_) std::cout << "\n";
+  }
+
+ private:
+  bool tty_;
+  std::string last_;
+};
+
+absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::string& dir,
+                         const std::string& only) {
+  SM_RETURN_IF_ERROR(MakeDirs(dir));
+  for (const v1::Artifact& a : job.artifacts()) {
+    if (!only.empty() && a.name() != only) continue;
+    const std::string path = (std::filesystem::path(dir) / std::filesystem::path(a.name()).filename()).string();
+    SM_RETURN_IF_ERROR(c.Download(a.digest(), path));
+    std::cout << absl::StrFormat("  %-40s %12d bytes\n", path, a.digest().size_bytes());
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
+  if (args.size() != 1) return absl::InvalidArgumentError("usage: sheetmesh mesh VOLUME -o DIR");
+  const std::string out = absl::GetFlag(FLAGS_o);
+  if (out.empty()) return absl::InvalidArgumentError("mesh needs -o DIR");
+  v1::CreateJobRequest req;
+  req.set_request_id(NewRequestId());
+  req.set_no_cache(absl::GetFlag(FLAGS_no_cache));
+  v1::JobInput& in = *req.mutable_input();
+  in.set_file_name(std::filesystem::path(args[0]).filename().string());
+  if (absl::GetFlag(FLAGS_reference)) {
+    in.set_volume_path(std::filesystem::absolute(args[0]).string());
+  } else {
+    const bool tty = ::isatty(1);
+    SM_ASSIGN_OR_RETURN(v1::Digest d, c.Upload(args[0], [tty](int64_t sent, int64_t total) {
+      if (tty) std::cout << absl::StrFormat("\rupload %5.1f%% of %d bytes", 100.0 * sent / std::max<int64_t>(1, total), total) << std::flush;
+    }));
+    if (tty) std::cout << "\n";
+    std::cout << "volume " << d.hash() << " (" << d.size_bytes() << " bytes)\n";
+    *in.mutable_volume_digest() = d;
+  }
+  v1::PipelineParameters& p = *req.mutable_parameters();
+  if (!absl::GetFlag(FLAGS_config).empty()) {
+    SM_ASSIGN_OR_RETURN(std::string cfg, ReadFileToString(absl::GetFlag(FLAGS_config)));
+    p.set_config_json(cfg);
+  }
+  for (absl::string_view l : absl::StrSplit(absl::GetFlag(FLAGS_labels), ',', absl::SkipEmpty())) {
+    double v = 0;
+    if (!absl::SimpleAtod(l, &v)) return absl::InvalidArgumentError(absl::StrCat("--labels: '", l, "' is not a number"));
+    p.add_labels(v);
+  }
+  if (!absl::GetFlag(FLAGS_dims).empty()) {
+    for (absl::string_view d : absl::StrSplit(absl::GetFlag(FLAGS_dims), 'x')) {
+      int64_t v = 0;
+      if (!absl::SimpleAtoi(d, &v)) return absl::InvalidArgumentError(absl::StrCat("--dims: '", d, "' is not an integer"));
+      in.mutable_format()->add_dims(v);
+    }
+  }
+  if (!absl::GetFlag(FLAGS_dtype).empty()) in.mutable_format()->set_dtype(absl::GetFlag(FLAGS_dtype));
+  if (absl::GetFlag(FLAGS_r) > 0) p.set_r(absl::GetFlag(FLAGS_r));
+  if (absl::GetFlag(FLAGS_extract)) p.set_extract(true);
+  if (absl::GetFlag(FLAGS_volume_mesh)) p.set_volume_mesh(true);
+  if (!absl::GetFlag(FLAGS_method).empty()) p.set_method(absl::GetFlag(FLAGS_method));
+  SM_ASSIGN_OR_RETURN(v1::Job job, c.CreateJob(req));
+  std::cout << "job " << job.name() << (job.cached_from().empty() ? "" : " (identical work done before: " + job.cached_from() + ")") << "\n";
+  Reporter reporter;
+  SM_ASSIGN_OR_RETURN(v1::Job done, c.Watch(job.name(), [&](const v1::WatchJobResponse& m) { reporter.Update(m); }));
+  reporter.Done();
+  if (done.state() != v1::SUCCEEDED) {
+    return absl::Status(static_cast<absl::StatusCode>(done.error().code() ? done.error().code() : 2),
+                        absl::StrCat(done.name(), " ", StateName(done.state()), ": ", done.error().message()));
+  }
+  std::cout << "downloading " << done.artifacts_size() << " files to " << out << "\n";
+  SM_RETURN_IF_ERROR(DownloadAll(c, done, out, ""));
+  std::cout << "results in " << std::filesystem::absolute(out).string() << "\n";
+  return absl::OkStatus();
+}
+
+absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
+  if (args.empty()) return absl::InvalidArgumentError("usage: sheetmesh jobs list|get|watch|cancel|delete [JOB]");
+  const std::string& verb = args[0];
+  if (verb == "list") {
+    v1::ListJobsRequest req;
+    req.set_page_size(absl::GetFlag(FLAGS_page_size));
+    if (!absl::GetFlag(FLAGS_state).empty()) {
+      v1::JobState s;
+      if (!v1::JobState_Parse(absl::GetFlag(FLAGS_state), &s)) {
+        return absl::InvalidArgumentError(absl::StrCat("--state=", absl::GetFlag(FLAGS_state), " is not a job state"));
+      }
+      req.set_state(s);
+    }
+    do {
+      SM_ASSIGN_OR_RETURN(v1::ListJobsResponse resp, c.ListJobs(req));
+      for (const v1::Job& j : resp.jobs()) PrintJob(j);
+      req.set_page_token(resp.next_page_token());
+    } while (absl::GetFlag(FLAGS_all_pages) && !req.page_token().empty());
+    return absl::OkStatus();
+  }
+  if (args.size() != 2) return absl::InvalidArgumentError(absl::StrCat("usage: sheetmesh jobs ", verb, " JOB"));
+  if (verb == "get") {
+    SM_ASSIGN_OR_RETURN(v1::Job j, c.GetJob(args[1]));
+    PrintJob(j);
+  } else if (verb == "watch") {
+    Reporter reporter;
+    SM_ASSIGN_OR_RETURN(v1::Job j, c.Watch(args[1], [&](const v1::WatchJobResponse& m) { reporter.Update(m); }));
+    reporter.Done();
+    PrintJob(j);
+  } else if (verb == "cancel") {
+    SM_ASSIGN_OR_RETURN(v1::Job j, c.CancelJob(args[1]));
+    PrintJob(j);
+  } else if (verb == "delete") {
+    SM_RETURN_IF_ERROR(c.DeleteJob(args[1]));
+    std::cout << "deleted " << JobName(args[1]) << "\n";
+  } else {
+    return absl::InvalidArgumentError(absl::StrCat("jobs ", verb, " is not known"));
+  }
+  return absl::OkStatus();
+}
+
+int Main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(kUsage);
+  std::vector<char*> rest = absl::ParseCommandLine(argc, argv);
+  if (rest.size() < 2) {
+    std::cerr << kUsage;
+    return 2;
+  }
+  ClientOptions o;
+  o.address = absl::GetFlag(FLAGS_server);
+  o.auth_token = absl::GetFlag(FLAGS_token);
+  if (o.auth_token.empty() && getenv("SHEETMESH_TOKEN") != nullptr) o.auth_token = getenv("SHEETMESH_TOKEN");
+  o.tls = absl::GetFlag(FLAGS_tls);
+  o.tls_root_cert = absl::GetFlag(FLAGS_tls_root_cert);
+  const std::string command = rest[1];
+  const std::vector<std::string> args(rest.begin() + 2, rest.end());
+  absl::Status st;
+  auto client = SheetmeshClient::Connect(o);
+  if (!client.ok()) {
+    st = client.status();
+  } else if (command == "mesh") {
+    st = Mesh(**client, args);
+  } else if (command == "upload") {
+    if (args.size() != 1) {
+      st = absl::InvalidArgumentError("usage: sheetmesh upload FILE");
+    } else {
+      auto d = (*client)->Upload(args[0]);
+      if (d.ok()) std::cout << d->hash() << "/" << d->size_bytes() << "\n";
+      st = d.status();
+    }
+  } else if (command == "jobs") {
+    st = Jobs(**client, args);
+  } else if (command == "artifacts") {
+    if (args.size() != 2 || args[0] != "get") {
+      st = absl::InvalidArgumentError("usage: sheetmesh artifacts get JOB -o DIR [--name FILE]");
+    } else {
+      auto job = (*client)->GetJob(args[1]);
+      st = job.ok() ? DownloadAll(**client, *job, absl::GetFlag(FLAGS_o).empty() ? "." : absl::GetFlag(FLAGS_o),
+                                  absl::GetFlag(FLAGS_name))
+                    : job.status();
+    }
+  } else if (command == "health") {
+    auto h = (*client)->Health();
+    if (h.ok()) std::cout << *h << "\n";
+    st = h.ok() && *h != "SERVING" ? absl::UnavailableError(*h) : h.status();
+  } else {
+    std::cerr << "unknown command '" << command << "'\n\n" << kUsage;
+    return 2;
+  }
+  if (!st.ok()) {
+    std::cerr << "sheetmesh " << command << ": " << absl::StatusCodeToString(st.code()) << ": " << st.message() << "\n";
+    return st.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace sheetmesh::client
+
+int main(int argc, char** argv) { return sheetmesh::client::Main(argc, argv); }

@@ -1,0 +1,70 @@
+// JobStore: where accepted jobs live, durably. A job accepted is never lost: it is written
+// before CreateJob answers, and a job whose worker vanished (lease expired, server killed)
+// goes back to the queue until it has been tried max_attempts times.
+#ifndef SHEETMESH_SERVER_JOB_STORE_H_
+#define SHEETMESH_SERVER_JOB_STORE_H_
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "sheetmesh/v1/jobs.pb.h"
+
+namespace sheetmesh::server {
+
+// Implementations are thread-safe.
+class JobStore {
+ public:
+  virtual ~JobStore() = default;
+
+  // Stores a new QUEUED job (or, for a `job` already SUCCEEDED from a cache, that). When a
+  // job with the same request_id exists, returns it and sets *created to false.
+  virtual absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
+                                         bool* created) = 0;
+  // kNotFound naming the job.
+  virtual absl::StatusOr<v1::Job> Get(const std::string& name) = 0;
+  // The job created with `request_id`, if any.
+  virtual absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& request_id) = 0;
+  // Newest first; page_token is opaque ("" = first page). Sets *next_token ("" = last).
+  virtual absl::StatusOr<std::vector<v1::Job>> List(v1::JobState state, int page_size,
+                                                    const std::string& page_token,
+                                                    std::string* next_token) = 0;
+  // The oldest QUEUED job, now RUNNING under `worker` until now + lease; attempts + 1.
+  virtual absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker,
+                                                           absl::Duration lease) = 0;
+  // kFailedPrecondition when the job is not RUNNING under `worker`.
+  virtual absl::Status Renew(const std::string& name, const std::string& worker,
+                             absl::Duration lease) = 0;
+  // Stores the job's progress (RUNNING under `worker` only).
+  virtual absl::Status SetProgress(const std::string& name, const std::string& worker,
+                                   const v1::JobProgress& progress) = 0;
+  // Ends a RUNNING job of `worker` in `state` (SUCCEEDED, FAILED or CANCELLED).
+  virtual absl::StatusOr<v1::Job> Finish(const std::string& name, const std::string& worker,
+                                         v1::JobState state, const v1::JobError& error,
+                                         const std::vector<v1::Artifact>& artifacts) = 0;
+  // Puts a RUNNING job of `worker` back in the queue, its attempt not counted.
+  virtual absl::Status Release(const std::string& name, const std::string& worker) = 0;
+  // QUEUED: CANCELLED now. RUNNING: marked, the worker stops it. Finished: unchanged.
+  virtual absl::StatusOr<v1::Job> RequestCancel(const std::string& name) = 0;
+  virtual absl::StatusOr<bool> CancelRequested(const std::string& name) = 0;
+  // kFailedPrecondition unless the job has finished.
+  virtual absl::Status Delete(const std::string& name) = 0;
+  // RUNNING jobs whose lease ended go back to QUEUED, or FAILED after max_attempts.
+  // `all` treats every RUNNING job as expired (a restart: no worker of the old process
+  // lives). Returns how many were requeued or failed.
+  virtual absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) = 0;
+  // A SUCCEEDED job with this cache key.
+  virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
+  virtual absl::StatusOr<int64_t> CountInState(v1::JobState state) = 0;
+};
+
+// SQLite in WAL mode at `path`.
+absl::StatusOr<std::unique_ptr<JobStore>> OpenSqliteJobStore(const std::string& path);
+
+}  // namespace sheetmesh::server
+
+#endif  // SHEETMESH_SERVER_JOB_STORE_H_

@@ -1,0 +1,172 @@
+#include "server/local_job_host.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_replace.h"
+#include "absl/time/clock.h"
+#include "google/protobuf/util/time_util.h"
+#include "server/references.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh::server {
+
+using google::protobuf::util::TimeUtil;
+
+LocalJobHost::LocalJobHost(JobStore* store, BlobStore* blobs, JobEvents* events,
+                           LocalJobHostOptions options)
+    : store_(store), blobs_(blobs), events_(events), options_(std::move(options)) {}
+
+void LocalJobHost::WakeWorkers() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    ++wake_;
+  }
+  work_.notify_all();
+}
+
+absl::StatusOr<std::optional<v1::Job>> LocalJobHost::Lease(const std::string& worker,
+                                                           absl::Duration wait) {
+  const absl::Time deadline = absl::Now() + wait;
+  for (;;) {
+    uint64_t seen;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      seen = wake_;
+    }
+    SM_ASSIGN_OR_RETURN(std::optional<v1::Job> job, store_->LeaseNext(worker, options_.lease));
+    if (job.has_value()) {
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        live_[job->name()] = Live{};
+      }
+      events_->Notify(job->name());
+      return job;
+    }
+    const absl::Duration left = deadline - absl::Now();
+    if (left <= absl::ZeroDuration()) return std::optional<v1::Job>();
+    std::unique_lock<std::mutex> lock(mu_);
+    work_.wait_for(lock, absl::ToChronoMilliseconds(left), [&] { return wake_ != seen; });
+  }
+}
+
+absl::Status LocalJobHost::Renew(const std::string& job, const std::string& worker) {
+  return store_->Renew(job, worker, options_.lease);
+}
+
+void LocalJobHost::MarkCancelled(const std::string& job) {
+  std::lock_guard<std::mutex> lock(mu_);
+  cancelled_.insert(job);
+}
+
+bool LocalJobHost::ReportProgress(const std::string& job, const std::string& worker,
+                                  const runtime::ProgressUpdate& u) {
+  const absl::Time now = absl::Now();
+  bool notify = false, store = false;
+  v1::JobProgress snapshot;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (cancelled_.count(job)) return false;
+    Live& live = live_[job];
+    const bool new_stage = live.progress.stage() != u.stage;
+    live.progress.set_stage(u.stage);
+    live.progress.set_stage_index(u.stage_index);
+    live.progress.set_stage_count(u.stage_count);
+    live.progress.set_fraction(u.fraction);
+    if (!u.message.empty() || new_stage) live.progress.set_message(u.message);
+    *live.progress.mutable_update_time() = TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(now));
+    // Watchers hear of every stage and of every percent, at most ten times a second.
+    if (new_stage || (u.fraction - live.notified_fraction >= 0.01 &&
+                      now - live.notified >= absl::Milliseconds(100))) {
+      notify = true;
+      live.notified = now;
+      live.notified_fraction = u.fraction;
+    }
+    if (new_stage || now - live.stored >= options_.progress_store_interval) {
+      store = true;
+      live.stored = now;
+    }
+    snapshot = live.progress;
+  }
+  if (store && !store_->SetProgress(job, worker, snapshot).ok()) return false;
+  if (notify) events_->Notify(job);
+  return true;
+}
+
+std::optional<v1::JobProgress> LocalJobHost::Progress(const std::string& job) {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = live_.find(job);
+  if (it == live_.end()) return std::nullopt;
+  return it->second.progress;
+}
+
+absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& job) {
+  const v1::JobInput& in = job.input();
+  runtime::LocalVolume v;
+  if (in.has_volume_digest()) {
+    SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(in.volume_digest()));
+    // Readers tell formats by name: give the blob the client's file name through a link.
+    const std::string name = in.file_name().empty() ? "volume.raw" : std::filesystem::path(in.file_name()).filename().string();
+    const std::string dir = absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job.name(), {{"/", "-"}}));
+    SM_RETURN_IF_ERROR(MakeDirs(dir));
+    v.path = dir + "/" + name;
+    ::unlink(v.path.c_str());
+    if (::symlink(blob.c_str(), v.path.c_str()) != 0) return ErrnoStatus(errno, v.path);
+    v.display_name = in.file_name().empty() ? DigestString(in.volume_digest()) : in.file_name();
+    return v;
+  }
+  if (!in.volume_path().empty()) {
+    SM_ASSIGN_OR_RETURN(v.path, ResolveReference(in.volume_path(), options_.allowed_roots));
+    v.display_name = in.volume_path();
+    return v;
+  }
+  return absl::InvalidArgumentError(absl::StrCat(job.name(), ": input names no volume"));
+}
+
+absl::StatusOr<v1::Artifact> LocalJobHost::PutArtifact(const std::string& job, const std::string& path,
+                                                       const std::string& media_type) {
+  SM_ASSIGN_OR_RETURN(v1::Digest d, blobs_->PutFile(path));
+  v1::Artifact a;
+  a.set_name(std::filesystem::path(path).filename().string());
+  *a.mutable_digest() = d;
+  a.set_media_type(media_type);
+  return a;
+}
+
+absl::Status LocalJobHost::Finish(const std::string& job, const std::string& worker,
+                                  const absl::Status& result,
+                                  const std::vector<v1::Artifact>& artifacts) {
+  v1::JobState state = v1::SUCCEEDED;
+  v1::JobError error;
+  if (!result.ok()) {
+    state = result.code() == absl::StatusCode::kCancelled ? v1::CANCELLED : v1::FAILED;
+    error.set_code(static_cast<int>(result.code()));
+    error.set_message(std::string(result.message()));
+  }
+  absl::StatusOr<v1::Job> done = store_->Finish(job, worker, state, error, artifacts);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    live_.erase(job);
+    cancelled_.erase(job);
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}})), ec);
+  events_->Notify(job);
+  return done.status();
+}
+
+absl::Status LocalJobHost::Release(const std::string& job, const std::string& worker) {
+  absl::Status st = store_->Release(job, worker);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    live_.erase(job);
+  }
+  events_->Notify(job);
+  WakeWorkers();
+  return st;
+}
+
+}  // namespace sheetmesh::server

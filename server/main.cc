@@ -1,0 +1,87 @@
+// sheetmesh-server: the service on the embedded default — one process, one data folder.
+//   sheetmesh-server --data_dir=DIR [--address=127.0.0.1:50051] [--workers=N]
+//                    [--allowed_root=/data/scans,...] [--auth_token=...] [--tls_cert/--tls_key]
+// SIGTERM or SIGINT drain the workers (up to --drain_seconds) and stop.
+#include <signal.h>
+
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_split.h"
+#include "server/server.h"
+#include "worker/pipeline/core/huge_pages.h"
+
+ABSL_FLAG(std::string, address, "127.0.0.1:50051", "host:port to listen on (port 0: any free port)");
+ABSL_FLAG(std::string, data_dir, "", "folder of the job store, blobs and scratch (required)");
+ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
+ABSL_FLAG(std::string, allowed_root, "", "comma-separated folders whose volumes jobs may name by path");
+ABSL_FLAG(std::string, auth_token, "", "bearer token every call must carry ('' = none)");
+ABSL_FLAG(std::string, auth_token_file, "", "read the bearer token from this file");
+ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
+ABSL_FLAG(std::string, tls_key, "", "PEM private key");
+ABSL_FLAG(int64_t, max_blob_bytes, int64_t{64} << 30, "largest upload accepted, bytes");
+ABSL_FLAG(int64_t, max_queued_jobs, 1000, "jobs the queue may hold");
+ABSL_FLAG(int, lease_seconds, 30, "worker lease length");
+ABSL_FLAG(int, max_attempts, 3, "runs before a job whose worker keeps vanishing fails");
+ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
+ABSL_FLAG(bool, cache, true, "reuse results of identical work");
+ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish");
+ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
+
+int main(int argc, char** argv) {
+  sheetmesh::UseTransparentHugePages(argc, argv);
+  absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
+  absl::ParseCommandLine(argc, argv);
+  // Signals go to one thread that waits for them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  sheetmesh::server::ServerOptions o;
+  o.address = absl::GetFlag(FLAGS_address);
+  o.data_dir = absl::GetFlag(FLAGS_data_dir);
+  o.workers = absl::GetFlag(FLAGS_workers);
+  for (absl::string_view r : absl::StrSplit(absl::GetFlag(FLAGS_allowed_root), ',', absl::SkipEmpty())) {
+    o.allowed_roots.emplace_back(r);
+  }
+  o.auth_token = absl::GetFlag(FLAGS_auth_token);
+  if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
+    std::ifstream f(absl::GetFlag(FLAGS_auth_token_file));
+    std::getline(f, o.auth_token);
+    if (o.auth_token.empty()) {
+      std::cerr << "sheetmesh-server: " << absl::GetFlag(FLAGS_auth_token_file) << " holds no token\n";
+      return 2;
+    }
+  }
+  o.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  o.tls_key = absl::GetFlag(FLAGS_tls_key);
+  o.limits.max_blob_bytes = absl::GetFlag(FLAGS_max_blob_bytes);
+  o.limits.max_queued_jobs = absl::GetFlag(FLAGS_max_queued_jobs);
+  o.lease = absl::Seconds(absl::GetFlag(FLAGS_lease_seconds));
+  o.max_attempts = absl::GetFlag(FLAGS_max_attempts);
+  o.heartbeat = absl::Seconds(absl::GetFlag(FLAGS_heartbeat_seconds));
+  o.cache = absl::GetFlag(FLAGS_cache);
+  auto server = sheetmesh::server::Server::Start(o);
+  if (!server.ok()) {
+    std::cerr << "sheetmesh-server: " << server.status() << "\n";
+    return server.status().code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+  }
+  std::cout << "sheetmesh-server listening on port " << (*server)->port() << ", data in " << o.data_dir
+            << std::endl;
+  if (!absl::GetFlag(FLAGS_port_file).empty()) {
+    std::ofstream(absl::GetFlag(FLAGS_port_file)) << (*server)->port() << "\n";
+  }
+  int sig = 0;
+  sigwait(&signals, &sig);
+  std::cout << "sheetmesh-server: signal " << sig << ", draining" << std::endl;
+  (*server)->Shutdown(absl::Seconds(absl::GetFlag(FLAGS_drain_seconds)));
+  std::cout << "sheetmesh-server: stopped" << std::endl;
+  return 0;
+}

@@ -1,0 +1,440 @@
+// The SQLite JobStore: one connection behind a mutex, WAL journal, synchronous=FULL so
+// that an accepted job survives a crash.
+#include <sqlite3.h>
+
+#include <mutex>
+
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "google/protobuf/util/time_util.h"
+#include "server/job_store.h"
+#include "worker/pipeline/core/random.h"
+#include "worker/pipeline/core/status_macros.h"
+
+namespace sheetmesh::server {
+namespace {
+
+using google::protobuf::util::TimeUtil;
+
+int64_t NowMs() { return absl::ToUnixMillis(absl::Now()); }
+
+google::protobuf::Timestamp NowTs() { return TimeUtil::MillisecondsToTimestamp(NowMs()); }
+
+// A prepared statement, finalized on destruction.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const char* sql) : db_(db) {
+    rc_ = sqlite3_prepare_v2(db, sql, -1, &s_, nullptr);
+  }
+  ~Stmt() { sqlite3_finalize(s_); }
+  absl::Status ok() const {
+    if (rc_ == SQLITE_OK) return absl::OkStatus();
+    return absl::InternalError(absl::StrCat("SQLite prepare: ", sqlite3_errmsg(db_)));
+  }
+  Stmt& Bind(int i, const std::string& v) {
+    sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Stmt& Bind(int i, int64_t v) {
+    sqlite3_bind_int64(s_, i, v);
+    return *this;
+  }
+  Stmt& BindBlob(int i, const std::string& v) {
+    sqlite3_bind_blob(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  // SQLITE_ROW, SQLITE_DONE, or an error code.
+  int Step() { return sqlite3_step(s_); }
+  absl::Status Run() {
+    const int rc = Step();
+    if (rc == SQLITE_DONE || rc == SQLITE_ROW) return absl::OkStatus();
+    return absl::InternalError(absl::StrCat("SQLite: ", sqlite3_errmsg(db_)));
+  }
+  int64_t Int(int col) { return sqlite3_column_int64(s_, col); }
+  std::string Text(int col) {
+    const unsigned char* t = sqlite3_column_text(s_, col);
+    return t ? reinterpret_cast<const char*>(t) : "";
+  }
+  std::string Blob(int col) {
+    const void* b = sqlite3_column_blob(s_, col);
+    return std::string(static_cast<const char*>(b), sqlite3_column_bytes(s_, col));
+  }
+
+ private:
+  sqlite3* db_;
+  sqlite3_stmt* s_ = nullptr;
+  int rc_;
+};
+
+std::string IdOf(const std::string& name) {
+  return name.rfind("jobs/", 0) == 0 ? name.substr(5) : name;
+}
+
+class SqliteJobStore : public JobStore {
+ public:
+  explicit SqliteJobStore(sqlite3* db) : db_(db), rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
+  ~SqliteJobStore() override { sqlite3_close(db_); }
+
+  absl::Status Init() {
+    for (const char* sql : {
+             "PRAGMA journal_mode=WAL",
+             "PRAGMA synchronous=FULL",
+             "PRAGMA busy_timeout=5000",
+             "CREATE TABLE IF NOT EXISTS jobs ("
+             "  id TEXT PRIMARY KEY, seq INTEGER NOT NULL, request_id TEXT UNIQUE NOT NULL,"
+             "  state INTEGER NOT NULL, lease_owner TEXT, lease_expires INTEGER,"
+             "  cancel_requested INTEGER NOT NULL DEFAULT 0, cache_key TEXT, job BLOB NOT NULL)",
+             "CREATE INDEX IF NOT EXISTS jobs_state_seq ON jobs(state, seq)",
+             "CREATE INDEX IF NOT EXISTS jobs_cache ON jobs(cache_key, state)",
+         }) {
+      char* err = nullptr;
+      if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+        const std::string msg = err ? err : "?";
+        sqlite3_free(err);
+        return absl::InternalError(absl::StrCat("SQLite '", sql, "': ", msg));
+      }
+    }
+    return absl::OkStatus();
+  }
+
+  absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key, bool* created) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    *created = false;
+    {
+      Stmt q(db_, "SELECT job FROM jobs WHERE request_id = ?");
+      SM_RETURN_IF_ERROR(q.ok());
+      q.Bind(1, job.request_id());
+      if (q.Step() == SQLITE_ROW) return Parse(q.Blob(0));
+    }
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    int64_t seq = 1;
+    {
+      Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
+      if (q.Step() == SQLITE_ROW) seq = q.Int(0);
+    }
+    // Ids sort by creation; the random tail keeps them unguessable.
+    char id[40];
+    std::snprintf(id, sizeof(id), "%012lld-%08llx", static_cast<long long>(seq),
+                  static_cast<unsigned long long>(rng_.Next() & 0xffffffffULL));
+    job.set_name(absl::StrCat("jobs/", id));
+    *job.mutable_create_time() = NowTs();
+    if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
+    Stmt ins(db_, "INSERT INTO jobs (id, seq, request_id, state, cache_key, job) VALUES (?, ?, ?, ?, ?, ?)");
+    SM_RETURN_IF_ERROR(ins.ok());
+    ins.Bind(1, std::string(id)).Bind(2, seq).Bind(3, job.request_id()).Bind(4, int64_t{job.state()})
+        .Bind(5, cache_key).BindBlob(6, job.SerializeAsString());
+    absl::Status st = ins.Run();
+    if (!st.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return st;
+    }
+    SM_RETURN_IF_ERROR(Exec("COMMIT"));
+    *created = true;
+    return job;
+  }
+
+  absl::StatusOr<v1::Job> Get(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    return GetLocked(IdOf(name));
+  }
+
+  absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& request_id) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT job FROM jobs WHERE request_id = ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, request_id);
+    if (q.Step() != SQLITE_ROW) return std::optional<v1::Job>();
+    SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
+    return std::optional<v1::Job>(std::move(j));
+  }
+
+  absl::StatusOr<std::vector<v1::Job>> List(v1::JobState state, int page_size,
+                                            const std::string& token, std::string* next) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    int64_t before = INT64_MAX;
+    if (!token.empty() && !absl::SimpleAtoi(token, &before)) {
+      return absl::InvalidArgumentError(absl::StrCat("page_token '", token, "' is not one this server gave"));
+    }
+    Stmt q(db_, state == v1::JOB_STATE_UNSPECIFIED
+                    ? "SELECT job, seq FROM jobs WHERE seq < ? ORDER BY seq DESC LIMIT ?"
+                    : "SELECT job, seq FROM jobs WHERE seq < ? AND state = ? ORDER BY seq DESC LIMIT ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, before);
+    if (state == v1::JOB_STATE_UNSPECIFIED) {
+      q.Bind(2, int64_t{page_size} + 1);
+    } else {
+      q.Bind(2, int64_t{state}).Bind(3, int64_t{page_size} + 1);
+    }
+    std::vector<v1::Job> out;
+    int64_t last = 0;
+    next->clear();
+    while (q.Step() == SQLITE_ROW) {
+      if (static_cast<int>(out.size()) == page_size) {
+        *next = absl::StrCat(last);
+        break;
+      }
+      SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
+      last = q.Int(1);
+      out.push_back(std::move(j));
+    }
+    return out;
+  }
+
+  absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker, absl::Duration lease) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    std::optional<v1::Job> out;
+    absl::Status st = [&]() -> absl::Status {
+      Stmt q(db_, "SELECT id, job FROM jobs WHERE state = ? ORDER BY seq LIMIT 1");
+      SM_RETURN_IF_ERROR(q.ok());
+      q.Bind(1, int64_t{v1::QUEUED});
+      if (q.Step() != SQLITE_ROW) return absl::OkStatus();
+      const std::string id = q.Text(0);
+      SM_ASSIGN_OR_RETURN(v1::Job job, Parse(q.Blob(1)));
+      job.set_state(v1::RUNNING);
+      job.set_attempts(job.attempts() + 1);
+      *job.mutable_start_time() = NowTs();
+      Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = ?, lease_expires = ?, job = ? WHERE id = ?");
+      SM_RETURN_IF_ERROR(u.ok());
+      u.Bind(1, int64_t{v1::RUNNING}).Bind(2, worker).Bind(3, NowMs() + absl::ToInt64Milliseconds(lease))
+          .BindBlob(4, job.SerializeAsString()).Bind(5, id);
+      SM_RETURN_IF_ERROR(u.Run());
+      out = std::move(job);
+      return absl::OkStatus();
+    }();
+    if (!st.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return st;
+    }
+    SM_RETURN_IF_ERROR(Exec("COMMIT"));
+    return out;
+  }
+
+  absl::Status Renew(const std::string& name, const std::string& worker, absl::Duration lease) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt u(db_, "UPDATE jobs SET lease_expires = ? WHERE id = ? AND state = ? AND lease_owner = ?");
+    SM_RETURN_IF_ERROR(u.ok());
+    u.Bind(1, NowMs() + absl::ToInt64Milliseconds(lease)).Bind(2, IdOf(name)).Bind(3, int64_t{v1::RUNNING}).Bind(4, worker);
+    SM_RETURN_IF_ERROR(u.Run());
+    if (sqlite3_changes(db_) != 1) {
+      return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status SetProgress(const std::string& name, const std::string& worker, const v1::JobProgress& p) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    if (row.job.state() != v1::RUNNING || row.owner != worker) {
+      return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
+    }
+    *row.job.mutable_progress() = p;
+    return WriteJobLocked(IdOf(name), row.job);
+  }
+
+  absl::StatusOr<v1::Job> Finish(const std::string& name, const std::string& worker, v1::JobState state,
+                                 const v1::JobError& error, const std::vector<v1::Artifact>& artifacts) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    if (row.job.state() != v1::RUNNING || row.owner != worker) {
+      return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
+    }
+    v1::Job& job = row.job;
+    job.set_state(state);
+    *job.mutable_end_time() = NowTs();
+    if (state == v1::SUCCEEDED) {
+      job.clear_error();
+      for (const v1::Artifact& a : artifacts) *job.add_artifacts() = a;
+    } else {
+      *job.mutable_error() = error;
+    }
+    Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id = ?");
+    SM_RETURN_IF_ERROR(u.ok());
+    u.Bind(1, int64_t{state}).BindBlob(2, job.SerializeAsString()).Bind(3, IdOf(name));
+    SM_RETURN_IF_ERROR(u.Run());
+    return job;
+  }
+
+  absl::Status Release(const std::string& name, const std::string& worker) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    if (row.job.state() != v1::RUNNING || row.owner != worker) return absl::OkStatus();
+    row.job.set_state(v1::QUEUED);
+    row.job.set_attempts(std::max(0, row.job.attempts() - 1));
+    row.job.clear_progress();
+    return SetStateLocked(IdOf(name), row.job);
+  }
+
+  absl::StatusOr<v1::Job> RequestCancel(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    v1::Job& job = row.job;
+    if (job.state() == v1::QUEUED) {
+      job.set_state(v1::CANCELLED);
+      *job.mutable_end_time() = NowTs();
+      job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
+      job.mutable_error()->set_message("cancelled before it started");
+      SM_RETURN_IF_ERROR(SetStateLocked(IdOf(name), job));
+    } else if (job.state() == v1::RUNNING) {
+      Stmt u(db_, "UPDATE jobs SET cancel_requested = 1 WHERE id = ?");
+      SM_RETURN_IF_ERROR(u.ok());
+      u.Bind(1, IdOf(name));
+      SM_RETURN_IF_ERROR(u.Run());
+    }
+    return job;
+  }
+
+  absl::StatusOr<bool> CancelRequested(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT cancel_requested, state FROM jobs WHERE id = ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, IdOf(name));
+    if (q.Step() != SQLITE_ROW) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+    return q.Int(0) != 0 || q.Int(1) != v1::RUNNING;
+  }
+
+  absl::Status Delete(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    if (row.job.state() == v1::QUEUED || row.job.state() == v1::RUNNING) {
+      return absl::FailedPreconditionError(absl::StrCat(
+          name, " is ", v1::JobState_Name(row.job.state()), "; cancel it before deleting it"));
+    }
+    Stmt d(db_, "DELETE FROM jobs WHERE id = ?");
+    SM_RETURN_IF_ERROR(d.ok());
+    d.Bind(1, IdOf(name));
+    return d.Run();
+  }
+
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    std::vector<std::pair<std::string, v1::Job>> expired;
+    {
+      Stmt q(db_, all ? "SELECT id, job FROM jobs WHERE state = ?"
+                      : "SELECT id, job FROM jobs WHERE state = ? AND lease_expires < ?");
+      SM_RETURN_IF_ERROR(q.ok());
+      q.Bind(1, int64_t{v1::RUNNING});
+      if (!all) q.Bind(2, NowMs());
+      while (q.Step() == SQLITE_ROW) {
+        SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(1)));
+        expired.emplace_back(q.Text(0), std::move(j));
+      }
+    }
+    for (auto& [id, job] : expired) {
+      bool cancel = false;
+      {
+        Stmt q(db_, "SELECT cancel_requested FROM jobs WHERE id = ?");
+        q.Bind(1, id);
+        if (q.Step() == SQLITE_ROW) cancel = q.Int(0) != 0;
+      }
+      job.clear_progress();
+      if (cancel) {
+        job.set_state(v1::CANCELLED);
+        job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
+        job.mutable_error()->set_message("cancelled while its worker was lost");
+        *job.mutable_end_time() = NowTs();
+      } else if (job.attempts() >= max_attempts) {
+        job.set_state(v1::FAILED);
+        job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
+        job.mutable_error()->set_message(absl::StrCat(
+            "its worker was lost ", job.attempts(), " times (lease expired or server restarted); "
+            "giving up after max_attempts = ", max_attempts));
+        *job.mutable_end_time() = NowTs();
+      } else {
+        job.set_state(v1::QUEUED);
+      }
+      SM_RETURN_IF_ERROR(SetStateLocked(id, job));
+    }
+    return static_cast<int>(expired.size());
+  }
+
+  absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& key) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT job FROM jobs WHERE cache_key = ? AND state = ? ORDER BY seq LIMIT 1");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, key).Bind(2, int64_t{v1::SUCCEEDED});
+    if (q.Step() != SQLITE_ROW) return std::optional<v1::Job>();
+    SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
+    return std::optional<v1::Job>(std::move(j));
+  }
+
+  absl::StatusOr<int64_t> CountInState(v1::JobState state) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT COUNT(*) FROM jobs WHERE state = ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, int64_t{state});
+    return q.Step() == SQLITE_ROW ? q.Int(0) : 0;
+  }
+
+ private:
+  struct Row {
+    v1::Job job;
+    std::string owner;
+  };
+
+  absl::Status Exec(const char* sql) {
+    char* err = nullptr;
+    if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+      const std::string msg = err ? err : "?";
+      sqlite3_free(err);
+      return absl::InternalError(absl::StrCat("SQLite '", sql, "': ", msg));
+    }
+    return absl::OkStatus();
+  }
+
+  static absl::StatusOr<v1::Job> Parse(const std::string& blob) {
+    v1::Job j;
+    if (!j.ParseFromString(blob)) return absl::DataLossError("a stored job record is corrupt");
+    return j;
+  }
+
+  absl::StatusOr<Row> RowLocked(const std::string& id) {
+    Stmt q(db_, "SELECT job, lease_owner FROM jobs WHERE id = ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, id);
+    if (q.Step() != SQLITE_ROW) return absl::NotFoundError(absl::StrCat("jobs/", id, " does not exist"));
+    SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
+    return Row{std::move(j), q.Text(1)};
+  }
+
+  absl::StatusOr<v1::Job> GetLocked(const std::string& id) {
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(id));
+    return row.job;
+  }
+
+  absl::Status WriteJobLocked(const std::string& id, const v1::Job& job) {
+    Stmt u(db_, "UPDATE jobs SET job = ? WHERE id = ?");
+    SM_RETURN_IF_ERROR(u.ok());
+    u.BindBlob(1, job.SerializeAsString()).Bind(2, id);
+    return u.Run();
+  }
+
+  absl::Status SetStateLocked(const std::string& id, const v1::Job& job) {
+    Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id = ?");
+    SM_RETURN_IF_ERROR(u.ok());
+    u.Bind(1, int64_t{job.state()}).BindBlob(2, job.SerializeAsString()).Bind(3, id);
+    return u.Run();
+  }
+
+  std::mutex mu_;
+  sqlite3* db_;
+  Rng rng_;
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<JobStore>> OpenSqliteJobStore(const std::string& path) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    const std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    return absl::InternalError(absl::StrCat(path, ": cannot open the job store: ", msg));
+  }
+  auto store = std::make_unique<SqliteJobStore>(db);
+  SM_RETURN_IF_ERROR(store->Init());
+  return std::unique_ptr<JobStore>(std::move(store));
+}
+
+}  // namespace sheetmesh::server

@@ -1,0 +1,64 @@
+// What a worker needs from whoever hands it jobs — the embedded server in-process, or a
+// server over gRPC when scaled out: jobs to lease, their inputs, a place for their outputs.
+#ifndef SHEETMESH_WORKER_RUNTIME_JOB_HOST_H_
+#define SHEETMESH_WORKER_RUNTIME_JOB_HOST_H_
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+#include "sheetmesh/v1/jobs.pb.h"
+
+namespace sheetmesh::runtime {
+
+struct ProgressUpdate {
+  std::string stage;
+  int stage_index = 0;  // 1-based
+  int stage_count = 0;
+  double fraction = 0;
+  std::string message;
+};
+
+// A volume readable on this machine.
+struct LocalVolume {
+  std::string path;
+  std::string display_name;  // for messages: the name the client gave
+};
+
+// Implementations must be thread-safe: every worker thread calls them.
+class JobHost {
+ public:
+  virtual ~JobHost() = default;
+
+  // Leases the oldest queued job for `worker`, waiting up to `wait` for one. nullopt when
+  // none came.
+  virtual absl::StatusOr<std::optional<v1::Job>> Lease(const std::string& worker,
+                                                        absl::Duration wait) = 0;
+  // Extends the lease. kNotFound / kFailedPrecondition when the job is gone, finished, or
+  // leased to another worker: the worker must stop.
+  virtual absl::Status Renew(const std::string& job, const std::string& worker) = 0;
+  // Progress of a leased job. Returns false when the job should stop (cancelled, lease
+  // lost).
+  virtual bool ReportProgress(const std::string& job, const std::string& worker,
+                              const ProgressUpdate& update) = 0;
+  // Makes the job's input readable locally.
+  virtual absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) = 0;
+  // Stores an output file as a blob.
+  virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job,
+                                                   const std::string& path,
+                                                   const std::string& media_type) = 0;
+  // Ends the job: SUCCEEDED with `artifacts` when result is OK, CANCELLED when it is
+  // kCancelled, FAILED otherwise.
+  virtual absl::Status Finish(const std::string& job, const std::string& worker,
+                              const absl::Status& result,
+                              const std::vector<v1::Artifact>& artifacts) = 0;
+  // Gives a leased job back to the queue without counting it as a failure (shutdown).
+  virtual absl::Status Release(const std::string& job, const std::string& worker) = 0;
+};
+
+}  // namespace sheetmesh::runtime
+
+#endif  // SHEETMESH_WORKER_RUNTIME_JOB_HOST_H_

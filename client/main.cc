@@ -63,6 +63,14 @@ std::string NewRequestId() {
 
 std::string StateName(v1::JobState s) { return v1::JobState_Name(s); }
 
+// "stage 3/6 surface 42%", or "starting" for a job leased that has not begun its first stage.
+std::string StageText(const v1::JobProgress& p, bool percent = true) {
+  if (p.stage_index() == 0) return "starting";
+  std::string s = absl::StrFormat("stage %d/%d %s", p.stage_index(), p.stage_count(), p.stage());
+  if (percent) absl::StrAppendFormat(&s, " %3.0f%%", 100 * p.fraction());
+  return s;
+}
+
 void PrintJob(const v1::Job& j) {
   if (absl::GetFlag(FLAGS_json)) {
     std::string out;
@@ -73,10 +81,7 @@ void PrintJob(const v1::Job& j) {
     return;
   }
   std::cout << absl::StrFormat("%s  %-9s", j.name(), StateName(j.state()));
-  if (j.state() == v1::RUNNING) {
-    std::cout << absl::StrFormat("  stage %d/%d %s %3.0f%%", j.progress().stage_index(),
-                                 j.progress().stage_count(), j.progress().stage(), 100 * j.progress().fraction());
-  }
+  if (j.state() == v1::RUNNING) std::cout << "  " << StageText(j.progress());
   if (!j.cached_from().empty()) std::cout << "  (cached from " << j.cached_from() << ")";
   if (j.has_error() && j.error().code() != 0) std::cout << "  error: " << j.error().message();
   std::cout << "\n";
@@ -89,17 +94,17 @@ class Reporter {
   void Update(const v1::WatchJobResponse& m) {
     const v1::Job& j = m.job();
     const v1::JobProgress& p = j.progress();
+    const bool running = j.state() == v1::RUNNING;
     if (tty_) {
       const int width = 30;
-      const int fill = static_cast<int>(p.fraction() * width);
-      std::cout << absl::StrFormat("\r%-9s [%s%s] stage %d/%d %-12s %3.0f%%", StateName(j.state()),
-                                   std::string(fill, '#'), std::string(width - fill, ' '),
-                                   p.stage_index(), p.stage_count(), p.stage(), 100 * p.fraction())
+      const int fill = running ? static_cast<int>(p.fraction() * width) : (j.state() == v1::SUCCEEDED ? width : 0);
+      std::cout << absl::StrFormat("\r%-9s [%s%s] %-32s", StateName(j.state()), std::string(fill, '#'),
+                                   std::string(width - fill, ' '), running ? StageText(p) : "")
                 << std::flush;
       return;
     }
-    const std::string line = absl::StrFormat("%s stage %d/%d %s", StateName(j.state()), p.stage_index(),
-                                             p.stage_count(), p.stage());
+    const std::string line = running ? absl::StrCat(StateName(j.state()), " ", StageText(p, false))
+                                     : StateName(j.state());
     if (line != last_) std::cout << line << std::endl;
     last_ = line;
   }

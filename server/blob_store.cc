@@ -160,10 +160,15 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
                                                      max_bytes, " bytes (max_blob_bytes)"));
   }
   if (up->complete) return UploadState{up->expected.size_bytes(), true};
-  if (offset != up->written) {
+  if (offset < 0 || offset > up->written) {
     return absl::InvalidArgumentError(absl::StrCat("write_offset ", offset, " for ", resource,
-                                                   " must be the committed size ", up->written));
+                                                   " must be at most the committed size ", up->written));
   }
+  // A resumed (or a second, concurrent) writer may send bytes the upload already has: the
+  // content is named by its digest, so they are the same bytes (the digest check at the end
+  // catches any that are not) and are skipped.
+  data.remove_prefix(std::min<int64_t>(up->written - offset, data.size()));
+  offset = up->written;
   if (up->written + static_cast<int64_t>(data.size()) > up->expected.size_bytes()) {
     return absl::InvalidArgumentError(absl::StrCat(resource, ": ", up->written + data.size(),
                                                    " bytes written exceed the declared size ",

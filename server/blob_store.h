@@ -44,8 +44,9 @@ class BlobStore {
     bool complete = false;  // the blob is stored
   };
   // Appends `data` at `offset` to the upload `resource` (uploads/{uuid}/blobs/{hash}/{size}).
-  // kInvalidArgument for a malformed name or an offset other than the committed size;
-  // kResourceExhausted beyond `max_bytes` (naming the limit). With `finish`, checks the
+  // Bytes before what the upload already holds are skipped (a resumed or concurrent writer
+  // of the same content). kInvalidArgument for a malformed name or an offset beyond what
+  // the upload holds; kResourceExhausted beyond `max_bytes` (naming the limit). With `finish`, checks the
   // digest (kInvalidArgument on mismatch; the upload is discarded) and stores the blob.
   absl::StatusOr<UploadState> Append(const std::string& resource, int64_t offset,
                                      absl::string_view data, bool finish, int64_t max_bytes);

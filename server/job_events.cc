@@ -5,21 +5,61 @@ namespace sheetmesh::server {
 void JobEvents::Notify(const std::string& job) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    ++versions_[job];
+    ++jobs_[job].version;
+  }
+  cv_.notify_all();
+}
+
+void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progress) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    Entry& e = jobs_[job];
+    ++e.version;
+    e.stages.emplace_back(e.version, progress);
+    if (e.stages.size() > kStagesKept) e.stages.pop_front();
+  }
+  cv_.notify_all();
+}
+
+void JobEvents::NotifyFinished(const std::string& job) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    ++jobs_[job].version;
+    finished_.push_back(job);
+    if (finished_.size() > kFinishedKept) {
+      // A watcher of a job this old finds it finished and ends: its entry can go.
+      jobs_.erase(finished_.front());
+      finished_.pop_front();
+    }
   }
   cv_.notify_all();
 }
 
 uint64_t JobEvents::Version(const std::string& job) {
   std::lock_guard<std::mutex> lock(mu_);
-  return versions_[job];
+  auto it = jobs_.find(job);
+  return it == jobs_.end() ? 0 : it->second.version;
+}
+
+std::vector<v1::JobProgress> JobEvents::StagesSince(const std::string& job, uint64_t seen) {
+  std::lock_guard<std::mutex> lock(mu_);
+  std::vector<v1::JobProgress> out;
+  auto it = jobs_.find(job);
+  if (it == jobs_.end()) return out;
+  for (const auto& [version, progress] : it->second.stages) {
+    if (version > seen) out.push_back(progress);
+  }
+  return out;
 }
 
 uint64_t JobEvents::Wait(const std::string& job, uint64_t seen, absl::Duration timeout) {
   std::unique_lock<std::mutex> lock(mu_);
-  cv_.wait_for(lock, absl::ToChronoMilliseconds(timeout),
-               [&] { return closed_ || versions_[job] > seen; });
-  return versions_[job];
+  auto version = [&] {
+    auto it = jobs_.find(job);
+    return it == jobs_.end() ? uint64_t{0} : it->second.version;
+  };
+  cv_.wait_for(lock, absl::ToChronoMilliseconds(timeout), [&] { return closed_ || version() != seen; });
+  return version();
 }
 
 bool JobEvents::closed() {

@@ -1,15 +1,21 @@
 // JobEvents: tells watchers that a job changed. Each job has a version that grows with
-// every change; a watcher waits for the version to pass the one it has seen.
+// every change; a watcher waits for the version to pass the one it has seen. The start of
+// every stage is also kept (for the running jobs and the last finished ones), so that a
+// watcher that was slow to wake still reports every stage, in order.
 #ifndef SHEETMESH_SERVER_JOB_EVENTS_H_
 #define SHEETMESH_SERVER_JOB_EVENTS_H_
 
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/time/time.h"
+#include "sheetmesh/v1/jobs.pb.h"
 
 namespace sheetmesh::server {
 
@@ -18,8 +24,14 @@ class JobEvents {
  public:
   // Marks `job` changed and wakes its watchers.
   void Notify(const std::string& job);
+  // Marks `job` changed by the start of a stage, described by `progress`.
+  void NotifyStage(const std::string& job, const v1::JobProgress& progress);
+  // Marks `job` finished: its stage log is kept for the next `kFinishedKept` finished jobs.
+  void NotifyFinished(const std::string& job);
   // The job's current version.
   uint64_t Version(const std::string& job);
+  // The stage starts recorded after version `seen`, oldest first.
+  std::vector<v1::JobProgress> StagesSince(const std::string& job, uint64_t seen);
   // Waits until the job's version passes `seen`, or `timeout`, or Close(). Returns the
   // version then.
   uint64_t Wait(const std::string& job, uint64_t seen, absl::Duration timeout);
@@ -27,10 +39,18 @@ class JobEvents {
   void Close();
   bool closed();
 
+  static constexpr size_t kFinishedKept = 256;
+  static constexpr size_t kStagesKept = 64;
+
  private:
+  struct Entry {
+    uint64_t version = 0;
+    std::deque<std::pair<uint64_t, v1::JobProgress>> stages;  // (version, stage start)
+  };
   std::mutex mu_;
   std::condition_variable cv_;
-  std::map<std::string, uint64_t> versions_;
+  std::map<std::string, Entry> jobs_;
+  std::deque<std::string> finished_;
   bool closed_ = false;
 };
 

@@ -2,6 +2,9 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <climits>
+
 #include "absl/strings/str_cat.h"
 #include "google/protobuf/io/coded_stream.h"
 #include "google/protobuf/io/zero_copy_stream_impl_lite.h"
@@ -183,6 +186,7 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
   *msg.mutable_job() = *job;
   if (!writer->Write(msg)) return grpc::Status::OK;
   std::string last = job->SerializeAsString();
+  int stage_sent = job->state() == v1::RUNNING ? job->progress().stage_index() : 0;
   while (!Terminal(job->state())) {
     const uint64_t now = ctx_->events->Wait(r->name(), seen, ctx_->heartbeat);
     if (context->IsCancelled()) return grpc::Status::OK;  // the watcher left; the job goes on
@@ -190,9 +194,25 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
       return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down; watch again after it restarts");
     }
     const bool changed = now != seen;
+    const std::vector<v1::JobProgress> stages = ctx_->events->StagesSince(r->name(), seen);
     seen = now;
     job = Fresh(r->name());
     if (!job.ok()) return ToGrpcStatus(job.status());
+    // Stages that started and ended while this watcher slept are still told, in order.
+    const int current = job->state() == v1::RUNNING ? job->progress().stage_index() : INT32_MAX;
+    for (const v1::JobProgress& stage : stages) {
+      if (stage.stage_index() <= stage_sent || stage.stage_index() >= current) continue;
+      msg.Clear();
+      *msg.mutable_job() = *job;
+      msg.mutable_job()->set_state(v1::RUNNING);
+      msg.mutable_job()->clear_error();
+      msg.mutable_job()->clear_artifacts();
+      msg.mutable_job()->clear_end_time();
+      *msg.mutable_job()->mutable_progress() = stage;
+      stage_sent = stage.stage_index();
+      if (!writer->Write(msg)) return grpc::Status::OK;
+    }
+    if (job->state() == v1::RUNNING) stage_sent = std::max(stage_sent, job->progress().stage_index());
     const std::string cur = job->SerializeAsString();
     msg.Clear();
     *msg.mutable_job() = *job;

@@ -65,13 +65,13 @@ void LocalJobHost::MarkCancelled(const std::string& job) {
 bool LocalJobHost::ReportProgress(const std::string& job, const std::string& worker,
                                   const runtime::ProgressUpdate& u) {
   const absl::Time now = absl::Now();
-  bool notify = false, store = false;
+  bool notify = false, store = false, new_stage = false;
   v1::JobProgress snapshot;
   {
     std::lock_guard<std::mutex> lock(mu_);
     if (cancelled_.count(job)) return false;
     Live& live = live_[job];
-    const bool new_stage = live.progress.stage() != u.stage;
+    new_stage = live.progress.stage() != u.stage || live.progress.stage_index() != u.stage_index;
     live.progress.set_stage(u.stage);
     live.progress.set_stage_index(u.stage_index);
     live.progress.set_stage_count(u.stage_count);
@@ -92,7 +92,11 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
     snapshot = live.progress;
   }
   if (store && !store_->SetProgress(job, worker, snapshot).ok()) return false;
-  if (notify) events_->Notify(job);
+  if (new_stage) {
+    events_->NotifyStage(job, snapshot);
+  } else if (notify) {
+    events_->Notify(job);
+  }
   return true;
 }
 
@@ -154,7 +158,7 @@ absl::Status LocalJobHost::Finish(const std::string& job, const std::string& wor
   }
   std::error_code ec;
   std::filesystem::remove_all(absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}})), ec);
-  events_->Notify(job);
+  events_->NotifyFinished(job);
   return done.status();
 }
 

@@ -12,8 +12,10 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "server/server.h"
+#include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/core/huge_pages.h"
 
 ABSL_FLAG(std::string, address, "127.0.0.1:50051", "host:port to listen on (port 0: any free port)");
@@ -76,7 +78,14 @@ int main(int argc, char** argv) {
   std::cout << "sheetmesh-server listening on port " << (*server)->port() << ", data in " << o.data_dir
             << std::endl;
   if (!absl::GetFlag(FLAGS_port_file).empty()) {
-    std::ofstream(absl::GetFlag(FLAGS_port_file)) << (*server)->port() << "\n";
+    // Atomically, so that a script polling for the file never reads half of it.
+    const absl::Status st = sheetmesh::WriteFileAtomically(absl::GetFlag(FLAGS_port_file),
+                                                           absl::StrCat((*server)->port(), "\n"));
+    if (!st.ok()) {
+      std::cerr << "sheetmesh-server: " << st << "\n";
+      (*server)->Shutdown(absl::ZeroDuration());
+      return 1;
+    }
   }
   int sig = 0;
   sigwait(&signals, &sig);

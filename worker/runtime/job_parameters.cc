@@ -1,5 +1,7 @@
 #include "worker/runtime/job_parameters.h"
 
+#include <cmath>
+
 #include "absl/strings/str_cat.h"
 #include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/run/pipeline_config.h"
@@ -65,6 +67,41 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
       return absl::InvalidArgumentError("parameters.window must be [lo, hi] with lo <= hi");
     }
     o.input.selection = PhaseSelection::Window(p.window(0), p.window(1));
+  }
+  // The typed fields are checked under their own names, so that an error names the field
+  // the caller set (the checks below on the combined options name the config's keys).
+  auto positive = [](absl::string_view field, bool has, double v) {
+    return has && !(v > 0) ? Bad(field, v, "must be positive") : absl::OkStatus();
+  };
+  auto not_negative = [](absl::string_view field, bool has, double v) {
+    return has && !(v >= 0) ? Bad(field, v, "must not be negative") : absl::OkStatus();
+  };
+  SM_RETURN_IF_ERROR(not_negative("refine_close_radius", p.has_refine_close_radius(), p.refine_close_radius()));
+  SM_RETURN_IF_ERROR(not_negative("refine_open_radius", p.has_refine_open_radius(), p.refine_open_radius()));
+  SM_RETURN_IF_ERROR(positive("detect_t", p.has_detect_t(), p.detect_t()));
+  SM_RETURN_IF_ERROR(positive("detect_r_cylinder", p.has_detect_r_cylinder(), p.detect_r_cylinder()));
+  SM_RETURN_IF_ERROR(not_negative("detect_rounds", p.has_detect_rounds(), p.detect_rounds()));
+  SM_RETURN_IF_ERROR(positive("separate_r", p.has_separate_r(), p.separate_r()));
+  if (p.has_d_ang() && !(p.d_ang() > 0 && p.d_ang() <= 180)) return Bad("d_ang", p.d_ang(), "must be in (0, 180]");
+  SM_RETURN_IF_ERROR(positive("recover_t", p.has_recover_t(), p.recover_t()));
+  SM_RETURN_IF_ERROR(positive("recover_r_cylinder", p.has_recover_r_cylinder(), p.recover_r_cylinder()));
+  SM_RETURN_IF_ERROR(not_negative("recover_rounds", p.has_recover_rounds(), p.recover_rounds()));
+  SM_RETURN_IF_ERROR(positive("r", p.has_r(), p.r()));
+  SM_RETURN_IF_ERROR(not_negative("generator_count", p.has_generator_count(), p.generator_count()));
+  SM_RETURN_IF_ERROR(not_negative("lloyd_max_iter", p.has_lloyd_max_iter(), p.lloyd_max_iter()));
+  SM_RETURN_IF_ERROR(not_negative("lloyd_tol", p.has_lloyd_tol(), p.lloyd_tol()));
+  if (p.has_target_similarity() && !(p.target_similarity() > 0 && p.target_similarity() <= 1)) {
+    return Bad("target_similarity", p.target_similarity(), "must be in (0, 1]");
+  }
+  if (p.has_tet_radius_edge_ratio() && p.tet_radius_edge_ratio() != 0 && !(p.tet_radius_edge_ratio() >= 1)) {
+    return Bad("tet_radius_edge_ratio", p.tet_radius_edge_ratio(), "must be 0 (none) or at least 1");
+  }
+  if (p.has_tet_min_dihedral() && !(p.tet_min_dihedral() >= 0 && p.tet_min_dihedral() < 70)) {
+    return Bad("tet_min_dihedral", p.tet_min_dihedral(), "must be in [0, 70)");
+  }
+  SM_RETURN_IF_ERROR(not_negative("tet_max_volume", p.has_tet_max_volume(), p.tet_max_volume()));
+  for (int i = 0; i < p.labels_size(); ++i) {
+    if (!std::isfinite(p.labels(i))) return Bad(absl::StrCat("labels[", i, "]"), p.labels(i), "must be finite");
   }
   // Extraction.
   ExtractionOptions& x = o.extraction;

@@ -23,7 +23,7 @@
 
 // Volume input.
 ABSL_FLAG(std::string, format, "", "volume format: raw, tiff, nrrd, vdb (default: by extension)");
-ABSL_FLAG(std::string, dims, "", "raw volumes: NXxNYxNZ (default: from a name like a_64x64x32_u8.raw)");
+ABSL_FLAG(std::string, dims, "", "raw volumes: NXxNYxNZ (default: from a name like a_64x64x32_u8.raw); phantom: its size");
 ABSL_FLAG(std::string, dtype, "", "raw volumes: uint8, uint16 or float32");
 ABSL_FLAG(std::string, byte_order, "little", "raw volumes: little or big");
 ABSL_FLAG(int64_t, header_bytes, 0, "raw volumes: bytes to skip before the voxels");
@@ -211,9 +211,15 @@ absl::Status Phantom(const std::vector<std::string>& args) {
     return absl::InvalidArgumentError(
         absl::StrCat("--preset=", preset, " is not known; use sample or paper"));
   }
+  // --dims is the natural spelling for the volume being made; --phantom_dims too.
+  if (!absl::GetFlag(FLAGS_phantom_dims).empty() && !absl::GetFlag(FLAGS_dims).empty()) {
+    return absl::InvalidArgumentError("give the phantom's size once: --dims or --phantom_dims");
+  }
   if (!absl::GetFlag(FLAGS_phantom_dims).empty()) {
     SM_ASSIGN_OR_RETURN(options.phantom.dims,
                         ParseDims("phantom_dims", absl::GetFlag(FLAGS_phantom_dims)));
+  } else if (!absl::GetFlag(FLAGS_dims).empty()) {
+    SM_ASSIGN_OR_RETURN(options.phantom.dims, ParseDims("dims", absl::GetFlag(FLAGS_dims)));
   }
   if (!absl::GetFlag(FLAGS_dtype).empty()) {
     SM_ASSIGN_OR_RETURN(options.phantom.dtype, ParseDType(absl::GetFlag(FLAGS_dtype)));

@@ -1,0 +1,385 @@
+// The server's stores on their own: the content-addressed blob store, the SQLite job
+// store, references under allowed roots, and the job events watchers wait on.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "absl/strings/str_cat.h"
+#include "server/blob_store.h"
+#include "server/job_events.h"
+#include "server/job_store.h"
+#include "server/references.h"
+#include "tests/testing/temp_dir.h"
+#include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/sha256.h"
+
+namespace sheetmesh::server {
+namespace {
+
+using ::testing::HasSubstr;
+using sheetmesh::testing::TempDir;
+
+v1::Digest DigestOf(const std::string& bytes) {
+  v1::Digest d;
+  d.set_hash(Sha256Hex(bytes));
+  d.set_size_bytes(bytes.size());
+  return d;
+}
+
+std::string Resource(const std::string& id, const v1::Digest& d) {
+  return absl::StrCat("uploads/", id, "/blobs/", d.hash(), "/", d.size_bytes());
+}
+
+// ---------------------------------------------------------------------------------------
+// BlobStore
+
+TEST(BlobStoreTest, AppendInPiecesThenFinish) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const std::string bytes = "the quick brown fox jumps over the lazy dog";
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("a1", d);
+  EXPECT_FALSE((*store)->Contains(d));
+  auto s1 = (*store)->Append(r, 0, bytes.substr(0, 10), false, 1 << 20);
+  ASSERT_TRUE(s1.ok()) << s1.status();
+  EXPECT_FALSE((*store)->Contains(d));  // nothing visible before the end
+  auto s2 = (*store)->Append(r, 10, bytes.substr(10), true, 1 << 20);
+  ASSERT_TRUE(s2.ok()) << s2.status();
+  EXPECT_TRUE(s2->complete);
+  EXPECT_TRUE((*store)->Contains(d));
+  auto path = (*store)->PathOf(d);
+  ASSERT_TRUE(path.ok());
+  EXPECT_EQ(*ReadFileToString(*path), bytes);
+  // The sha256 helper agrees with a known vector.
+  EXPECT_EQ(d.hash(), "05c6e08f1d9fdafa03147fcb8f82f124c76d2f70e3d989dc8aadb5e7d7450bec");
+}
+
+TEST(BlobStoreTest, OverlappingPiecesAreSkippedAndGapsRefused) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const std::string bytes(1000, 'x');
+  const v1::Digest d = DigestOf(bytes + "yz");
+  const std::string r = Resource("a2", d);
+  ASSERT_TRUE((*store)->Append(r, 0, bytes.substr(0, 600), false, 1 << 20).ok());
+  // A resumed writer starting earlier: the overlap is dropped.
+  ASSERT_TRUE((*store)->Append(r, 500, bytes.substr(500), false, 1 << 20).ok());
+  // A gap is refused, naming the offset.
+  auto gap = (*store)->Append(r, 1500, "zz", false, 1 << 20);
+  EXPECT_EQ(gap.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(gap.status().message(), HasSubstr("write_offset 1500"));
+  auto done = (*store)->Append(r, 1000, "yz", true, 1 << 20);
+  ASSERT_TRUE(done.ok()) << done.status();
+  EXPECT_TRUE((*store)->Contains(d));
+}
+
+TEST(BlobStoreTest, DigestMismatchDiscardsTheUpload) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const v1::Digest claimed = DigestOf("something else");
+  const std::string r = Resource("a3", claimed);
+  auto st = (*store)->Append(r, 0, "something ELSE", true, 1 << 20);
+  EXPECT_EQ(st.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(st.status().message(), HasSubstr(claimed.hash()));
+  EXPECT_FALSE((*store)->Contains(claimed));
+  auto status = (*store)->Status(r);
+  ASSERT_TRUE(status.ok());
+  EXPECT_EQ(status->committed, 0);
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir.File("blobs"))) {
+    EXPECT_FALSE(e.is_regular_file()) << e.path();
+  }
+}
+
+TEST(BlobStoreTest, UploadResumesAfterReopening) {
+  TempDir dir;
+  const std::string bytes = std::string(3000, 'a') + std::string(3000, 'b');
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("a4", d);
+  {
+    auto store = BlobStore::Open(dir.File("blobs"));
+    ASSERT_TRUE(store.ok());
+    ASSERT_TRUE((*store)->Append(r, 0, bytes.substr(0, 2500), false, 1 << 20).ok());
+    ASSERT_TRUE((*store)->Sync(r).ok());
+  }
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  auto status = (*store)->Status(r);
+  ASSERT_TRUE(status.ok());
+  EXPECT_EQ(status->committed, 2500);
+  ASSERT_TRUE((*store)->Append(r, 2500, bytes.substr(2500), true, 1 << 20).ok());
+  EXPECT_EQ(*ReadFileToString(*(*store)->PathOf(d)), bytes);
+}
+
+TEST(BlobStoreTest, LimitsAndMalformedNames) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const v1::Digest d = DigestOf(std::string(100, 'q'));
+  auto big = (*store)->Append(Resource("a5", d), 0, "q", false, 50);
+  EXPECT_EQ(big.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(big.status().message(), HasSubstr("max_blob_bytes"));
+  for (const std::string& bad : {std::string("uploads/a/blobs/xyz/3"), std::string("blobs/abc"),
+                                 absl::StrCat("uploads/a b/blobs/", d.hash(), "/100"),
+                                 absl::StrCat("uploads/a/blobs/", d.hash(), "/-1")}) {
+    EXPECT_EQ((*store)->Append(bad, 0, "q", false, 1 << 20).status().code(),
+              absl::StatusCode::kInvalidArgument)
+        << bad;
+  }
+}
+
+TEST(BlobStoreTest, PutFileAndConcurrentWritersOfTheSameContent) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  std::ofstream(dir.File("f")) << "file contents";
+  auto put = (*store)->PutFile(dir.File("f"));
+  ASSERT_TRUE(put.ok());
+  EXPECT_EQ(put->hash(), DigestOf("file contents").hash());
+  // Four writers of one upload, piece by piece: the store ends with the right blob.
+  std::string bytes;
+  for (int i = 0; i < 4000; ++i) bytes += static_cast<char>('a' + i % 26);
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("shared", d);
+  std::vector<std::thread> writers;
+  for (int w = 0; w < 4; ++w) {
+    writers.emplace_back([&] {
+      for (int64_t off = 0; off < 4000; off += 100) {
+        auto st = (*store)->Append(r, off, absl::string_view(bytes).substr(off, 100), off + 100 == 4000, 1 << 20);
+        if (!st.ok() || st->complete) return;
+      }
+    });
+  }
+  for (auto& t : writers) t.join();
+  ASSERT_TRUE((*store)->Contains(d));
+  EXPECT_EQ(*ReadFileToString(*(*store)->PathOf(d)), bytes);
+}
+
+// ---------------------------------------------------------------------------------------
+// SQLite job store
+
+v1::Job NewJob(const std::string& request_id) {
+  v1::Job j;
+  j.set_request_id(request_id);
+  j.mutable_input()->set_volume_path("/data/" + request_id);
+  j.set_pipeline_version("test");
+  return j;
+}
+
+TEST(JobStoreTest, CreateIsIdempotentByRequestId) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok()) << store.status();
+  bool created = false;
+  auto a = (*store)->Create(NewJob("r1"), "k1", &created);
+  ASSERT_TRUE(a.ok());
+  EXPECT_TRUE(created);
+  EXPECT_EQ(a->state(), v1::QUEUED);
+  EXPECT_THAT(a->name(), ::testing::StartsWith("jobs/"));
+  auto b = (*store)->Create(NewJob("r1"), "k1", &created);
+  ASSERT_TRUE(b.ok());
+  EXPECT_FALSE(created);
+  EXPECT_EQ(a->name(), b->name());
+  auto found = (*store)->FindByRequestId("r1");
+  ASSERT_TRUE(found.ok() && found->has_value());
+  EXPECT_EQ((*found)->name(), a->name());
+  EXPECT_EQ((*store)->Get("jobs/none").status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST(JobStoreTest, LeaseRenewFinishAndCache) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  bool created;
+  auto first = (*store)->Create(NewJob("r1"), "k1", &created);
+  auto second = (*store)->Create(NewJob("r2"), "k2", &created);
+  ASSERT_TRUE(first.ok() && second.ok());
+  auto l1 = (*store)->LeaseNext("w1", absl::Seconds(30));
+  ASSERT_TRUE(l1.ok() && l1->has_value());
+  EXPECT_EQ((*l1)->name(), first->name());  // oldest first
+  EXPECT_EQ((*l1)->state(), v1::RUNNING);
+  EXPECT_EQ((*l1)->attempts(), 1);
+  EXPECT_TRUE((*store)->Renew(first->name(), "w1", absl::Seconds(30)).ok());
+  EXPECT_EQ((*store)->Renew(first->name(), "w2", absl::Seconds(30)).code(), absl::StatusCode::kFailedPrecondition);
+  v1::JobProgress p;
+  p.set_stage("surface");
+  p.set_stage_index(3);
+  ASSERT_TRUE((*store)->SetProgress(first->name(), "w1", p).ok());
+  EXPECT_EQ((*store)->Get(first->name())->progress().stage(), "surface");
+  v1::Artifact art;
+  art.set_name("report.json");
+  art.mutable_digest()->set_hash(std::string(64, 'b'));
+  auto done = (*store)->Finish(first->name(), "w1", v1::SUCCEEDED, v1::JobError(), {art});
+  ASSERT_TRUE(done.ok());
+  EXPECT_EQ(done->state(), v1::SUCCEEDED);
+  EXPECT_EQ(done->artifacts_size(), 1);
+  auto cached = (*store)->FindCached("k1");
+  ASSERT_TRUE(cached.ok() && cached->has_value());
+  EXPECT_EQ((*cached)->name(), first->name());
+  EXPECT_FALSE((*store)->FindCached("k2")->has_value());
+  EXPECT_EQ(*(*store)->CountInState(v1::QUEUED), 1);
+}
+
+TEST(JobStoreTest, ExpiredLeasesRequeueThenFailAfterMaxAttempts) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  bool created;
+  auto job = (*store)->Create(NewJob("r1"), "k1", &created);
+  ASSERT_TRUE(job.ok());
+  for (int attempt = 1; attempt <= 2; ++attempt) {
+    auto l = (*store)->LeaseNext("w", absl::Milliseconds(1));
+    ASSERT_TRUE(l.ok() && l->has_value());
+    EXPECT_EQ((*l)->attempts(), attempt);
+    absl::SleepFor(absl::Milliseconds(20));
+    EXPECT_EQ(*(*store)->RequeueExpired(2, false), 1);
+  }
+  auto end = (*store)->Get(job->name());
+  ASSERT_TRUE(end.ok());
+  EXPECT_EQ(end->state(), v1::FAILED);
+  EXPECT_THAT(end->error().message(), HasSubstr("2"));
+}
+
+TEST(JobStoreTest, RestartRequeuesRunningJobsAndKeepsEverything) {
+  TempDir dir;
+  std::string name;
+  {
+    auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+    ASSERT_TRUE(store.ok());
+    bool created;
+    name = (*store)->Create(NewJob("r1"), "k1", &created)->name();
+    ASSERT_TRUE((*store)->LeaseNext("w", absl::Hours(1))->has_value());
+  }
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  EXPECT_EQ(*(*store)->RequeueExpired(3, /*all=*/true), 1);
+  auto job = (*store)->Get(name);
+  ASSERT_TRUE(job.ok());
+  EXPECT_EQ(job->state(), v1::QUEUED);
+  EXPECT_EQ(job->attempts(), 1);
+  auto again = (*store)->LeaseNext("w2", absl::Seconds(30));
+  ASSERT_TRUE(again.ok() && again->has_value());
+  EXPECT_EQ((*again)->attempts(), 2);
+}
+
+TEST(JobStoreTest, CancelAndDelete) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  bool created;
+  auto queued = (*store)->Create(NewJob("q"), "kq", &created);
+  auto running = (*store)->Create(NewJob("r"), "kr", &created);
+  ASSERT_TRUE(queued.ok() && running.ok());
+  ASSERT_TRUE((*store)->LeaseNext("w", absl::Seconds(30))->has_value());  // "q" runs
+  // Now "q" is running and "r" queued.
+  auto c1 = (*store)->RequestCancel(running->name());
+  ASSERT_TRUE(c1.ok());
+  EXPECT_EQ(c1->state(), v1::CANCELLED);
+  auto c2 = (*store)->RequestCancel(queued->name());
+  ASSERT_TRUE(c2.ok());
+  EXPECT_EQ(c2->state(), v1::RUNNING);
+  EXPECT_TRUE(*(*store)->CancelRequested(queued->name()));
+  EXPECT_EQ((*store)->Delete(queued->name()).code(), absl::StatusCode::kFailedPrecondition);
+  v1::JobError e;
+  e.set_code(1);
+  ASSERT_TRUE((*store)->Finish(queued->name(), "w", v1::CANCELLED, e, {}).ok());
+  EXPECT_TRUE((*store)->Delete(queued->name()).ok());
+  EXPECT_EQ((*store)->Get(queued->name()).status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST(JobStoreTest, ListPagesNewestFirstByState) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  bool created;
+  std::vector<std::string> names;
+  for (int i = 0; i < 7; ++i) names.push_back((*store)->Create(NewJob(absl::StrCat("r", i)), "", &created)->name());
+  std::vector<std::string> seen;
+  std::string token, next;
+  do {
+    auto page = (*store)->List(v1::JOB_STATE_UNSPECIFIED, 3, token, &next);
+    ASSERT_TRUE(page.ok());
+    for (const auto& j : *page) seen.push_back(j.name());
+    token = next;
+  } while (!token.empty());
+  EXPECT_EQ(seen, std::vector<std::string>(names.rbegin(), names.rend()));
+  auto running = (*store)->List(v1::RUNNING, 10, "", &next);
+  ASSERT_TRUE(running.ok());
+  EXPECT_TRUE(running->empty());
+  EXPECT_EQ((*store)->List(v1::QUEUED, 10, "garbage", &next).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// ---------------------------------------------------------------------------------------
+// References
+
+TEST(ReferencesTest, OnlyUnderTheRootsAfterFollowingLinks) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.File("root/sub"));
+  std::filesystem::create_directories(dir.File("rootish"));
+  std::ofstream(dir.File("root/sub/v.raw")) << "x";
+  std::ofstream(dir.File("rootish/v.raw")) << "x";
+  std::ofstream(dir.File("secret.raw")) << "x";
+  std::filesystem::create_symlink(dir.File("secret.raw"), dir.File("root/link.raw"));
+  std::filesystem::create_symlink(dir.File("root/sub/v.raw"), dir.File("root/inner.raw"));
+  const std::vector<std::string> roots = {dir.File("root")};
+  auto ok = ResolveReference(dir.File("root/sub/v.raw"), roots);
+  ASSERT_TRUE(ok.ok()) << ok.status();
+  EXPECT_EQ(*ok, std::filesystem::canonical(dir.File("root/sub/v.raw")).string());
+  EXPECT_TRUE(ResolveReference(dir.File("root/inner.raw"), roots).ok());
+  for (const std::string& bad : {dir.File("secret.raw"), dir.File("root/link.raw"),
+                                 dir.File("root/sub/../../secret.raw"), dir.File("rootish/v.raw")}) {
+    auto r = ResolveReference(bad, roots);
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kPermissionDenied) << bad << ": " << r.status();
+  }
+  EXPECT_EQ(ResolveReference("relative.raw", roots).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(ResolveReference(dir.File("root/none.raw"), roots).status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(ResolveReference(dir.File("root/sub/v.raw"), {}).status().code(), absl::StatusCode::kPermissionDenied);
+}
+
+// ---------------------------------------------------------------------------------------
+// JobEvents
+
+TEST(JobEventsTest, WaitersWakeAndStagesAreKeptInOrder) {
+  JobEvents events;
+  const uint64_t v0 = events.Version("jobs/1");
+  std::thread later([&] {
+    absl::SleepFor(absl::Milliseconds(50));
+    for (int i = 1; i <= 3; ++i) {
+      v1::JobProgress p;
+      p.set_stage_index(i);
+      events.NotifyStage("jobs/1", p);
+    }
+  });
+  const uint64_t v1 = events.Wait("jobs/1", v0, absl::Seconds(10));
+  EXPECT_GT(v1, v0);
+  later.join();
+  const auto stages = events.StagesSince("jobs/1", v0);
+  ASSERT_EQ(stages.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(stages[i].stage_index(), i + 1);
+  EXPECT_EQ(events.StagesSince("jobs/1", events.Version("jobs/1")).size(), 0u);
+  // A wait with nothing new times out; Close wakes for good.
+  const uint64_t now = events.Version("jobs/1");
+  EXPECT_EQ(events.Wait("jobs/1", now, absl::Milliseconds(10)), now);
+  events.Close();
+  EXPECT_TRUE(events.closed());
+  EXPECT_EQ(events.Wait("jobs/1", now, absl::Hours(1)), now);
+}
+
+TEST(JobEventsTest, FinishedJobsAreForgottenAfterALimit) {
+  JobEvents events;
+  for (size_t i = 0; i < JobEvents::kFinishedKept + 10; ++i) {
+    const std::string name = absl::StrCat("jobs/", i);
+    v1::JobProgress p;
+    events.NotifyStage(name, p);
+    events.NotifyFinished(name);
+  }
+  EXPECT_EQ(events.Version("jobs/0"), 0u);  // forgotten
+  EXPECT_GT(events.Version(absl::StrCat("jobs/", JobEvents::kFinishedKept + 5)), 0u);
+}
+
+}  // namespace
+}  // namespace sheetmesh::server

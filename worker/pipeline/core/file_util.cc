@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 
 #include "absl/strings/str_cat.h"
@@ -129,8 +130,11 @@ AtomicFileWriter::~AtomicFileWriter() {
 absl::StatusOr<AtomicFileWriter> AtomicFileWriter::Create(const std::string& path) {
   AtomicFileWriter w;
   w.path_ = path;
-  w.part_path_ = path + ".part";
-  const int fd = ::open(w.part_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // A name of its own, so that writers of the same path (two jobs storing one artifact)
+  // never share a part file; the last rename wins with complete contents either way.
+  static std::atomic<uint64_t> counter{0};
+  w.part_path_ = absl::StrCat(path, ".", ::getpid(), "-", counter.fetch_add(1), ".part");
+  const int fd = ::open(w.part_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return ErrnoStatus(errno, w.part_path_);
   w.fd_ = ScopedFd(fd);
   return w;

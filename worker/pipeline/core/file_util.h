@@ -65,7 +65,8 @@ class AtomicFileWriter {
   AtomicFileWriter& operator=(AtomicFileWriter&&) = default;
   ~AtomicFileWriter();
 
-  // Starts writing `path`. kPermissionDenied / kNotFound (no parent folder) on failure.
+  // Starts writing `path` (through `path`.<pid>-<n>.part, so concurrent writers of one
+  // path do not collide). kPermissionDenied / kNotFound (no parent folder) on failure.
   static absl::StatusOr<AtomicFileWriter> Create(const std::string& path);
 
   absl::Status Append(std::span<const std::byte> data);

@@ -6,6 +6,7 @@
 //   sheetmesh health
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <random>
@@ -119,6 +120,12 @@ class Reporter {
 
 absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::string& dir,
                          const std::string& only) {
+  if (!only.empty() && std::none_of(job.artifacts().begin(), job.artifacts().end(),
+                                    [&](const v1::Artifact& a) { return a.name() == only; })) {
+    std::string names;
+    for (const v1::Artifact& a : job.artifacts()) absl::StrAppend(&names, names.empty() ? "" : ", ", a.name());
+    return absl::NotFoundError(absl::StrCat(job.name(), " has no file '", only, "' (it has: ", names, ")"));
+  }
   SM_RETURN_IF_ERROR(MakeDirs(dir));
   for (const v1::Artifact& a : job.artifacts()) {
     if (!only.empty() && a.name() != only) continue;
@@ -167,7 +174,7 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
     }
   }
   if (!absl::GetFlag(FLAGS_dtype).empty()) in.mutable_format()->set_dtype(absl::GetFlag(FLAGS_dtype));
-  if (absl::GetFlag(FLAGS_r) > 0) p.set_r(absl::GetFlag(FLAGS_r));
+  if (absl::GetFlag(FLAGS_r) != 0) p.set_r(absl::GetFlag(FLAGS_r));  // the server checks it
   if (absl::GetFlag(FLAGS_extract)) p.set_extract(true);
   if (absl::GetFlag(FLAGS_volume_mesh)) p.set_volume_mesh(true);
   if (!absl::GetFlag(FLAGS_method).empty()) p.set_method(absl::GetFlag(FLAGS_method));
@@ -266,6 +273,10 @@ int Main(int argc, char** argv) {
       st = job.ok() ? DownloadAll(**client, *job, absl::GetFlag(FLAGS_o).empty() ? "." : absl::GetFlag(FLAGS_o),
                                   absl::GetFlag(FLAGS_name))
                     : job.status();
+      if (st.ok() && job->state() != v1::SUCCEEDED) {
+        st = absl::FailedPreconditionError(absl::StrCat(job->name(), " is ", StateName(job->state()),
+                                                        "; its files come when it has SUCCEEDED"));
+      }
     }
   } else if (command == "health") {
     auto h = (*client)->Health();

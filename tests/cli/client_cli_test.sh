@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# End-to-end test of the `sheetmesh` client CLI against a real sheetmesh-server: mesh by
+# upload and by reference, upload, jobs list/get/watch/cancel/delete, artifacts get,
+# health, and clear errors with non-zero exits for bad input.
+# Usage: client_cli_test.sh SERVER_BIN CLIENT_BIN PIPELINE_BIN
+set -euo pipefail
+server_bin=$1 cli=$2 pipeline=$3
+tmp=$(mktemp -d)
+server_pid=
+cleanup() {
+  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*" >&2; [ -f "$tmp/server.log" ] && cat "$tmp/server.log" >&2; exit 1; }
+# Runs a command and greps its whole output (no early-closed pipe under pipefail).
+outputs() {
+  local pattern=$1; shift
+  local out
+  out=$("$@") || return 1
+  grep -qE -- "$pattern" <<< "$out"
+}
+
+mkdir -p "$tmp/root"
+"$server_bin" --address=127.0.0.1:0 --data_dir="$tmp/data" --port_file="$tmp/port" \
+  --allowed_root="$tmp/root" --workers=2 > "$tmp/server.log" 2>&1 &
+server_pid=$!
+for _ in $(seq 300); do [ -s "$tmp/port" ] && break; sleep 0.05; done
+[ -s "$tmp/port" ] || fail "the server did not start"
+s="--server=127.0.0.1:$(cat "$tmp/port")"
+
+outputs '^SERVING$' "$cli" health $s || fail health
+"$pipeline" phantom --dims=64x64x64 --seed=2 -o "$tmp/root/rock_64x64x64_u8.raw" > /dev/null
+
+# mesh by upload: plain progress lines (not a terminal), files downloaded.
+"$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/out" --r=5 $s > "$tmp/mesh.txt" || fail "mesh: $(cat "$tmp/mesh.txt")"
+grep -q "^RUNNING stage 1/" "$tmp/mesh.txt" || fail "mesh printed no stages"
+grep -q "^SUCCEEDED" "$tmp/mesh.txt" || fail "mesh did not succeed"
+for f in surface.ply surface.vtp surface.obj report.json; do [ -f "$tmp/out/$f" ] || fail "mesh wrote no $f"; done
+job=$(sed -n 's/^job \(jobs\/[^ ]*\).*/\1/p' "$tmp/mesh.txt")
+[ -n "$job" ] || fail "mesh named no job"
+
+# The same work again comes from the cache; --no_cache runs it.
+outputs "identical work done before: $job" "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/out2" --r=5 $s || fail cache
+"$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/out3" --r=5 --no_cache $s > "$tmp/mesh3.txt"
+grep -q "identical work" "$tmp/mesh3.txt" && fail "no_cache"
+job3=$(sed -n 's/^job \(jobs\/[^ ]*\).*/\1/p' "$tmp/mesh3.txt")
+cmp "$tmp/out/surface.ply" "$tmp/out3/surface.ply" || fail "the same job gave other bytes"
+
+# mesh by reference.
+"$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" --reference -o "$tmp/ref" $s > /dev/null || fail "mesh --reference"
+[ -f "$tmp/ref/report.json" ] || fail "reference mesh wrote no report"
+
+# upload, jobs, artifacts.
+outputs '^[0-9a-f]{64}/262144$' "$cli" upload "$tmp/root/rock_64x64x64_u8.raw" $s || fail upload
+outputs "$job  SUCCEEDED" "$cli" jobs list $s || fail "jobs list"
+[ "$("$cli" jobs list --page_size=1 --all_pages $s | wc -l)" -ge 4 ] || fail "jobs list --all_pages"
+"$cli" jobs get "$job" $s --json | /usr/bin/python3 -c "import json,sys; j=json.load(sys.stdin); sys.exit(0 if j['state']=='SUCCEEDED' and j['artifacts'] else 1)" || fail "jobs get --json"
+outputs SUCCEEDED "$cli" jobs watch "$job" $s || fail "jobs watch"
+"$cli" artifacts get "$job" -o "$tmp/art" --name report.json $s > /dev/null || fail "artifacts get"
+[ -f "$tmp/art/report.json" ] && [ ! -f "$tmp/art/surface.ply" ] || fail "artifacts get --name"
+outputs "deleted $job" "$cli" jobs delete "$job" $s || fail "jobs delete"
+
+# Cancel a long job.
+"$pipeline" phantom --dims=224x224x224 --seed=3 -o "$tmp/root/big_224x224x224_u8.raw" > /dev/null
+"$cli" mesh "$tmp/root/big_224x224x224_u8.raw" --reference --extract -o "$tmp/big" $s > "$tmp/big.txt" 2>&1 &
+mesh_pid=$!
+for _ in $(seq 200); do grep -q "^job " "$tmp/big.txt" && break; sleep 0.05; done
+big=$(sed -n 's/^job \(jobs\/[^ ]*\).*/\1/p' "$tmp/big.txt")
+[ -n "$big" ] || fail "no job for the long mesh"
+"$cli" jobs cancel "$big" $s > /dev/null || fail "jobs cancel"
+if wait "$mesh_pid"; then fail "mesh of a cancelled job must exit non-zero"; fi
+grep -q "CANCELLED" "$tmp/big.txt" || fail "the cancelled mesh did not say so: $(cat "$tmp/big.txt")"
+
+# Bad input: clear messages, non-zero exits.
+expect_error() {
+  local code=$1 want=$2; shift 2
+  local out rc=0
+  out=$("$@" 2>&1) || rc=$?
+  [ "$rc" = "$code" ] || fail "exit $rc (not $code) for: $* -> $out"
+  grep -q -- "$want" <<< "$out" || fail "no '$want' in: $out"
+}
+expect_error 2 "parameters.r = -2" "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/x" --r=-2 $s
+expect_error 1 "PERMISSION_DENIED" "$cli" mesh /etc/hostname --reference -o "$tmp/x" $s
+expect_error 1 "NOT_FOUND" "$cli" jobs get jobs/nope $s
+expect_error 1 "no file 'nope.ply'" "$cli" artifacts get "$job3" -o "$tmp/x" --name nope.ply $s
+expect_error 1 "UNAVAILABLE" "$cli" health --server=127.0.0.1:1
+expect_error 2 "junk.nrrd" bash -c "printf 'NRRD0004\ntype: complex\n\n' > '$tmp/junk.nrrd' && '$cli' mesh '$tmp/junk.nrrd' -o '$tmp/x' $s"
+expect_error 2 "usage" "$cli" jobs get $s
+echo "client CLI test passed"

@@ -1,0 +1,163 @@
+#!/usr/bin/python3
+"""The Python client against a real sheetmesh-server process over loopback.
+
+    /usr/bin/python3 tests/client/python_client_test.py SERVER_BIN PIPELINE_BIN
+(with SHEETMESH_PYTHON_STUBS pointing at the build's generated stubs).
+"""
+
+import hashlib
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+import grpc
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent.parent / "client" / "python"))
+import sheetmesh_client  # noqa: E402
+from sheetmesh_client import SheetmeshClient, SheetmeshError  # noqa: E402
+from sheetmesh.v1 import blobs_pb2, jobs_pb2  # noqa: E402
+
+SERVER_BIN = PIPELINE_BIN = None
+
+
+class PythonClientTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = pathlib.Path(tempfile.mkdtemp(prefix="sheetmesh_pyclient_"))
+        cls.root = cls.tmp / "root"
+        cls.root.mkdir()
+        port_file = cls.tmp / "port"
+        cls.server = subprocess.Popen(
+            [SERVER_BIN, "--address=127.0.0.1:0", "--data_dir=%s" % (cls.tmp / "data"),
+             "--port_file=%s" % port_file, "--allowed_root=%s" % cls.root, "--workers=2",
+             "--heartbeat_seconds=1"],
+            stdout=subprocess.DEVNULL)
+        deadline = time.time() + 30
+        while not (port_file.exists() and port_file.read_text().endswith("\n")):
+            if time.time() > deadline or cls.server.poll() is not None:
+                raise RuntimeError("sheetmesh-server did not start")
+            time.sleep(0.02)
+        cls.address = "127.0.0.1:%s" % port_file.read_text().strip()
+        cls.client = SheetmeshClient(cls.address)
+        cls.volume = cls.root / "rock_64x64x64_u8.raw"
+        subprocess.run([PIPELINE_BIN, "phantom", "--dims=64x64x64", "--seed=3", "-o", str(cls.volume)],
+                       check=True, stdout=subprocess.DEVNULL)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+        cls.server.terminate()
+        cls.server.wait(timeout=60)
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_health(self):
+        self.assertEqual(self.client.health(), "SERVING")
+
+    def test_mesh_uploads_runs_and_downloads_verified_files(self):
+        out = self.tmp / "mesh_out"
+        stages = []
+
+        def on_update(job, heartbeat):
+            if job.state == jobs_pb2.RUNNING and job.progress.stage_index and (
+                    not stages or stages[-1] != job.progress.stage_index):
+                stages.append(job.progress.stage_index)
+
+        job = self.client.mesh(self.volume, out, on_update=on_update, r=5)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+        self.assertEqual(stages, list(range(1, job.progress.stage_count + 1)))
+        names = {a.name for a in job.artifacts}
+        self.assertTrue({"surface.ply", "report.json"} <= names, names)
+        for a in job.artifacts:
+            data = (out / a.name).read_bytes()
+            self.assertEqual(hashlib.sha256(data).hexdigest(), a.digest.hash, a.name)
+        report = json.loads((out / "report.json").read_text())
+        self.assertGreater(report["similarity"]["similarity"], 0.3)
+        # The same again is answered from the cache.
+        again = self.client.create_job(volume_digest=sheetmesh_client.file_digest(self.volume),
+                                       file_name=self.volume.name, parameters={"r": 5})
+        self.assertEqual(again.state, jobs_pb2.SUCCEEDED)
+        self.assertEqual(again.cached_from, job.name)
+        listed = [j.name for j in self.client.list_jobs(page_size=1)]
+        self.assertIn(job.name, listed)
+        self.assertIn(again.name, listed)
+
+    def test_reference_inside_root_and_refused_outside(self):
+        out = self.tmp / "ref_out"
+        job = self.client.mesh(self.volume, out, reference=True)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+        outside = self.tmp / "outside_8x8x8_u8.raw"
+        outside.write_bytes(bytes(512))
+        with self.assertRaises(grpc.RpcError) as e:
+            self.client.create_job(volume_path=str(outside))
+        self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
+        info = self.client.inspect_volume(str(self.volume))
+        self.assertEqual(list(info.dims), [64, 64, 64])
+
+    def test_bad_parameters_name_the_field(self):
+        digest = self.client.upload(self.volume)
+        with self.assertRaises(grpc.RpcError) as e:
+            self.client.create_job(volume_digest=digest, file_name=self.volume.name, parameters={"r": -1})
+        self.assertEqual(e.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("parameters.r = -1", e.exception.details())
+
+    def test_failed_job_raises_with_the_readers_message(self):
+        junk = self.tmp / "junk.nrrd"
+        junk.write_text("NRRD0004\ntype: complex\n\n")
+        with self.assertRaises(SheetmeshError) as e:
+            self.client.mesh(junk, self.tmp / "junk_out")
+        self.assertIn("FAILED", str(e.exception))
+        self.assertIn("junk.nrrd", str(e.exception))
+
+    def test_upload_resumes_after_a_broken_stream(self):
+        path = self.tmp / "blob.bin"
+        data = os.urandom(3 * (1 << 20) + 5)
+        path.write_bytes(data)
+        digest = sheetmesh_client.file_digest(path)
+        resource = "uploads/u%s/blobs/%s/%d" % (digest.hash[:32], digest.hash, digest.size_bytes)
+
+        def two_pieces_then_break():
+            for i in range(2):
+                yield blobs_pb2.WriteRequest(resource_name=resource if i == 0 else "", write_offset=i << 20,
+                                             data=data[i << 20:(i + 1) << 20])
+            time.sleep(0.3)
+            raise RuntimeError("the connection broke")
+
+        with self.assertRaises(grpc.RpcError):
+            self.client.blobs.Write(two_pieces_then_break())
+        status = None
+        for _ in range(100):
+            status = self.client.blobs.QueryWriteStatus(blobs_pb2.QueryWriteStatusRequest(resource_name=resource))
+            if status.committed_size == 2 << 20:
+                break
+            time.sleep(0.05)
+        self.assertEqual(status.committed_size, 2 << 20)
+        reports = []
+        self.client.upload(path, progress=lambda sent, total: reports.append(sent))
+        self.assertEqual(reports[0], 3 << 20)  # resumed past what the server held
+        back = self.client.download(digest, self.tmp / "back.bin")
+        self.assertEqual(back.read_bytes(), data)
+
+    def test_cancel(self):
+        big = self.root / "big_192x192x192_u8.raw"
+        subprocess.run([PIPELINE_BIN, "phantom", "--dims=192x192x192", "--seed=4", "-o", str(big)],
+                       check=True, stdout=subprocess.DEVNULL)
+        job = self.client.create_job(volume_path=str(big), parameters={"extract": True}, no_cache=True)
+        self.client.cancel_job(job.name)
+        end = self.client.watch(job.name)
+        self.assertEqual(end.state, jobs_pb2.CANCELLED)
+        self.client.delete_job(job.name)
+        with self.assertRaises(grpc.RpcError) as e:
+            self.client.get_job(job.name)
+        self.assertEqual(e.exception.code(), grpc.StatusCode.NOT_FOUND)
+
+
+if __name__ == "__main__":
+    SERVER_BIN, PIPELINE_BIN = sys.argv[1], sys.argv[2]
+    unittest.main(argv=[sys.argv[0]] + sys.argv[3:], verbosity=2)

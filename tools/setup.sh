@@ -17,7 +17,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev clang libfuzzer-14-dev
   # Python tooling (always run with /usr/bin/python3)
   python3 python3-numpy python3-scipy python3-vtk9 python3-skimage python3-meshio
-  python3-grpcio python3-protobuf python3-grpc-tools
+  python3-grpcio python3-protobuf python3-yaml
 )
 
 missing=()

@@ -142,7 +142,7 @@ TEST(DurabilityTest, UploadInterruptedByAKillResumesAfterRestart) {
   TempDir dir;
   std::filesystem::create_directories(dir.File("root"));
   const std::string path = dir.File("volume.bin");
-  std::string bytes(5 * (1 << 20) + 3, '\0');
+  std::string bytes(13 * (1 << 20) + 3, '\0');
   std::mt19937 gen(5);
   for (auto& c : bytes) c = static_cast<char>(gen());
   std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
@@ -156,7 +156,9 @@ TEST(DurabilityTest, UploadInterruptedByAKillResumesAfterRestart) {
     auto ctx = server.client().Context();
     v1::WriteResponse resp;
     auto writer = server.client().blobs()->Write(ctx.get(), &resp);
-    for (int i = 0; i < 2; ++i) {
+    // Ten pieces: the server writes its 8 MiB buffer straight to the disk as it fills;
+    // the two pieces still in the buffer die with the process.
+    for (int i = 0; i < 10; ++i) {
       v1::WriteRequest req;
       if (i == 0) req.set_resource_name(resource);
       req.set_write_offset(int64_t{i} << 20);
@@ -172,13 +174,13 @@ TEST(DurabilityTest, UploadInterruptedByAKillResumesAfterRestart) {
   q.set_resource_name(resource);
   v1::QueryWriteStatusResponse qs;
   ASSERT_TRUE(server.client().blobs()->QueryWriteStatus(server.client().Context().get(), q, &qs).ok());
-  EXPECT_EQ(qs.committed_size(), 2 << 20);
+  EXPECT_EQ(qs.committed_size(), 8 << 20);
   int64_t first = -1;
   auto up = server.client().Upload(path, [&](int64_t sent, int64_t) {
     if (first < 0) first = sent;
   });
   ASSERT_TRUE(up.ok()) << up.status();
-  EXPECT_EQ(first, 3 << 20);  // resumed after the two pieces that had arrived
+  EXPECT_EQ(first, 9 << 20);  // resumed after the eight pieces on the disk
   ASSERT_TRUE(server.client().Download(*digest, dir.File("back.bin")).ok());
   auto back = ReadFileToString(dir.File("back.bin"));
   ASSERT_TRUE(back.ok());

@@ -14,6 +14,10 @@ void UseTransparentHugePages(int argc, char** argv) {
   const char* current = getenv("GLIBC_TUNABLES");
   if (current != nullptr && strstr(current, "glibc.malloc.hugetlb") != nullptr) return;
   std::string tunables = "glibc.malloc.hugetlb=1";
+  for (const char* t : {"glibc.malloc.mmap_threshold=67108864", "glibc.malloc.trim_threshold=268435456"}) {
+    const std::string name(t, strchr(t, '=') - t);
+    if (current == nullptr || strstr(current, name.c_str()) == nullptr) tunables += std::string(":") + t;
+  }
   if (current != nullptr && current[0] != '\0') tunables = std::string(current) + ":" + tunables;
   setenv("GLIBC_TUNABLES", tunables.c_str(), 1);
   execv("/proc/self/exe", argv);

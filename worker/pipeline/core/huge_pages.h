@@ -1,14 +1,19 @@
-// Start-up tuning for processes that hold large arrays: ask glibc's malloc for transparent
-// huge pages. On virtual machines page faults cost more than the work on sparse voxels.
+// Start-up tuning for processes that hold large arrays or stream large messages: ask
+// glibc's malloc for transparent huge pages, and to keep freed memory for reuse instead of
+// handing it back to the kernel at once. On virtual machines a page fault costs more than
+// the work on sparse voxels, or than copying a network buffer.
 #ifndef SHEETMESH_WORKER_PIPELINE_CORE_HUGE_PAGES_H_
 #define SHEETMESH_WORKER_PIPELINE_CORE_HUGE_PAGES_H_
 
 namespace sheetmesh {
 
-// If the environment does not set glibc.malloc.hugetlb yet, sets it to 1 and re-executes
-// the program with the same arguments (glibc reads tunables only at start-up). Returns
-// normally when nothing needs doing, when SHEETMESH_NO_HUGE_PAGES is set, or when the
-// re-exec fails. Call first thing in main(), before any thread starts.
+// If the environment does not set glibc.malloc.hugetlb yet, sets it to 1, with
+// glibc.malloc.mmap_threshold = 64 MiB and glibc.malloc.trim_threshold = 256 MiB (blocks
+// below 64 MiB come from the heap and are reused; at most 256 MiB of free heap is kept),
+// and re-executes the program with the same arguments (glibc reads tunables only at
+// start-up). Tunables already in GLIBC_TUNABLES are kept. Returns normally when nothing
+// needs doing, when SHEETMESH_NO_HUGE_PAGES is set, or when the re-exec fails. Call first
+// thing in main(), before any thread starts.
 void UseTransparentHugePages(int argc, char** argv);
 
 }  // namespace sheetmesh

@@ -56,6 +56,14 @@ class RssSampler:
         self._thread.join()
 
 
+def server_env():
+    """The server's environment: SERVER_GLIBC_TUNABLES, when set, is its GLIBC_TUNABLES."""
+    env = dict(os.environ)
+    if "SERVER_GLIBC_TUNABLES" in env:
+        env["GLIBC_TUNABLES"] = env["SERVER_GLIBC_TUNABLES"]
+    return env
+
+
 class Server:
     def __init__(self, build, name, *flags):
         self.build = build
@@ -68,7 +76,7 @@ class Server:
             [str(build / "server" / "sheetmesh-server"), "--address=127.0.0.1:0",
              "--data_dir=%s" % (self.dir / "data"), "--port_file=%s" % port_file,
              "--allowed_root=%s" % (self.dir / "root")] + list(flags),
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=server_env())
         while not (port_file.exists() and port_file.read_text().endswith("\n")):
             if self.proc.poll() is not None:
                 raise RuntimeError("sheetmesh-server did not start")
@@ -127,8 +135,10 @@ def bench_upload(build, gib):
     print("  cat (page cache)    %6.2f s  %7.1f MB/s" % (read, mb / read))
     print("  dd + fsync copy     %6.2f s  %7.1f MB/s" % (copy, mb / copy))
     print("  upload again        %6.2f s  (already stored: hash + FindMissing only)" % again)
-    print("  server RSS          %.0f MiB before, %.0f-%.0f MiB during (%d samples)"
-          % (base, min(s.samples), max(s.samples), len(s.samples)))
+    q = len(s.samples) // 4 or 1
+    quarters = [statistics.median(s.samples[i * q:(i + 1) * q] or [0]) for i in range(4)]
+    print("  server RSS          %.0f MiB before, %.0f-%.0f MiB during (%d samples); medians by quarter %s MiB"
+          % (base, min(s.samples), max(s.samples), len(s.samples), " / ".join("%.0f" % m for m in quarters)))
     path.unlink()
 
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include <filesystem>
+#include <future>
 #include <span>
 #include <vector>
 
@@ -34,13 +35,16 @@ void SyncDir(const std::string& dir) {
 // The file of an upload in progress. Pieces are gathered in an aligned buffer and written
 // with O_DIRECT in large blocks: the bytes go from the network to the disk without a
 // copy into the page cache (which costs more than the disk itself on small machines) and
-// the server's memory stays flat however large the blob. The unaligned tail is written
-// through the page cache when the stream stops. Where O_DIRECT is refused (tmpfs), plain
-// writes are used.
+// the server's memory stays flat however large the blob. Two buffers alternate: one is
+// written by a helper thread while the stream fills the other, so the disk and the
+// network overlap. The unaligned tail is written through the page cache when the stream
+// stops. Where O_DIRECT is refused (tmpfs), plain writes are used.
 class PartFile {
  public:
   static constexpr int64_t kBlock = 4096;
   static constexpr int64_t kStage = int64_t{8} << 20;
+
+  ~PartFile() { (void)WaitForWrite(); }
 
   absl::Status Open(const std::string& path, int64_t* size) {
     path_ = path;
@@ -65,7 +69,15 @@ class PartFile {
       end_ += n;
       data.remove_prefix(n);
       if (stage_len_ == kStage) {
-        SM_RETURN_IF_ERROR(WriteAt(stage_.get(), kStage, stage_start_, direct_.valid()));
+        // The previous block must be out before its buffer is reused.
+        SM_RETURN_IF_ERROR(WaitForWrite());
+        if (spare_ == nullptr) {
+          SM_ASSIGN_OR_RETURN(spare_, NewBuffer());
+        }
+        std::swap(stage_, spare_);
+        const char* full = spare_.get();
+        const int64_t at = stage_start_;
+        writing_ = std::async(std::launch::async, [this, full, at] { return WriteAt(full, kStage, at, true); });
         stage_start_ += kStage;
         stage_len_ = 0;
       }
@@ -73,23 +85,27 @@ class PartFile {
     return absl::OkStatus();
   }
 
-  // Writes out everything and makes it durable (fdatasync); the buffer is released.
+  // Writes out everything and makes it durable (fdatasync); the buffers are released.
   absl::Status Flush() {
+    SM_RETURN_IF_ERROR(WaitForWrite());
     if (stage_ != nullptr && stage_len_ > 0) {
       const int64_t aligned = stage_len_ / kBlock * kBlock;
-      if (aligned > 0) SM_RETURN_IF_ERROR(WriteAt(stage_.get(), aligned, stage_start_, direct_.valid()));
+      if (aligned > 0) SM_RETURN_IF_ERROR(WriteAt(stage_.get(), aligned, stage_start_, true));
       if (stage_len_ > aligned) {
         SM_RETURN_IF_ERROR(WriteAt(stage_.get() + aligned, stage_len_ - aligned, stage_start_ + aligned, false));
       }
     }
     stage_.reset();
+    spare_.reset();
     stage_len_ = 0;
     if (::fdatasync(fd_.get()) != 0) return ErrnoStatus(errno, path_);
     return absl::OkStatus();
   }
 
   void Close() {
+    (void)WaitForWrite();
     stage_.reset();
+    spare_.reset();
     direct_ = ScopedFd();
     fd_ = ScopedFd();
   }
@@ -98,13 +114,23 @@ class PartFile {
   struct FreeDeleter {
     void operator()(char* p) const { free(p); }
   };
+  using Buffer = std::unique_ptr<char, FreeDeleter>;
+
+  static absl::StatusOr<Buffer> NewBuffer() {
+    void* mem = nullptr;
+    if (posix_memalign(&mem, kBlock, kStage) != 0) return absl::ResourceExhaustedError("no memory for an upload buffer");
+    return Buffer(static_cast<char*>(mem));
+  }
+
+  absl::Status WaitForWrite() {
+    if (!writing_.valid()) return absl::OkStatus();
+    return writing_.get();
+  }
 
   // The buffer starts at the block holding the end of the file; a partial block already
   // in the file is read back into it, so that direct writes stay aligned.
   absl::Status LoadStage() {
-    void* mem = nullptr;
-    if (posix_memalign(&mem, kBlock, kStage) != 0) return absl::ResourceExhaustedError("no memory for an upload buffer");
-    stage_.reset(static_cast<char*>(mem));
+    SM_ASSIGN_OR_RETURN(stage_, NewBuffer());
     stage_start_ = end_ / kBlock * kBlock;
     stage_len_ = end_ - stage_start_;
     if (stage_len_ > 0) {
@@ -114,14 +140,17 @@ class PartFile {
     return absl::OkStatus();
   }
 
-  absl::Status WriteAt(const char* p, int64_t n, int64_t offset, bool direct) {
-    const int fd = direct ? direct_.get() : fd_.get();
+  // At most one write runs at a time (the helper's, or the caller's after waiting for
+  // it), so direct_ is never touched by two threads at once.
+  absl::Status WriteAt(const char* p, int64_t n, int64_t offset, bool want_direct) {
+    bool direct = want_direct && direct_.valid();
     while (n > 0) {
-      const ssize_t w = ::pwrite(fd, p, n, offset);
+      const ssize_t w = ::pwrite(direct ? direct_.get() : fd_.get(), p, n, offset);
       if (w < 0 && errno == EINTR) continue;
       if (w < 0 && direct && errno == EINVAL) {  // this file system refuses O_DIRECT
         direct_ = ScopedFd();
-        return WriteAt(p, n, offset, false);
+        direct = false;
+        continue;
       }
       if (w <= 0) return ErrnoStatus(w < 0 ? errno : EIO, path_);
       p += w;
@@ -133,10 +162,11 @@ class PartFile {
 
   std::string path_;
   ScopedFd fd_, direct_;
-  std::unique_ptr<char, FreeDeleter> stage_;
+  Buffer stage_, spare_;
+  std::future<absl::Status> writing_;
   int64_t stage_start_ = 0;  // file offset of stage_[0], block-aligned
   int64_t stage_len_ = 0;
-  int64_t end_ = 0;          // bytes in the file and the buffer together
+  int64_t end_ = 0;          // bytes in the file and the buffers together
 };
 
 // An upload: its file, the hash of the bytes written, and the declared digest.

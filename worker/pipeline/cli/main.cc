@@ -87,6 +87,9 @@ ABSL_FLAG(bool, tet_steiner, true, "volume: allow TetGen to add points on the sh
 ABSL_FLAG(double, tet_time_limit, 600, "volume: seconds before TetGen is killed");
 ABSL_FLAG(double, tet_memory_gb, 8, "volume: memory limit of TetGen, GiB");
 ABSL_FLAG(std::string, tetgen, "tetgen", "volume: the TetGen program");
+ABSL_FLAG(double, flip_fold, 15,
+          "volume: flip sheet edges between nearly coplanar triangles (normals within this many degrees) "
+          "where that gives better triangles; 0: keep the sheet triangles as given");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
 ABSL_FLAG(std::string, volume_formats, "vtu,msh,inp", "volume: files to write");
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
@@ -269,6 +272,7 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   }
   if (Given("tetgen")) t.program = absl::GetFlag(FLAGS_tetgen);
   if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
+  if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
   if (Given("volume_formats")) {
     o->output.vtu = o->output.msh = o->output.inp = false;
     for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_volume_formats), ',', absl::SkipEmpty())) {

@@ -154,6 +154,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     report.volume_conformity = volume.conformity;
     report.volume_snapped = volume.snapped_vertices;
     report.volume_repaired = volume.repaired_triangles;
+    report.volume_flipped = volume.flipped_edges;
+    report.volume_dropped_caps = volume.dropped_caps;
     report.voxels_per_tet = report.volume_tets > 0
                                 ? double(phase.info.dims.num_voxels()) / report.volume_tets
                                 : 0.0;

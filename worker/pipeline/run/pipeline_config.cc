@@ -309,6 +309,8 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
              {"tetgen", [&](const Json& w, const std::string& q) { return rd.String(w, q, &o->volume.tetgen.program); }},
              {"repair", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume.plc.repair); }},
              {"snap_voxels", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.snap_voxels); }},
+             {"flip_fold_degrees", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.flip_fold_degrees); }},
+             {"cap_degrees", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.cap_degrees); }},
          });
        }},
       {"output", [&](const Json& v, const std::string& p) {
@@ -390,6 +392,12 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   if (!(tg.max_volume >= 0)) return bad("volume_mesh.max_volume", tg.max_volume, "must not be negative");
   if (!(tg.time_limit_seconds > 0)) return bad("volume_mesh.time_limit_seconds", tg.time_limit_seconds, "must be positive");
   if (!(o.volume.plc.snap_voxels >= 0)) return bad("volume_mesh.snap_voxels", o.volume.plc.snap_voxels, "must not be negative");
+  if (!(o.volume.plc.flip_fold_degrees >= 0 && o.volume.plc.flip_fold_degrees < 90)) {
+    return bad("volume_mesh.flip_fold_degrees", o.volume.plc.flip_fold_degrees, "must be in [0, 90)");
+  }
+  if (!(o.volume.plc.cap_degrees > 90 && o.volume.plc.cap_degrees <= 180)) {
+    return bad("volume_mesh.cap_degrees", o.volume.plc.cap_degrees, "must be in (90, 180]");
+  }
   for (int k : o.score.grid_rates) {
     if (k < 1) return bad("grid_rates", k, "must be >= 1");
   }

@@ -166,6 +166,8 @@ std::string PipelineReport::ToJson() const {
         {"volume", volume_quality.volume},
         {"snapped_vertices", volume_snapped},
         {"repaired_triangles", volume_repaired},
+        {"flipped_edges", volume_flipped},
+        {"dropped_caps", volume_dropped_caps},
         {"conformity",
          {{"sheet_triangles", volume_conformity.sheet_triangles},
           {"conforming", volume_conformity.conforming},

@@ -20,6 +20,118 @@ namespace {
 int Axis(int face) { return face / 2; }
 bool Low(int face) { return face % 2 == 0; }
 
+// Angles of triangle t, the smallest and the largest, degrees.
+std::pair<double, double> AngleRange(const Triangle& t) {
+  double lo = 180, hi = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 u = t[(k + 1) % 3] - t[k], w = t[(k + 2) % 3] - t[k];
+    const double nu = Norm(u), nw = Norm(w);
+    const double a = nu > 0 && nw > 0 ? std::acos(std::clamp(Dot(u, w) / (nu * nw), -1.0, 1.0)) * 180 / M_PI : 0;
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
+  }
+  return {lo, hi};
+}
+
+double AngleBetweenDegrees(const Vec3& a, const Vec3& b) {
+  const double na = Norm(a), nb = Norm(b);
+  if (na == 0 || nb == 0) return 180;
+  return std::acos(std::clamp(Dot(a, b) / (na * nb), -1.0, 1.0)) * 180 / M_PI;
+}
+
+struct SheetTriangles {
+  std::vector<Face> faces;
+  std::vector<uint32_t> source;  // input face
+  std::vector<int32_t> piece;
+  std::vector<float> thickness;
+};
+
+// Improves the sheet triangles TetGen must keep, since a thin or flat triangle forces tiny
+// tetrahedra and slivers around it: an edge between two triangles of one piece that are
+// nearly coplanar (normals within max_fold) is flipped where that raises the smaller of
+// the two triangles' smallest angles (Lawson's rule on the sheet); a flat cap (largest
+// angle over cap_degrees) whose long edge is on the sheet's rim is dropped, as it covers
+// almost nothing. No flip touches a `frozen` vertex. Returns the number of flips and drops.
+std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std::vector<Vec3>& v,
+                                                    const std::vector<uint8_t>& on_face,
+                                                    const std::vector<uint8_t>& frozen, double max_fold,
+                                                    double cap_degrees) {
+  uint32_t flips = 0, drops = 0;
+  auto corners = [&](const Face& f) { return Triangle{v[f[0]], v[f[1]], v[f[2]]}; };
+  auto key = [](uint32_t a, uint32_t b) { return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b); };
+  for (int round = 0; round < 50; ++round) {
+    absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edges;
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      for (int k = 0; k < 3; ++k) edges[key(s.faces[f][k], s.faces[f][(k + 1) % 3])].push_back(f);
+    }
+    std::vector<uint8_t> touched(s.faces.size(), 0), drop(s.faces.size(), 0);
+    uint32_t changed = 0, dropped = 0;
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      if (touched[f]) continue;
+      const auto [lo, hi] = AngleRange(corners(s.faces[f]));
+      // The edge opposite the largest angle: the one a flip or a drop would remove.
+      int longest = 0;
+      double best = -1;
+      for (int k = 0; k < 3; ++k) {
+        const double len = Norm(v[s.faces[f][(k + 1) % 3]] - v[s.faces[f][k]]);
+        if (len > best) best = len, longest = k;
+      }
+      const uint32_t a = s.faces[f][longest], b = s.faces[f][(longest + 1) % 3], c = s.faces[f][(longest + 2) % 3];
+      const std::vector<uint32_t>& across = edges[key(a, b)];
+      if (across.size() == 1 && hi > cap_degrees) {
+        drop[f] = touched[f] = 1;
+        ++drops;
+        ++dropped;
+        ++changed;
+        continue;
+      }
+      if (across.size() != 2) continue;
+      const uint32_t g = across[0] == f ? across[1] : across[0];
+      if (touched[g] || s.piece[f] != s.piece[g]) continue;
+      // g must run b -> a (consistent orientation); d is its third vertex.
+      int kb = -1;
+      for (int k = 0; k < 3; ++k) {
+        if (s.faces[g][k] == b && s.faces[g][(k + 1) % 3] == a) kb = k;
+      }
+      if (kb < 0) continue;
+      const uint32_t d = s.faces[g][(kb + 2) % 3];
+      if (c == d || edges.contains(key(c, d)) || frozen[a] || frozen[b] || frozen[c] || frozen[d]) continue;
+      const Face nf = {a, d, c}, ng = {d, b, c};
+      const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf), tng = corners(ng);
+      if (AngleBetweenDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) continue;
+      if (AngleBetweenDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) continue;
+      const Vec3 up = AreaVector(tf) + AreaVector(tg);
+      if (Dot(AreaVector(tnf), up) <= 0 || Dot(AreaVector(tng), up) <= 0) continue;
+      const double old_min = std::min(lo, AngleRange(tg).first);
+      const double new_min = std::min(AngleRange(tnf).first, AngleRange(tng).first);
+      if (new_min < old_min + 0.5) continue;
+      const bool in_box_face = (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
+      if (in_box_face) continue;
+      const double af = Area(tf), ag = Area(tg);
+      const float t = static_cast<float>((s.thickness[f] * af + s.thickness[g] * ag) / std::max(af + ag, 1e-300));
+      s.faces[f] = nf;
+      s.faces[g] = ng;
+      s.thickness[f] = s.thickness[g] = t;
+      touched[f] = touched[g] = 1;
+      ++flips;
+      ++changed;
+    }
+    if (dropped > 0) {
+      SheetTriangles keep;
+      for (size_t f = 0; f < s.faces.size(); ++f) {
+        if (drop[f]) continue;
+        keep.faces.push_back(s.faces[f]);
+        keep.source.push_back(s.source[f]);
+        keep.piece.push_back(s.piece[f]);
+        keep.thickness.push_back(s.thickness[f]);
+      }
+      s = std::move(keep);
+    }
+    if (changed == 0) break;
+  }
+  return {flips, drops};
+}
+
 }  // namespace
 
 std::string Plc::ToPoly() const {
@@ -108,8 +220,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     }
   }
   // Keep triangles that are still triangles and do not lie in a box face.
-  TriangleMesh kept;
-  std::vector<uint32_t> source;  // input face of each kept triangle
+  SheetTriangles st;
   std::set<std::array<uint32_t, 3>> seen;
   for (size_t f = 0; f < sheets.faces.size(); ++f) {
     Face t = {rep[sheets.faces[f][0]], rep[sheets.faces[f][1]], rep[sheets.faces[f][2]]};
@@ -121,10 +232,40 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       ++plc.dropped_triangles;
       continue;
     }
-    kept.faces.push_back(t);
-    source.push_back(static_cast<uint32_t>(f));
+    st.faces.push_back(t);
+    st.source.push_back(static_cast<uint32_t>(f));
+    st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
+    st.thickness.push_back(sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
   }
+  if (options.flip_fold_degrees > 0) {
+    // A flip moves the sheet a little; where that makes it cut another sheet (near a
+    // crossing), the vertices of the clash are frozen and the improvement starts over.
+    std::vector<uint8_t> frozen(v.size(), 0);
+    for (int attempt = 0; attempt < 5; ++attempt) {
+      SheetTriangles better = st;
+      const auto [flips, drops] =
+          ImproveSheetTriangles(better, v, on_face, frozen, options.flip_fold_degrees, options.cap_degrees);
+      if (flips == 0 && drops == 0) break;
+      TriangleMesh check;
+      check.vertices = v;
+      check.faces = better.faces;
+      const auto clash = FindSelfIntersections(check, 1000, 1.0);
+      if (clash.empty()) {
+        st = std::move(better);
+        plc.flipped_edges = flips;
+        plc.dropped_caps = drops;
+        break;
+      }
+      for (const auto& [a, b] : clash) {
+        for (uint32_t x : better.faces[a]) frozen[x] = 1;
+        for (uint32_t x : better.faces[b]) frozen[x] = 1;
+      }
+    }
+  }
+  TriangleMesh kept;
+  kept.faces = st.faces;
   kept.vertices = v;
+  std::vector<uint32_t> source = st.source;
 
   // Facets must not cut through each other: check before TetGen, and name the clashes.
   std::vector<std::pair<uint32_t, uint32_t>> pairs = FindSelfIntersections(kept, 10000, 1.0);
@@ -165,6 +306,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     TriangleMesh fixed;
     fixed.vertices = kept.vertices;
     std::vector<uint32_t> fixed_source;
+    SheetTriangles fixed_st;
     for (size_t f = 0; f < kept.faces.size(); ++f) {
       if (drop[f]) {
         ++plc.repaired_triangles;
@@ -172,7 +314,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       }
       fixed.faces.push_back(kept.faces[f]);
       fixed_source.push_back(source[f]);
+      fixed_st.piece.push_back(st.piece[f]);
+      fixed_st.thickness.push_back(st.thickness[f]);
     }
+    st.piece = std::move(fixed_st.piece);
+    st.thickness = std::move(fixed_st.thickness);
     if (!FindSelfIntersections(fixed, 1, 1.0).empty()) {
       return absl::FailedPreconditionError(absl::StrCat(
           "sheet triangles still intersect after removing ", plc.repaired_triangles,
@@ -196,10 +342,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       }
       out[k] = index[t[k]];
     }
+    const size_t f = plc.sheet_triangles.size();
     plc.sheet_triangles.push_back(out);
-    const uint32_t f = source[plc.sheet_triangles.size() - 1];
-    plc.sheet_piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
-    plc.sheet_thickness.push_back(sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
+    plc.sheet_piece.push_back(st.piece[f]);
+    plc.sheet_thickness.push_back(st.thickness[f]);
   }
   // Box faces. Corner c has bit 0 = x high, bit 1 = y high, bit 2 = z high. Each face is a
   // polygon through its 4 corners and the sheet vertices on its edges, in order, plus the

@@ -36,6 +36,8 @@ struct Plc {
   uint32_t merged_vertices = 0;         // merged into a near-duplicate
   uint32_t dropped_triangles = 0;       // degenerate after snapping, or lying in a box face
   uint32_t repaired_triangles = 0;      // removed because they clashed (repair mode)
+  uint32_t flipped_edges = 0;           // sheet edges flipped for better triangles
+  uint32_t dropped_caps = 0;            // flat rim triangles dropped
 
   // The PLC as a TetGen .poly file (0-based numbering).
   std::string ToPoly() const;
@@ -46,6 +48,13 @@ struct PlcOptions {
   double merge_voxels = 1e-3;   // vertices this close merge
   bool repair = false;          // remove clashing triangles (the smaller of each pair)
                                 // instead of failing
+  // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
+  // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
+  // are within flip_fold_degrees is flipped where that raises their smallest angle (0:
+  // no flips, the sheet triangles are kept as given); a rim triangle with an angle over
+  // cap_degrees (it covers almost nothing) is dropped.
+  double flip_fold_degrees = 15.0;
+  double cap_degrees = 160.0;
 };
 
 // A pair of sheet triangles (indices into the input mesh) that cut through each other.

@@ -54,6 +54,8 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.merged_vertices = plc.merged_vertices;
   r.dropped_triangles = plc.dropped_triangles;
   r.repaired_triangles = plc.repaired_triangles;
+  r.flipped_edges = plc.flipped_edges;
+  r.dropped_caps = plc.dropped_caps;
   const Vec3 ext = plc.box_hi - plc.box_lo;
   r.box_volume = std::abs(ext.x * ext.y * ext.z);
   const absl::Time start = absl::Now();

@@ -36,6 +36,8 @@ struct VolumeMeshResult {
   uint32_t merged_vertices = 0;
   uint32_t dropped_triangles = 0;
   uint32_t repaired_triangles = 0;
+  uint32_t flipped_edges = 0;         // sheet edges flipped for better triangles (PlcOptions)
+  uint32_t dropped_caps = 0;          // flat rim triangles dropped
   double box_volume = 0;              // physical units^3
   double tetgen_seconds = 0;
 };

@@ -116,6 +116,81 @@ TEST(VolumeMesherTest, SheetsReachingTheBoxEndOnIt) {
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
 }
 
+// Two triangles of a flat quad split along its long diagonal a-b (a thin pair), with the
+// fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given.
+TriangleMesh ThinPair(double lift, int32_t piece_f, int32_t piece_g) {
+  TriangleMesh m;
+  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 11.5, 20}, {20, 8.5, 20 + lift}};  // a b c d
+  m.faces = {{0, 1, 2}, {1, 0, 3}};
+  m.face_piece = {piece_f, piece_g};
+  m.face_thickness = {2, 4};
+  return m;
+}
+
+bool HasEdge(const Plc& plc, const Vec3& p, const Vec3& q) {
+  for (const Face& t : plc.sheet_triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = plc.vertices[t[k]], b = plc.vertices[t[(k + 1) % 3]];
+      if ((Norm(a - p) < 1e-9 && Norm(b - q) < 1e-9) || (Norm(a - q) < 1e-9 && Norm(b - p) < 1e-9)) return true;
+    }
+  }
+  return false;
+}
+
+TEST(PlcTest, AThinPairOfCoplanarTrianglesIsFlipped) {
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(ThinPair(0, 0, 0), {40, 20, 40}, {}));
+  EXPECT_EQ(plc.flipped_edges, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 2u);
+  EXPECT_FALSE(HasEdge(plc, {10, 10, 20}, {30, 10, 20}));
+  EXPECT_TRUE(HasEdge(plc, {20, 11.5, 20}, {20, 8.5, 20}));
+  // Both halves of the flipped quad carry the pair's area-weighted thickness (equal areas).
+  EXPECT_FLOAT_EQ(plc.sheet_thickness[0], 3.f);
+  EXPECT_FLOAT_EQ(plc.sheet_thickness[1], 3.f);
+  // Better triangles, and the same surface: the area is unchanged.
+  double area = 0, min_angle = 180;
+  for (const Face& t : plc.sheet_triangles) {
+    const Triangle c = {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]};
+    area += Area(c);
+    min_angle = std::min(min_angle, MinAngleDegrees(c));
+  }
+  EXPECT_NEAR(area, 30.0, 1e-9);
+  EXPECT_GT(min_angle, 16.0);
+}
+
+TEST(PlcTest, FlipsKeepPiecesFoldsAndCanBeTurnedOff) {
+  PlcOptions off;
+  off.flip_fold_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(ThinPair(0, 0, 0), {40, 20, 40}, {}, off));
+  EXPECT_EQ(kept.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(kept, {10, 10, 20}, {30, 10, 20}));
+  // Two pieces meeting along an edge keep it.
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(0, 0, 1), {40, 20, 40}, {}));
+  EXPECT_EQ(pieces.flipped_edges, 0u);
+  // A fold (d lifted 3 voxels: the normals are ~60 degrees apart) is a shape, not noise.
+  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}));
+  EXPECT_EQ(fold.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(fold, {10, 10, 20}, {30, 10, 20}));
+}
+
+TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
+  // A good triangle and, beside it on a short edge, a flat cap (largest angle ~170
+  // degrees) whose long edge is on the sheet's rim: no flip can mend it.
+  TriangleMesh m;
+  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10.9, 20}, {12, 20, 20}};  // a b c e
+  m.faces = {{0, 2, 3}, {0, 1, 2}};
+  m.face_piece = {0, 0};
+  m.face_thickness = {3, 3};
+  PlcOptions o;
+  o.flip_fold_degrees = 15;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {40, 30, 40}, {}, o));
+  // The cap covers almost nothing and goes.
+  EXPECT_EQ(plc.dropped_caps, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 1u);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {40, 30, 40}, {}, {}));
+  EXPECT_EQ(r.dropped_caps, 1u);
+  EXPECT_EQ(r.conformity.conforming, 1u);
+}
+
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
   // A vertical square piercing a horizontal one without sharing edges.
   TriangleMesh m = Append(Square(4, 15, 10, 2), Square(5, 14, 9.5, 2, 1, 3, /*axis=*/0));

@@ -36,7 +36,10 @@ ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish"
 ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
 
 int main(int argc, char** argv) {
-  sheetmesh::UseTransparentHugePages(argc, argv);
+  // Two malloc arenas: upload buffers allocated by gRPC's threads and freed by the
+  // handlers' stay in a bounded heap instead of one arena per thread (measured in
+  // bench/RESULTS.md, "Service").
+  sheetmesh::UseTransparentHugePages(argc, argv, /*max_arenas=*/2);
   absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
   absl::ParseCommandLine(argc, argv);
   // Signals go to one thread that waits for them.

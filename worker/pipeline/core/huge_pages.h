@@ -13,8 +13,11 @@ namespace sheetmesh {
 // and re-executes the program with the same arguments (glibc reads tunables only at
 // start-up). Tunables already in GLIBC_TUNABLES are kept. Returns normally when nothing
 // needs doing, when SHEETMESH_NO_HUGE_PAGES is set, or when the re-exec fails. Call first
-// thing in main(), before any thread starts.
-void UseTransparentHugePages(int argc, char** argv);
+// thing in main(), before any thread starts. `max_arenas` > 0 also caps glibc's malloc
+// arenas (glibc.malloc.arena_max): a server whose network threads allocate message buffers
+// that other threads free otherwise spreads free memory over one arena per thread, and its
+// resident size creeps up with the bytes streamed.
+void UseTransparentHugePages(int argc, char** argv, int max_arenas = 0);
 
 }  // namespace sheetmesh
 

@@ -1,11 +1,10 @@
 #include "client/client.h"
 
-#include <grpcpp/grpcpp.h>
 #include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
 
 #include <condition_variable>
 #include <mutex>
-
 #include <thread>
 #include <vector>
 
@@ -52,12 +51,13 @@ absl::StatusOr<std::unique_ptr<SheetmeshClient>> SheetmeshClient::Connect(const 
 
 std::unique_ptr<grpc::ClientContext> SheetmeshClient::Context() const {
   auto ctx = std::make_unique<grpc::ClientContext>();
-  if (!options_.auth_token.empty()) ctx->AddMetadata("authorization", "Bearer " + options_.auth_token);
+  if (!options_.auth_token.empty())
+    ctx->AddMetadata("authorization", "Bearer " + options_.auth_token);
   return ctx;
 }
 
-absl::StatusOr<v1::Digest> SheetmeshClient::Upload(const std::string& path,
-                                                   const std::function<void(int64_t, int64_t)>& progress) {
+absl::StatusOr<v1::Digest> SheetmeshClient::Upload(
+    const std::string& path, const std::function<void(int64_t, int64_t)>& progress) {
   SM_ASSIGN_OR_RETURN(FileHash h, HashFile(path));
   v1::Digest digest;
   digest.set_hash(h.hex);
@@ -73,7 +73,8 @@ absl::StatusOr<v1::Digest> SheetmeshClient::Upload(const std::string& path,
     }
   }
   // The upload is named by the content, so that running the upload again resumes it.
-  const std::string resource = absl::StrCat("uploads/u", h.hex.substr(0, 32), "/blobs/", h.hex, "/", h.size);
+  const std::string resource =
+      absl::StrCat("uploads/u", h.hex.substr(0, 32), "/blobs/", h.hex, "/", h.size);
   SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
   std::vector<std::byte> buf(kPiece);
   absl::Status last;
@@ -108,13 +109,15 @@ absl::StatusOr<v1::Digest> SheetmeshClient::Upload(const std::string& path,
     last = FromGrpc(writer->Finish());
     if (last.ok() && !broken) return digest;
     if (!last.ok() && last.code() != absl::StatusCode::kUnavailable &&
-        last.code() != absl::StatusCode::kDeadlineExceeded && last.code() != absl::StatusCode::kCancelled) {
+        last.code() != absl::StatusCode::kDeadlineExceeded &&
+        last.code() != absl::StatusCode::kCancelled) {
       return last;  // the server refused: retrying would not help
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(200 << std::min(attempt, 5)));
   }
   return absl::UnavailableError(absl::StrCat("upload of ", path, " did not complete after ",
-                                             options_.upload_retries + 1, " attempts: ", last.message()));
+                                             options_.upload_retries + 1,
+                                             " attempts: ", last.message()));
 }
 
 absl::StatusOr<v1::Job> SheetmeshClient::CreateJob(const v1::CreateJobRequest& request) {
@@ -152,13 +155,14 @@ absl::Status SheetmeshClient::DeleteJob(const std::string& name) {
   return FromGrpc(jobs_->DeleteJob(Context().get(), req, &resp));
 }
 
-absl::StatusOr<v1::Job> SheetmeshClient::Watch(const std::string& name,
-                                               const std::function<void(const v1::WatchJobResponse&)>& on_update) {
+absl::StatusOr<v1::Job> SheetmeshClient::Watch(
+    const std::string& name, const std::function<void(const v1::WatchJobResponse&)>& on_update) {
   v1::WatchJobRequest req;
   req.set_name(JobName(name));
   for (int retry = 0;; ++retry) {
     auto ctx = Context();
-    std::unique_ptr<grpc::ClientReader<v1::WatchJobResponse>> reader = jobs_->WatchJob(ctx.get(), req);
+    std::unique_ptr<grpc::ClientReader<v1::WatchJobResponse>> reader =
+        jobs_->WatchJob(ctx.get(), req);
     v1::WatchJobResponse msg;
     v1::Job last;
     while (reader->Read(&msg)) {
@@ -201,7 +205,8 @@ absl::Status SheetmeshClient::Download(const v1::Digest& digest, const std::stri
     }
   }
   if (sha.Hex() != digest.hash()) {
-    return absl::DataLossError(absl::StrCat(path, ": the downloaded bytes do not match digest ", digest.hash()));
+    return absl::DataLossError(
+        absl::StrCat(path, ": the downloaded bytes do not match digest ", digest.hash()));
   }
   return out.Commit();
 }
@@ -220,8 +225,8 @@ absl::StatusOr<std::string> SheetmeshClient::Health() {
   std::condition_variable cv;
   bool done = false;
   grpc::Status status;
-  stub.UnaryCall(ctx.get(), "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
-                 [&](grpc::Status s) {
+  stub.UnaryCall(ctx.get(), "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request,
+                 &response, [&](grpc::Status s) {
                    std::lock_guard<std::mutex> lock(mu);
                    status = s;
                    done = true;

@@ -17,10 +17,10 @@ namespace sheetmesh::client {
 
 struct ClientOptions {
   std::string address = "127.0.0.1:50051";
-  std::string auth_token;       // sent as "authorization: Bearer <token>"
-  bool tls = false;             // TLS with the system's roots, or...
-  std::string tls_root_cert;    // ...with this PEM file
-  int upload_retries = 5;       // broken upload streams resumed this many times
+  std::string auth_token;     // sent as "authorization: Bearer <token>"
+  bool tls = false;           // TLS with the system's roots, or...
+  std::string tls_root_cert;  // ...with this PEM file
+  int upload_retries = 5;     // broken upload streams resumed this many times
 };
 
 // Thread-compatible: one client per thread, or guard it.

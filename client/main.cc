@@ -29,8 +29,10 @@ ABSL_FLAG(std::string, token, "", "bearer token (or $SHEETMESH_TOKEN)");
 ABSL_FLAG(bool, tls, false, "use TLS (system roots)");
 ABSL_FLAG(std::string, tls_root_cert, "", "PEM root certificate for TLS");
 ABSL_FLAG(std::string, o, "", "output folder");
-ABSL_FLAG(bool, reference, false, "mesh: name the volume by its path on the server instead of uploading it");
-ABSL_FLAG(std::string, config, "", "mesh: the pipeline's JSON config file (as for sheetmesh-pipeline)");
+ABSL_FLAG(bool, reference, false,
+          "mesh: name the volume by its path on the server instead of uploading it");
+ABSL_FLAG(std::string, config, "",
+          "mesh: the pipeline's JSON config file (as for sheetmesh-pipeline)");
 ABSL_FLAG(std::string, labels, "", "mesh: sheet-phase values, e.g. 255");
 ABSL_FLAG(std::string, dims, "", "mesh: raw volume dims NXxNYxNZ");
 ABSL_FLAG(std::string, dtype, "", "mesh: raw volume dtype");
@@ -98,9 +100,11 @@ class Reporter {
     const bool running = j.state() == v1::RUNNING;
     if (tty_) {
       const int width = 30;
-      const int fill = running ? static_cast<int>(p.fraction() * width) : (j.state() == v1::SUCCEEDED ? width : 0);
-      std::cout << absl::StrFormat("\r%-9s [%s%s] %-32s", StateName(j.state()), std::string(fill, '#'),
-                                   std::string(width - fill, ' '), running ? StageText(p) : "")
+      const int fill = running ? static_cast<int>(p.fraction() * width)
+                               : (j.state() == v1::SUCCEEDED ? width : 0);
+      std::cout << absl::StrFormat("\r%-9s [%s%s] %-32s", StateName(j.state()),
+                                   std::string(fill, '#'), std::string(width - fill, ' '),
+                                   running ? StageText(p) : "")
                 << std::flush;
       return;
     }
@@ -123,13 +127,16 @@ absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::stri
   if (!only.empty() && std::none_of(job.artifacts().begin(), job.artifacts().end(),
                                     [&](const v1::Artifact& a) { return a.name() == only; })) {
     std::string names;
-    for (const v1::Artifact& a : job.artifacts()) absl::StrAppend(&names, names.empty() ? "" : ", ", a.name());
-    return absl::NotFoundError(absl::StrCat(job.name(), " has no file '", only, "' (it has: ", names, ")"));
+    for (const v1::Artifact& a : job.artifacts())
+      absl::StrAppend(&names, names.empty() ? "" : ", ", a.name());
+    return absl::NotFoundError(
+        absl::StrCat(job.name(), " has no file '", only, "' (it has: ", names, ")"));
   }
   SM_RETURN_IF_ERROR(MakeDirs(dir));
   for (const v1::Artifact& a : job.artifacts()) {
     if (!only.empty() && a.name() != only) continue;
-    const std::string path = (std::filesystem::path(dir) / std::filesystem::path(a.name()).filename()).string();
+    const std::string path =
+        (std::filesystem::path(dir) / std::filesystem::path(a.name()).filename()).string();
     SM_RETURN_IF_ERROR(c.Download(a.digest(), path));
     std::cout << absl::StrFormat("  %-40s %12d bytes\n", path, a.digest().size_bytes());
   }
@@ -150,7 +157,10 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
   } else {
     const bool tty = ::isatty(1);
     SM_ASSIGN_OR_RETURN(v1::Digest d, c.Upload(args[0], [tty](int64_t sent, int64_t total) {
-      if (tty) std::cout << absl::StrFormat("\rupload %5.1f%% of %d bytes", 100.0 * sent / std::max<int64_t>(1, total), total) << std::flush;
+      if (tty)
+        std::cout << absl::StrFormat("\rupload %5.1f%% of %d bytes",
+                                     100.0 * sent / std::max<int64_t>(1, total), total)
+                  << std::flush;
     }));
     if (tty) std::cout << "\n";
     std::cout << "volume " << d.hash() << " (" << d.size_bytes() << " bytes)\n";
@@ -163,29 +173,39 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
   }
   for (absl::string_view l : absl::StrSplit(absl::GetFlag(FLAGS_labels), ',', absl::SkipEmpty())) {
     double v = 0;
-    if (!absl::SimpleAtod(l, &v)) return absl::InvalidArgumentError(absl::StrCat("--labels: '", l, "' is not a number"));
+    if (!absl::SimpleAtod(l, &v))
+      return absl::InvalidArgumentError(absl::StrCat("--labels: '", l, "' is not a number"));
     p.add_labels(v);
   }
   if (!absl::GetFlag(FLAGS_dims).empty()) {
     for (absl::string_view d : absl::StrSplit(absl::GetFlag(FLAGS_dims), 'x')) {
       int64_t v = 0;
-      if (!absl::SimpleAtoi(d, &v)) return absl::InvalidArgumentError(absl::StrCat("--dims: '", d, "' is not an integer"));
+      if (!absl::SimpleAtoi(d, &v))
+        return absl::InvalidArgumentError(absl::StrCat("--dims: '", d, "' is not an integer"));
       in.mutable_format()->add_dims(v);
     }
   }
-  if (!absl::GetFlag(FLAGS_dtype).empty()) in.mutable_format()->set_dtype(absl::GetFlag(FLAGS_dtype));
+  if (!absl::GetFlag(FLAGS_dtype).empty())
+    in.mutable_format()->set_dtype(absl::GetFlag(FLAGS_dtype));
   if (absl::GetFlag(FLAGS_r) != 0) p.set_r(absl::GetFlag(FLAGS_r));  // the server checks it
   if (absl::GetFlag(FLAGS_extract)) p.set_extract(true);
   if (absl::GetFlag(FLAGS_volume_mesh)) p.set_volume_mesh(true);
   if (!absl::GetFlag(FLAGS_method).empty()) p.set_method(absl::GetFlag(FLAGS_method));
   SM_ASSIGN_OR_RETURN(v1::Job job, c.CreateJob(req));
-  std::cout << "job " << job.name() << (job.cached_from().empty() ? "" : " (identical work done before: " + job.cached_from() + ")") << "\n";
+  std::cout << "job " << job.name()
+            << (job.cached_from().empty()
+                    ? ""
+                    : " (identical work done before: " + job.cached_from() + ")")
+            << "\n";
   Reporter reporter;
-  SM_ASSIGN_OR_RETURN(v1::Job done, c.Watch(job.name(), [&](const v1::WatchJobResponse& m) { reporter.Update(m); }));
+  SM_ASSIGN_OR_RETURN(v1::Job done, c.Watch(job.name(), [&](const v1::WatchJobResponse& m) {
+    reporter.Update(m);
+  }));
   reporter.Done();
   if (done.state() != v1::SUCCEEDED) {
-    return absl::Status(static_cast<absl::StatusCode>(done.error().code() ? done.error().code() : 2),
-                        absl::StrCat(done.name(), " ", StateName(done.state()), ": ", done.error().message()));
+    return absl::Status(
+        static_cast<absl::StatusCode>(done.error().code() ? done.error().code() : 2),
+        absl::StrCat(done.name(), " ", StateName(done.state()), ": ", done.error().message()));
   }
   std::cout << "downloading " << done.artifacts_size() << " files to " << out << "\n";
   SM_RETURN_IF_ERROR(DownloadAll(c, done, out, ""));
@@ -194,7 +214,8 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
 }
 
 absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
-  if (args.empty()) return absl::InvalidArgumentError("usage: sheetmesh jobs list|get|watch|cancel|delete [JOB]");
+  if (args.empty())
+    return absl::InvalidArgumentError("usage: sheetmesh jobs list|get|watch|cancel|delete [JOB]");
   const std::string& verb = args[0];
   if (verb == "list") {
     v1::ListJobsRequest req;
@@ -202,7 +223,8 @@ absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
     if (!absl::GetFlag(FLAGS_state).empty()) {
       v1::JobState s;
       if (!v1::JobState_Parse(absl::GetFlag(FLAGS_state), &s)) {
-        return absl::InvalidArgumentError(absl::StrCat("--state=", absl::GetFlag(FLAGS_state), " is not a job state"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("--state=", absl::GetFlag(FLAGS_state), " is not a job state"));
       }
       req.set_state(s);
     }
@@ -213,13 +235,15 @@ absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
     } while (absl::GetFlag(FLAGS_all_pages) && !req.page_token().empty());
     return absl::OkStatus();
   }
-  if (args.size() != 2) return absl::InvalidArgumentError(absl::StrCat("usage: sheetmesh jobs ", verb, " JOB"));
+  if (args.size() != 2)
+    return absl::InvalidArgumentError(absl::StrCat("usage: sheetmesh jobs ", verb, " JOB"));
   if (verb == "get") {
     SM_ASSIGN_OR_RETURN(v1::Job j, c.GetJob(args[1]));
     PrintJob(j);
   } else if (verb == "watch") {
     Reporter reporter;
-    SM_ASSIGN_OR_RETURN(v1::Job j, c.Watch(args[1], [&](const v1::WatchJobResponse& m) { reporter.Update(m); }));
+    SM_ASSIGN_OR_RETURN(
+        v1::Job j, c.Watch(args[1], [&](const v1::WatchJobResponse& m) { reporter.Update(m); }));
     reporter.Done();
     PrintJob(j);
   } else if (verb == "cancel") {
@@ -244,7 +268,8 @@ int Main(int argc, char** argv) {
   ClientOptions o;
   o.address = absl::GetFlag(FLAGS_server);
   o.auth_token = absl::GetFlag(FLAGS_token);
-  if (o.auth_token.empty() && getenv("SHEETMESH_TOKEN") != nullptr) o.auth_token = getenv("SHEETMESH_TOKEN");
+  if (o.auth_token.empty() && getenv("SHEETMESH_TOKEN") != nullptr)
+    o.auth_token = getenv("SHEETMESH_TOKEN");
   o.tls = absl::GetFlag(FLAGS_tls);
   o.tls_root_cert = absl::GetFlag(FLAGS_tls_root_cert);
   const std::string command = rest[1];
@@ -270,12 +295,14 @@ int Main(int argc, char** argv) {
       st = absl::InvalidArgumentError("usage: sheetmesh artifacts get JOB -o DIR [--name FILE]");
     } else {
       auto job = (*client)->GetJob(args[1]);
-      st = job.ok() ? DownloadAll(**client, *job, absl::GetFlag(FLAGS_o).empty() ? "." : absl::GetFlag(FLAGS_o),
+      st = job.ok() ? DownloadAll(**client, *job,
+                                  absl::GetFlag(FLAGS_o).empty() ? "." : absl::GetFlag(FLAGS_o),
                                   absl::GetFlag(FLAGS_name))
                     : job.status();
       if (st.ok() && job->state() != v1::SUCCEEDED) {
-        st = absl::FailedPreconditionError(absl::StrCat(job->name(), " is ", StateName(job->state()),
-                                                        "; its files come when it has SUCCEEDED"));
+        st =
+            absl::FailedPreconditionError(absl::StrCat(job->name(), " is ", StateName(job->state()),
+                                                       "; its files come when it has SUCCEEDED"));
       }
     }
   } else if (command == "health") {
@@ -287,7 +314,8 @@ int Main(int argc, char** argv) {
     return 2;
   }
   if (!st.ok()) {
-    std::cerr << "sheetmesh " << command << ": " << absl::StatusCodeToString(st.code()) << ": " << st.message() << "\n";
+    std::cerr << "sheetmesh " << command << ": " << absl::StatusCodeToString(st.code()) << ": "
+              << st.message() << "\n";
     return st.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
   }
   return 0;

@@ -42,17 +42,19 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
   while (reader->Read(&req)) {
     if (resource.empty()) {
       if (req.resource_name().empty()) {
-        return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "the first WriteRequest must name the resource");
+        return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "the first WriteRequest must name the resource");
       }
       resource = req.resource_name();
     } else if (!req.resource_name().empty() && req.resource_name() != resource) {
       return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                          absl::StrCat("resource_name changed within a stream: '", req.resource_name(),
-                                       "' after '", resource, "'"));
+                          absl::StrCat("resource_name changed within a stream: '",
+                                       req.resource_name(), "' after '", resource, "'"));
     }
     if (static_cast<int64_t>(req.data().size()) > kMaxPiece) {
-      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                          absl::StrCat("a piece of ", req.data().size(), " bytes exceeds the 1 MiB limit"));
+      return grpc::Status(
+          grpc::StatusCode::INVALID_ARGUMENT,
+          absl::StrCat("a piece of ", req.data().size(), " bytes exceeds the 1 MiB limit"));
     }
     absl::StatusOr<BlobStore::UploadState> st = ctx_->blobs->Append(
         resource, req.write_offset(), req.data(), req.finish_write(), ctx_->limits.max_blob_bytes);
@@ -93,18 +95,22 @@ grpc::Status BlobServiceImpl::Read(grpc::ServerContext* context, const v1::ReadR
   if (!path.ok()) return ToGrpcStatus(path.status());
   const int64_t size = request->digest().size_bytes();
   if (request->read_offset() < 0 || request->read_offset() > size || request->read_limit() < 0) {
-    return grpc::Status(grpc::StatusCode::OUT_OF_RANGE,
-                        absl::StrCat("read_offset ", request->read_offset(), " and read_limit ",
-                                     request->read_limit(), " do not fit a blob of ", size, " bytes"));
+    return grpc::Status(
+        grpc::StatusCode::OUT_OF_RANGE,
+        absl::StrCat("read_offset ", request->read_offset(), " and read_limit ",
+                     request->read_limit(), " do not fit a blob of ", size, " bytes"));
   }
-  const int64_t end = request->read_limit() == 0 ? size : std::min(size, request->read_offset() + request->read_limit());
+  const int64_t end = request->read_limit() == 0
+                          ? size
+                          : std::min(size, request->read_offset() + request->read_limit());
   absl::StatusOr<ScopedFd> fd = OpenForRead(*path);
   if (!fd.ok()) return ToGrpcStatus(fd.status());
   std::vector<std::byte> buf(kMaxPiece);
   v1::ReadResponse resp;
   for (int64_t off = request->read_offset(); off < end && !context->IsCancelled();) {
     const int64_t n = std::min(kMaxPiece, end - off);
-    if (absl::Status st = ReadFullyAt(fd->get(), off, std::span<std::byte>(buf.data(), n), *path); !st.ok()) {
+    if (absl::Status st = ReadFullyAt(fd->get(), off, std::span<std::byte>(buf.data(), n), *path);
+        !st.ok()) {
       return ToGrpcStatus(st);
     }
     resp.set_data(reinterpret_cast<const char*>(buf.data()), n);

@@ -11,11 +11,13 @@ class BlobServiceImpl final : public v1::BlobService::Service {
  public:
   explicit BlobServiceImpl(const ServiceContext* ctx) : ctx_(ctx) {}
 
-  grpc::Status FindMissingBlobs(grpc::ServerContext* context, const v1::FindMissingBlobsRequest* request,
+  grpc::Status FindMissingBlobs(grpc::ServerContext* context,
+                                const v1::FindMissingBlobsRequest* request,
                                 v1::FindMissingBlobsResponse* response) override;
   grpc::Status Write(grpc::ServerContext* context, grpc::ServerReader<v1::WriteRequest>* reader,
                      v1::WriteResponse* response) override;
-  grpc::Status QueryWriteStatus(grpc::ServerContext* context, const v1::QueryWriteStatusRequest* request,
+  grpc::Status QueryWriteStatus(grpc::ServerContext* context,
+                                const v1::QueryWriteStatusRequest* request,
                                 v1::QueryWriteStatusResponse* response) override;
   grpc::Status Read(grpc::ServerContext* context, const v1::ReadRequest* request,
                     grpc::ServerWriter<v1::ReadResponse>* writer) override;

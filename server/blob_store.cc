@@ -1,10 +1,9 @@
 #include "server/blob_store.h"
 
 #include <fcntl.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
-#include <string.h>
 
 #include <filesystem>
 #include <future>
@@ -77,7 +76,8 @@ class PartFile {
         std::swap(stage_, spare_);
         const char* full = spare_.get();
         const int64_t at = stage_start_;
-        writing_ = std::async(std::launch::async, [this, full, at] { return WriteAt(full, kStage, at, true); });
+        writing_ = std::async(std::launch::async,
+                              [this, full, at] { return WriteAt(full, kStage, at, true); });
         stage_start_ += kStage;
         stage_len_ = 0;
       }
@@ -92,7 +92,8 @@ class PartFile {
       const int64_t aligned = stage_len_ / kBlock * kBlock;
       if (aligned > 0) SM_RETURN_IF_ERROR(WriteAt(stage_.get(), aligned, stage_start_, true));
       if (stage_len_ > aligned) {
-        SM_RETURN_IF_ERROR(WriteAt(stage_.get() + aligned, stage_len_ - aligned, stage_start_ + aligned, false));
+        SM_RETURN_IF_ERROR(
+            WriteAt(stage_.get() + aligned, stage_len_ - aligned, stage_start_ + aligned, false));
       }
     }
     stage_.reset();
@@ -118,7 +119,8 @@ class PartFile {
 
   static absl::StatusOr<Buffer> NewBuffer() {
     void* mem = nullptr;
-    if (posix_memalign(&mem, kBlock, kStage) != 0) return absl::ResourceExhaustedError("no memory for an upload buffer");
+    if (posix_memalign(&mem, kBlock, kStage) != 0)
+      return absl::ResourceExhaustedError("no memory for an upload buffer");
     return Buffer(static_cast<char*>(mem));
   }
 
@@ -134,8 +136,9 @@ class PartFile {
     stage_start_ = end_ / kBlock * kBlock;
     stage_len_ = end_ - stage_start_;
     if (stage_len_ > 0) {
-      SM_RETURN_IF_ERROR(ReadFullyAt(fd_.get(), stage_start_,
-                                     std::as_writable_bytes(std::span<char>(stage_.get(), stage_len_)), path_));
+      SM_RETURN_IF_ERROR(
+          ReadFullyAt(fd_.get(), stage_start_,
+                      std::as_writable_bytes(std::span<char>(stage_.get(), stage_len_)), path_));
     }
     return absl::OkStatus();
   }
@@ -166,7 +169,7 @@ class PartFile {
   std::future<absl::Status> writing_;
   int64_t stage_start_ = 0;  // file offset of stage_[0], block-aligned
   int64_t stage_len_ = 0;
-  int64_t end_ = 0;          // bytes in the file and the buffers together
+  int64_t end_ = 0;  // bytes in the file and the buffers together
 };
 
 // An upload: its file, the hash of the bytes written, and the declared digest.
@@ -177,21 +180,24 @@ struct BlobStore::Upload {
   std::unique_ptr<PartFile> file;
   std::unique_ptr<Sha256> sha;  // over [0, written)
   int64_t written = 0;
-  int64_t committed = 0;        // durable (the stream ended, or a restart found it on disk)
+  int64_t committed = 0;  // durable (the stream ended, or a restart found it on disk)
   bool complete = false;
 };
 
-std::string DigestString(const v1::Digest& d) { return absl::StrCat(d.hash(), "/", d.size_bytes()); }
+std::string DigestString(const v1::Digest& d) {
+  return absl::StrCat(d.hash(), "/", d.size_bytes());
+}
 
 absl::Status CheckDigest(const v1::Digest& d) {
   bool hex = d.hash().size() == 64;
   for (char c : d.hash()) hex &= absl::ascii_isdigit(c) || (c >= 'a' && c <= 'f');
   if (!hex) {
-    return absl::InvalidArgumentError(absl::StrCat("digest hash '", d.hash(),
-                                                   "' is not 64 lower-case hex digits (SHA-256)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("digest hash '", d.hash(), "' is not 64 lower-case hex digits (SHA-256)"));
   }
   if (d.size_bytes() < 0) {
-    return absl::InvalidArgumentError(absl::StrCat("digest size_bytes ", d.size_bytes(), " is negative"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("digest size_bytes ", d.size_bytes(), " is negative"));
   }
   return absl::OkStatus();
 }
@@ -222,7 +228,8 @@ bool BlobStore::Contains(const v1::Digest& d) const {
 
 absl::StatusOr<std::string> BlobStore::PathOf(const v1::Digest& d) const {
   SM_RETURN_IF_ERROR(CheckDigest(d));
-  if (!Contains(d)) return absl::NotFoundError(absl::StrCat("blob ", DigestString(d), " is not stored"));
+  if (!Contains(d))
+    return absl::NotFoundError(absl::StrCat("blob ", DigestString(d), " is not stored"));
   return CasPath(d.hash());
 }
 
@@ -256,8 +263,8 @@ absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const st
   }
   for (char c : parts[1]) {
     if (!absl::ascii_isalnum(c) && c != '-' && c != '_') {
-      return absl::InvalidArgumentError(
-          absl::StrCat("resource_name '", resource, "': the upload id may hold letters, digits, - and _ only"));
+      return absl::InvalidArgumentError(absl::StrCat(
+          "resource_name '", resource, "': the upload id may hold letters, digits, - and _ only"));
     }
   }
   v1::Digest expected;
@@ -302,7 +309,8 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
   if (up->complete) return UploadState{up->expected.size_bytes(), true};
   if (offset < 0 || offset > up->written) {
     return absl::InvalidArgumentError(absl::StrCat("write_offset ", offset, " for ", resource,
-                                                   " must be at most the committed size ", up->written));
+                                                   " must be at most the committed size ",
+                                                   up->written));
   }
   // A resumed (or a second, concurrent) writer may send bytes the upload already has: the
   // content is named by its digest, so they are the same bytes (the digest check at the end
@@ -322,9 +330,9 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
   if (!finish) return UploadState{up->committed, false};
   const std::string got = up->sha->Hex();
   if (up->written != up->expected.size_bytes() || got != up->expected.hash()) {
-    const std::string why = absl::StrCat(
-        "upload ", resource, " has ", up->written, " bytes of SHA-256 ", got,
-        ", not the declared ", DigestString(up->expected), "; it is discarded");
+    const std::string why =
+        absl::StrCat("upload ", resource, " has ", up->written, " bytes of SHA-256 ", got,
+                     ", not the declared ", DigestString(up->expected), "; it is discarded");
     up->file->Close();
     ::unlink(up->part_path.c_str());
     std::lock_guard<std::mutex> l(mu_);

@@ -46,8 +46,8 @@ class BlobStore {
   // Appends `data` at `offset` to the upload `resource` (uploads/{uuid}/blobs/{hash}/{size}).
   // Bytes before what the upload already holds are skipped (a resumed or concurrent writer
   // of the same content). kInvalidArgument for a malformed name or an offset beyond what
-  // the upload holds; kResourceExhausted beyond `max_bytes` (naming the limit). With `finish`, checks the
-  // digest (kInvalidArgument on mismatch; the upload is discarded) and stores the blob.
+  // the upload holds; kResourceExhausted beyond `max_bytes` (naming the limit). With `finish`,
+  // checks the digest (kInvalidArgument on mismatch; the upload is discarded) and stores the blob.
   absl::StatusOr<UploadState> Append(const std::string& resource, int64_t offset,
                                      absl::string_view data, bool finish, int64_t max_bytes);
   // Makes what was written durable (a stream ended or broke).

@@ -58,7 +58,8 @@ uint64_t JobEvents::Wait(const std::string& job, uint64_t seen, absl::Duration t
     auto it = jobs_.find(job);
     return it == jobs_.end() ? uint64_t{0} : it->second.version;
   };
-  cv_.wait_for(lock, absl::ToChronoMilliseconds(timeout), [&] { return closed_ || version() != seen; });
+  cv_.wait_for(lock, absl::ToChronoMilliseconds(timeout),
+               [&] { return closed_ || version() != seen; });
   return version();
 }
 

@@ -28,7 +28,9 @@ std::string Deterministic(const google::protobuf::Message& m) {
   return out;
 }
 
-bool Terminal(v1::JobState s) { return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED; }
+bool Terminal(v1::JobState s) {
+  return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED;
+}
 
 }  // namespace
 
@@ -38,14 +40,16 @@ absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& r, const std::s
     identity = absl::StrCat("digest:", DigestString(r.input().volume_digest()));
   } else {
     struct stat st;
-    if (::stat(resolved.c_str(), &st) != 0) return absl::NotFoundError(absl::StrCat(resolved, " vanished"));
-    identity = absl::StrCat("path:", resolved, ":", st.st_size, ":", st.st_mtim.tv_sec, ".", st.st_mtim.tv_nsec);
+    if (::stat(resolved.c_str(), &st) != 0)
+      return absl::NotFoundError(absl::StrCat(resolved, " vanished"));
+    identity = absl::StrCat("path:", resolved, ":", st.st_size, ":", st.st_mtim.tv_sec, ".",
+                            st.st_mtim.tv_nsec);
   }
   v1::JobInput input = r.input();
   input.clear_volume_digest();
   input.clear_volume_path();
-  return Sha256Hex(absl::StrCat(SHEETMESH_VERSION, "\n", identity, "\n", Deterministic(input),
-                                "\n", Deterministic(r.parameters())));
+  return Sha256Hex(absl::StrCat(SHEETMESH_VERSION, "\n", identity, "\n", Deterministic(input), "\n",
+                                Deterministic(r.parameters())));
 }
 
 absl::StatusOr<v1::Job> JobServiceImpl::Fresh(const std::string& name) {
@@ -60,7 +64,8 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
                                        v1::Job* response) {
   if (grpc::Status a = CheckAuth(context, ctx_->auth_token); !a.ok()) return a;
   if (r->request_id().empty()) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "request_id is required (a UUID chosen by the client)");
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        "request_id is required (a UUID chosen by the client)");
   }
   // A retry of an accepted request gets the same job, whatever the queue holds now.
   absl::StatusOr<std::optional<v1::Job>> existing = ctx_->jobs->FindByRequestId(r->request_id());
@@ -74,7 +79,8 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
   std::string resolved;
   if (in.has_volume_digest()) {
     if (absl::Status st = CheckDigest(in.volume_digest()); !st.ok()) {
-      return ToGrpcStatus(absl::InvalidArgumentError(absl::StrCat("input.volume_digest: ", st.message())));
+      return ToGrpcStatus(
+          absl::InvalidArgumentError(absl::StrCat("input.volume_digest: ", st.message())));
     }
     if (!ctx_->blobs->Contains(in.volume_digest())) {
       return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
@@ -86,7 +92,8 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     if (!path.ok()) return ToGrpcStatus(path.status());
     resolved = *path;
   } else {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "input needs volume_digest or volume_path");
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        "input needs volume_digest or volume_path");
   }
   // Parameters are checked now, so that a mistake is the caller's error, not a failed job.
   absl::StatusOr<PipelineOptions> options =
@@ -115,9 +122,10 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     absl::StatusOr<int64_t> queued = ctx_->jobs->CountInState(v1::QUEUED);
     if (!queued.ok()) return ToGrpcStatus(queued.status());
     if (*queued >= ctx_->limits.max_queued_jobs) {
-      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                          absl::StrCat("the queue holds ", *queued, " jobs, the server's limit (max_queued_jobs = ",
-                                       ctx_->limits.max_queued_jobs, "); retry later"));
+      return grpc::Status(
+          grpc::StatusCode::RESOURCE_EXHAUSTED,
+          absl::StrCat("the queue holds ", *queued, " jobs, the server's limit (max_queued_jobs = ",
+                       ctx_->limits.max_queued_jobs, "); retry later"));
     }
   }
   bool created = false;
@@ -128,7 +136,8 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
   return grpc::Status::OK;
 }
 
-grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* r, v1::Job* response) {
+grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* r,
+                                    v1::Job* response) {
   if (grpc::Status a = CheckAuth(context, ctx_->auth_token); !a.ok()) return a;
   absl::StatusOr<v1::Job> job = Fresh(r->name());
   if (!job.ok()) return ToGrpcStatus(job.status());
@@ -140,11 +149,13 @@ grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context, const v1::Li
                                       v1::ListJobsResponse* response) {
   if (grpc::Status a = CheckAuth(context, ctx_->auth_token); !a.ok()) return a;
   if (r->page_size() < 0) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, absl::StrCat("page_size ", r->page_size(), " is negative"));
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        absl::StrCat("page_size ", r->page_size(), " is negative"));
   }
   const int size = r->page_size() == 0 ? 50 : std::min(r->page_size(), 1000);
   std::string next;
-  absl::StatusOr<std::vector<v1::Job>> jobs = ctx_->jobs->List(r->state(), size, r->page_token(), &next);
+  absl::StatusOr<std::vector<v1::Job>> jobs =
+      ctx_->jobs->List(r->state(), size, r->page_token(), &next);
   if (!jobs.ok()) return ToGrpcStatus(jobs.status());
   for (v1::Job& j : *jobs) {
     if (j.state() == v1::RUNNING) {
@@ -191,7 +202,8 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
     const uint64_t now = ctx_->events->Wait(r->name(), seen, ctx_->heartbeat);
     if (context->IsCancelled()) return grpc::Status::OK;  // the watcher left; the job goes on
     if (ctx_->events->closed()) {
-      return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down; watch again after it restarts");
+      return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                          "the server is shutting down; watch again after it restarts");
     }
     const bool changed = now != seen;
     const std::vector<v1::JobProgress> stages = ctx_->events->StagesSince(r->name(), seen);
@@ -212,7 +224,8 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
       stage_sent = stage.stage_index();
       if (!writer->Write(msg)) return grpc::Status::OK;
     }
-    if (job->state() == v1::RUNNING) stage_sent = std::max(stage_sent, job->progress().stage_index());
+    if (job->state() == v1::RUNNING)
+      stage_sent = std::max(stage_sent, job->progress().stage_index());
     const std::string cur = job->SerializeAsString();
     msg.Clear();
     *msg.mutable_job() = *job;

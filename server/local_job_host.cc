@@ -77,7 +77,8 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
     live.progress.set_stage_count(u.stage_count);
     live.progress.set_fraction(u.fraction);
     if (!u.message.empty() || new_stage) live.progress.set_message(u.message);
-    *live.progress.mutable_update_time() = TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(now));
+    *live.progress.mutable_update_time() =
+        TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(now));
     // Watchers hear of every stage and of every percent, at most ten times a second.
     if (new_stage || (u.fraction - live.notified_fraction >= 0.01 &&
                       now - live.notified >= absl::Milliseconds(100))) {
@@ -113,8 +114,11 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
   if (in.has_volume_digest()) {
     SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(in.volume_digest()));
     // Readers tell formats by name: give the blob the client's file name through a link.
-    const std::string name = in.file_name().empty() ? "volume.raw" : std::filesystem::path(in.file_name()).filename().string();
-    const std::string dir = absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job.name(), {{"/", "-"}}));
+    const std::string name = in.file_name().empty()
+                                 ? "volume.raw"
+                                 : std::filesystem::path(in.file_name()).filename().string();
+    const std::string dir = absl::StrCat(options_.scratch_dir, "/inputs/",
+                                         absl::StrReplaceAll(job.name(), {{"/", "-"}}));
     SM_RETURN_IF_ERROR(MakeDirs(dir));
     v.path = dir + "/" + name;
     ::unlink(v.path.c_str());
@@ -130,7 +134,8 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
   return absl::InvalidArgumentError(absl::StrCat(job.name(), ": input names no volume"));
 }
 
-absl::StatusOr<v1::Artifact> LocalJobHost::PutArtifact(const std::string& job, const std::string& path,
+absl::StatusOr<v1::Artifact> LocalJobHost::PutArtifact(const std::string& job,
+                                                       const std::string& path,
                                                        const std::string& media_type) {
   SM_ASSIGN_OR_RETURN(v1::Digest d, blobs_->PutFile(path));
   v1::Artifact a;
@@ -157,7 +162,8 @@ absl::Status LocalJobHost::Finish(const std::string& job, const std::string& wor
     cancelled_.erase(job);
   }
   std::error_code ec;
-  std::filesystem::remove_all(absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}})), ec);
+  std::filesystem::remove_all(
+      absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}})), ec);
   events_->NotifyFinished(job);
   return done.status();
 }

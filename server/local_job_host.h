@@ -21,9 +21,9 @@
 namespace sheetmesh::server {
 
 struct LocalJobHostOptions {
-  std::vector<std::string> allowed_roots;       // for volume_path inputs
-  std::string scratch_dir;                      // per-job links to uploaded volumes
-  absl::Duration lease = absl::Seconds(30);     // lease length
+  std::vector<std::string> allowed_roots;                     // for volume_path inputs
+  std::string scratch_dir;                                    // per-job links to uploaded volumes
+  absl::Duration lease = absl::Seconds(30);                   // lease length
   absl::Duration progress_store_interval = absl::Seconds(2);  // store progress this often
 };
 
@@ -32,7 +32,8 @@ class LocalJobHost : public runtime::JobHost {
  public:
   LocalJobHost(JobStore* store, BlobStore* blobs, JobEvents* events, LocalJobHostOptions options);
 
-  absl::StatusOr<std::optional<v1::Job>> Lease(const std::string& worker, absl::Duration wait) override;
+  absl::StatusOr<std::optional<v1::Job>> Lease(const std::string& worker,
+                                               absl::Duration wait) override;
   absl::Status Renew(const std::string& job, const std::string& worker) override;
   bool ReportProgress(const std::string& job, const std::string& worker,
                       const runtime::ProgressUpdate& update) override;
@@ -53,8 +54,8 @@ class LocalJobHost : public runtime::JobHost {
  private:
   struct Live {
     v1::JobProgress progress;
-    absl::Time stored;      // when progress was last stored
-    absl::Time notified;    // when watchers were last told
+    absl::Time stored;    // when progress was last stored
+    absl::Time notified;  // when watchers were last told
     double notified_fraction = -1;
   };
 

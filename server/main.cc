@@ -18,10 +18,12 @@
 #include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/core/huge_pages.h"
 
-ABSL_FLAG(std::string, address, "127.0.0.1:50051", "host:port to listen on (port 0: any free port)");
+ABSL_FLAG(std::string, address, "127.0.0.1:50051",
+          "host:port to listen on (port 0: any free port)");
 ABSL_FLAG(std::string, data_dir, "", "folder of the job store, blobs and scratch (required)");
 ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
-ABSL_FLAG(std::string, allowed_root, "", "comma-separated folders whose volumes jobs may name by path");
+ABSL_FLAG(std::string, allowed_root, "",
+          "comma-separated folders whose volumes jobs may name by path");
 ABSL_FLAG(std::string, auth_token, "", "bearer token every call must carry ('' = none)");
 ABSL_FLAG(std::string, auth_token_file, "", "read the bearer token from this file");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
@@ -53,7 +55,8 @@ int main(int argc, char** argv) {
   o.address = absl::GetFlag(FLAGS_address);
   o.data_dir = absl::GetFlag(FLAGS_data_dir);
   o.workers = absl::GetFlag(FLAGS_workers);
-  for (absl::string_view r : absl::StrSplit(absl::GetFlag(FLAGS_allowed_root), ',', absl::SkipEmpty())) {
+  for (absl::string_view r :
+       absl::StrSplit(absl::GetFlag(FLAGS_allowed_root), ',', absl::SkipEmpty())) {
     o.allowed_roots.emplace_back(r);
   }
   o.auth_token = absl::GetFlag(FLAGS_auth_token);
@@ -61,7 +64,8 @@ int main(int argc, char** argv) {
     std::ifstream f(absl::GetFlag(FLAGS_auth_token_file));
     std::getline(f, o.auth_token);
     if (o.auth_token.empty()) {
-      std::cerr << "sheetmesh-server: " << absl::GetFlag(FLAGS_auth_token_file) << " holds no token\n";
+      std::cerr << "sheetmesh-server: " << absl::GetFlag(FLAGS_auth_token_file)
+                << " holds no token\n";
       return 2;
     }
   }
@@ -78,8 +82,8 @@ int main(int argc, char** argv) {
     std::cerr << "sheetmesh-server: " << server.status() << "\n";
     return server.status().code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
   }
-  std::cout << "sheetmesh-server listening on port " << (*server)->port() << ", data in " << o.data_dir
-            << std::endl;
+  std::cout << "sheetmesh-server listening on port " << (*server)->port() << ", data in "
+            << o.data_dir << std::endl;
   if (!absl::GetFlag(FLAGS_port_file).empty()) {
     // Atomically, so that a script polling for the file never reads half of it.
     const absl::Status st = sheetmesh::WriteFileAtomically(absl::GetFlag(FLAGS_port_file),

@@ -22,7 +22,8 @@ absl::StatusOr<std::string> ResolveReference(const std::string& path,
   }
   for (const auto& part : std::filesystem::path(path)) {
     if (part == "..") {
-      return absl::PermissionDeniedError(absl::StrCat("volume_path '", path, "' may not contain '..'"));
+      return absl::PermissionDeniedError(
+          absl::StrCat("volume_path '", path, "' may not contain '..'"));
     }
   }
   char real[PATH_MAX];
@@ -35,9 +36,9 @@ absl::StatusOr<std::string> ResolveReference(const std::string& path,
     if (r.back() != '/') r += '/';
     if (resolved.rfind(r, 0) == 0 || resolved + "/" == r) return resolved;
   }
-  return absl::PermissionDeniedError(absl::StrCat(
-      "volume_path '", path, "' resolves to '", resolved, "', outside the allowed roots (",
-      absl::StrJoin(roots, ", "), ")"));
+  return absl::PermissionDeniedError(absl::StrCat("volume_path '", path, "' resolves to '",
+                                                  resolved, "', outside the allowed roots (",
+                                                  absl::StrJoin(roots, ", "), ")"));
 }
 
 }  // namespace sheetmesh::server

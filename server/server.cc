@@ -54,12 +54,14 @@ static std::string Slurp(const std::string& path) {
 }
 
 absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
-  if (o.data_dir.empty()) return absl::InvalidArgumentError("the server needs a data folder (--data_dir)");
+  if (o.data_dir.empty())
+    return absl::InvalidArgumentError("the server needs a data folder (--data_dir)");
   if (o.tls_cert.empty() != o.tls_key.empty()) {
     return absl::InvalidArgumentError("TLS needs both --tls_cert and --tls_key");
   }
   if (o.max_attempts < 1) {
-    return absl::InvalidArgumentError(absl::StrCat("max_attempts ", o.max_attempts, " must be at least 1"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("max_attempts ", o.max_attempts, " must be at least 1"));
   }
   std::unique_ptr<Server> server(new Server());
   server->impl_ = std::make_unique<Impl>();

@@ -25,14 +25,14 @@ struct ServerOptions {
   std::vector<std::string> allowed_roots;   // paths jobs may name (none: only uploads)
   std::string tls_cert;                     // PEM files; both empty: no TLS
   std::string tls_key;
-  std::string auth_token;                   // required bearer token ("" = none)
+  std::string auth_token;  // required bearer token ("" = none)
   ServiceLimits limits;
-  absl::Duration lease = absl::Seconds(30);       // worker lease; renewed every third
-  int max_attempts = 3;                           // runs before a job whose workers keep
-                                                  // vanishing is FAILED
-  absl::Duration heartbeat = absl::Seconds(5);    // WatchJob heartbeat
-  bool cache = true;                              // reuse results of identical work
-  int max_message_bytes = 4 << 20;                // gRPC message limit (pieces are 1 MiB)
+  absl::Duration lease = absl::Seconds(30);     // worker lease; renewed every third
+  int max_attempts = 3;                         // runs before a job whose workers keep
+                                                // vanishing is FAILED
+  absl::Duration heartbeat = absl::Seconds(5);  // WatchJob heartbeat
+  bool cache = true;                            // reuse results of identical work
+  int max_message_bytes = 4 << 20;              // gRPC message limit (pieces are 1 MiB)
 };
 
 // Thread-safe.

@@ -16,8 +16,8 @@
 namespace sheetmesh::server {
 
 struct ServiceLimits {
-  int64_t max_blob_bytes = int64_t{64} << 30;   // an upload beyond this is refused
-  int64_t max_queued_jobs = 1000;               // CreateJob beyond this is refused
+  int64_t max_blob_bytes = int64_t{64} << 30;  // an upload beyond this is refused
+  int64_t max_queued_jobs = 1000;              // CreateJob beyond this is refused
 };
 
 struct ServiceContext {
@@ -26,7 +26,7 @@ struct ServiceContext {
   JobEvents* events = nullptr;
   LocalJobHost* host = nullptr;
   std::vector<std::string> allowed_roots;
-  std::string auth_token;                       // "" = no authentication
+  std::string auth_token;  // "" = no authentication
   ServiceLimits limits;
   absl::Duration heartbeat = absl::Seconds(5);  // WatchJob sends at least this often
   bool cache = true;                            // reuse results of identical work

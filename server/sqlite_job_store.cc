@@ -73,7 +73,8 @@ std::string IdOf(const std::string& name) {
 
 class SqliteJobStore : public JobStore {
  public:
-  explicit SqliteJobStore(sqlite3* db) : db_(db), rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
+  explicit SqliteJobStore(sqlite3* db)
+      : db_(db), rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
   ~SqliteJobStore() override { sqlite3_close(db_); }
 
   absl::Status Init() {
@@ -98,7 +99,8 @@ class SqliteJobStore : public JobStore {
     return absl::OkStatus();
   }
 
-  absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key, bool* created) override {
+  absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
+                                 bool* created) override {
     std::lock_guard<std::mutex> lock(mu_);
     *created = false;
     {
@@ -120,10 +122,16 @@ class SqliteJobStore : public JobStore {
     job.set_name(absl::StrCat("jobs/", id));
     *job.mutable_create_time() = NowTs();
     if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
-    Stmt ins(db_, "INSERT INTO jobs (id, seq, request_id, state, cache_key, job) VALUES (?, ?, ?, ?, ?, ?)");
+    Stmt ins(
+        db_,
+        "INSERT INTO jobs (id, seq, request_id, state, cache_key, job) VALUES (?, ?, ?, ?, ?, ?)");
     SM_RETURN_IF_ERROR(ins.ok());
-    ins.Bind(1, std::string(id)).Bind(2, seq).Bind(3, job.request_id()).Bind(4, int64_t{job.state()})
-        .Bind(5, cache_key).BindBlob(6, job.SerializeAsString());
+    ins.Bind(1, std::string(id))
+        .Bind(2, seq)
+        .Bind(3, job.request_id())
+        .Bind(4, int64_t{job.state()})
+        .Bind(5, cache_key)
+        .BindBlob(6, job.SerializeAsString());
     absl::Status st = ins.Run();
     if (!st.ok()) {
       Exec("ROLLBACK").IgnoreError();
@@ -154,11 +162,13 @@ class SqliteJobStore : public JobStore {
     std::lock_guard<std::mutex> lock(mu_);
     int64_t before = INT64_MAX;
     if (!token.empty() && !absl::SimpleAtoi(token, &before)) {
-      return absl::InvalidArgumentError(absl::StrCat("page_token '", token, "' is not one this server gave"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("page_token '", token, "' is not one this server gave"));
     }
-    Stmt q(db_, state == v1::JOB_STATE_UNSPECIFIED
-                    ? "SELECT job, seq FROM jobs WHERE seq < ? ORDER BY seq DESC LIMIT ?"
-                    : "SELECT job, seq FROM jobs WHERE seq < ? AND state = ? ORDER BY seq DESC LIMIT ?");
+    Stmt q(db_,
+           state == v1::JOB_STATE_UNSPECIFIED
+               ? "SELECT job, seq FROM jobs WHERE seq < ? ORDER BY seq DESC LIMIT ?"
+               : "SELECT job, seq FROM jobs WHERE seq < ? AND state = ? ORDER BY seq DESC LIMIT ?");
     SM_RETURN_IF_ERROR(q.ok());
     q.Bind(1, before);
     if (state == v1::JOB_STATE_UNSPECIFIED) {
@@ -181,7 +191,8 @@ class SqliteJobStore : public JobStore {
     return out;
   }
 
-  absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker, absl::Duration lease) override {
+  absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker,
+                                                   absl::Duration lease) override {
     std::lock_guard<std::mutex> lock(mu_);
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
     std::optional<v1::Job> out;
@@ -195,10 +206,14 @@ class SqliteJobStore : public JobStore {
       job.set_state(v1::RUNNING);
       job.set_attempts(job.attempts() + 1);
       *job.mutable_start_time() = NowTs();
-      Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = ?, lease_expires = ?, job = ? WHERE id = ?");
+      Stmt u(db_,
+             "UPDATE jobs SET state = ?, lease_owner = ?, lease_expires = ?, job = ? WHERE id = ?");
       SM_RETURN_IF_ERROR(u.ok());
-      u.Bind(1, int64_t{v1::RUNNING}).Bind(2, worker).Bind(3, NowMs() + absl::ToInt64Milliseconds(lease))
-          .BindBlob(4, job.SerializeAsString()).Bind(5, id);
+      u.Bind(1, int64_t{v1::RUNNING})
+          .Bind(2, worker)
+          .Bind(3, NowMs() + absl::ToInt64Milliseconds(lease))
+          .BindBlob(4, job.SerializeAsString())
+          .Bind(5, id);
       SM_RETURN_IF_ERROR(u.Run());
       out = std::move(job);
       return absl::OkStatus();
@@ -211,11 +226,15 @@ class SqliteJobStore : public JobStore {
     return out;
   }
 
-  absl::Status Renew(const std::string& name, const std::string& worker, absl::Duration lease) override {
+  absl::Status Renew(const std::string& name, const std::string& worker,
+                     absl::Duration lease) override {
     std::lock_guard<std::mutex> lock(mu_);
     Stmt u(db_, "UPDATE jobs SET lease_expires = ? WHERE id = ? AND state = ? AND lease_owner = ?");
     SM_RETURN_IF_ERROR(u.ok());
-    u.Bind(1, NowMs() + absl::ToInt64Milliseconds(lease)).Bind(2, IdOf(name)).Bind(3, int64_t{v1::RUNNING}).Bind(4, worker);
+    u.Bind(1, NowMs() + absl::ToInt64Milliseconds(lease))
+        .Bind(2, IdOf(name))
+        .Bind(3, int64_t{v1::RUNNING})
+        .Bind(4, worker);
     SM_RETURN_IF_ERROR(u.Run());
     if (sqlite3_changes(db_) != 1) {
       return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
@@ -223,7 +242,8 @@ class SqliteJobStore : public JobStore {
     return absl::OkStatus();
   }
 
-  absl::Status SetProgress(const std::string& name, const std::string& worker, const v1::JobProgress& p) override {
+  absl::Status SetProgress(const std::string& name, const std::string& worker,
+                           const v1::JobProgress& p) override {
     std::lock_guard<std::mutex> lock(mu_);
     SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
     if (row.job.state() != v1::RUNNING || row.owner != worker) {
@@ -233,8 +253,9 @@ class SqliteJobStore : public JobStore {
     return WriteJobLocked(IdOf(name), row.job);
   }
 
-  absl::StatusOr<v1::Job> Finish(const std::string& name, const std::string& worker, v1::JobState state,
-                                 const v1::JobError& error, const std::vector<v1::Artifact>& artifacts) override {
+  absl::StatusOr<v1::Job> Finish(const std::string& name, const std::string& worker,
+                                 v1::JobState state, const v1::JobError& error,
+                                 const std::vector<v1::Artifact>& artifacts) override {
     std::lock_guard<std::mutex> lock(mu_);
     SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
     if (row.job.state() != v1::RUNNING || row.owner != worker) {
@@ -249,7 +270,9 @@ class SqliteJobStore : public JobStore {
     } else {
       *job.mutable_error() = error;
     }
-    Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id = ?");
+    Stmt u(db_,
+           "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id "
+           "= ?");
     SM_RETURN_IF_ERROR(u.ok());
     u.Bind(1, int64_t{state}).BindBlob(2, job.SerializeAsString()).Bind(3, IdOf(name));
     SM_RETURN_IF_ERROR(u.Run());
@@ -337,9 +360,10 @@ class SqliteJobStore : public JobStore {
       } else if (job.attempts() >= max_attempts) {
         job.set_state(v1::FAILED);
         job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
-        job.mutable_error()->set_message(absl::StrCat(
-            "its worker was lost ", job.attempts(), " times (lease expired or server restarted); "
-            "giving up after max_attempts = ", max_attempts));
+        job.mutable_error()->set_message(absl::StrCat("its worker was lost ", job.attempts(),
+                                                      " times (lease expired or server restarted); "
+                                                      "giving up after max_attempts = ",
+                                                      max_attempts));
         *job.mutable_end_time() = NowTs();
       } else {
         job.set_state(v1::QUEUED);
@@ -393,7 +417,8 @@ class SqliteJobStore : public JobStore {
     Stmt q(db_, "SELECT job, lease_owner FROM jobs WHERE id = ?");
     SM_RETURN_IF_ERROR(q.ok());
     q.Bind(1, id);
-    if (q.Step() != SQLITE_ROW) return absl::NotFoundError(absl::StrCat("jobs/", id, " does not exist"));
+    if (q.Step() != SQLITE_ROW)
+      return absl::NotFoundError(absl::StrCat("jobs/", id, " does not exist"));
     SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
     return Row{std::move(j), q.Text(1)};
   }
@@ -411,7 +436,9 @@ class SqliteJobStore : public JobStore {
   }
 
   absl::Status SetStateLocked(const std::string& id, const v1::Job& job) {
-    Stmt u(db_, "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id = ?");
+    Stmt u(db_,
+           "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id "
+           "= ?");
     SM_RETURN_IF_ERROR(u.ok());
     u.Bind(1, int64_t{job.state()}).BindBlob(2, job.SerializeAsString()).Bind(3, id);
     return u.Run();
@@ -426,7 +453,8 @@ class SqliteJobStore : public JobStore {
 
 absl::StatusOr<std::unique_ptr<JobStore>> OpenSqliteJobStore(const std::string& path) {
   sqlite3* db = nullptr;
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+  if (sqlite3_open_v2(path.c_str(), &db,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
     const std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
     sqlite3_close(db);

@@ -40,9 +40,9 @@ grpc::Status VolumeServiceImpl::ImportVolume(grpc::ServerContext* context,
   if (!path.ok()) return ToGrpcStatus(path.status());
   struct stat st;
   if (::stat(path->c_str(), &st) == 0 && st.st_size > ctx_->limits.max_blob_bytes) {
-    return ToGrpcStatus(absl::ResourceExhaustedError(absl::StrCat(
-        r->path(), " has ", st.st_size, " bytes, above the server's limit of ",
-        ctx_->limits.max_blob_bytes, " bytes (max_blob_bytes)")));
+    return ToGrpcStatus(absl::ResourceExhaustedError(
+        absl::StrCat(r->path(), " has ", st.st_size, " bytes, above the server's limit of ",
+                     ctx_->limits.max_blob_bytes, " bytes (max_blob_bytes)")));
   }
   absl::StatusOr<v1::Digest> d = ctx_->blobs->PutFile(*path);
   if (!d.ok()) return ToGrpcStatus(d.status());

@@ -41,8 +41,8 @@ void FuzzVolumeFile(const uint8_t* data, size_t size) {
     options.raw_dtype = static_cast<DType>(data[1] % 3);
   }
   const std::string path = TempPath(ext);
-  if (!WriteFileAtomically(path, absl::string_view(reinterpret_cast<const char*>(data) + 4,
-                                                   size - 4))
+  if (!WriteFileAtomically(path,
+                           absl::string_view(reinterpret_cast<const char*>(data) + 4, size - 4))
            .ok()) {
     return;
   }

@@ -22,18 +22,16 @@ namespace {
 // The sheetmesh-server binary as a child process.
 class ServerProcess {
  public:
-  ServerProcess(std::string data_dir, std::string root) : data_dir_(std::move(data_dir)), root_(std::move(root)) {}
+  ServerProcess(std::string data_dir, std::string root)
+      : data_dir_(std::move(data_dir)), root_(std::move(root)) {}
   ~ServerProcess() { Kill(SIGKILL); }
 
   void Start() {
     const std::string port_file = data_dir_ + ".port";
     ::unlink(port_file.c_str());
-    std::vector<std::string> args = {SHEETMESH_SERVER_BIN,
-                                     "--address=127.0.0.1:0",
-                                     "--data_dir=" + data_dir_,
-                                     "--port_file=" + port_file,
-                                     "--allowed_root=" + root_,
-                                     "--workers=1",
+    std::vector<std::string> args = {SHEETMESH_SERVER_BIN,      "--address=127.0.0.1:0",
+                                     "--data_dir=" + data_dir_, "--port_file=" + port_file,
+                                     "--allowed_root=" + root_, "--workers=1",
                                      "--lease_seconds=3"};
     pid_ = ::fork();
     ASSERT_GE(pid_, 0);
@@ -173,7 +171,8 @@ TEST(DurabilityTest, UploadInterruptedByAKillResumesAfterRestart) {
   v1::QueryWriteStatusRequest q;
   q.set_resource_name(resource);
   v1::QueryWriteStatusResponse qs;
-  ASSERT_TRUE(server.client().blobs()->QueryWriteStatus(server.client().Context().get(), q, &qs).ok());
+  ASSERT_TRUE(
+      server.client().blobs()->QueryWriteStatus(server.client().Context().get(), q, &qs).ok());
   EXPECT_EQ(qs.committed_size(), 8 << 20);
   int64_t first = -1;
   auto up = server.client().Upload(path, [&](int64_t sent, int64_t) {

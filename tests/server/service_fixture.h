@@ -18,7 +18,8 @@
 namespace sheetmesh::testing {
 
 // Writes a seeded phantom of n^3 voxels as <dir>/<stem>_<n>x<n>x<n>_u8.raw; returns its path.
-inline std::string WritePhantom(const std::string& dir, const std::string& stem, int n, uint64_t seed) {
+inline std::string WritePhantom(const std::string& dir, const std::string& stem, int n,
+                                uint64_t seed) {
   PhantomOptions o;
   o.dims = {n, n, n};
   o.seed = seed;

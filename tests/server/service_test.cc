@@ -61,7 +61,8 @@ v1::Job WaitRunning(client::SheetmeshClient& c, const std::string& name, int min
     auto job = c.GetJob(name);
     EXPECT_TRUE(job.ok()) << job.status();
     if (!job.ok()) return {};
-    if (job->state() != v1::QUEUED && (job->state() != v1::RUNNING || job->progress().stage_index() >= min_stage)) {
+    if (job->state() != v1::QUEUED &&
+        (job->state() != v1::RUNNING || job->progress().stage_index() >= min_stage)) {
       return *job;
     }
     if (absl::Now() > deadline) {
@@ -164,7 +165,8 @@ TEST_F(ServiceTest, UploadWithWrongDigestIsRefusedAndLeavesNoBlob) {
   WriteRandomFile(dir_.File("b.bin"), 100000, 10);
   auto claimed = server::DigestOfFile(dir_.File("b.bin"));  // the digest of other bytes
   ASSERT_TRUE(claimed.ok());
-  const std::string resource = absl::StrCat("uploads/liar/blobs/", claimed->hash(), "/", claimed->size_bytes());
+  const std::string resource =
+      absl::StrCat("uploads/liar/blobs/", claimed->hash(), "/", claimed->size_bytes());
   auto ctx = client_->Context();
   v1::WriteResponse resp;
   auto writer = client_->blobs()->Write(ctx.get(), &resp);
@@ -179,7 +181,8 @@ TEST_F(ServiceTest, UploadWithWrongDigestIsRefusedAndLeavesNoBlob) {
   EXPECT_THAT(st.error_message(), HasSubstr(claimed->hash()));
   EXPECT_EQ(Missing(*client_, *claimed).size(), 1u);
   // Nothing of it is left in the store: not a blob, not a part file.
-  for (const auto& e : std::filesystem::recursive_directory_iterator(options_.data_dir + "/blobs")) {
+  for (const auto& e :
+       std::filesystem::recursive_directory_iterator(options_.data_dir + "/blobs")) {
     EXPECT_FALSE(e.is_regular_file()) << e.path();
   }
 }
@@ -328,7 +331,8 @@ TEST_F(ServiceTest, CancelStopsTheRunningStageAndFreesTheWorker) {
   const absl::Duration took = absl::Now() - asked;
   EXPECT_EQ(end.state(), v1::CANCELLED);
   EXPECT_EQ(end.error().code(), static_cast<int>(absl::StatusCode::kCancelled));
-  EXPECT_LT(took, absl::Seconds(2)) << "stopped after " << took << " in stage " << running.progress().stage();
+  EXPECT_LT(took, absl::Seconds(2))
+      << "stopped after " << took << " in stage " << running.progress().stage();
   // The only worker takes the next job.
   const std::string small = WritePhantom(options_.allowed_roots[0], "small", 40, 5);
   v1::CreateJobRequest next;
@@ -427,7 +431,8 @@ TEST_F(ServiceTest, ListPagesDeleteAndGet) {
   ASSERT_TRUE(d.ok());
   std::vector<std::string> created;
   for (int i = 0; i < 5; ++i) {
-    v1::CreateJobRequest r = UploadRequest(*d, std::filesystem::path(vol).filename(), absl::StrCat("p-", i));
+    v1::CreateJobRequest r =
+        UploadRequest(*d, std::filesystem::path(vol).filename(), absl::StrCat("p-", i));
     r.set_no_cache(true);
     auto j = client_->CreateJob(r);
     ASSERT_TRUE(j.ok());
@@ -501,7 +506,8 @@ TEST_F(ServiceTest, ReferencesOutsideTheAllowedRootsArePermissionDenied) {
     r.set_request_id(absl::StrCat("ref-", path));
     r.mutable_input()->set_volume_path(path);
     auto job = client_->CreateJob(r);
-    EXPECT_EQ(job.status().code(), absl::StatusCode::kPermissionDenied) << path << ": " << job.status();
+    EXPECT_EQ(job.status().code(), absl::StatusCode::kPermissionDenied)
+        << path << ": " << job.status();
     v1::InspectVolumeRequest ir;
     ir.set_path(path);
     v1::InspectVolumeResponse iresp;
@@ -544,9 +550,11 @@ TEST_F(ServiceTest, BadParametersAreInvalidArgumentNamingTheField) {
       {[](v1::PipelineParameters* p) { p->set_r(-3); }, "parameters.r = -3"},
       {[](v1::PipelineParameters* p) { p->set_d_ang(200); }, "parameters.d_ang = 200"},
       {[](v1::PipelineParameters* p) { p->set_method("magic"); }, "parameters.method = 'magic'"},
-      {[](v1::PipelineParameters* p) { p->set_tet_min_dihedral(80); }, "parameters.tet_min_dihedral = 80"},
+      {[](v1::PipelineParameters* p) { p->set_tet_min_dihedral(80); },
+       "parameters.tet_min_dihedral = 80"},
       {[](v1::PipelineParameters* p) { p->set_config_json("{\"surface\": {\"rr\": 3}}"); }, "rr"},
-      {[](v1::PipelineParameters* p) { p->set_config_json("{not json"); }, "parameters.config_json"},
+      {[](v1::PipelineParameters* p) { p->set_config_json("{not json"); },
+       "parameters.config_json"},
   };
   int i = 0;
   for (const Case& c : cases) {
@@ -611,12 +619,14 @@ TEST_F(ServiceTest, TokenIsRequiredWhenConfigured) {
   co.address = absl::StrCat("127.0.0.1:", server_->port());
   auto anonymous = client::SheetmeshClient::Connect(co);
   ASSERT_TRUE(anonymous.ok());
-  EXPECT_EQ((*anonymous)->ListJobs(v1::ListJobsRequest()).status().code(), absl::StatusCode::kUnauthenticated);
+  EXPECT_EQ((*anonymous)->ListJobs(v1::ListJobsRequest()).status().code(),
+            absl::StatusCode::kUnauthenticated);
   co.auth_token = "wrong";
   auto wrong = client::SheetmeshClient::Connect(co);
   EXPECT_EQ((*wrong)->GetJob("jobs/x").status().code(), absl::StatusCode::kUnauthenticated);
   WriteRandomFile(dir_.File("a.bin"), 10, 1);
-  EXPECT_EQ((*wrong)->Upload(dir_.File("a.bin")).status().code(), absl::StatusCode::kUnauthenticated);
+  EXPECT_EQ((*wrong)->Upload(dir_.File("a.bin")).status().code(),
+            absl::StatusCode::kUnauthenticated);
   // Health answers without the token (probes carry none).
   auto health = (*anonymous)->Health();
   ASSERT_TRUE(health.ok()) << health.status();
@@ -661,7 +671,8 @@ TEST_F(ServiceTest, FullQueueIsResourceExhaustedNamingTheLimit) {
 TEST_F(ServiceTest, SixteenClientsFourJobsEach) {
   StartServer();
   std::vector<std::string> volumes;
-  for (int i = 0; i < 4; ++i) volumes.push_back(WritePhantom(dir_.path(), absl::StrCat("load", i), 40, 100 + i));
+  for (int i = 0; i < 4; ++i)
+    volumes.push_back(WritePhantom(dir_.path(), absl::StrCat("load", i), 40, 100 + i));
   const int64_t rss_before = ProcessRssBytes();
   constexpr int kClients = 16, kJobs = 4;
   std::atomic<int> succeeded{0}, failed{0};

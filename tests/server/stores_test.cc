@@ -19,8 +19,8 @@
 namespace sheetmesh::server {
 namespace {
 
-using ::testing::HasSubstr;
 using sheetmesh::testing::TempDir;
+using ::testing::HasSubstr;
 
 v1::Digest DigestOf(const std::string& bytes) {
   v1::Digest d;
@@ -149,7 +149,8 @@ TEST(BlobStoreTest, PutFileAndConcurrentWritersOfTheSameContent) {
   for (int w = 0; w < 4; ++w) {
     writers.emplace_back([&] {
       for (int64_t off = 0; off < 4000; off += 100) {
-        auto st = (*store)->Append(r, off, absl::string_view(bytes).substr(off, 100), off + 100 == 4000, 1 << 20);
+        auto st = (*store)->Append(r, off, absl::string_view(bytes).substr(off, 100),
+                                   off + 100 == 4000, 1 << 20);
         if (!st.ok() || st->complete) return;
       }
     });
@@ -204,7 +205,8 @@ TEST(JobStoreTest, LeaseRenewFinishAndCache) {
   EXPECT_EQ((*l1)->state(), v1::RUNNING);
   EXPECT_EQ((*l1)->attempts(), 1);
   EXPECT_TRUE((*store)->Renew(first->name(), "w1", absl::Seconds(30)).ok());
-  EXPECT_EQ((*store)->Renew(first->name(), "w2", absl::Seconds(30)).code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ((*store)->Renew(first->name(), "w2", absl::Seconds(30)).code(),
+            absl::StatusCode::kFailedPrecondition);
   v1::JobProgress p;
   p.set_stage("surface");
   p.set_stage_index(3);
@@ -297,7 +299,8 @@ TEST(JobStoreTest, ListPagesNewestFirstByState) {
   ASSERT_TRUE(store.ok());
   bool created;
   std::vector<std::string> names;
-  for (int i = 0; i < 7; ++i) names.push_back((*store)->Create(NewJob(absl::StrCat("r", i)), "", &created)->name());
+  for (int i = 0; i < 7; ++i)
+    names.push_back((*store)->Create(NewJob(absl::StrCat("r", i)), "", &created)->name());
   std::vector<std::string> seen;
   std::string token, next;
   do {
@@ -310,7 +313,8 @@ TEST(JobStoreTest, ListPagesNewestFirstByState) {
   auto running = (*store)->List(v1::RUNNING, 10, "", &next);
   ASSERT_TRUE(running.ok());
   EXPECT_TRUE(running->empty());
-  EXPECT_EQ((*store)->List(v1::QUEUED, 10, "garbage", &next).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ((*store)->List(v1::QUEUED, 10, "garbage", &next).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -330,14 +334,18 @@ TEST(ReferencesTest, OnlyUnderTheRootsAfterFollowingLinks) {
   ASSERT_TRUE(ok.ok()) << ok.status();
   EXPECT_EQ(*ok, std::filesystem::canonical(dir.File("root/sub/v.raw")).string());
   EXPECT_TRUE(ResolveReference(dir.File("root/inner.raw"), roots).ok());
-  for (const std::string& bad : {dir.File("secret.raw"), dir.File("root/link.raw"),
-                                 dir.File("root/sub/../../secret.raw"), dir.File("rootish/v.raw")}) {
+  for (const std::string& bad :
+       {dir.File("secret.raw"), dir.File("root/link.raw"), dir.File("root/sub/../../secret.raw"),
+        dir.File("rootish/v.raw")}) {
     auto r = ResolveReference(bad, roots);
     EXPECT_EQ(r.status().code(), absl::StatusCode::kPermissionDenied) << bad << ": " << r.status();
   }
-  EXPECT_EQ(ResolveReference("relative.raw", roots).status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(ResolveReference(dir.File("root/none.raw"), roots).status().code(), absl::StatusCode::kNotFound);
-  EXPECT_EQ(ResolveReference(dir.File("root/sub/v.raw"), {}).status().code(), absl::StatusCode::kPermissionDenied);
+  EXPECT_EQ(ResolveReference("relative.raw", roots).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(ResolveReference(dir.File("root/none.raw"), roots).status().code(),
+            absl::StatusCode::kNotFound);
+  EXPECT_EQ(ResolveReference(dir.File("root/sub/v.raw"), {}).status().code(),
+            absl::StatusCode::kPermissionDenied);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -13,7 +13,8 @@
 namespace sheetmesh::testing {
 
 // The voxels of `dims` for which `inside(x, y, z)` holds.
-inline VoxelSet ShapeSet(const Dims& dims, const std::function<bool(double, double, double)>& inside) {
+inline VoxelSet ShapeSet(const Dims& dims,
+                         const std::function<bool(double, double, double)>& inside) {
   VoxelSet::Builder b(dims);
   for (int64_t z = 0; z < dims.nz; ++z)
     for (int64_t y = 0; y < dims.ny; ++y)
@@ -34,8 +35,8 @@ inline VoxelSet BoxSet(const Dims& dims, Index3 lo, Index3 hi) {
 inline VoxelSet PlaneSlab(const Dims& dims, Vec3 p, Vec3 n, double thickness, int margin = 2) {
   n = Normalized(n);
   return ShapeSet(dims, [=](double x, double y, double z) {
-    if (x < margin || y < margin || z < margin || x >= dims.nx - margin ||
-        y >= dims.ny - margin || z >= dims.nz - margin) {
+    if (x < margin || y < margin || z < margin || x >= dims.nx - margin || y >= dims.ny - margin ||
+        z >= dims.nz - margin) {
       return false;
     }
     return std::abs(Dot(Vec3(x, y, z) - p, n)) <= thickness / 2;
@@ -44,8 +45,8 @@ inline VoxelSet PlaneSlab(const Dims& dims, Vec3 p, Vec3 n, double thickness, in
 
 // A cylindrical shell around the z axis through (cx, cy): radius r (mid-surface), thickness t,
 // z in [z0, z1), spanning `arc` radians from angle 0.
-inline VoxelSet CylinderShell(const Dims& dims, double cx, double cy, double r, double t,
-                              int z0, int z1, double arc = 2 * M_PI) {
+inline VoxelSet CylinderShell(const Dims& dims, double cx, double cy, double r, double t, int z0,
+                              int z1, double arc = 2 * M_PI) {
   return ShapeSet(dims, [=](double x, double y, double z) {
     if (z < z0 || z >= z1) return false;
     double a = std::atan2(y - cy, x - cx);

@@ -36,7 +36,7 @@ class JobHost {
   // Leases the oldest queued job for `worker`, waiting up to `wait` for one. nullopt when
   // none came.
   virtual absl::StatusOr<std::optional<v1::Job>> Lease(const std::string& worker,
-                                                        absl::Duration wait) = 0;
+                                                       absl::Duration wait) = 0;
   // Extends the lease. kNotFound / kFailedPrecondition when the job is gone, finished, or
   // leased to another worker: the worker must stop.
   virtual absl::Status Renew(const std::string& job, const std::string& worker) = 0;
@@ -47,8 +47,7 @@ class JobHost {
   // Makes the job's input readable locally.
   virtual absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) = 0;
   // Stores an output file as a blob.
-  virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job,
-                                                   const std::string& path,
+  virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& path,
                                                    const std::string& media_type) = 0;
   // Ends the job: SUCCEEDED with `artifacts` when result is OK, CANCELLED when it is
   // kCancelled, FAILED otherwise.

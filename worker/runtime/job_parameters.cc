@@ -31,7 +31,9 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
   const v1::VolumeFormat& f = input.format();
   if (!f.format().empty()) o.input.open.format = f.format();
   if (f.dims_size() > 0) {
-    if (f.dims_size() != 3) return absl::InvalidArgumentError(absl::StrCat("input.format.dims has ", f.dims_size(), " values, not 3"));
+    if (f.dims_size() != 3)
+      return absl::InvalidArgumentError(
+          absl::StrCat("input.format.dims has ", f.dims_size(), " values, not 3"));
     o.input.open.raw_dims = Dims{f.dims(0), f.dims(1), f.dims(2)};
   }
   if (!f.dtype().empty()) {
@@ -44,14 +46,17 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
     if (!b.ok()) return BadText("input.format.byte_order", f.byte_order(), "is not little or big");
     o.input.open.raw_byte_order = *b;
   }
-  if (f.header_bytes() < 0) return Bad("input.format.header_bytes", f.header_bytes(), "must not be negative");
+  if (f.header_bytes() < 0)
+    return Bad("input.format.header_bytes", f.header_bytes(), "must not be negative");
   o.input.open.raw_header_bytes = f.header_bytes();
   if (f.spacing_size() > 0) {
-    if (f.spacing_size() != 3) return absl::InvalidArgumentError("input.format.spacing must have 3 values");
+    if (f.spacing_size() != 3)
+      return absl::InvalidArgumentError("input.format.spacing must have 3 values");
     o.input.open.spacing = Vec3(f.spacing(0), f.spacing(1), f.spacing(2));
   }
   if (f.origin_size() > 0) {
-    if (f.origin_size() != 3) return absl::InvalidArgumentError("input.format.origin must have 3 values");
+    if (f.origin_size() != 3)
+      return absl::InvalidArgumentError("input.format.origin must have 3 values");
     o.input.open.origin = Vec3(f.origin(0), f.origin(1), f.origin(2));
   }
   if (!f.unit().empty()) o.input.open.unit = f.unit();
@@ -76,15 +81,20 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
   auto not_negative = [](absl::string_view field, bool has, double v) {
     return has && !(v >= 0) ? Bad(field, v, "must not be negative") : absl::OkStatus();
   };
-  SM_RETURN_IF_ERROR(not_negative("refine_close_radius", p.has_refine_close_radius(), p.refine_close_radius()));
-  SM_RETURN_IF_ERROR(not_negative("refine_open_radius", p.has_refine_open_radius(), p.refine_open_radius()));
+  SM_RETURN_IF_ERROR(
+      not_negative("refine_close_radius", p.has_refine_close_radius(), p.refine_close_radius()));
+  SM_RETURN_IF_ERROR(
+      not_negative("refine_open_radius", p.has_refine_open_radius(), p.refine_open_radius()));
   SM_RETURN_IF_ERROR(positive("detect_t", p.has_detect_t(), p.detect_t()));
-  SM_RETURN_IF_ERROR(positive("detect_r_cylinder", p.has_detect_r_cylinder(), p.detect_r_cylinder()));
+  SM_RETURN_IF_ERROR(
+      positive("detect_r_cylinder", p.has_detect_r_cylinder(), p.detect_r_cylinder()));
   SM_RETURN_IF_ERROR(not_negative("detect_rounds", p.has_detect_rounds(), p.detect_rounds()));
   SM_RETURN_IF_ERROR(positive("separate_r", p.has_separate_r(), p.separate_r()));
-  if (p.has_d_ang() && !(p.d_ang() > 0 && p.d_ang() <= 180)) return Bad("d_ang", p.d_ang(), "must be in (0, 180]");
+  if (p.has_d_ang() && !(p.d_ang() > 0 && p.d_ang() <= 180))
+    return Bad("d_ang", p.d_ang(), "must be in (0, 180]");
   SM_RETURN_IF_ERROR(positive("recover_t", p.has_recover_t(), p.recover_t()));
-  SM_RETURN_IF_ERROR(positive("recover_r_cylinder", p.has_recover_r_cylinder(), p.recover_r_cylinder()));
+  SM_RETURN_IF_ERROR(
+      positive("recover_r_cylinder", p.has_recover_r_cylinder(), p.recover_r_cylinder()));
   SM_RETURN_IF_ERROR(not_negative("recover_rounds", p.has_recover_rounds(), p.recover_rounds()));
   SM_RETURN_IF_ERROR(positive("r", p.has_r(), p.r()));
   SM_RETURN_IF_ERROR(not_negative("generator_count", p.has_generator_count(), p.generator_count()));
@@ -93,15 +103,18 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
   if (p.has_target_similarity() && !(p.target_similarity() > 0 && p.target_similarity() <= 1)) {
     return Bad("target_similarity", p.target_similarity(), "must be in (0, 1]");
   }
-  if (p.has_tet_radius_edge_ratio() && p.tet_radius_edge_ratio() != 0 && !(p.tet_radius_edge_ratio() >= 1)) {
-    return Bad("tet_radius_edge_ratio", p.tet_radius_edge_ratio(), "must be 0 (none) or at least 1");
+  if (p.has_tet_radius_edge_ratio() && p.tet_radius_edge_ratio() != 0 &&
+      !(p.tet_radius_edge_ratio() >= 1)) {
+    return Bad("tet_radius_edge_ratio", p.tet_radius_edge_ratio(),
+               "must be 0 (none) or at least 1");
   }
   if (p.has_tet_min_dihedral() && !(p.tet_min_dihedral() >= 0 && p.tet_min_dihedral() < 70)) {
     return Bad("tet_min_dihedral", p.tet_min_dihedral(), "must be in [0, 70)");
   }
   SM_RETURN_IF_ERROR(not_negative("tet_max_volume", p.has_tet_max_volume(), p.tet_max_volume()));
   for (int i = 0; i < p.labels_size(); ++i) {
-    if (!std::isfinite(p.labels(i))) return Bad(absl::StrCat("labels[", i, "]"), p.labels(i), "must be finite");
+    if (!std::isfinite(p.labels(i)))
+      return Bad(absl::StrCat("labels[", i, "]"), p.labels(i), "must be finite");
   }
   // Extraction.
   ExtractionOptions& x = o.extraction;

@@ -43,7 +43,8 @@ std::string MediaTypeOf(const std::string& name) {
   if (absl::EndsWith(name, ".csv")) return "text/csv";
   if (absl::EndsWith(name, ".ply")) return "model/x-ply";
   if (absl::EndsWith(name, ".obj")) return "model/obj";
-  if (absl::EndsWith(name, ".vtp") || absl::EndsWith(name, ".vtu")) return "application/vnd.vtk+xml";
+  if (absl::EndsWith(name, ".vtp") || absl::EndsWith(name, ".vtu"))
+    return "application/vnd.vtk+xml";
   if (absl::EndsWith(name, ".msh")) return "model/x-gmsh";
   if (absl::EndsWith(name, ".inp")) return "text/x-abaqus-input";
   return "application/octet-stream";
@@ -54,9 +55,8 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
   SM_ASSIGN_OR_RETURN(LocalVolume volume, host.ResolveInput(job));
   SM_ASSIGN_OR_RETURN(PipelineOptions options,
                       ToPipelineOptions(job.parameters(), job.input(), volume.path));
-  const std::string dir = (std::filesystem::path(scratch_dir) /
-                           absl::StrReplaceAll(job.name(), {{"/", "-"}}))
-                              .string();
+  const std::string dir =
+      (std::filesystem::path(scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}})).string();
   std::error_code ec;
   std::filesystem::remove_all(dir, ec);
   options.output.dir = dir;
@@ -72,15 +72,16 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
   if (!report.ok()) {
     // Name the volume the client knows, not the server's path for it.
     if (!volume.display_name.empty() && volume.display_name != volume.path) {
-      return absl::Status(report.status().code(),
-                          absl::StrReplaceAll(report.status().message(),
-                                              {{volume.path, volume.display_name}}));
+      return absl::Status(
+          report.status().code(),
+          absl::StrReplaceAll(report.status().message(), {{volume.path, volume.display_name}}));
     }
     return report.status();
   }
   std::vector<v1::Artifact> artifacts;
   for (const std::string& name : report->files) {
-    SM_ASSIGN_OR_RETURN(v1::Artifact a, host.PutArtifact(job.name(), dir + "/" + name, MediaTypeOf(name)));
+    SM_ASSIGN_OR_RETURN(v1::Artifact a,
+                        host.PutArtifact(job.name(), dir + "/" + name, MediaTypeOf(name)));
     a.set_name(name);
     artifacts.push_back(std::move(a));
   }

@@ -93,8 +93,10 @@ void WorkerPool::Work(int index) {
                result.status().code() == absl::StatusCode::kCancelled) {
       host_->Release(job.name(), worker).IgnoreError();  // runs again after restart
     } else {
-      host_->Finish(job.name(), worker, result.status(),
-                    result.ok() ? *result : std::vector<v1::Artifact>{}).IgnoreError();
+      host_
+          ->Finish(job.name(), worker, result.status(),
+                   result.ok() ? *result : std::vector<v1::Artifact>{})
+          .IgnoreError();
     }
     --busy_;
   }

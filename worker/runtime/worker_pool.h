@@ -17,10 +17,10 @@
 namespace sheetmesh::runtime {
 
 struct WorkerPoolOptions {
-  int workers = 0;                                 // threads (0: the number of cores)
-  std::string name = "worker";                     // prefix of the workers' lease names
-  std::string scratch_dir = "/tmp";                // where jobs write before upload
-  absl::Duration renew_interval = absl::Seconds(5);  // lease renewal period
+  int workers = 0;                                      // threads (0: the number of cores)
+  std::string name = "worker";                          // prefix of the workers' lease names
+  std::string scratch_dir = "/tmp";                     // where jobs write before upload
+  absl::Duration renew_interval = absl::Seconds(5);     // lease renewal period
   absl::Duration lease_poll = absl::Milliseconds(500);  // Lease() wait per attempt
 };
 

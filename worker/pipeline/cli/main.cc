@@ -16,14 +16,15 @@
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/phantom_command.h"
 #include "worker/pipeline/cli/surface_command.h"
+#include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/core/huge_pages.h"
 #include "worker/pipeline/core/status_macros.h"
-#include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/run/pipeline_config.h"
 
 // Volume input.
 ABSL_FLAG(std::string, format, "", "volume format: raw, tiff, nrrd, vdb (default: by extension)");
-ABSL_FLAG(std::string, dims, "", "raw volumes: NXxNYxNZ (default: from a name like a_64x64x32_u8.raw); phantom: its size");
+ABSL_FLAG(std::string, dims, "",
+          "raw volumes: NXxNYxNZ (default: from a name like a_64x64x32_u8.raw); phantom: its size");
 ABSL_FLAG(std::string, dtype, "", "raw volumes: uint8, uint16 or float32");
 ABSL_FLAG(std::string, byte_order, "little", "raw volumes: little or big");
 ABSL_FLAG(int64_t, header_bytes, 0, "raw volumes: bytes to skip before the voxels");
@@ -42,7 +43,8 @@ ABSL_FLAG(int, connectivity, 6, "component connectivity: 6, 18 or 26");
 ABSL_FLAG(int, largest, 10, "component sizes to list");
 // surface, score
 ABSL_FLAG(double, r, 7.0, "surface: SCVD cell radius r in voxels (formula 3)");
-ABSL_FLAG(double, target_similarity, -1, "surface: search the largest r reaching this similarity (paper: 0.6)");
+ABSL_FLAG(double, target_similarity, -1,
+          "surface: search the largest r reaching this similarity (paper: 0.6)");
 ABSL_FLAG(bool, search_best, false, "surface: search the r of best similarity");
 ABSL_FLAG(double, r_min, 2, "surface: smallest r of a search");
 ABSL_FLAG(double, r_max, 0, "surface: largest r of a search (0: a quarter of the largest extent)");
@@ -50,18 +52,25 @@ ABSL_FLAG(int64_t, generators, 0, "surface: total generator count instead of for
 ABSL_FLAG(double, thickness, 0, "surface: mean thickness t in voxels for formula 3 (0: measured)");
 ABSL_FLAG(int, lloyd_max_iter, 20, "surface: Lloyd steps at most");
 ABSL_FLAG(double, lloyd_tol, 1e-3, "surface: Lloyd stop when the energy changes less (relative)");
-ABSL_FLAG(double, fold_angle, 50, "surface: reject triangles folding onto kept ones below this dihedral angle");
-ABSL_FLAG(std::string, method, "extended", "surface: extended (rim strip, centroid vertices, thickness along the normal) or paper (the plain reading)");
-ABSL_FLAG(std::string, placement, "", "surface: vertex placement generator or centroid (default: the method's)");
-ABSL_FLAG(std::string, thickness_measure, "", "surface: axis_runs or normal (default: the method's)");
+ABSL_FLAG(double, fold_angle, 50,
+          "surface: reject triangles folding onto kept ones below this dihedral angle");
+ABSL_FLAG(std::string, method, "extended",
+          "surface: extended (rim strip, centroid vertices, thickness along the normal) or paper "
+          "(the plain reading)");
+ABSL_FLAG(std::string, placement, "",
+          "surface: vertex placement generator or centroid (default: the method's)");
+ABSL_FLAG(std::string, thickness_measure, "",
+          "surface: axis_runs or normal (default: the method's)");
 ABSL_FLAG(std::string, rim, "", "surface: true/false, close the rim band (default: the method's)");
-ABSL_FLAG(std::string, similarity_model, "face", "surface: face (one thickness per triangle) or vertex (linear shell)");
+ABSL_FLAG(std::string, similarity_model, "face",
+          "surface: face (one thickness per triangle) or vertex (linear shell)");
 ABSL_FLAG(bool, hausdorff, true, "surface/score: also compute the symmetric Hausdorff distance");
 ABSL_FLAG(std::string, grid_rates, "2,3,4", "surface: grid-model baselines to score (empty: none)");
 ABSL_FLAG(std::string, formats, "ply,vtp,obj", "surface: mesh files to write");
 ABSL_FLAG(bool, closed, false, "score: the mesh is a closed surface; score the volume it encloses");
 // run (feature extraction; every flag here overrides --config)
-ABSL_FLAG(std::string, config, "", "run/surface: JSON config file with any parameter (flags override it)");
+ABSL_FLAG(std::string, config, "",
+          "run/surface: JSON config file with any parameter (flags override it)");
 ABSL_FLAG(bool, refine, true, "run: refine (closing/opening)");
 ABSL_FLAG(int, refine_close, 1, "run: closing radius in voxels");
 ABSL_FLAG(int, refine_open, 0, "run: opening radius in voxels");
@@ -79,25 +88,32 @@ ABSL_FLAG(double, recover_t, 1.5, "run: t of formula 4 for recovery");
 ABSL_FLAG(double, recover_R, 7, "run: R of formula 4 for recovery");
 ABSL_FLAG(int, recover_rounds, 10, "run: recovery rounds at most");
 // volume mesh (run, surface --volume_mesh, volume)
-ABSL_FLAG(bool, volume_mesh, false, "run/surface: also tetrahedralize the box with the sheets inside (TetGen)");
-ABSL_FLAG(double, tet_ratio, 1.5, "volume: TetGen radius-edge ratio bound (-q; 0: no quality bound)");
+ABSL_FLAG(bool, volume_mesh, false,
+          "run/surface: also tetrahedralize the box with the sheets inside (TetGen)");
+ABSL_FLAG(double, tet_ratio, 1.5,
+          "volume: TetGen radius-edge ratio bound (-q; 0: no quality bound)");
 ABSL_FLAG(double, tet_min_dihedral, 10, "volume: smallest dihedral angle asked of TetGen, degrees");
-ABSL_FLAG(double, tet_max_volume, 0, "volume: largest tetrahedron volume, physical units^3 (0: none)");
+ABSL_FLAG(double, tet_max_volume, 0,
+          "volume: largest tetrahedron volume, physical units^3 (0: none)");
 ABSL_FLAG(bool, tet_steiner, true, "volume: allow TetGen to add points on the sheets (false: -Y)");
 ABSL_FLAG(double, tet_time_limit, 600, "volume: seconds before TetGen is killed");
 ABSL_FLAG(double, tet_memory_gb, 8, "volume: memory limit of TetGen, GiB");
 ABSL_FLAG(std::string, tetgen, "tetgen", "volume: the TetGen program");
-ABSL_FLAG(double, flip_fold, 15,
-          "volume: flip sheet edges between nearly coplanar triangles (normals within this many degrees) "
-          "where that gives better triangles; 0: keep the sheet triangles as given");
+ABSL_FLAG(
+    double, flip_fold, 15,
+    "volume: flip sheet edges between nearly coplanar triangles (normals within this many degrees) "
+    "where that gives better triangles; 0: keep the sheet triangles as given");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
 ABSL_FLAG(std::string, volume_formats, "vtu,msh,inp", "volume: files to write");
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
-ABSL_FLAG(std::string, volume, "", "volume: the image whose box, spacing and origin the mesh fills");
+ABSL_FLAG(std::string, volume, "",
+          "volume: the image whose box, spacing and origin the mesh fills");
 // phantom
 ABSL_FLAG(std::string, o, "", "output path (phantom: the volume file; surface: the folder)");
-ABSL_FLAG(std::string, out_format, "raw", "phantom output: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb");
-ABSL_FLAG(std::string, preset, "", "phantom preset: sample (the demo volume) or paper (1012x1024x931)");
+ABSL_FLAG(std::string, out_format, "raw",
+          "phantom output: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb");
+ABSL_FLAG(std::string, preset, "",
+          "phantom preset: sample (the demo volume) or paper (1012x1024x931)");
 ABSL_FLAG(std::string, phantom_dims, "", "phantom dims NXxNYxNZ");
 ABSL_FLAG(uint64_t, seed, 1, "phantom seed");
 ABSL_FLAG(int, sheets, -1, "phantom sheets (default: the preset's)");
@@ -117,7 +133,8 @@ constexpr char kUsage[] =
     "                          --volume_mesh adds the TetGen volume mesh; --config FILE sets\n"
     "                          any parameter, flags override it\n"
     "  volume SURFACE.ply -o DIR  tetrahedralize the box (--volume VOL or --box) around a surface\n"
-    "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed surfaces)\n"
+    "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed "
+    "surfaces)\n"
     "  phantom -o FILE         write a synthetic rock volume and its ground truth\n"
     "  convert VOLUME -o FILE  copy a volume into --out_format (raw, tiff, nrrd, vdb, ...)\n\n"
     "Flags may be written with dashes or underscores (--target-similarity).\n"
@@ -176,11 +193,9 @@ absl::StatusOr<SheetInput> InputFromFlags(const std::string& path) {
     return absl::InvalidArgumentError("give either --labels or --window, not both");
   }
   if (!absl::GetFlag(FLAGS_labels).empty()) {
-    SM_ASSIGN_OR_RETURN(in.selection,
-                        ParsePhaseSelection("labels=" + absl::GetFlag(FLAGS_labels)));
+    SM_ASSIGN_OR_RETURN(in.selection, ParsePhaseSelection("labels=" + absl::GetFlag(FLAGS_labels)));
   } else if (!absl::GetFlag(FLAGS_window).empty()) {
-    SM_ASSIGN_OR_RETURN(in.selection,
-                        ParsePhaseSelection("window=" + absl::GetFlag(FLAGS_window)));
+    SM_ASSIGN_OR_RETURN(in.selection, ParsePhaseSelection("window=" + absl::GetFlag(FLAGS_window)));
   }
   in.mask_path = absl::GetFlag(FLAGS_mask);
   if (!absl::GetFlag(FLAGS_mask_labels).empty()) {
@@ -243,7 +258,8 @@ absl::Status Phantom(const std::vector<std::string>& args) {
 }
 
 absl::Status Convert(const std::vector<std::string>& args) {
-  if (args.size() != 1) return absl::InvalidArgumentError("usage: convert VOLUME -o FILE --out_format=F");
+  if (args.size() != 1)
+    return absl::InvalidArgumentError("usage: convert VOLUME -o FILE --out_format=F");
   SM_ASSIGN_OR_RETURN(SheetInput in, InputFromFlags(args[0]));
   SM_ASSIGN_OR_RETURN(VolumeFormat format, ParseVolumeFormat(absl::GetFlag(FLAGS_out_format)));
   if (absl::GetFlag(FLAGS_o).empty()) return absl::InvalidArgumentError("convert needs -o FILE");
@@ -275,7 +291,8 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
   if (Given("volume_formats")) {
     o->output.vtu = o->output.msh = o->output.inp = false;
-    for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_volume_formats), ',', absl::SkipEmpty())) {
+    for (absl::string_view f :
+         absl::StrSplit(absl::GetFlag(FLAGS_volume_formats), ',', absl::SkipEmpty())) {
       if (f == "vtu") {
         o->output.vtu = true;
       } else if (f == "msh") {
@@ -283,7 +300,8 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
       } else if (f == "inp") {
         o->output.inp = true;
       } else {
-        return absl::InvalidArgumentError(absl::StrCat("--volume_formats: '", f, "' is not vtu, msh or inp"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("--volume_formats: '", f, "' is not vtu, msh or inp"));
       }
     }
   }
@@ -318,7 +336,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
     if (method == "paper") {
       o.surface = SurfaceOptions::Paper();
     } else if (method != "extended") {
-      return absl::InvalidArgumentError(absl::StrCat("--method=", method, " is not known; use extended or paper"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("--method=", method, " is not known; use extended or paper"));
     }
   }
   ScvdOptions& scvd = o.surface.scvd;
@@ -335,7 +354,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   } else if (placement == "centroid") {
     o.surface.placement = VertexPlacement::kCentroid;
   } else if (!placement.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat("--placement=", placement, " is not known; use generator or centroid"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--placement=", placement, " is not known; use generator or centroid"));
   }
   const std::string measure = absl::GetFlag(FLAGS_thickness_measure);
   if (measure == "axis_runs") {
@@ -343,7 +363,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   } else if (measure == "normal") {
     o.surface.thickness = ThicknessMeasure::kNormal;
   } else if (!measure.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat("--thickness_measure=", measure, " is not known; use axis_runs or normal"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--thickness_measure=", measure, " is not known; use axis_runs or normal"));
   }
   const std::string rim = absl::GetFlag(FLAGS_rim);
   if (rim == "true" || rim == "false") {
@@ -354,7 +375,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   if (Given("similarity_model")) {
     const std::string model = absl::GetFlag(FLAGS_similarity_model);
     if (model != "vertex" && model != "face") {
-      return absl::InvalidArgumentError(absl::StrCat("--similarity_model=", model, " is not known; use face or vertex"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("--similarity_model=", model, " is not known; use face or vertex"));
     }
     o.score.height = model == "vertex" ? PrismHeight::kVertex : PrismHeight::kFace;
     o.radius_search.height = o.score.height;
@@ -372,17 +394,20 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   if (Given("hausdorff")) o.score.hausdorff = absl::GetFlag(FLAGS_hausdorff);
   if (Given("grid_rates")) {
     o.score.grid_rates.clear();
-    for (absl::string_view k : absl::StrSplit(absl::GetFlag(FLAGS_grid_rates), ',', absl::SkipEmpty())) {
+    for (absl::string_view k :
+         absl::StrSplit(absl::GetFlag(FLAGS_grid_rates), ',', absl::SkipEmpty())) {
       int rate = 0;
       if (!absl::SimpleAtoi(k, &rate) || rate < 1) {
-        return absl::InvalidArgumentError(absl::StrCat("--grid_rates: '", k, "' is not an integer >= 1"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("--grid_rates: '", k, "' is not an integer >= 1"));
       }
       o.score.grid_rates.push_back(rate);
     }
   }
   if (Given("formats")) {
     o.output.ply = o.output.vtp = o.output.obj = false;
-    for (absl::string_view f : absl::StrSplit(absl::GetFlag(FLAGS_formats), ',', absl::SkipEmpty())) {
+    for (absl::string_view f :
+         absl::StrSplit(absl::GetFlag(FLAGS_formats), ',', absl::SkipEmpty())) {
       if (f == "ply") {
         o.output.ply = true;
       } else if (f == "vtp") {
@@ -390,7 +415,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
       } else if (f == "obj") {
         o.output.obj = true;
       } else {
-        return absl::InvalidArgumentError(absl::StrCat("--formats: '", f, "' is not ply, vtp or obj"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("--formats: '", f, "' is not ply, vtp or obj"));
       }
     }
   }
@@ -406,7 +432,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
   if (Given("separate")) x.separate = absl::GetFlag(FLAGS_separate);
   if (Given("r_sep")) {
     x.separation.radius_voxels = absl::GetFlag(FLAGS_r_sep);
-    x.detect_extend.scvd_radius_voxels = x.recover_extend.scvd_radius_voxels = x.separation.radius_voxels;
+    x.detect_extend.scvd_radius_voxels = x.recover_extend.scvd_radius_voxels =
+        x.separation.radius_voxels;
   }
   if (Given("D_ang")) x.separation.dihedral_degrees = absl::GetFlag(FLAGS_D_ang);
   if (Given("remove_minor")) x.remove_minor = absl::GetFlag(FLAGS_remove_minor);
@@ -424,8 +451,8 @@ absl::StatusOr<PipelineOptions> PipelineFromFlags(const std::string& volume, boo
 
 absl::Status Surface(const std::vector<std::string>& args, bool extract) {
   if (args.size() != 1) {
-    return absl::InvalidArgumentError(absl::StrCat("usage: ", extract ? "run" : "surface",
-                                                   " VOLUME -o DIR [flags]"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("usage: ", extract ? "run" : "surface", " VOLUME -o DIR [flags]"));
   }
   SM_ASSIGN_OR_RETURN(PipelineOptions o, PipelineFromFlags(args[0], extract));
   return RunSurface(o, std::cout);
@@ -434,7 +461,9 @@ absl::Status Surface(const std::vector<std::string>& args, bool extract) {
 // `volume SURFACE.ply (--volume VOL | --box NXxNYxNZ) -o DIR`: the volume mesh of a
 // surface file already made.
 absl::Status Volume(const std::vector<std::string>& args) {
-  if (args.size() != 1) return absl::InvalidArgumentError("usage: volume SURFACE.ply (--volume VOL | --box NXxNYxNZ) -o DIR");
+  if (args.size() != 1)
+    return absl::InvalidArgumentError(
+        "usage: volume SURFACE.ply (--volume VOL | --box NXxNYxNZ) -o DIR");
   PipelineOptions o;
   if (!absl::GetFlag(FLAGS_config).empty()) {
     SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(absl::GetFlag(FLAGS_config)));
@@ -461,7 +490,8 @@ absl::Status Volume(const std::vector<std::string>& args) {
 }
 
 absl::Status Score(const std::vector<std::string>& args) {
-  if (args.size() != 2) return absl::InvalidArgumentError("usage: score VOLUME MESH [--closed] [--json]");
+  if (args.size() != 2)
+    return absl::InvalidArgumentError("usage: score VOLUME MESH [--closed] [--json]");
   ScoreCommandOptions o;
   SM_ASSIGN_OR_RETURN(o.input, InputFromFlags(args[0]));
   o.mesh_path = args[1];
@@ -483,7 +513,8 @@ void NormalizeFlagNames(int argc, char** argv) {
       if (*c == '-' && a[1] == '-') *c = '_';
     }
     std::string flag(name, c);
-    if (flag.rfind("no", 0) == 0 && absl::FindCommandLineFlag(flag) == nullptr) flag = flag.substr(2);
+    if (flag.rfind("no", 0) == 0 && absl::FindCommandLineFlag(flag) == nullptr)
+      flag = flag.substr(2);
     GivenFlags().insert(flag);
   }
 }
@@ -518,8 +549,8 @@ int Main(int argc, char** argv) {
     return 2;
   }
   if (!status.ok()) {
-    std::cerr << "sheetmesh-pipeline " << command << ": "
-              << absl::StatusCodeToString(status.code()) << ": " << status.message() << "\n";
+    std::cerr << "sheetmesh-pipeline " << command << ": " << absl::StatusCodeToString(status.code())
+              << ": " << status.message() << "\n";
     return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
   }
   return 0;

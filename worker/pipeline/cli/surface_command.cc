@@ -3,12 +3,12 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_format.h"
-#include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/core/file_util.h"
+#include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
-#include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
 
 namespace sheetmesh {
 
@@ -22,8 +22,8 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
         out << absl::StrFormat("  %-13s skipped\n", s.name);
         continue;
       }
-      out << absl::StrFormat("  %-13s voxels %d -> %d (+%d -%d), objects %d -> %d, %.2f s\n", s.name,
-                             s.voxels_before, s.voxels_after, s.added, s.removed,
+      out << absl::StrFormat("  %-13s voxels %d -> %d (+%d -%d), objects %d -> %d, %.2f s\n",
+                             s.name, s.voxels_before, s.voxels_after, s.added, s.removed,
                              s.objects_before, s.objects_after, s.seconds);
     }
     out << absl::StrFormat("model       %d pieces, %d voxels (M = %d)\n", r.pieces, r.model_voxels,
@@ -50,14 +50,17 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
       "(%d voxels) too small for a triangle\n",
       r.topology.boundary_loops, r.topology.nonmanifold_edges, r.topology.pieces,
       r.skipped_components, r.skipped_voxels);
-  out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f", r.similarity.similarity,
-                         r.similarity.c_in, r.similarity.c_out, r.similarity.c_image, r.similarity.dice);
-  if (r.similarity.hausdorff >= 0) out << absl::StrFormat(", Hausdorff %.2f voxels", r.similarity.hausdorff);
+  out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f",
+                         r.similarity.similarity, r.similarity.c_in, r.similarity.c_out,
+                         r.similarity.c_image, r.similarity.dice);
+  if (r.similarity.hausdorff >= 0)
+    out << absl::StrFormat(", Hausdorff %.2f voxels", r.similarity.hausdorff);
   out << absl::StrFormat("; other prism model %.4f\n", r.shell_similarity);
   if (r.options.extract) {
-    out << absl::StrFormat("            against the raw phase: %.4f (C_in %d, C_out %d, C_image %d)\n",
-                           r.similarity_raw.similarity, r.similarity_raw.c_in,
-                           r.similarity_raw.c_out, r.similarity_raw.c_image);
+    out << absl::StrFormat(
+        "            against the raw phase: %.4f (C_in %d, C_out %d, C_image %d)\n",
+        r.similarity_raw.similarity, r.similarity_raw.c_in, r.similarity_raw.c_out,
+        r.similarity_raw.c_image);
     out << "pieces      (piece: voxels, dip/dip direction, mean aperture)\n";
     for (size_t i = 0; i < r.geology.size() && i < 10; ++i) {
       const PieceGeology& g = r.geology[i];
@@ -75,7 +78,8 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   if (r.has_volume_mesh) {
     const TetQuality& q = r.volume_quality;
     out << absl::StrFormat(
-        "volume mesh %d nodes, %d tetrahedra (1 : %.0f of the voxels), %d sheet faces; all %d sheet "
+        "volume mesh %d nodes, %d tetrahedra (1 : %.0f of the voxels), %d sheet faces; all %d "
+        "sheet "
         "triangles conform\n",
         r.volume_nodes, r.volume_tets, r.voxels_per_tet, r.volume_sheet_faces,
         r.volume_conformity.conforming);
@@ -117,7 +121,9 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   const TetQuality& q = r.quality;
   nlohmann::json j;
   auto stat = [](const QualityStat& s) {
-    return nlohmann::json{{"min", s.min}, {"mean", s.mean}, {"histogram_range", {s.lo, s.hi}},
+    return nlohmann::json{{"min", s.min},
+                          {"mean", s.mean},
+                          {"histogram_range", {s.lo, s.hi}},
                           {"histogram", s.histogram}};
   };
   j["surface"] = surface;
@@ -126,10 +132,14 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   j["nodes"] = r.mesh.nodes.size();
   j["tetrahedra"] = r.mesh.tets.size();
   j["sheet_faces"] = r.mesh.num_sheet_faces();
-  j["voxels_per_tetrahedron"] = double(box.dims.num_voxels()) / std::max<size_t>(1, r.mesh.tets.size());
-  j["conformity"] = {{"sheet_triangles", r.conformity.sheet_triangles}, {"conforming", r.conformity.conforming}};
-  j["quality"] = {{"min_dihedral_degrees", stat(q.min_dihedral)}, {"gamma", stat(q.gamma)},
-                  {"edge_aspect", stat(q.edge_aspect)}, {"radius_aspect", stat(q.radius_aspect)}};
+  j["voxels_per_tetrahedron"] =
+      double(box.dims.num_voxels()) / std::max<size_t>(1, r.mesh.tets.size());
+  j["conformity"] = {{"sheet_triangles", r.conformity.sheet_triangles},
+                     {"conforming", r.conformity.conforming}};
+  j["quality"] = {{"min_dihedral_degrees", stat(q.min_dihedral)},
+                  {"gamma", stat(q.gamma)},
+                  {"edge_aspect", stat(q.edge_aspect)},
+                  {"radius_aspect", stat(q.radius_aspect)}};
   j["snapped_vertices"] = r.snapped_vertices;
   j["repaired_triangles"] = r.repaired_triangles;
   j["flipped_edges"] = r.flipped_edges;
@@ -163,25 +173,33 @@ absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out) {
   } else if (mesh.face_thickness.size() == mesh.faces.size()) {
     SM_ASSIGN_OR_RETURN(model, VoxelizePrisms(mesh, phase.info.dims));
   } else {
-    return absl::InvalidArgumentError(absl::StrCat(
-        options.mesh_path, ": has no per-face thickness to build sheet prisms from; give "
-                           "--closed to score a closed surface by the volume it encloses"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(options.mesh_path,
+                     ": has no per-face thickness to build sheet prisms from; give "
+                     "--closed to score a closed surface by the volume it encloses"));
   }
   SimilarityScore s = ScoreModel(model, phase.sheet);
   if (options.hausdorff) {
     SM_ASSIGN_OR_RETURN(s.hausdorff, HausdorffDistance(model, phase.sheet));
   }
   if (options.json) {
-    nlohmann::json j = {{"mesh", options.mesh_path}, {"volume", phase.info.path},
-                        {"triangles", mesh.num_faces()}, {"similarity", s.similarity},
-                        {"c_in", s.c_in}, {"c_out", s.c_out}, {"c_image", s.c_image},
-                        {"dice", s.dice}, {"hausdorff_voxels", s.hausdorff}};
+    nlohmann::json j = {{"mesh", options.mesh_path},
+                        {"volume", phase.info.path},
+                        {"triangles", mesh.num_faces()},
+                        {"similarity", s.similarity},
+                        {"c_in", s.c_in},
+                        {"c_out", s.c_out},
+                        {"c_image", s.c_image},
+                        {"dice", s.dice},
+                        {"hausdorff_voxels", s.hausdorff}};
     out << j.dump(2) << "\n";
     return absl::OkStatus();
   }
-  out << absl::StrFormat("%s: %d triangles, similarity %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f, Hausdorff %.2f voxels\n",
-                         options.mesh_path, mesh.num_faces(), s.similarity, s.c_in, s.c_out,
-                         s.c_image, s.dice, s.hausdorff);
+  out << absl::StrFormat(
+      "%s: %d triangles, similarity %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f, Hausdorff "
+      "%.2f voxels\n",
+      options.mesh_path, mesh.num_faces(), s.similarity, s.c_in, s.c_out, s.c_image, s.dice,
+      s.hausdorff);
   return absl::OkStatus();
 }
 

@@ -21,10 +21,10 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
                        const PipelineOptions& options, std::ostream& out);
 
 struct ScoreCommandOptions {
-  SheetInput input;           // the image
-  std::string mesh_path;      // .ply or .obj, physical coordinates of the input
-  bool closed = false;        // score by enclosed volume (closed surfaces of other tools);
-                              // otherwise as sheet prisms from the PLY's face thickness
+  SheetInput input;       // the image
+  std::string mesh_path;  // .ply or .obj, physical coordinates of the input
+  bool closed = false;    // score by enclosed volume (closed surfaces of other tools);
+                          // otherwise as sheet prisms from the PLY's face thickness
   bool hausdorff = true;
   bool json = false;
 };

@@ -75,9 +75,8 @@ absl::Status ReadFullyAt(int fd, int64_t offset, std::span<std::byte> out,
       return ErrnoStatus(errno, path);
     }
     if (n == 0) {
-      return absl::DataLossError(absl::StrCat(path, ": file ends at byte ", offset + done,
-                                              " but ", out.size() - done,
-                                              " more bytes were expected"));
+      return absl::DataLossError(absl::StrCat(path, ": file ends at byte ", offset + done, " but ",
+                                              out.size() - done, " more bytes were expected"));
     }
     done += static_cast<size_t>(n);
   }
@@ -107,8 +106,7 @@ absl::StatusOr<std::string> ReadFileToString(const std::string& path, int64_t ma
         absl::StrCat(path, ": ", *size, " bytes, above the limit of ", max_bytes));
   }
   std::string out(static_cast<size_t>(*size), '\0');
-  absl::Status st =
-      ReadFullyAt(fd->get(), 0, std::as_writable_bytes(std::span<char>(out)), path);
+  absl::Status st = ReadFullyAt(fd->get(), 0, std::as_writable_bytes(std::span<char>(out)), path);
   if (!st.ok()) return st;
   return out;
 }

@@ -8,10 +8,10 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include "absl/strings/string_view.h"
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 
 namespace sheetmesh {
 
@@ -44,8 +44,7 @@ absl::StatusOr<ScopedFd> OpenForRead(const std::string& path);
 // Size in bytes of an open file.
 absl::StatusOr<int64_t> FileSizeOf(int fd, const std::string& path);
 // Reads exactly out.size() bytes at `offset`. kDataLoss if the file ends first.
-absl::Status ReadFullyAt(int fd, int64_t offset, std::span<std::byte> out,
-                         const std::string& path);
+absl::Status ReadFullyAt(int fd, int64_t offset, std::span<std::byte> out, const std::string& path);
 // Writes all of `data` to `fd`.
 absl::Status WriteFully(int fd, std::span<const std::byte> data, const std::string& path);
 // Whole file as a string (for small files: headers, configs). kResourceExhausted above

@@ -15,7 +15,8 @@ void UseTransparentHugePages(int argc, char** argv, int max_arenas) {
   const char* current = getenv("GLIBC_TUNABLES");
   if (current != nullptr && strstr(current, "glibc.malloc.hugetlb") != nullptr) return;
   std::string tunables = "glibc.malloc.hugetlb=1";
-  std::vector<std::string> wanted = {"glibc.malloc.mmap_threshold=67108864", "glibc.malloc.trim_threshold=268435456"};
+  std::vector<std::string> wanted = {"glibc.malloc.mmap_threshold=67108864",
+                                     "glibc.malloc.trim_threshold=268435456"};
   if (max_arenas > 0) wanted.push_back("glibc.malloc.arena_max=" + std::to_string(max_arenas));
   for (const std::string& t : wanted) {
     const std::string name = t.substr(0, t.find('='));

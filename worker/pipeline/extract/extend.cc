@@ -19,8 +19,8 @@ namespace sheetmesh {
 namespace {
 
 struct Claim {
-  uint64_t key;      // linear voxel index
-  float off_plane;   // |v . n|
+  uint64_t key;     // linear voxel index
+  float off_plane;  // |v . n|
   int32_t label;
   bool operator<(const Claim& o) const {
     if (key != o.key) return key < o.key;
@@ -43,8 +43,8 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
   DualTriangleOptions to;
   to.rim = false;
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
-                                                             sheet.thickness, scvd, pos, to));
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to));
   // Formula 4's n: the normalised mean of the generator's triangles' normals.
   const std::vector<Vec3> normal = VertexNormals(pos, tri.faces);
   // Cells on the rim (the outer edge or a hole's): the only ones whose cylinder can reach
@@ -64,32 +64,33 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   tbb::combinable<std::vector<Claim>> parts;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
                     [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<Claim>& out = parts.local();
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const uint32_t g = active[i];
-      const Index3 z = scvd.generators[g];
-      const Vec3& n = normal[g];
-      const int32_t label = patch.label[scvd.generator_voxel[g]];
-      for (int64_t dz = -reach; dz <= reach; ++dz) {
-        for (int64_t dy = -reach; dy <= reach; ++dy) {
-          for (int64_t dx = -reach; dx <= reach; ++dx) {
-            const int64_t x = z.x + dx, y = z.y + dy, zz = z.z + dz;
-            if (!d.Contains(x, y, zz)) continue;
-            const Vec3 v(dx, dy, dz);
-            const double along = std::abs(Dot(v, n));
-            if (along >= t) continue;
-            if (Norm2(v) - along * along >= R * R) continue;
-            if (patch.set.Contains(x, y, zz)) continue;
-            if (within != nullptr && !within->Contains(x, y, zz)) continue;
-            out.push_back({static_cast<uint64_t>((zz * d.ny + y) * d.nx + x),
-                           static_cast<float>(along), label});
-          }
-        }
-      }
-    }
-  });
+                      std::vector<Claim>& out = parts.local();
+                      for (size_t i = r.begin(); i < r.end(); ++i) {
+                        const uint32_t g = active[i];
+                        const Index3 z = scvd.generators[g];
+                        const Vec3& n = normal[g];
+                        const int32_t label = patch.label[scvd.generator_voxel[g]];
+                        for (int64_t dz = -reach; dz <= reach; ++dz) {
+                          for (int64_t dy = -reach; dy <= reach; ++dy) {
+                            for (int64_t dx = -reach; dx <= reach; ++dx) {
+                              const int64_t x = z.x + dx, y = z.y + dy, zz = z.z + dz;
+                              if (!d.Contains(x, y, zz)) continue;
+                              const Vec3 v(dx, dy, dz);
+                              const double along = std::abs(Dot(v, n));
+                              if (along >= t) continue;
+                              if (Norm2(v) - along * along >= R * R) continue;
+                              if (patch.set.Contains(x, y, zz)) continue;
+                              if (within != nullptr && !within->Contains(x, y, zz)) continue;
+                              out.push_back({static_cast<uint64_t>((zz * d.ny + y) * d.nx + x),
+                                             static_cast<float>(along), label});
+                            }
+                          }
+                        }
+                      }
+                    });
   std::vector<Claim> claims;
-  parts.combine_each([&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
+  parts.combine_each(
+      [&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
   tbb::parallel_sort(claims.begin(), claims.end());
   // The first claim of each voxel is the nearest plane's (ties: the lower label).
   claims.erase(std::unique(claims.begin(), claims.end(),
@@ -133,9 +134,9 @@ absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOpt
                                     const VoxelSet* within, const Progress& progress) {
   if (!(options.half_thickness_voxels > 0) || !(options.radius_voxels > 0) ||
       !(options.scvd_radius_voxels > 0)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "extend t = ", options.half_thickness_voxels, ", R = ", options.radius_voxels,
-        " and r = ", options.scvd_radius_voxels, " must all be positive"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("extend t = ", options.half_thickness_voxels, ", R = ", options.radius_voxels,
+                     " and r = ", options.scvd_radius_voxels, " must all be positive"));
   }
   if (within != nullptr && !(within->dims() == patch.set.dims())) {
     return absl::InvalidArgumentError("extend: the original image's dims differ from the patch's");
@@ -144,8 +145,8 @@ absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOpt
   out.patch = patch;
   if (patch.set.empty()) return out;
   for (int round = 0; round < options.max_rounds; ++round) {
-    const Progress p = progress.Sub(double(round) / options.max_rounds,
-                                    double(round + 1) / options.max_rounds);
+    const Progress p =
+        progress.Sub(double(round) / options.max_rounds, double(round + 1) / options.max_rounds);
     SM_ASSIGN_OR_RETURN(std::vector<Claim> claims, Round(out.patch, options, within, p));
     if (claims.empty()) break;
     out.added += claims.size();

@@ -24,7 +24,7 @@ struct ExtendResult {
   LabelledVoxels patch;  // the patch with the added voxels, labelled like the generator that
                          // added them
   uint64_t added = 0;
-  int rounds = 0;        // rounds that added something
+  int rounds = 0;  // rounds that added something
 };
 
 // Extends `patch`. Detection mode when `within` is null: empty space may be added, so

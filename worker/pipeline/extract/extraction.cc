@@ -33,10 +33,10 @@ void Count(const VoxelSet& before, const VoxelSet& after, ExtractionStep* s) {
 
 }  // namespace
 
-absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
-                                                 const ExtractionOptions& o,
+absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const ExtractionOptions& o,
                                                  const Progress& progress) {
-  if (input.empty()) return absl::InvalidArgumentError("feature extraction of an empty sheet phase");
+  if (input.empty())
+    return absl::InvalidArgumentError("feature extraction of an empty sheet phase");
   if (o.refine_close_radius < 0 || o.refine_open_radius < 0) {
     return absl::InvalidArgumentError(absl::StrCat("refine radii ", o.refine_close_radius, " and ",
                                                    o.refine_open_radius, " must not be negative"));
@@ -47,8 +47,8 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
   uint64_t m = o.min_object_voxels;
   if (m == 0) {
     SM_ASSIGN_OR_RETURN(std::vector<uint16_t> tau, ComputeThickness(input));
-    m = static_cast<uint64_t>(std::ceil(
-        3 * CellVolume(SummarizeThickness(tau).mean, o.separation.radius_voxels)));
+    m = static_cast<uint64_t>(
+        std::ceil(3 * CellVolume(SummarizeThickness(tau).mean, o.separation.radius_voxels)));
   }
   out.min_object_voxels = m;
 
@@ -76,7 +76,8 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
     out.steps.push_back(s);
   }
   if (refined.empty()) {
-    return absl::InvalidArgumentError("refinement erased the whole sheet phase; lower refine_open_radius");
+    return absl::InvalidArgumentError(
+        "refinement erased the whole sheet phase; lower refine_open_radius");
   }
   SM_ASSIGN_OR_RETURN(Components refined_components, LabelComponents(refined, Connectivity::k6));
 
@@ -90,8 +91,8 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
     s.objects_before = refined_components.count();
     if (o.detect) {
       s.ran = true;
-      SM_ASSIGN_OR_RETURN(ExtendResult ext, Extend(objects, o.detect_extend, nullptr,
-                                                   progress.Stage("detect")));
+      SM_ASSIGN_OR_RETURN(ExtendResult ext,
+                          Extend(objects, o.detect_extend, nullptr, progress.Stage("detect")));
       SM_ASSIGN_OR_RETURN(Components merged, LabelComponents(ext.patch.set, Connectivity::k6));
       const std::vector<uint32_t> object_of = merged.VoxelLabels(ext.patch.set);
       std::map<uint32_t, uint64_t> original;
@@ -118,8 +119,8 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
     out.steps.push_back(s);
   }
   if (objects.set.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "no object has M = ", m, " voxels or more; lower min_object_voxels"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("no object has M = ", m, " voxels or more; lower min_object_voxels"));
   }
 
   // 3. separate
@@ -163,9 +164,10 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
     out.steps.push_back(s);
   }
   if (pieces.set.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "no piece has M = ", m, " voxels or more after separation; lower min_object_voxels or "
-        "raise D_ang"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("no piece has M = ", m,
+                     " voxels or more after separation; lower min_object_voxels or "
+                     "raise D_ang"));
   }
 
   // 5. recover, within the refined image.
@@ -176,8 +178,8 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
     s.voxels_before = pieces.set.size();
     if (o.recover) {
       s.ran = true;
-      SM_ASSIGN_OR_RETURN(ExtendResult ext, Extend(pieces, o.recover_extend, &refined,
-                                                   progress.Stage("recover")));
+      SM_ASSIGN_OR_RETURN(ExtendResult ext,
+                          Extend(pieces, o.recover_extend, &refined, progress.Stage("recover")));
       s.added = ext.added;
       pieces = std::move(ext.patch);
     }

@@ -17,39 +17,39 @@
 namespace sheetmesh {
 
 struct ExtractionOptions {
-  bool refine = true;               // 1. closing then opening (§2.2.1's refinement by t)
-  int refine_close_radius = 1;      //    closing radius, voxels (0: none)
-  int refine_open_radius = 0;       //    opening radius, voxels (0: none; it would erase
-                                    //    sheets thinner than twice the radius)
-  bool detect = true;               // 2. extend (detection mode); objects = components
+  bool refine = true;           // 1. closing then opening (§2.2.1's refinement by t)
+  int refine_close_radius = 1;  //    closing radius, voxels (0: none)
+  int refine_open_radius = 0;   //    opening radius, voxels (0: none; it would erase
+                                //    sheets thinner than twice the radius)
+  bool detect = true;           // 2. extend (detection mode); objects = components
   ExtendOptions detect_extend = {1.5, 7.0, 1, 5.0, 1};  // t, R, rounds, r, seed
-  uint64_t min_object_voxels = 0;   // M: an object (detect) or piece (remove minor) with
-                                    // fewer voxels goes; 0 = three cells of the separation
-                                    // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
-  bool separate = true;             // 3. Algorithm 2
-  SeparationOptions separation;     //    r = 5, D_ang = 150
-  bool remove_minor = true;         // 4. pieces below M go
-  bool recover = true;              // 5. extend (recovery mode) within the refined input
+  uint64_t min_object_voxels = 0;  // M: an object (detect) or piece (remove minor) with
+                                   // fewer voxels goes; 0 = three cells of the separation
+                                   // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
+  bool separate = true;            // 3. Algorithm 2
+  SeparationOptions separation;    //    r = 5, D_ang = 150
+  bool remove_minor = true;        // 4. pieces below M go
+  bool recover = true;             // 5. extend (recovery mode) within the refined input
   ExtendOptions recover_extend = {1.5, 7.0, 10, 5.0, 1};
 };
 
 // What one step changed.
 struct ExtractionStep {
-  std::string name;                 // refine, detect, separate, remove_minor, recover
-  bool ran = false;                 // false: disabled
+  std::string name;  // refine, detect, separate, remove_minor, recover
+  bool ran = false;  // false: disabled
   uint64_t voxels_before = 0;
   uint64_t voxels_after = 0;
   uint64_t added = 0;
   uint64_t removed = 0;
-  uint32_t objects_before = 0;      // components (refine, detect) or labels
+  uint32_t objects_before = 0;  // components (refine, detect) or labels
   uint32_t objects_after = 0;
   double seconds = 0;
 };
 
 struct ExtractionResult {
-  LabelledVoxels model;             // pieces labelled 0, 1, ... largest first
+  LabelledVoxels model;  // pieces labelled 0, 1, ... largest first
   std::vector<ExtractionStep> steps;
-  uint64_t min_object_voxels = 0;   // M as used
+  uint64_t min_object_voxels = 0;  // M as used
 };
 
 // Runs the workflow on the sheet phase `input`. kInvalidArgument for bad parameters or

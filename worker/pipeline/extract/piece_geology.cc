@@ -1,7 +1,6 @@
 #include "worker/pipeline/extract/piece_geology.h"
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <map>
 
@@ -80,11 +79,11 @@ std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces) {
       "piece,voxels,triangles,area,mean_aperture,max_aperture,normal_x,normal_y,normal_z,"
       "dip,dip_direction,planarity,centroid_x,centroid_y,centroid_z\n";
   for (const PieceGeology& g : pieces) {
-    absl::StrAppendFormat(&out, "%d,%d,%d,%.6g,%.6g,%.6g,%.6f,%.6f,%.6f,%.3f,%.3f,%.4f,%.6g,%.6g,%.6g\n",
-                          g.piece, g.voxels, g.triangles, g.area, g.mean_aperture, g.max_aperture,
-                          g.normal.x, g.normal.y, g.normal.z, g.dip_degrees,
-                          g.dip_direction_degrees, g.planarity, g.centroid.x, g.centroid.y,
-                          g.centroid.z);
+    absl::StrAppendFormat(
+        &out, "%d,%d,%d,%.6g,%.6g,%.6g,%.6f,%.6f,%.6f,%.3f,%.3f,%.4f,%.6g,%.6g,%.6g\n", g.piece,
+        g.voxels, g.triangles, g.area, g.mean_aperture, g.max_aperture, g.normal.x, g.normal.y,
+        g.normal.z, g.dip_degrees, g.dip_direction_degrees, g.planarity, g.centroid.x, g.centroid.y,
+        g.centroid.z);
   }
   return out;
 }

@@ -18,15 +18,15 @@ namespace sheetmesh {
 struct PieceGeology {
   int32_t piece = 0;
   uint64_t voxels = 0;
-  uint64_t triangles = 0;               // faces of the mesh carrying this piece
-  double area = 0;                      // mesh area of those faces, physical units^2
-  double mean_aperture = 0;             // mean τ along the plane normal, physical units
+  uint64_t triangles = 0;    // faces of the mesh carrying this piece
+  double area = 0;           // mesh area of those faces, physical units^2
+  double mean_aperture = 0;  // mean τ along the plane normal, physical units
   double max_aperture = 0;
-  Vec3 normal;                          // best-fit plane (least squares), unit, z >= 0
+  Vec3 normal;  // best-fit plane (least squares), unit, z >= 0
   double dip_degrees = 0;
   double dip_direction_degrees = 0;
-  double planarity = 0;                 // 1 - λ_min / λ_mid of the voxels' covariance
-  Vec3 centroid;                        // physical units
+  double planarity = 0;  // 1 - λ_min / λ_mid of the voxels' covariance
+  Vec3 centroid;         // physical units
 };
 
 // The geology of every label of `model`. `thickness` is τ per voxel of model.set; faces of

@@ -1,9 +1,8 @@
 #include "worker/pipeline/extract/separation.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <map>
-
-#include <Eigen/Dense>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
@@ -87,8 +86,8 @@ double Planarity(const std::vector<Vec3>& pos, const std::vector<uint32_t>& ids)
 absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
                                           const Progress& progress) {
   if (!(options.dihedral_degrees > 0 && options.dihedral_degrees <= 180)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "separation D_ang = ", options.dihedral_degrees, " degrees must be in (0, 180]"));
+    return absl::InvalidArgumentError(absl::StrCat("separation D_ang = ", options.dihedral_degrees,
+                                                   " degrees must be in (0, 180]"));
   }
   SeparationResult out;
   SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(set, progress.Sub(0, 0.2)));
@@ -104,9 +103,9 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
   // angles and survive the selection to fail Algorithm 2's test.
   DualTriangleOptions to;
   to.rim = false;
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri, TriangulateScvd(sheet.set, sheet.neighbors,
-                                                             sheet.thickness, scvd, pos, to,
-                                                             progress.Sub(0.7, 0.9)));
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to,
+                                      progress.Sub(0.7, 0.9)));
   const std::vector<uint8_t> flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
   std::vector<std::vector<uint32_t>> adj(scvd.num_generators());
   for (const Face& f : tri.faces) {

@@ -17,15 +17,15 @@
 namespace sheetmesh {
 
 struct SeparationOptions {
-  double radius_voxels = 5.0;       // r of the SCVD built for separation (Fig. 4: r = 5)
-  double dihedral_degrees = 150.0;  // D_ang: below this, two triangles are not flat
-  uint64_t seed = 1;                // SCVD seed
-  int widen_rings = 1;              // beyond the paper: a piece that is not planar and
-                                    // touches non-flat generators leaked through a missed
-                                    // cell; it is flooded again with the non-flat set widened
-                                    // by this many mesh edges, and the ring then rejoins the
-                                    // piece of most of its neighbours (0: the paper)
-  double planarity_threshold = 0.9; // pieces below this planarity count as leaked
+  double radius_voxels = 5.0;        // r of the SCVD built for separation (Fig. 4: r = 5)
+  double dihedral_degrees = 150.0;   // D_ang: below this, two triangles are not flat
+  uint64_t seed = 1;                 // SCVD seed
+  int widen_rings = 1;               // beyond the paper: a piece that is not planar and
+                                     // touches non-flat generators leaked through a missed
+                                     // cell; it is flooded again with the non-flat set widened
+                                     // by this many mesh edges, and the ring then rejoins the
+                                     // piece of most of its neighbours (0: the paper)
+  double planarity_threshold = 0.9;  // pieces below this planarity count as leaked
 };
 
 // Flat flags per vertex of `faces` over `positions` (Algorithm 2's test). Vertices with no
@@ -34,8 +34,8 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
                                   double dihedral_degrees);
 
 struct SeparationResult {
-  LabelledVoxels pieces;            // one label per flood, largest first
-  uint64_t removed_voxels = 0;      // voxels of non-flat cells
+  LabelledVoxels pieces;        // one label per flood, largest first
+  uint64_t removed_voxels = 0;  // voxels of non-flat cells
   uint32_t generators = 0;
   uint32_t nonflat_generators = 0;
 };

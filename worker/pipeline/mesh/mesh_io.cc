@@ -16,7 +16,6 @@
 #include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/core/version.h"
 
-
 namespace sheetmesh {
 namespace {
 
@@ -36,7 +35,8 @@ double PhysicalLength(double voxels, const Placement& p) {
   return voxels * std::cbrt(std::abs(p.spacing.x * p.spacing.y * p.spacing.z));
 }
 
-absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement) {
   const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
   const bool fthick = mesh.face_thickness.size() == mesh.faces.size();
   const bool fpiece = mesh.face_piece.size() == mesh.faces.size();
@@ -46,7 +46,8 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const P
   absl::StrAppend(&out, "element vertex ", mesh.vertices.size(),
                   "\nproperty float x\nproperty float y\nproperty float z\n");
   if (vthick) out += "property float thickness\n";
-  absl::StrAppend(&out, "element face ", mesh.faces.size(), "\nproperty list uchar int vertex_indices\n");
+  absl::StrAppend(&out, "element face ", mesh.faces.size(),
+                  "\nproperty list uchar int vertex_indices\n");
   if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
   if (fpiece) out += "property int piece\n";
   out += "end_header\n";
@@ -56,7 +57,8 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const P
     Put<float>(&out, static_cast<float>(p.x));
     Put<float>(&out, static_cast<float>(p.y));
     Put<float>(&out, static_cast<float>(p.z));
-    if (vthick) Put<float>(&out, static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
+    if (vthick)
+      Put<float>(&out, static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
   }
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     Put<uint8_t>(&out, 3);
@@ -70,7 +72,8 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const P
   return WriteFileAtomically(path, out);
 }
 
-absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement) {
   std::string out;
   absl::StrAppend(&out,
                   "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "
@@ -83,15 +86,20 @@ absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const P
   }
   out += "</DataArray>\n</Points>\n";
   if (mesh.vertex_thickness.size() == mesh.vertices.size()) {
-    out += "<PointData Scalars=\"thickness\">\n<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
-    for (float t : mesh.vertex_thickness) absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
+    out +=
+        "<PointData Scalars=\"thickness\">\n<DataArray type=\"Float32\" Name=\"thickness\" "
+        "format=\"ascii\">\n";
+    for (float t : mesh.vertex_thickness)
+      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
     out += "</DataArray>\n</PointData>\n";
   }
   out += "<CellData Scalars=\"thickness\">\n";
   if (mesh.face_thickness.size() == mesh.faces.size()) {
     out += "<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
-    for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
-    out += "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness_voxels\" format=\"ascii\">\n";
+    for (float t : mesh.face_thickness)
+      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
+    out +=
+        "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness_voxels\" format=\"ascii\">\n";
     for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", t);
     out += "</DataArray>\n";
   }
@@ -100,7 +108,8 @@ absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const P
     for (int32_t p : mesh.face_piece) absl::StrAppend(&out, p, "\n");
     out += "</DataArray>\n";
   }
-  out += "</CellData>\n<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  out +=
+      "</CellData>\n<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (const Face& f : mesh.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
   out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
   for (size_t f = 0; f < mesh.faces.size(); ++f) absl::StrAppend(&out, 3 * (f + 1), "\n");
@@ -108,7 +117,8 @@ absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const P
   return WriteFileAtomically(path, out);
 }
 
-absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh, const Placement& placement) {
+absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement) {
   std::string out = absl::StrCat("# sheetmesh ", SHEETMESH_VERSION, ": ", mesh.vertices.size(),
                                  " vertices, ", mesh.faces.size(), " triangles\n");
   if (!placement.unit.empty()) absl::StrAppend(&out, "# unit ", placement.unit, "\n");
@@ -146,8 +156,8 @@ absl::Status AddPolygon(const std::vector<int64_t>& idx, size_t num_vertices,
                         const std::string& where, TriangleMesh* mesh) {
   for (int64_t i : idx) {
     if (i < 0 || static_cast<size_t>(i) >= num_vertices) {
-      return absl::InvalidArgumentError(absl::StrCat(where, ": vertex index ", i,
-                                                     " outside 0..", num_vertices - 1));
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": vertex index ", i, " outside 0..", num_vertices - 1));
     }
   }
   for (size_t k = 1; k + 1 < idx.size(); ++k) {
@@ -164,13 +174,15 @@ absl::StatusOr<TriangleMesh> ReadObj(const std::string& path, const std::string&
   int line_no = 0;
   for (absl::string_view line : absl::StrSplit(text, '\n')) {
     ++line_no;
-    std::vector<absl::string_view> tok = absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
+    std::vector<absl::string_view> tok =
+        absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
     if (tok.empty()) continue;
     if (tok[0] == "v") {
       Vec3 p;
       if (tok.size() < 4 || !absl::SimpleAtod(tok[1], &p.x) || !absl::SimpleAtod(tok[2], &p.y) ||
           !absl::SimpleAtod(tok[3], &p.z)) {
-        return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": bad vertex '", line, "'"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, " line ", line_no, ": bad vertex '", line, "'"));
       }
       mesh.vertices.push_back(ToIndex(p, placement));
     } else if (tok[0] == "f") {
@@ -179,19 +191,22 @@ absl::StatusOr<TriangleMesh> ReadObj(const std::string& path, const std::string&
         int64_t i = 0;
         const absl::string_view first = tok[k].substr(0, tok[k].find('/'));
         if (!absl::SimpleAtoi(first, &i) || i == 0) {
-          return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": bad face '", line, "'"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(path, " line ", line_no, ": bad face '", line, "'"));
         }
         // Negative indices count back from the last vertex so far.
         idx.push_back(i > 0 ? i - 1 : static_cast<int64_t>(mesh.vertices.size()) + i);
       }
       if (idx.size() < 3) {
-        return absl::InvalidArgumentError(absl::StrCat(path, " line ", line_no, ": face with fewer than 3 vertices"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, " line ", line_no, ": face with fewer than 3 vertices"));
       }
       polys.push_back(std::move(idx));
     }
   }
   for (size_t k = 0; k < polys.size(); ++k) {
-    SM_RETURN_IF_ERROR(AddPolygon(polys[k], mesh.vertices.size(), absl::StrCat(path, " face ", k), &mesh));
+    SM_RETURN_IF_ERROR(
+        AddPolygon(polys[k], mesh.vertices.size(), absl::StrCat(path, " face ", k), &mesh));
   }
   return mesh;
 }
@@ -210,7 +225,8 @@ struct PlyElement {
 int TypeSize(const std::string& t) {
   if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
   if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32")
+    return 4;
   if (t == "double" || t == "float64") return 8;
   return 0;
 }
@@ -237,14 +253,35 @@ class PlyCursor {
     std::memcpy(b, data_.data() + pos_, n);
     pos_ += n;
     if (big_ == NativeIsLittleEndian()) std::reverse(b, b + n);
-    if (type == "char" || type == "int8") *out = static_cast<int8_t>(b[0]);
-    else if (type == "uchar" || type == "uint8") *out = b[0];
-    else if (type == "short" || type == "int16") { int16_t v; std::memcpy(&v, b, 2); *out = v; }
-    else if (type == "ushort" || type == "uint16") { uint16_t v; std::memcpy(&v, b, 2); *out = v; }
-    else if (type == "int" || type == "int32") { int32_t v; std::memcpy(&v, b, 4); *out = v; }
-    else if (type == "uint" || type == "uint32") { uint32_t v; std::memcpy(&v, b, 4); *out = v; }
-    else if (type == "float" || type == "float32") { float v; std::memcpy(&v, b, 4); *out = v; }
-    else { double v; std::memcpy(&v, b, 8); *out = v; }
+    if (type == "char" || type == "int8")
+      *out = static_cast<int8_t>(b[0]);
+    else if (type == "uchar" || type == "uint8")
+      *out = b[0];
+    else if (type == "short" || type == "int16") {
+      int16_t v;
+      std::memcpy(&v, b, 2);
+      *out = v;
+    } else if (type == "ushort" || type == "uint16") {
+      uint16_t v;
+      std::memcpy(&v, b, 2);
+      *out = v;
+    } else if (type == "int" || type == "int32") {
+      int32_t v;
+      std::memcpy(&v, b, 4);
+      *out = v;
+    } else if (type == "uint" || type == "uint32") {
+      uint32_t v;
+      std::memcpy(&v, b, 4);
+      *out = v;
+    } else if (type == "float" || type == "float32") {
+      float v;
+      std::memcpy(&v, b, 4);
+      *out = v;
+    } else {
+      double v;
+      std::memcpy(&v, b, 8);
+      *out = v;
+    }
     return true;
   }
 
@@ -258,27 +295,32 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
                                      const Placement& placement) {
   const size_t end = data.find("end_header");
   if (data.rfind("ply", 0) != 0 || end == std::string::npos) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": not a PLY file (no 'ply' magic or 'end_header')"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a PLY file (no 'ply' magic or 'end_header')"));
   }
   size_t body = data.find('\n', end);
-  if (body == std::string::npos) return absl::InvalidArgumentError(absl::StrCat(path, ": header ends without a newline"));
+  if (body == std::string::npos)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": header ends without a newline"));
   ++body;
   bool ascii = false, big = false;
   std::vector<PlyElement> elements;
   for (absl::string_view line : absl::StrSplit(absl::string_view(data).substr(0, end), '\n')) {
-    std::vector<absl::string_view> tok = absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
+    std::vector<absl::string_view> tok =
+        absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty());
     if (tok.empty()) continue;
     if (tok[0] == "format" && tok.size() >= 2) {
       ascii = tok[1] == "ascii";
       big = tok[1] == "binary_big_endian";
       if (!ascii && !big && tok[1] != "binary_little_endian") {
-        return absl::InvalidArgumentError(absl::StrCat(path, ": PLY format '", tok[1], "' is unknown"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": PLY format '", tok[1], "' is unknown"));
       }
     } else if (tok[0] == "element" && tok.size() >= 3) {
       PlyElement e;
       e.name = std::string(tok[1]);
       if (!absl::SimpleAtoi(tok[2], &e.count) || e.count < 0) {
-        return absl::InvalidArgumentError(absl::StrCat(path, ": element '", tok[1], "' count '", tok[2], "'"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": element '", tok[1], "' count '", tok[2], "'"));
       }
       elements.push_back(e);
     } else if (tok[0] == "property" && !elements.empty()) {
@@ -292,7 +334,8 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
         p.name = std::string(tok[2]);
       }
       if (TypeSize(p.type) == 0 || (!p.count_type.empty() && TypeSize(p.count_type) == 0)) {
-        return absl::InvalidArgumentError(absl::StrCat(path, ": property '", line, "' has an unknown type"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(path, ": property '", line, "' has an unknown type"));
       }
       elements.back().props.push_back(p);
     }
@@ -309,7 +352,8 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
         double v = 0;
         if (prop.count_type.empty()) {
           if (!cur.Read(prop.type, &v)) {
-            return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " property ", prop.name, " is truncated"));
+            return absl::InvalidArgumentError(absl::StrCat(
+                path, ": element ", e.name, " ", i, " property ", prop.name, " is truncated"));
           }
           if (e.name == "vertex") {
             if (prop.name == "x") p.x = v;
@@ -325,11 +369,13 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
         }
         double n = 0;
         if (!cur.Read(prop.count_type, &n) || n < 0 || n > 1e6) {
-          return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " list ", prop.name, " has a bad count"));
+          return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i,
+                                                         " list ", prop.name, " has a bad count"));
         }
         for (int k = 0; k < static_cast<int>(n); ++k) {
           if (!cur.Read(prop.type, &v)) {
-            return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i, " list ", prop.name, " is truncated"));
+            return absl::InvalidArgumentError(absl::StrCat(path, ": element ", e.name, " ", i,
+                                                           " list ", prop.name, " is truncated"));
           }
           if (e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
             idx.push_back(static_cast<int64_t>(v));
@@ -339,13 +385,15 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
       if (e.name == "vertex") mesh.vertices.push_back(ToIndex(p, placement));
       if (e.name == "face") {
         if (idx.size() < 3) {
-          return absl::InvalidArgumentError(absl::StrCat(path, ": face ", i, " has fewer than 3 vertices"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(path, ": face ", i, " has fewer than 3 vertices"));
         }
         if (idx.size() != 3 && (!face_thick.empty() || !face_thick_vox.empty())) {
           return absl::InvalidArgumentError(
               absl::StrCat(path, ": face ", i, " is not a triangle but carries a thickness"));
         }
-        SM_RETURN_IF_ERROR(AddPolygon(idx, mesh.vertices.size(), absl::StrCat(path, " face ", i), &mesh));
+        SM_RETURN_IF_ERROR(
+            AddPolygon(idx, mesh.vertices.size(), absl::StrCat(path, " face ", i), &mesh));
       }
     }
   }

@@ -20,12 +20,15 @@ double PhysicalLength(double voxels, const Placement& placement);
 // Binary little-endian PLY. Vertices x, y, z (float, physical) and, when present,
 // thickness; faces vertex_indices, thickness (physical), thickness_voxels, piece.
 // The file appears atomically.
-absl::Status WritePly(const std::string& path, const TriangleMesh& mesh, const Placement& placement);
+absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement);
 // VTK XML PolyData (.vtp) with cell data thickness, thickness_voxels, piece and point data
 // thickness. Atomic.
-absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh, const Placement& placement);
+absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement);
 // Wavefront OBJ, faces grouped by piece ("g piece_3"). Atomic.
-absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh, const Placement& placement);
+absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement);
 
 // Reads a PLY (ascii or binary, any endianness) or OBJ surface and maps its physical
 // coordinates back to voxel index coordinates with `placement`. Polygons are fanned into

@@ -82,8 +82,10 @@ TopologyReport AnalyzeTopology(const TriangleMesh& mesh) {
   for (auto& f : sorted) std::sort(f.begin(), f.end());
   std::vector<uint32_t> order(sorted.size());
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return sorted[a] < sorted[b]; });
-  for (size_t i = 1; i < order.size(); ++i) r.duplicate_faces += sorted[order[i]] == sorted[order[i - 1]];
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return sorted[a] < sorted[b]; });
+  for (size_t i = 1; i < order.size(); ++i)
+    r.duplicate_faces += sorted[order[i]] == sorted[order[i - 1]];
   std::vector<uint8_t> used(mesh.vertices.size(), 0);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& t = mesh.faces[f];
@@ -147,7 +149,8 @@ size_t OrientConsistently(TriangleMesh* mesh) {
       stack.pop_back();
       for (const auto& [g, ei] : adj[f]) {
         const EdgeIndex::Edge& e = index.edges()[ei];
-        const bool same = Direction(mesh->faces[f], e.a, e.b) == Direction(mesh->faces[g], e.a, e.b);
+        const bool same =
+            Direction(mesh->faces[f], e.a, e.b) == Direction(mesh->faces[g], e.a, e.b);
         if (!seen[g]) {
           if (same) std::swap(mesh->faces[g][1], mesh->faces[g][2]);
           seen[g] = 1;
@@ -202,8 +205,10 @@ std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleM
         hit = TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
       } else if (shared == 2) {
         uint32_t ra = 0, rb = 0;
-        for (uint32_t u : a) if (u != sv[0] && u != sv[1]) ra = u;
-        for (uint32_t v : b) if (v != sv[0] && v != sv[1]) rb = v;
+        for (uint32_t u : a)
+          if (u != sv[0] && u != sv[1]) ra = u;
+        for (uint32_t v : b)
+          if (v != sv[0] && v != sv[1]) rb = v;
         hit = DihedralAngleDegrees(mesh.vertices[sv[0]], mesh.vertices[sv[1]], mesh.vertices[ra],
                                    mesh.vertices[rb]) < fold_angle_degrees;
       }

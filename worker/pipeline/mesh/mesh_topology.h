@@ -17,7 +17,7 @@ class EdgeIndex {
   explicit EdgeIndex(const TriangleMesh& mesh);
 
   struct Edge {
-    uint32_t a, b;  // a < b
+    uint32_t a, b;          // a < b
     uint32_t first, count;  // faces_[first .. first + count)
   };
   const std::vector<Edge>& edges() const { return edges_; }
@@ -35,14 +35,14 @@ struct TopologyReport {
   size_t vertices = 0;
   size_t faces = 0;
   size_t edges = 0;
-  size_t boundary_edges = 0;     // used by one face
-  size_t manifold_edges = 0;     // used by two faces
-  size_t nonmanifold_edges = 0;  // used by three or more
-  size_t duplicate_faces = 0;    // faces with the same vertex set as an earlier face
-  size_t degenerate_faces = 0;   // repeated vertex or zero area
-  size_t boundary_loops = 0;     // connected groups of boundary edges
-  size_t pieces = 0;             // groups of faces connected through edges
-  size_t inconsistent_edges = 0; // two-face edges walked in the same direction by both
+  size_t boundary_edges = 0;      // used by one face
+  size_t manifold_edges = 0;      // used by two faces
+  size_t nonmanifold_edges = 0;   // used by three or more
+  size_t duplicate_faces = 0;     // faces with the same vertex set as an earlier face
+  size_t degenerate_faces = 0;    // repeated vertex or zero area
+  size_t boundary_loops = 0;      // connected groups of boundary edges
+  size_t pieces = 0;              // groups of faces connected through edges
+  size_t inconsistent_edges = 0;  // two-face edges walked in the same direction by both
   size_t unused_vertices = 0;
   std::vector<std::pair<uint32_t, uint32_t>> nonmanifold_edge_list;
 };

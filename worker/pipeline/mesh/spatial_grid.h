@@ -41,8 +41,8 @@ class SpatialGrid {
   }
   int64_t Cell(double v) const { return static_cast<int64_t>(std::floor(v * inv_)); }
   static uint64_t Key(int64_t x, int64_t y, int64_t z) {
-    return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<uint64_t>(y & 0x1FFFFF) << 21) |
-           static_cast<uint64_t>(z & 0x1FFFFF);
+    return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
+           (static_cast<uint64_t>(y & 0x1FFFFF) << 21) | static_cast<uint64_t>(z & 0x1FFFFF);
   }
 
   double inv_;

@@ -122,8 +122,7 @@ bool TrianglesIntersect(const Triangle& a, const Triangle& b, double tolerance) 
 
 Triangle Shrink(const Triangle& t, double fraction) {
   const Vec3 c = (t[0] + t[1] + t[2]) / 3.0;
-  return {t[0] + (c - t[0]) * fraction, t[1] + (c - t[1]) * fraction,
-          t[2] + (c - t[2]) * fraction};
+  return {t[0] + (c - t[0]) * fraction, t[1] + (c - t[1]) * fraction, t[2] + (c - t[2]) * fraction};
 }
 
 }  // namespace sheetmesh

@@ -14,7 +14,7 @@ namespace sheetmesh {
 using Face = std::array<uint32_t, 3>;
 
 struct TriangleMesh {
-  std::vector<Vec3> vertices;           // voxel index coordinates (not physical)
+  std::vector<Vec3> vertices;  // voxel index coordinates (not physical)
   std::vector<Face> faces;
   std::vector<float> face_thickness;    // per face, voxels; empty when not computed
   std::vector<int32_t> face_piece;      // per face, object id; empty when not labelled

@@ -8,8 +8,8 @@
 #include "worker/pipeline/core/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/pipeline_config.h"
-#include "worker/pipeline/volume/label_volume.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
+#include "worker/pipeline/volume/label_volume.h"
 #include "worker/pipeline/volume/vdb_io.h"
 
 namespace sheetmesh {
@@ -90,8 +90,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   SurfaceOptions surface = options.surface;
   if (options.search_radius) {
     StageTimer t(&report, "search-r");
-    SM_ASSIGN_OR_RETURN(report.radius_choice,
-                        SearchRadius(sheet, surface, options.radius_search, progress.Stage("search-r")));
+    SM_ASSIGN_OR_RETURN(report.radius_choice, SearchRadius(sheet, surface, options.radius_search,
+                                                           progress.Stage("search-r")));
     surface.scvd.radius_voxels = report.radius_choice.radius;
     report.options.surface.scvd.radius_voxels = report.radius_choice.radius;
   }
@@ -119,12 +119,14 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   {
     StageTimer t(&report, "similarity");
     const Progress p = progress.Stage("similarity");
-    const PrismHeight other = options.score.height == PrismHeight::kFace ? PrismHeight::kVertex
-                                                                         : PrismHeight::kFace;
-    SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
+    const PrismHeight other =
+        options.score.height == PrismHeight::kFace ? PrismHeight::kVertex : PrismHeight::kFace;
+    SM_ASSIGN_OR_RETURN(VoxelSet prisms,
+                        VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
     report.similarity = ScoreModel(prisms, sheet.set);
     if (options.score.hausdorff) {
-      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff, HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
+      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff,
+                          HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
     }
     SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
     report.shell_similarity = ScoreModel(shell, sheet.set).similarity;
@@ -156,9 +158,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     report.volume_repaired = volume.repaired_triangles;
     report.volume_flipped = volume.flipped_edges;
     report.volume_dropped_caps = volume.dropped_caps;
-    report.voxels_per_tet = report.volume_tets > 0
-                                ? double(phase.info.dims.num_voxels()) / report.volume_tets
-                                : 0.0;
+    report.voxels_per_tet =
+        report.volume_tets > 0 ? double(phase.info.dims.num_voxels()) / report.volume_tets : 0.0;
   }
 
   if (!options.output.dir.empty()) {
@@ -182,7 +183,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     if (options.extract && options.output.model) {
       SM_RETURN_IF_ERROR(WriteVoxelSetVdb(path("model.vdb"), model.set, model.label, pl, "model"));
       report.files.push_back("model.vdb");
-      const std::string labels = absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
+      const std::string labels =
+          absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
       SM_RETURN_IF_ERROR(WriteLabelVolume(model, path(labels.c_str()), VolumeFormat::kRaw, pl));
       report.files.push_back(labels);
       SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report.geology)));

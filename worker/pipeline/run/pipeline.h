@@ -30,26 +30,26 @@ struct ScoreOptions {
 };
 
 struct OutputOptions {
-  std::string dir;        // where files go (created); empty: write nothing
-  bool ply = true;        // surface.ply
-  bool vtp = true;        // surface.vtp
-  bool obj = true;        // surface.obj
-  bool model = true;      // with extraction: model.vdb (mask + labels) and
-                          // model_labels_<dims>_u16.raw, and pieces.csv
-  bool vtu = true;        // with a volume mesh: volume.vtu
-  bool msh = true;        // volume.msh (Gmsh 4.1)
-  bool inp = true;        // volume.inp (Abaqus)
+  std::string dir;    // where files go (created); empty: write nothing
+  bool ply = true;    // surface.ply
+  bool vtp = true;    // surface.vtp
+  bool obj = true;    // surface.obj
+  bool model = true;  // with extraction: model.vdb (mask + labels) and
+                      // model_labels_<dims>_u16.raw, and pieces.csv
+  bool vtu = true;    // with a volume mesh: volume.vtu
+  bool msh = true;    // volume.msh (Gmsh 4.1)
+  bool inp = true;    // volume.inp (Abaqus)
 };
 
 struct PipelineOptions {
   SheetInput input;
-  bool extract = false;                   // run the feature extraction (Fig. 3) first
+  bool extract = false;  // run the feature extraction (Fig. 3) first
   ExtractionOptions extraction;
-  SurfaceOptions surface;                 // r = surface.scvd.radius_voxels unless searched
-  bool search_radius = false;             // choose r with `radius_search`
+  SurfaceOptions surface;      // r = surface.scvd.radius_voxels unless searched
+  bool search_radius = false;  // choose r with `radius_search`
   RadiusSearchOptions radius_search;
   ScoreOptions score;
-  bool volume_mesh = false;               // tetrahedralize the box with the sheets inside
+  bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
   VolumeMeshOptions volume;
   OutputOptions output;
 };
@@ -69,7 +69,7 @@ struct GridFigure {
 };
 
 struct PipelineReport {
-  PipelineOptions options;          // as run (r as chosen)
+  PipelineOptions options;  // as run (r as chosen)
   VolumeInfo volume;
   uint64_t sheet_voxels = 0;
   ThicknessStats thickness;
@@ -81,7 +81,7 @@ struct PipelineReport {
   double energy = 0;
   uint64_t vertices = 0;
   uint64_t triangles = 0;
-  double element_size_voxels = 0;   // mean edge length
+  double element_size_voxels = 0;  // mean edge length
   double area_voxels = 0;
   DualTriangleStats triangle_stats;
   TopologyReport topology;
@@ -89,17 +89,17 @@ struct PipelineReport {
   uint64_t skipped_voxels = 0;
   // extraction (when run)
   std::vector<ExtractionStep> extraction_steps;
-  uint64_t min_object_voxels = 0;    // M as used
-  uint64_t model_voxels = 0;         // voxels of the extracted model
+  uint64_t min_object_voxels = 0;  // M as used
+  uint64_t model_voxels = 0;       // voxels of the extracted model
   uint32_t pieces = 0;
   std::vector<PieceGeology> geology;
   // similarity
-  SimilarityScore similarity;        // against the meshed set (the extracted model, or the
-                                     // input's sheet phase), model of `score.height`
-  SimilarityScore similarity_raw;    // against the input's sheet phase (with extraction)
-  double shell_similarity = 0;       // the other prism model (per-vertex if height is face)
+  SimilarityScore similarity;      // against the meshed set (the extracted model, or the
+                                   // input's sheet phase), model of `score.height`
+  SimilarityScore similarity_raw;  // against the input's sheet phase (with extraction)
+  double shell_similarity = 0;     // the other prism model (per-vertex if height is face)
   std::vector<GridFigure> grid;
-  RadiusChoice radius_choice;        // when r was searched
+  RadiusChoice radius_choice;  // when r was searched
   // volume mesh (when made)
   bool has_volume_mesh = false;
   uint64_t volume_nodes = 0;
@@ -111,9 +111,9 @@ struct PipelineReport {
   uint32_t volume_repaired = 0;
   uint32_t volume_flipped = 0;
   uint32_t volume_dropped_caps = 0;
-  double voxels_per_tet = 0;         // the paper's 1 : 6704 is 6704 here
+  double voxels_per_tet = 0;  // the paper's 1 : 6704 is 6704 here
   std::vector<StageTime> timings;
-  std::vector<std::string> files;    // written, relative to output.dir
+  std::vector<std::string> files;  // written, relative to output.dir
 
   // The report as JSON (the report.json artifact).
   std::string ToJson() const;

@@ -1,9 +1,8 @@
 #include "worker/pipeline/run/pipeline_config.h"
 
-#include <nlohmann/json.hpp>
-
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "absl/strings/str_cat.h"
@@ -67,8 +66,10 @@ class Reader {
   }
 
   // Calls handlers[key] for each key of object `v`; unknown keys are an error.
-  absl::Status Object(const Json& v, const std::string& path,
-                      const std::map<std::string, std::function<absl::Status(const Json&, const std::string&)>>& handlers) const {
+  absl::Status Object(
+      const Json& v, const std::string& path,
+      const std::map<std::string, std::function<absl::Status(const Json&, const std::string&)>>&
+          handlers) const {
     if (!v.is_object()) return Error(path.empty() ? "(top level)" : path, v, "must be an object");
     for (auto it = v.begin(); it != v.end(); ++it) {
       const std::string key = path.empty() ? it.key() : absl::StrCat(path, ".", it.key());
@@ -76,8 +77,8 @@ class Reader {
       if (h == handlers.end()) {
         std::vector<std::string> known;
         for (const auto& [k, _] : handlers) known.push_back(k);
-        return absl::InvalidArgumentError(absl::StrCat(source_, ": unknown key '", key,
-                                                       "'; known here: ", absl::StrJoin(known, ", ")));
+        return absl::InvalidArgumentError(absl::StrCat(
+            source_, ": unknown key '", key, "'; known here: ", absl::StrJoin(known, ", ")));
       }
       SM_RETURN_IF_ERROR(h->second(it.value(), key));
     }
@@ -88,15 +89,20 @@ class Reader {
   std::string source_;
 };
 
-using Handlers = std::map<std::string, std::function<absl::Status(const Json&, const std::string&)>>;
+using Handlers =
+    std::map<std::string, std::function<absl::Status(const Json&, const std::string&)>>;
 
 Handlers ExtendHandlers(const Reader& rd, bool* enabled, ExtendOptions* e) {
   return {
       {"enabled", [=, &rd](const Json& v, const std::string& p) { return rd.Bool(v, p, enabled); }},
-      {"t", [=, &rd](const Json& v, const std::string& p) { return rd.Number(v, p, &e->half_thickness_voxels); }},
-      {"R", [=, &rd](const Json& v, const std::string& p) { return rd.Number(v, p, &e->radius_voxels); }},
-      {"rounds", [=, &rd](const Json& v, const std::string& p) { return rd.Integer(v, p, &e->max_rounds); }},
-      {"r", [=, &rd](const Json& v, const std::string& p) { return rd.Number(v, p, &e->scvd_radius_voxels); }},
+      {"t", [=, &rd](const Json& v,
+                     const std::string& p) { return rd.Number(v, p, &e->half_thickness_voxels); }},
+      {"R", [=, &rd](const Json& v,
+                     const std::string& p) { return rd.Number(v, p, &e->radius_voxels); }},
+      {"rounds",
+       [=, &rd](const Json& v, const std::string& p) { return rd.Integer(v, p, &e->max_rounds); }},
+      {"r", [=, &rd](const Json& v,
+                     const std::string& p) { return rd.Number(v, p, &e->scvd_radius_voxels); }},
   };
 }
 
@@ -114,26 +120,30 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
   ExtractionOptions& x = o->extraction;
   SurfaceOptions& s = o->surface;
   const Handlers input = {
-      {"labels", [&](const Json& v, const std::string& p) {
+      {"labels",
+       [&](const Json& v, const std::string& p) {
          std::vector<double> l;
          SM_RETURN_IF_ERROR(rd.Numbers(v, p, &l));
          o->input.selection = PhaseSelection::Labels(l);
          return absl::OkStatus();
        }},
-      {"window", [&](const Json& v, const std::string& p) {
+      {"window",
+       [&](const Json& v, const std::string& p) {
          std::vector<double> w;
          SM_RETURN_IF_ERROR(rd.Numbers(v, p, &w));
          if (w.size() != 2 || w[0] > w[1]) return rd.Error(p, v, "must be [lo, hi] with lo <= hi");
          o->input.selection = PhaseSelection::Window(w[0], w[1]);
          return absl::OkStatus();
        }},
-      {"dims", [&](const Json& v, const std::string& p) {
+      {"dims",
+       [&](const Json& v, const std::string& p) {
          Vec3 d;
          SM_RETURN_IF_ERROR(rd.Vec(v, p, &d));
          o->input.open.raw_dims = Dims{int64_t(d.x), int64_t(d.y), int64_t(d.z)};
          return absl::OkStatus();
        }},
-      {"dtype", [&](const Json& v, const std::string& p) {
+      {"dtype",
+       [&](const Json& v, const std::string& p) {
          std::string t;
          SM_RETURN_IF_ERROR(rd.String(v, p, &t));
          auto d = ParseDType(t);
@@ -141,7 +151,8 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
          o->input.open.raw_dtype = *d;
          return absl::OkStatus();
        }},
-      {"byte_order", [&](const Json& v, const std::string& p) {
+      {"byte_order",
+       [&](const Json& v, const std::string& p) {
          std::string t;
          SM_RETURN_IF_ERROR(rd.String(v, p, &t));
          auto b = ParseByteOrder(t);
@@ -149,24 +160,34 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
          o->input.open.raw_byte_order = *b;
          return absl::OkStatus();
        }},
-      {"header_bytes", [&](const Json& v, const std::string& p) { return rd.Integer(v, p, &o->input.open.raw_header_bytes); }},
-      {"format", [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.open.format); }},
-      {"vdb_grid", [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.open.vdb_grid); }},
-      {"spacing", [&](const Json& v, const std::string& p) {
+      {"header_bytes",
+       [&](const Json& v, const std::string& p) {
+         return rd.Integer(v, p, &o->input.open.raw_header_bytes);
+       }},
+      {"format",
+       [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.open.format); }},
+      {"vdb_grid", [&](const Json& v,
+                       const std::string& p) { return rd.String(v, p, &o->input.open.vdb_grid); }},
+      {"spacing",
+       [&](const Json& v, const std::string& p) {
          Vec3 sp;
          SM_RETURN_IF_ERROR(rd.Vec(v, p, &sp));
          o->input.open.spacing = sp;
          return absl::OkStatus();
        }},
-      {"origin", [&](const Json& v, const std::string& p) {
+      {"origin",
+       [&](const Json& v, const std::string& p) {
          Vec3 og;
          SM_RETURN_IF_ERROR(rd.Vec(v, p, &og));
          o->input.open.origin = og;
          return absl::OkStatus();
        }},
-      {"unit", [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.open.unit); }},
-      {"mask", [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.mask_path); }},
-      {"mask_labels", [&](const Json& v, const std::string& p) {
+      {"unit",
+       [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.open.unit); }},
+      {"mask",
+       [&](const Json& v, const std::string& p) { return rd.String(v, p, &o->input.mask_path); }},
+      {"mask_labels",
+       [&](const Json& v, const std::string& p) {
          std::vector<double> l;
          SM_RETURN_IF_ERROR(rd.Numbers(v, p, &l));
          o->input.mask_selection = PhaseSelection::Labels(l);
@@ -177,170 +198,308 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
   const Handlers top = {
       {"input", [&](const Json& v, const std::string& p) { return rd.Object(v, p, input); }},
       {"extract", [&](const Json& v, const std::string& p) { return rd.Bool(v, p, &o->extract); }},
-      {"M", [&](const Json& v, const std::string& p) { return rd.Integer(v, p, &x.min_object_voxels); }},
-      {"refine", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"enabled", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &x.refine); }},
-             {"close_radius", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &x.refine_close_radius); }},
-             {"open_radius", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &x.refine_open_radius); }},
-         });
+      {"M",
+       [&](const Json& v, const std::string& p) { return rd.Integer(v, p, &x.min_object_voxels); }},
+      {"refine",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(
+             v, p,
+             {
+                 {"enabled",
+                  [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &x.refine); }},
+                 {"close_radius",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &x.refine_close_radius);
+                  }},
+                 {"open_radius",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &x.refine_open_radius);
+                  }},
+             });
        }},
-      {"detect", [&](const Json& v, const std::string& p) {
+      {"detect",
+       [&](const Json& v, const std::string& p) {
          return rd.Object(v, p, ExtendHandlers(rd, &x.detect, &x.detect_extend));
        }},
-      {"recover", [&](const Json& v, const std::string& p) {
+      {"recover",
+       [&](const Json& v, const std::string& p) {
          return rd.Object(v, p, ExtendHandlers(rd, &x.recover, &x.recover_extend));
        }},
-      {"separate", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"enabled", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &x.separate); }},
-             {"r", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &x.separation.radius_voxels); }},
-             {"D_ang", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &x.separation.dihedral_degrees); }},
-         });
+      {"separate",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(
+             v, p,
+             {
+                 {"enabled",
+                  [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &x.separate); }},
+                 {"r",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &x.separation.radius_voxels);
+                  }},
+                 {"D_ang",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &x.separation.dihedral_degrees);
+                  }},
+             });
        }},
-      {"remove_minor", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {{"enabled", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &remove_minor); }}});
+      {"remove_minor",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(v, p, {{"enabled", [&](const Json& w, const std::string& q) {
+                                    return rd.Bool(w, q, &remove_minor);
+                                  }}});
        }},
-      {"surface", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"r", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &s.scvd.radius_voxels); }},
-             {"seed", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &s.scvd.seed); }},
-             {"generators", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &s.scvd.generator_count); }},
-             {"thickness", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &s.scvd.mean_thickness_voxels); }},
-             {"lloyd_max_iter", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &s.scvd.lloyd_max_iter); }},
-             {"lloyd_tol", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &s.scvd.lloyd_tol); }},
-             {"fold_angle", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &s.triangles.fold_angle_degrees); }},
-             {"rim", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &s.triangles.rim); }},
-             {"method", [&](const Json& w, const std::string& q) {
-                std::string m;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &m));
-                if (m == "paper") {
-                  const ScvdOptions keep = s.scvd;
-                  s = SurfaceOptions::Paper();
-                  s.scvd.radius_voxels = keep.radius_voxels;
-                  s.scvd.seed = keep.seed;
-                } else if (m != "extended") {
-                  return rd.Error(q, w, "is not extended or paper");
-                }
-                return absl::OkStatus();
-              }},
-             {"placement", [&](const Json& w, const std::string& q) {
-                std::string m;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &m));
-                if (m == "generator") s.placement = VertexPlacement::kGenerator;
-                else if (m == "centroid") s.placement = VertexPlacement::kCentroid;
-                else return rd.Error(q, w, "is not generator or centroid");
-                return absl::OkStatus();
-              }},
-             {"thickness_measure", [&](const Json& w, const std::string& q) {
-                std::string m;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &m));
-                if (m == "axis_runs") s.thickness = ThicknessMeasure::kAxisRuns;
-                else if (m == "normal") s.thickness = ThicknessMeasure::kNormal;
-                else return rd.Error(q, w, "is not axis_runs or normal");
-                return absl::OkStatus();
-              }},
-             {"domain", [&](const Json& w, const std::string& q) {
-                std::string m;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &m));
-                if (m == "voxels") s.scvd.domain = ScvdDomain::kVoxels;
-                else if (m == "columns") s.scvd.domain = ScvdDomain::kColumns;
-                else if (m == "auto") s.scvd.domain = ScvdDomain::kAuto;
-                else return rd.Error(q, w, "is not voxels, columns or auto");
-                return absl::OkStatus();
-              }},
-         });
+      {"surface",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(
+             v, p,
+             {
+                 {"r",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &s.scvd.radius_voxels);
+                  }},
+                 {"seed", [&](const Json& w,
+                              const std::string& q) { return rd.Integer(w, q, &s.scvd.seed); }},
+                 {"generators",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &s.scvd.generator_count);
+                  }},
+                 {"thickness",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &s.scvd.mean_thickness_voxels);
+                  }},
+                 {"lloyd_max_iter",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &s.scvd.lloyd_max_iter);
+                  }},
+                 {"lloyd_tol",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &s.scvd.lloyd_tol);
+                  }},
+                 {"fold_angle",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &s.triangles.fold_angle_degrees);
+                  }},
+                 {"rim", [&](const Json& w,
+                             const std::string& q) { return rd.Bool(w, q, &s.triangles.rim); }},
+                 {"method",
+                  [&](const Json& w, const std::string& q) {
+                    std::string m;
+                    SM_RETURN_IF_ERROR(rd.String(w, q, &m));
+                    if (m == "paper") {
+                      const ScvdOptions keep = s.scvd;
+                      s = SurfaceOptions::Paper();
+                      s.scvd.radius_voxels = keep.radius_voxels;
+                      s.scvd.seed = keep.seed;
+                    } else if (m != "extended") {
+                      return rd.Error(q, w, "is not extended or paper");
+                    }
+                    return absl::OkStatus();
+                  }},
+                 {"placement",
+                  [&](const Json& w, const std::string& q) {
+                    std::string m;
+                    SM_RETURN_IF_ERROR(rd.String(w, q, &m));
+                    if (m == "generator")
+                      s.placement = VertexPlacement::kGenerator;
+                    else if (m == "centroid")
+                      s.placement = VertexPlacement::kCentroid;
+                    else
+                      return rd.Error(q, w, "is not generator or centroid");
+                    return absl::OkStatus();
+                  }},
+                 {"thickness_measure",
+                  [&](const Json& w, const std::string& q) {
+                    std::string m;
+                    SM_RETURN_IF_ERROR(rd.String(w, q, &m));
+                    if (m == "axis_runs")
+                      s.thickness = ThicknessMeasure::kAxisRuns;
+                    else if (m == "normal")
+                      s.thickness = ThicknessMeasure::kNormal;
+                    else
+                      return rd.Error(q, w, "is not axis_runs or normal");
+                    return absl::OkStatus();
+                  }},
+                 {"domain",
+                  [&](const Json& w, const std::string& q) {
+                    std::string m;
+                    SM_RETURN_IF_ERROR(rd.String(w, q, &m));
+                    if (m == "voxels")
+                      s.scvd.domain = ScvdDomain::kVoxels;
+                    else if (m == "columns")
+                      s.scvd.domain = ScvdDomain::kColumns;
+                    else if (m == "auto")
+                      s.scvd.domain = ScvdDomain::kAuto;
+                    else
+                      return rd.Error(q, w, "is not voxels, columns or auto");
+                    return absl::OkStatus();
+                  }},
+             });
        }},
-      {"radius_search", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"goal", [&](const Json& w, const std::string& q) {
-                std::string g;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &g));
-                if (g == "none") {
-                  o->search_radius = false;
-                } else if (g == "best") {
-                  o->search_radius = true;
-                  o->radius_search.goal = RadiusGoal::kBestSimilarity;
-                } else if (g == "target") {
-                  o->search_radius = true;
-                  o->radius_search.goal = RadiusGoal::kTargetSimilarity;
-                } else {
-                  return rd.Error(q, w, "is not none, best or target");
-                }
-                return absl::OkStatus();
-              }},
-             {"target_similarity", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->radius_search.target_similarity); }},
-             {"r_min", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->radius_search.min_radius_voxels); }},
-             {"r_max", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->radius_search.max_radius_voxels); }},
-         });
+      {"radius_search",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(v, p,
+                          {
+                              {"goal",
+                               [&](const Json& w, const std::string& q) {
+                                 std::string g;
+                                 SM_RETURN_IF_ERROR(rd.String(w, q, &g));
+                                 if (g == "none") {
+                                   o->search_radius = false;
+                                 } else if (g == "best") {
+                                   o->search_radius = true;
+                                   o->radius_search.goal = RadiusGoal::kBestSimilarity;
+                                 } else if (g == "target") {
+                                   o->search_radius = true;
+                                   o->radius_search.goal = RadiusGoal::kTargetSimilarity;
+                                 } else {
+                                   return rd.Error(q, w, "is not none, best or target");
+                                 }
+                                 return absl::OkStatus();
+                               }},
+                              {"target_similarity",
+                               [&](const Json& w, const std::string& q) {
+                                 return rd.Number(w, q, &o->radius_search.target_similarity);
+                               }},
+                              {"r_min",
+                               [&](const Json& w, const std::string& q) {
+                                 return rd.Number(w, q, &o->radius_search.min_radius_voxels);
+                               }},
+                              {"r_max",
+                               [&](const Json& w, const std::string& q) {
+                                 return rd.Number(w, q, &o->radius_search.max_radius_voxels);
+                               }},
+                          });
        }},
-      {"similarity", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"model", [&](const Json& w, const std::string& q) {
-                std::string m;
-                SM_RETURN_IF_ERROR(rd.String(w, q, &m));
-                if (m == "face") o->score.height = PrismHeight::kFace;
-                else if (m == "vertex") o->score.height = PrismHeight::kVertex;
-                else return rd.Error(q, w, "is not face or vertex");
-                o->radius_search.height = o->score.height;
-                return absl::OkStatus();
-              }},
-             {"hausdorff", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->score.hausdorff); }},
-             {"grid_rates", [&](const Json& w, const std::string& q) {
-                if (!w.is_array()) return rd.Error(q, w, "must be a list of integers >= 1");
-                o->score.grid_rates.clear();
-                for (const Json& k : w) {
-                  if (!k.is_number_integer() || k.get<int>() < 1) return rd.Error(q, w, "must be a list of integers >= 1");
-                  o->score.grid_rates.push_back(k.get<int>());
-                }
-                return absl::OkStatus();
-              }},
-         });
+      {"similarity",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(v, p,
+                          {
+                              {"model",
+                               [&](const Json& w, const std::string& q) {
+                                 std::string m;
+                                 SM_RETURN_IF_ERROR(rd.String(w, q, &m));
+                                 if (m == "face")
+                                   o->score.height = PrismHeight::kFace;
+                                 else if (m == "vertex")
+                                   o->score.height = PrismHeight::kVertex;
+                                 else
+                                   return rd.Error(q, w, "is not face or vertex");
+                                 o->radius_search.height = o->score.height;
+                                 return absl::OkStatus();
+                               }},
+                              {"hausdorff",
+                               [&](const Json& w, const std::string& q) {
+                                 return rd.Bool(w, q, &o->score.hausdorff);
+                               }},
+                              {"grid_rates",
+                               [&](const Json& w, const std::string& q) {
+                                 if (!w.is_array())
+                                   return rd.Error(q, w, "must be a list of integers >= 1");
+                                 o->score.grid_rates.clear();
+                                 for (const Json& k : w) {
+                                   if (!k.is_number_integer() || k.get<int>() < 1)
+                                     return rd.Error(q, w, "must be a list of integers >= 1");
+                                   o->score.grid_rates.push_back(k.get<int>());
+                                 }
+                                 return absl::OkStatus();
+                               }},
+                          });
        }},
-      {"volume_mesh", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"enabled", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume_mesh); }},
-             {"radius_edge_ratio", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.max_radius_edge_ratio); }},
-             {"min_dihedral", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.min_dihedral_degrees); }},
-             {"max_volume", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.max_volume); }},
-             {"steiner_on_sheets", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume.tetgen.steiner_on_sheets); }},
-             {"time_limit_seconds", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.tetgen.time_limit_seconds); }},
-             {"memory_limit_bytes", [&](const Json& w, const std::string& q) { return rd.Integer(w, q, &o->volume.tetgen.memory_limit_bytes); }},
-             {"tetgen", [&](const Json& w, const std::string& q) { return rd.String(w, q, &o->volume.tetgen.program); }},
-             {"repair", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->volume.plc.repair); }},
-             {"snap_voxels", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.snap_voxels); }},
-             {"flip_fold_degrees", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.flip_fold_degrees); }},
-             {"cap_degrees", [&](const Json& w, const std::string& q) { return rd.Number(w, q, &o->volume.plc.cap_degrees); }},
-         });
+      {"volume_mesh",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(
+             v, p,
+             {
+                 {"enabled", [&](const Json& w,
+                                 const std::string& q) { return rd.Bool(w, q, &o->volume_mesh); }},
+                 {"radius_edge_ratio",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.tetgen.max_radius_edge_ratio);
+                  }},
+                 {"min_dihedral",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.tetgen.min_dihedral_degrees);
+                  }},
+                 {"max_volume",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.tetgen.max_volume);
+                  }},
+                 {"steiner_on_sheets",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Bool(w, q, &o->volume.tetgen.steiner_on_sheets);
+                  }},
+                 {"time_limit_seconds",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.tetgen.time_limit_seconds);
+                  }},
+                 {"memory_limit_bytes",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &o->volume.tetgen.memory_limit_bytes);
+                  }},
+                 {"tetgen",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.String(w, q, &o->volume.tetgen.program);
+                  }},
+                 {"repair",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Bool(w, q, &o->volume.plc.repair);
+                  }},
+                 {"snap_voxels",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.snap_voxels);
+                  }},
+                 {"flip_fold_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.flip_fold_degrees);
+                  }},
+                 {"cap_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.cap_degrees);
+                  }},
+             });
        }},
-      {"output", [&](const Json& v, const std::string& p) {
-         return rd.Object(v, p, {
-             {"formats", [&](const Json& w, const std::string& q) {
-                if (!w.is_array()) return rd.Error(q, w, "must be a list of ply, vtp, obj");
-                o->output.ply = o->output.vtp = o->output.obj = false;
-                for (const Json& f : w) {
-                  const std::string n = f.is_string() ? f.get<std::string>() : "";
-                  if (n == "ply") o->output.ply = true;
-                  else if (n == "vtp") o->output.vtp = true;
-                  else if (n == "obj") o->output.obj = true;
-                  else return rd.Error(q, w, "must be a list of ply, vtp, obj");
-                }
-                return absl::OkStatus();
-              }},
-             {"model", [&](const Json& w, const std::string& q) { return rd.Bool(w, q, &o->output.model); }},
-             {"volume_formats", [&](const Json& w, const std::string& q) {
-                if (!w.is_array()) return rd.Error(q, w, "must be a list of vtu, msh, inp");
-                o->output.vtu = o->output.msh = o->output.inp = false;
-                for (const Json& f : w) {
-                  const std::string n = f.is_string() ? f.get<std::string>() : "";
-                  if (n == "vtu") o->output.vtu = true;
-                  else if (n == "msh") o->output.msh = true;
-                  else if (n == "inp") o->output.inp = true;
-                  else return rd.Error(q, w, "must be a list of vtu, msh, inp");
-                }
-                return absl::OkStatus();
-              }},
-         });
+      {"output",
+       [&](const Json& v, const std::string& p) {
+         return rd.Object(
+             v, p,
+             {
+                 {"formats",
+                  [&](const Json& w, const std::string& q) {
+                    if (!w.is_array()) return rd.Error(q, w, "must be a list of ply, vtp, obj");
+                    o->output.ply = o->output.vtp = o->output.obj = false;
+                    for (const Json& f : w) {
+                      const std::string n = f.is_string() ? f.get<std::string>() : "";
+                      if (n == "ply")
+                        o->output.ply = true;
+                      else if (n == "vtp")
+                        o->output.vtp = true;
+                      else if (n == "obj")
+                        o->output.obj = true;
+                      else
+                        return rd.Error(q, w, "must be a list of ply, vtp, obj");
+                    }
+                    return absl::OkStatus();
+                  }},
+                 {"model", [&](const Json& w,
+                               const std::string& q) { return rd.Bool(w, q, &o->output.model); }},
+                 {"volume_formats",
+                  [&](const Json& w, const std::string& q) {
+                    if (!w.is_array()) return rd.Error(q, w, "must be a list of vtu, msh, inp");
+                    o->output.vtu = o->output.msh = o->output.inp = false;
+                    for (const Json& f : w) {
+                      const std::string n = f.is_string() ? f.get<std::string>() : "";
+                      if (n == "vtu")
+                        o->output.vtu = true;
+                      else if (n == "msh")
+                        o->output.msh = true;
+                      else if (n == "inp")
+                        o->output.inp = true;
+                      else
+                        return rd.Error(q, w, "must be a list of vtu, msh, inp");
+                    }
+                    return absl::OkStatus();
+                  }},
+             });
        }},
   };
   SM_RETURN_IF_ERROR(rd.Object(root, "", top));
@@ -356,44 +515,60 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   };
   const SurfaceOptions& s = o.surface;
   if (!(s.scvd.radius_voxels > 0)) return bad("r", s.scvd.radius_voxels, "must be positive");
-  if (s.scvd.lloyd_max_iter < 0) return bad("lloyd_max_iter", s.scvd.lloyd_max_iter, "must not be negative");
+  if (s.scvd.lloyd_max_iter < 0)
+    return bad("lloyd_max_iter", s.scvd.lloyd_max_iter, "must not be negative");
   if (!(s.scvd.lloyd_tol >= 0)) return bad("lloyd_tol", s.scvd.lloyd_tol, "must not be negative");
-  if (s.scvd.generator_count < 0) return bad("generators", s.scvd.generator_count, "must not be negative");
+  if (s.scvd.generator_count < 0)
+    return bad("generators", s.scvd.generator_count, "must not be negative");
   if (!(s.triangles.fold_angle_degrees >= 0 && s.triangles.fold_angle_degrees < 180)) {
     return bad("fold_angle", s.triangles.fold_angle_degrees, "must be in [0, 180)");
   }
   {
     const ExtractionOptions& x = o.extraction;
-    if (x.refine_close_radius < 0) return bad("refine.close_radius", x.refine_close_radius, "must not be negative");
-    if (x.refine_open_radius < 0) return bad("refine.open_radius", x.refine_open_radius, "must not be negative");
-    if (!(x.separation.radius_voxels > 0)) return bad("separate.r", x.separation.radius_voxels, "must be positive");
+    if (x.refine_close_radius < 0)
+      return bad("refine.close_radius", x.refine_close_radius, "must not be negative");
+    if (x.refine_open_radius < 0)
+      return bad("refine.open_radius", x.refine_open_radius, "must not be negative");
+    if (!(x.separation.radius_voxels > 0))
+      return bad("separate.r", x.separation.radius_voxels, "must be positive");
     if (!(x.separation.dihedral_degrees > 0 && x.separation.dihedral_degrees <= 180)) {
       return bad("separate.D_ang", x.separation.dihedral_degrees, "must be in (0, 180]");
     }
-    for (const auto& [name, e] : {std::pair{"detect", &x.detect_extend}, std::pair{"recover", &x.recover_extend}}) {
-      if (!(e->half_thickness_voxels > 0)) return bad(absl::StrCat(name, ".t"), e->half_thickness_voxels, "must be positive");
-      if (!(e->radius_voxels > 0)) return bad(absl::StrCat(name, ".R"), e->radius_voxels, "must be positive");
-      if (!(e->scvd_radius_voxels > 0)) return bad(absl::StrCat(name, ".r"), e->scvd_radius_voxels, "must be positive");
-      if (e->max_rounds < 0) return bad(absl::StrCat(name, ".rounds"), e->max_rounds, "must not be negative");
+    for (const auto& [name, e] :
+         {std::pair{"detect", &x.detect_extend}, std::pair{"recover", &x.recover_extend}}) {
+      if (!(e->half_thickness_voxels > 0))
+        return bad(absl::StrCat(name, ".t"), e->half_thickness_voxels, "must be positive");
+      if (!(e->radius_voxels > 0))
+        return bad(absl::StrCat(name, ".R"), e->radius_voxels, "must be positive");
+      if (!(e->scvd_radius_voxels > 0))
+        return bad(absl::StrCat(name, ".r"), e->scvd_radius_voxels, "must be positive");
+      if (e->max_rounds < 0)
+        return bad(absl::StrCat(name, ".rounds"), e->max_rounds, "must not be negative");
     }
   }
   if (o.search_radius) {
     const RadiusSearchOptions& r = o.radius_search;
-    if (!(r.target_similarity <= 1.0)) return bad("target_similarity", r.target_similarity, "must be at most 1");
+    if (!(r.target_similarity <= 1.0))
+      return bad("target_similarity", r.target_similarity, "must be at most 1");
     if (!(r.min_radius_voxels > 0)) return bad("r_min", r.min_radius_voxels, "must be positive");
   }
   const TetgenOptions& tg = o.volume.tetgen;
   if (tg.max_radius_edge_ratio != 0 && !(tg.max_radius_edge_ratio >= 1.0)) {
-    return bad("volume_mesh.radius_edge_ratio", tg.max_radius_edge_ratio, "must be 0 (none) or at least 1");
+    return bad("volume_mesh.radius_edge_ratio", tg.max_radius_edge_ratio,
+               "must be 0 (none) or at least 1");
   }
   if (!(tg.min_dihedral_degrees >= 0 && tg.min_dihedral_degrees < 70)) {
     return bad("volume_mesh.min_dihedral", tg.min_dihedral_degrees, "must be in [0, 70)");
   }
-  if (!(tg.max_volume >= 0)) return bad("volume_mesh.max_volume", tg.max_volume, "must not be negative");
-  if (!(tg.time_limit_seconds > 0)) return bad("volume_mesh.time_limit_seconds", tg.time_limit_seconds, "must be positive");
-  if (!(o.volume.plc.snap_voxels >= 0)) return bad("volume_mesh.snap_voxels", o.volume.plc.snap_voxels, "must not be negative");
+  if (!(tg.max_volume >= 0))
+    return bad("volume_mesh.max_volume", tg.max_volume, "must not be negative");
+  if (!(tg.time_limit_seconds > 0))
+    return bad("volume_mesh.time_limit_seconds", tg.time_limit_seconds, "must be positive");
+  if (!(o.volume.plc.snap_voxels >= 0))
+    return bad("volume_mesh.snap_voxels", o.volume.plc.snap_voxels, "must not be negative");
   if (!(o.volume.plc.flip_fold_degrees >= 0 && o.volume.plc.flip_fold_degrees < 90)) {
-    return bad("volume_mesh.flip_fold_degrees", o.volume.plc.flip_fold_degrees, "must be in [0, 90)");
+    return bad("volume_mesh.flip_fold_degrees", o.volume.plc.flip_fold_degrees,
+               "must be in [0, 90)");
   }
   if (!(o.volume.plc.cap_degrees > 90 && o.volume.plc.cap_degrees <= 180)) {
     return bad("volume_mesh.cap_degrees", o.volume.plc.cap_degrees, "must be in (90, 180]");

@@ -35,8 +35,10 @@ std::string PipelineReport::ToJson() const {
                 {"sheet_voxels", sheet_voxels},
                 {"components", components},
                 {"thickness_voxels",
-                 {{"mean", thickness.mean}, {"median", thickness.median},
-                  {"min", thickness.min}, {"max", thickness.max}}}};
+                 {{"mean", thickness.mean},
+                  {"median", thickness.median},
+                  {"min", thickness.min},
+                  {"max", thickness.max}}}};
   const SurfaceOptions& s = options.surface;
   j["parameters"] = {{"r", s.scvd.radius_voxels},
                      {"seed", s.scvd.seed},
@@ -53,32 +55,31 @@ std::string PipelineReport::ToJson() const {
                {"lloyd_iterations", lloyd_iterations},
                {"lloyd_converged", lloyd_converged},
                {"energy", energy}};
-  j["surface"] = {
-      {"vertices", vertices},
-      {"triangles", triangles},
-      {"element_size_voxels", element_size_voxels},
-      {"element_size", PhysicalLength(element_size_voxels, pl)},
-      {"area_voxels", area_voxels},
-      {"candidates", triangle_stats.candidates},
-      {"blocks_three_cells", triangle_stats.blocks_three},
-      {"blocks_amended", triangle_stats.blocks_amended},
-      {"rejected_fold", triangle_stats.rejected_fold},
-      {"rejected_intersection", triangle_stats.rejected_intersection},
-      {"rejected_degenerate", triangle_stats.rejected_degenerate},
-      {"rim_vertices", triangle_stats.rim_vertices},
-      {"rim_triangles", triangle_stats.rim_faces},
-      {"crack_triangles", triangle_stats.crack_faces},
-      {"components_without_triangles", skipped_components},
-      {"voxels_without_triangles", skipped_voxels},
-      {"topology",
-       {{"edges", topology.edges},
-        {"boundary_edges", topology.boundary_edges},
-        {"nonmanifold_edges", topology.nonmanifold_edges},
-        {"boundary_loops", topology.boundary_loops},
-        {"pieces", topology.pieces},
-        {"inconsistent_edges", topology.inconsistent_edges},
-        {"duplicate_faces", topology.duplicate_faces},
-        {"degenerate_faces", topology.degenerate_faces}}}};
+  j["surface"] = {{"vertices", vertices},
+                  {"triangles", triangles},
+                  {"element_size_voxels", element_size_voxels},
+                  {"element_size", PhysicalLength(element_size_voxels, pl)},
+                  {"area_voxels", area_voxels},
+                  {"candidates", triangle_stats.candidates},
+                  {"blocks_three_cells", triangle_stats.blocks_three},
+                  {"blocks_amended", triangle_stats.blocks_amended},
+                  {"rejected_fold", triangle_stats.rejected_fold},
+                  {"rejected_intersection", triangle_stats.rejected_intersection},
+                  {"rejected_degenerate", triangle_stats.rejected_degenerate},
+                  {"rim_vertices", triangle_stats.rim_vertices},
+                  {"rim_triangles", triangle_stats.rim_faces},
+                  {"crack_triangles", triangle_stats.crack_faces},
+                  {"components_without_triangles", skipped_components},
+                  {"voxels_without_triangles", skipped_voxels},
+                  {"topology",
+                   {{"edges", topology.edges},
+                    {"boundary_edges", topology.boundary_edges},
+                    {"nonmanifold_edges", topology.nonmanifold_edges},
+                    {"boundary_loops", topology.boundary_loops},
+                    {"pieces", topology.pieces},
+                    {"inconsistent_edges", topology.inconsistent_edges},
+                    {"duplicate_faces", topology.duplicate_faces},
+                    {"degenerate_faces", topology.degenerate_faces}}}};
   nlohmann::json sim = {{"against", "input sheet phase"},
                         {"similarity", similarity.similarity},
                         {"c_in", similarity.c_in},
@@ -89,46 +90,61 @@ std::string PipelineReport::ToJson() const {
   if (similarity.hausdorff >= 0) sim["hausdorff_voxels"] = similarity.hausdorff;
   nlohmann::json grid_json = nlohmann::json::array();
   for (const GridFigure& g : grid) {
-    grid_json.push_back({{"rate", g.rate}, {"similarity", g.similarity}, {"grid_quantity", g.grid_quantity}});
+    grid_json.push_back(
+        {{"rate", g.rate}, {"similarity", g.similarity}, {"grid_quantity", g.grid_quantity}});
   }
   sim["grid_models"] = grid_json;
   if (options.extract) {
     sim["against"] = "extracted model";
-    sim["raw"] = {{"against", "input sheet phase"},
-                  {"similarity", similarity_raw.similarity},
-                  {"c_in", similarity_raw.c_in},
-                  {"c_out", similarity_raw.c_out},
-                  {"c_image", similarity_raw.c_image},
-                  {"dice", similarity_raw.dice}};
+    sim["raw"] = {{"against", "input sheet phase"},    {"similarity", similarity_raw.similarity},
+                  {"c_in", similarity_raw.c_in},       {"c_out", similarity_raw.c_out},
+                  {"c_image", similarity_raw.c_image}, {"dice", similarity_raw.dice}};
     const ExtractionOptions& e = options.extraction;
     nlohmann::json steps = nlohmann::json::array();
     for (const ExtractionStep& s : extraction_steps) {
-      steps.push_back({{"step", s.name}, {"ran", s.ran}, {"voxels_before", s.voxels_before},
-                       {"voxels_after", s.voxels_after}, {"added", s.added},
-                       {"removed", s.removed}, {"objects_before", s.objects_before},
-                       {"objects_after", s.objects_after}, {"seconds", s.seconds}});
+      steps.push_back({{"step", s.name},
+                       {"ran", s.ran},
+                       {"voxels_before", s.voxels_before},
+                       {"voxels_after", s.voxels_after},
+                       {"added", s.added},
+                       {"removed", s.removed},
+                       {"objects_before", s.objects_before},
+                       {"objects_after", s.objects_after},
+                       {"seconds", s.seconds}});
     }
-    j["extraction"] = {
-        {"parameters",
-         {{"refine", e.refine}, {"refine_close_radius", e.refine_close_radius},
-          {"refine_open_radius", e.refine_open_radius}, {"detect", e.detect},
-          {"detect_t", e.detect_extend.half_thickness_voxels}, {"detect_R", e.detect_extend.radius_voxels},
-          {"detect_rounds", e.detect_extend.max_rounds}, {"M", min_object_voxels},
-          {"separate", e.separate}, {"separate_r", e.separation.radius_voxels},
-          {"D_ang", e.separation.dihedral_degrees}, {"remove_minor", e.remove_minor},
-          {"recover", e.recover}, {"recover_t", e.recover_extend.half_thickness_voxels},
-          {"recover_R", e.recover_extend.radius_voxels}, {"recover_rounds", e.recover_extend.max_rounds}}},
-        {"steps", steps},
-        {"model_voxels", model_voxels},
-        {"pieces", pieces}};
+    j["extraction"] = {{"parameters",
+                        {{"refine", e.refine},
+                         {"refine_close_radius", e.refine_close_radius},
+                         {"refine_open_radius", e.refine_open_radius},
+                         {"detect", e.detect},
+                         {"detect_t", e.detect_extend.half_thickness_voxels},
+                         {"detect_R", e.detect_extend.radius_voxels},
+                         {"detect_rounds", e.detect_extend.max_rounds},
+                         {"M", min_object_voxels},
+                         {"separate", e.separate},
+                         {"separate_r", e.separation.radius_voxels},
+                         {"D_ang", e.separation.dihedral_degrees},
+                         {"remove_minor", e.remove_minor},
+                         {"recover", e.recover},
+                         {"recover_t", e.recover_extend.half_thickness_voxels},
+                         {"recover_R", e.recover_extend.radius_voxels},
+                         {"recover_rounds", e.recover_extend.max_rounds}}},
+                       {"steps", steps},
+                       {"model_voxels", model_voxels},
+                       {"pieces", pieces}};
     nlohmann::json geo = nlohmann::json::array();
     for (const PieceGeology& g : geology) {
-      geo.push_back({{"piece", g.piece}, {"voxels", g.voxels}, {"triangles", g.triangles},
-                     {"area", g.area}, {"mean_aperture", g.mean_aperture},
-                     {"max_aperture", g.max_aperture}, {"normal", Vec(g.normal)},
+      geo.push_back({{"piece", g.piece},
+                     {"voxels", g.voxels},
+                     {"triangles", g.triangles},
+                     {"area", g.area},
+                     {"mean_aperture", g.mean_aperture},
+                     {"max_aperture", g.max_aperture},
+                     {"normal", Vec(g.normal)},
                      {"dip_degrees", g.dip_degrees},
                      {"dip_direction_degrees", g.dip_direction_degrees},
-                     {"planarity", g.planarity}, {"centroid", Vec(g.centroid)}});
+                     {"planarity", g.planarity},
+                     {"centroid", Vec(g.centroid)}});
     }
     j["pieces"] = geo;
   }
@@ -147,36 +163,37 @@ std::string PipelineReport::ToJson() const {
   }
   if (has_volume_mesh) {
     auto stat = [](const QualityStat& q) {
-      return nlohmann::json{{"min", q.min}, {"mean", q.mean}, {"histogram_range", {q.lo, q.hi}},
+      return nlohmann::json{{"min", q.min},
+                            {"mean", q.mean},
+                            {"histogram_range", {q.lo, q.hi}},
                             {"histogram", q.histogram}};
     };
     const TetgenOptions& tg = options.volume.tetgen;
-    j["volume_mesh"] = {
-        {"parameters",
-         {{"max_radius_edge_ratio", tg.max_radius_edge_ratio},
-          {"min_dihedral_degrees", tg.min_dihedral_degrees},
-          {"max_volume", tg.max_volume},
-          {"steiner_on_sheets", tg.steiner_on_sheets},
-          {"tetgen_switches", TetgenSwitches(tg)},
-          {"repair", options.volume.plc.repair}}},
-        {"nodes", volume_nodes},
-        {"tetrahedra", volume_tets},
-        {"sheet_faces", volume_sheet_faces},
-        {"voxels_per_tetrahedron", voxels_per_tet},
-        {"volume", volume_quality.volume},
-        {"snapped_vertices", volume_snapped},
-        {"repaired_triangles", volume_repaired},
-        {"flipped_edges", volume_flipped},
-        {"dropped_caps", volume_dropped_caps},
-        {"conformity",
-         {{"sheet_triangles", volume_conformity.sheet_triangles},
-          {"conforming", volume_conformity.conforming},
-          {"worst_area_error", volume_conformity.worst_area_error}}},
-        {"quality",
-         {{"min_dihedral_degrees", stat(volume_quality.min_dihedral)},
-          {"gamma", stat(volume_quality.gamma)},
-          {"edge_aspect", stat(volume_quality.edge_aspect)},
-          {"radius_aspect", stat(volume_quality.radius_aspect)}}}};
+    j["volume_mesh"] = {{"parameters",
+                         {{"max_radius_edge_ratio", tg.max_radius_edge_ratio},
+                          {"min_dihedral_degrees", tg.min_dihedral_degrees},
+                          {"max_volume", tg.max_volume},
+                          {"steiner_on_sheets", tg.steiner_on_sheets},
+                          {"tetgen_switches", TetgenSwitches(tg)},
+                          {"repair", options.volume.plc.repair}}},
+                        {"nodes", volume_nodes},
+                        {"tetrahedra", volume_tets},
+                        {"sheet_faces", volume_sheet_faces},
+                        {"voxels_per_tetrahedron", voxels_per_tet},
+                        {"volume", volume_quality.volume},
+                        {"snapped_vertices", volume_snapped},
+                        {"repaired_triangles", volume_repaired},
+                        {"flipped_edges", volume_flipped},
+                        {"dropped_caps", volume_dropped_caps},
+                        {"conformity",
+                         {{"sheet_triangles", volume_conformity.sheet_triangles},
+                          {"conforming", volume_conformity.conforming},
+                          {"worst_area_error", volume_conformity.worst_area_error}}},
+                        {"quality",
+                         {{"min_dihedral_degrees", stat(volume_quality.min_dihedral)},
+                          {"gamma", stat(volume_quality.gamma)},
+                          {"edge_aspect", stat(volume_quality.edge_aspect)},
+                          {"radius_aspect", stat(volume_quality.radius_aspect)}}}};
   }
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;

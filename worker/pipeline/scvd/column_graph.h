@@ -24,7 +24,9 @@ struct CsrGraph {
   std::vector<uint64_t> offsets;
   std::vector<uint32_t> targets;
 
-  uint32_t num_nodes() const { return offsets.empty() ? 0 : static_cast<uint32_t>(offsets.size() - 1); }
+  uint32_t num_nodes() const {
+    return offsets.empty() ? 0 : static_cast<uint32_t>(offsets.size() - 1);
+  }
   std::span<const uint32_t> of(uint32_t n) const {
     return {targets.data() + offsets[n], targets.data() + offsets[n + 1]};
   }

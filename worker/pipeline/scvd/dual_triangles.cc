@@ -220,8 +220,7 @@ class FaceSelector {
   Verdict TryAdd(const Face& f) {
     const std::vector<Vec3>& pos = *pos_;
     const Triangle t = {pos[f[0]], pos[f[1]], pos[f[2]]};
-    const double longest =
-        std::max({Norm2(t[1] - t[0]), Norm2(t[2] - t[1]), Norm2(t[0] - t[2])});
+    const double longest = std::max({Norm2(t[1] - t[0]), Norm2(t[2] - t[1]), Norm2(t[0] - t[2])});
     if (!(Norm(AreaVector(t)) > 1e-6 * longest) || MinAngleDegrees(t) < 0.5) {
       return Verdict::kDegenerate;
     }
@@ -458,7 +457,8 @@ void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
       const uint32_t w = succ[0], u = prev[v][0];
       if (u == w) continue;
       const Vec3 a = pos[u] - pos[v], b = pos[w] - pos[v];
-      const double angle = std::acos(std::clamp(Dot(a, b) / (Norm(a) * Norm(b)), -1.0, 1.0)) * 180.0 / M_PI;
+      const double angle =
+          std::acos(std::clamp(Dot(a, b) / (Norm(a) * Norm(b)), -1.0, 1.0)) * 180.0 / M_PI;
       if (angle >= options.crack_angle_degrees || Norm(pos[w] - pos[u]) > max_edge) continue;
       // The boundary runs u -> v -> w inside faces; the ear walks the edges the other way.
       const Face ear = {w, v, u};
@@ -479,8 +479,7 @@ void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
 absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
                                                   const NeighborTable& neighbors,
                                                   std::span<const uint16_t> thickness,
-                                                  const Scvd& scvd,
-                                                  std::span<const Vec3> positions,
+                                                  const Scvd& scvd, std::span<const Vec3> positions,
                                                   const DualTriangleOptions& options,
                                                   const Progress& progress) {
   DualTriangulation result;
@@ -494,13 +493,14 @@ absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
   const Dims& d = set.dims();
   const size_t plane = static_cast<size_t>((d.nx + 2) * (d.ny + 2));
   tbb::combinable<BlockScan> scans;
-  tbb::parallel_for(tbb::blocked_range<int64_t>(-1, d.nz), [&](const tbb::blocked_range<int64_t>& r) {
-    std::vector<uint32_t> lo(plane, kNoCell), hi(plane, kNoCell);
-    BlockScan& out = scans.local();
-    for (int64_t z = r.begin(); z < r.end(); ++z) {
-      ScanSlicePair(set, scvd, z, &lo, &hi, adjacency, positions, &out);
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int64_t>(-1, d.nz),
+                    [&](const tbb::blocked_range<int64_t>& r) {
+                      std::vector<uint32_t> lo(plane, kNoCell), hi(plane, kNoCell);
+                      BlockScan& out = scans.local();
+                      for (int64_t z = r.begin(); z < r.end(); ++z) {
+                        ScanSlicePair(set, scvd, z, &lo, &hi, adjacency, positions, &out);
+                      }
+                    });
   std::vector<Candidate> all;
   scans.combine_each([&](BlockScan& s) {
     result.stats.blocks_three += s.three;

@@ -35,23 +35,23 @@ struct DualTriangleOptions {
   // voxels is closed by that triangle; real holes (over empty space) stay open.
   bool close_cracks = true;
   double crack_angle_degrees = 60.0;
-  double rim_normal_cos = 0.4;       // a step d along the sheet has |d . n| / |d| below this
-                                     // (n: the vertex normal); a voxel from which such a step
-                                     // leaves the sheet is a rim voxel
+  double rim_normal_cos = 0.4;  // a step d along the sheet has |d . n| / |d| below this
+                                // (n: the vertex normal); a voxel from which such a step
+                                // leaves the sheet is a rim voxel
 };
 
 struct DualTriangleStats {
-  uint64_t blocks_three = 0;         // blocks with exactly three cells
-  uint64_t blocks_amended = 0;       // blocks with four or more
-  uint64_t blocks_unresolved = 0;    // of those, blocks whose cells form no polygon
-  uint64_t candidates = 0;           // distinct candidate triangles
+  uint64_t blocks_three = 0;       // blocks with exactly three cells
+  uint64_t blocks_amended = 0;     // blocks with four or more
+  uint64_t blocks_unresolved = 0;  // of those, blocks whose cells form no polygon
+  uint64_t candidates = 0;         // distinct candidate triangles
   uint64_t kept = 0;
   uint64_t rejected_degenerate = 0;
   uint64_t rejected_fold = 0;
   uint64_t rejected_intersection = 0;
-  uint64_t rim_vertices = 0;         // rim vertices added
-  uint64_t rim_faces = 0;            // of the kept faces, those on the rim strip
-  uint64_t crack_faces = 0;          // of the kept faces, those closing cracks
+  uint64_t rim_vertices = 0;  // rim vertices added
+  uint64_t rim_faces = 0;     // of the kept faces, those on the rim strip
+  uint64_t crack_faces = 0;   // of the kept faces, those closing cracks
 };
 
 struct DualTriangulation {
@@ -70,8 +70,7 @@ struct DualTriangulation {
 absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
                                                   const NeighborTable& neighbors,
                                                   std::span<const uint16_t> thickness,
-                                                  const Scvd& scvd,
-                                                  std::span<const Vec3> positions,
+                                                  const Scvd& scvd, std::span<const Vec3> positions,
                                                   const DualTriangleOptions& options = {},
                                                   const Progress& progress = {});
 

@@ -134,7 +134,8 @@ absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& 
   if (o.radius_voxels > 2 * box) {
     return absl::InvalidArgumentError(absl::StrCat("SCVD radius r = ", o.radius_voxels,
                                                    " voxels exceeds twice the volume's largest "
-                                                   "extent (", box, ")"));
+                                                   "extent (",
+                                                   box, ")"));
   }
   return absl::OkStatus();
 }
@@ -164,8 +165,7 @@ CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>
     const Index3& p = xyz[v];
     s.sum[c] += Vec3(p.x, p.y, p.z);
     ++s.count[c];
-    const double dx = p.x - generators[c].x, dy = p.y - generators[c].y,
-                 dz = p.z - generators[c].z;
+    const double dx = p.x - generators[c].x, dy = p.y - generators[c].y, dz = p.z - generators[c].z;
     s.energy += dx * dx + dy * dy + dz * dz;
   }
   return s;
@@ -176,28 +176,28 @@ CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>
 absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbors,
                                const Components& components, double mean_thickness,
                                const ScvdOptions& options, const Progress& progress) {
-  const double t = options.mean_thickness_voxels > 0 ? options.mean_thickness_voxels
-                                                       : mean_thickness;
+  const double t =
+      options.mean_thickness_voxels > 0 ? options.mean_thickness_voxels : mean_thickness;
   SM_RETURN_IF_ERROR(Validate(set, t, options));
   Scvd scvd;
   scvd.mean_thickness = t;
   scvd.cell_volume = CellVolume(t, options.radius_voxels);
   const uint32_t num_components = components.count();
   if (options.generator_count > 0 && options.generator_count < num_components) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "SCVD generator_count ", options.generator_count, " is below the ", num_components,
-        " connected components of the sheet (each needs one)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("SCVD generator_count ", options.generator_count, " is below the ",
+                     num_components, " connected components of the sheet (each needs one)"));
   }
 
   // The nodes cells grow over: voxels, or columns of voxels.
-  const bool columns =
-      options.domain == ScvdDomain::kColumns ||
-      (options.domain == ScvdDomain::kAuto && options.radius_voxels < options.auto_column_ratio * t);
+  const bool columns = options.domain == ScvdDomain::kColumns ||
+                       (options.domain == ScvdDomain::kAuto &&
+                        options.radius_voxels < options.auto_column_ratio * t);
   scvd.columns = columns;
   ColumnGraph cg;
   if (columns) {
-    const uint32_t cap = static_cast<uint32_t>(
-        std::max(1.0, std::floor(options.max_column_thickness * t)));
+    const uint32_t cap =
+        static_cast<uint32_t>(std::max(1.0, std::floor(options.max_column_thickness * t)));
     SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap));
   }
   const uint32_t num_nodes = columns ? cg.num_nodes() : static_cast<uint32_t>(set.size());
@@ -298,8 +298,8 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   scvd.cell_size = std::move(stats.count);
   scvd.centroid.resize(scvd.generators.size());
   for (size_t c = 0; c < scvd.centroid.size(); ++c) {
-    scvd.centroid[c] = scvd.cell_size[c] > 0 ? stats.sum[c] / scvd.cell_size[c]
-                                             : Vec3::Of(scvd.generators[c]);
+    scvd.centroid[c] =
+        scvd.cell_size[c] > 0 ? stats.sum[c] / scvd.cell_size[c] : Vec3::Of(scvd.generators[c]);
   }
   scvd.adjacency = CellAdjacency(neighbors, cell);
   scvd.cell = std::move(cell);

@@ -38,9 +38,9 @@ struct ScvdOptions {
   int lloyd_max_iter = 20;             // Lloyd steps at most
   double lloyd_tol = 1e-3;             // stop when the energy changes by less (relative)
   ScvdDomain domain = ScvdDomain::kAuto;
-  double auto_column_ratio = 1.2;      // kAuto: the r / t̄ below which columns are used
-  double max_column_thickness = 3.0;   // kColumns: runs longer than this many t̄ are extent,
-                                       // not thickness, and are not merged into columns
+  double auto_column_ratio = 1.2;     // kAuto: the r / t̄ below which columns are used
+  double max_column_thickness = 3.0;  // kColumns: runs longer than this many t̄ are extent,
+                                      // not thickness, and are not merged into columns
 };
 
 // V_vol of formula 3: t̄ (1 + 2 r (r - 1)), the voxels of one cell.
@@ -60,12 +60,12 @@ struct Scvd {
   std::vector<uint32_t> cell_size;            // voxels per cell
   std::vector<Vec3> centroid;                 // centroid of each cell (formula 2, ρ = 1)
   std::vector<std::pair<uint32_t, uint32_t>> adjacency;  // cells whose fronts met, a < b
-  std::vector<double> energy;                 // E after each growth
-  int iterations = 0;                         // growths done
-  bool converged = false;                     // stopped by lloyd_tol or a fixed point
-  double cell_volume = 0;                     // V_vol used
-  double mean_thickness = 0;                  // t̄ used
-  bool columns = false;                       // grown over columns (not voxels)
+  std::vector<double> energy;                            // E after each growth
+  int iterations = 0;                                    // growths done
+  bool converged = false;                                // stopped by lloyd_tol or a fixed point
+  double cell_volume = 0;                                // V_vol used
+  double mean_thickness = 0;                             // t̄ used
+  bool columns = false;                                  // grown over columns (not voxels)
 
   uint32_t num_generators() const { return static_cast<uint32_t>(generators.size()); }
 };

@@ -1,13 +1,13 @@
 #include "worker/pipeline/similarity/similarity.h"
 
 #include <tbb/blocked_range.h>
-#include <nanoflann.hpp>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <nanoflann.hpp>
 #include <vector>
 
 #include "worker/pipeline/core/status_macros.h"
@@ -32,7 +32,10 @@ namespace {
 // voxel to a point outside the set; kept in a k-d tree.
 class NearestIndex {
  public:
-  explicit NearestIndex(const VoxelSet& set) : tree_(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)) {
+  explicit NearestIndex(const VoxelSet& set)
+      : tree_(3, cloud_,
+              nanoflann::KDTreeSingleIndexAdaptorParams(
+                  16, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)) {
     set.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
       const bool inner = set.Contains(x - 1, y, z) && set.Contains(x + 1, y, z) &&
                          set.Contains(x, y - 1, z) && set.Contains(x, y + 1, z) &&

@@ -13,13 +13,13 @@
 namespace sheetmesh {
 
 struct SimilarityScore {
-  uint64_t c_in = 0;         // model voxels that are image voxels
-  uint64_t c_out = 0;        // model voxels that are not
-  uint64_t c_image = 0;      // image voxels
-  uint64_t c_model = 0;      // model voxels (c_in + c_out)
-  double similarity = 0;     // (c_in - c_out) / c_image, in (-inf, 1]
-  double dice = 0;           // 2 c_in / (c_model + c_image)
-  double hausdorff = -1;     // symmetric, voxels; -1 when not computed
+  uint64_t c_in = 0;      // model voxels that are image voxels
+  uint64_t c_out = 0;     // model voxels that are not
+  uint64_t c_image = 0;   // image voxels
+  uint64_t c_model = 0;   // model voxels (c_in + c_out)
+  double similarity = 0;  // (c_in - c_out) / c_image, in (-inf, 1]
+  double dice = 0;        // 2 c_in / (c_model + c_image)
+  double hausdorff = -1;  // symmetric, voxels; -1 when not computed
 };
 
 // Formula 5 and Dice of `model` against `image`. REQUIRES: equal dims; image not empty.

@@ -71,8 +71,8 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
                         : std::max(3.0, std::max({d.nx, d.ny, d.nz}) / 4.0);
   const double lo = options.min_radius_voxels;
   if (!(lo > 0) || !(hi >= lo)) {
-    return absl::InvalidArgumentError(absl::StrCat("radius search range [", lo, ", ", hi,
-                                                   "] must be positive and not inverted"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("radius search range [", lo, ", ", hi, "] must be positive and not inverted"));
   }
   if (options.goal == RadiusGoal::kTargetSimilarity && !(options.target_similarity <= 1.0)) {
     return absl::InvalidArgumentError(absl::StrCat("target similarity ", options.target_similarity,

@@ -36,9 +36,9 @@ struct RadiusTrial {
 };
 
 struct RadiusChoice {
-  double radius = 0;             // the chosen r
-  bool target_reached = true;    // kTargetSimilarity: false when no r reached the target (the
-                                 // best r is chosen then)
+  double radius = 0;                // the chosen r
+  bool target_reached = true;       // kTargetSimilarity: false when no r reached the target (the
+                                    // best r is chosen then)
   std::vector<RadiusTrial> trials;  // every r tried, in order of trial
 };
 

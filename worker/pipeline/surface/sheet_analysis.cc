@@ -11,8 +11,7 @@ absl::StatusOr<SheetAnalysis> AnalyzeSheet(VoxelSet set, const Progress& progres
   a.thickness_stats = SummarizeThickness(a.thickness);
   SM_ASSIGN_OR_RETURN(a.neighbors, NeighborTable::Build(set));
   SM_RETURN_IF_ERROR(progress.Update(0.7));
-  SM_ASSIGN_OR_RETURN(a.components,
-                      LabelComponents(set, Connectivity::k6, progress.Sub(0.7, 1.0)));
+  SM_ASSIGN_OR_RETURN(a.components, LabelComponents(set, Connectivity::k6, progress.Sub(0.7, 1.0)));
   a.set = std::move(set);
   return a;
 }

@@ -20,7 +20,7 @@ struct SheetAnalysis {
   std::vector<uint16_t> thickness;  // τ per voxel
   ThicknessStats thickness_stats;   // mean = t̄
   NeighborTable neighbors;
-  Components components;            // 6-connectivity: the cells' growth cannot cross them
+  Components components;  // 6-connectivity: the cells' growth cannot cross them
 };
 
 // Analyses `set`. kInvalidArgument for an empty set; kCancelled if asked.

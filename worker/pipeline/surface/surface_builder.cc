@@ -20,14 +20,15 @@ SurfaceOptions SurfaceOptions::Paper() {
   return o;
 }
 
-absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet, const SurfaceOptions& options,
+absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
+                                           const SurfaceOptions& options,
                                            std::span<const int32_t> piece_of_voxel,
                                            const Progress& progress) {
   SurfaceResult out;
   absl::Time t0 = absl::Now();
-  SM_ASSIGN_OR_RETURN(out.scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                          sheet.thickness_stats.mean, options.scvd,
-                                          progress.Sub(0, 0.7)));
+  SM_ASSIGN_OR_RETURN(
+      out.scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components, sheet.thickness_stats.mean,
+                          options.scvd, progress.Sub(0, 0.7)));
   out.scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   const Scvd& scvd = out.scvd;
 
@@ -38,8 +39,8 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet, const Sur
                                                                    : Vec3::Of(scvd.generators[g]);
   }
   SM_ASSIGN_OR_RETURN(DualTriangulation tri,
-                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd,
-                                      positions, options.triangles, progress.Sub(0.7, 0.9)));
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, positions,
+                                      options.triangles, progress.Sub(0.7, 0.9)));
   // Rim vertices follow the generators in the vertex numbering of `tri`.
   const uint32_t num_gen = scvd.num_generators();
   for (size_t k = 0; k < tri.rim_positions.size(); ++k) positions.push_back(tri.rim_positions[k]);

@@ -24,11 +24,11 @@ enum class VertexPlacement {
 };
 
 struct SurfaceOptions {
-  ScvdOptions scvd;                          // r, seed, Lloyd settings
-  DualTriangleOptions triangles;             // candidate selection
+  ScvdOptions scvd;               // r, seed, Lloyd settings
+  DualTriangleOptions triangles;  // candidate selection
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
-  bool orient = true;                        // orient faces consistently per manifold piece
+  bool orient = true;  // orient faces consistently per manifold piece
 
   // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
   static SurfaceOptions Paper();
@@ -41,12 +41,12 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                         // face_thickness, face_piece, vertex_thickness set
-  std::vector<uint32_t> vertex_generator;    // SCVD generator of each mesh vertex
+  TriangleMesh mesh;                       // face_thickness, face_piece, vertex_thickness set
+  std::vector<uint32_t> vertex_generator;  // SCVD generator of each mesh vertex
   Scvd scvd;
   DualTriangleStats triangle_stats;
-  uint32_t components = 0;                   // 6-connected components of the sheet
-  uint32_t skipped_components = 0;           // of those, components with no triangle
+  uint32_t components = 0;          // 6-connected components of the sheet
+  uint32_t skipped_components = 0;  // of those, components with no triangle
   uint64_t skipped_voxels = 0;
   std::vector<SkippedComponent> largest_skipped;  // up to 20, largest first
   double scvd_seconds = 0;
@@ -58,7 +58,8 @@ struct SurfaceResult {
 // (faces take their vertices' majority); otherwise faces carry their component id.
 // Errors of BuildScvd pass through (kInvalidArgument for r <= 0 or r beyond the volume);
 // kCancelled if asked.
-absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet, const SurfaceOptions& options,
+absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
+                                           const SurfaceOptions& options,
                                            std::span<const int32_t> piece_of_voxel = {},
                                            const Progress& progress = {});
 

@@ -26,7 +26,8 @@ std::pair<double, double> AngleRange(const Triangle& t) {
   for (int k = 0; k < 3; ++k) {
     const Vec3 u = t[(k + 1) % 3] - t[k], w = t[(k + 2) % 3] - t[k];
     const double nu = Norm(u), nw = Norm(w);
-    const double a = nu > 0 && nw > 0 ? std::acos(std::clamp(Dot(u, w) / (nu * nw), -1.0, 1.0)) * 180 / M_PI : 0;
+    const double a =
+        nu > 0 && nw > 0 ? std::acos(std::clamp(Dot(u, w) / (nu * nw), -1.0, 1.0)) * 180 / M_PI : 0;
     lo = std::min(lo, a);
     hi = std::max(hi, a);
   }
@@ -54,11 +55,13 @@ struct SheetTriangles {
 // almost nothing. No flip touches a `frozen` vertex. Returns the number of flips and drops.
 std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std::vector<Vec3>& v,
                                                     const std::vector<uint8_t>& on_face,
-                                                    const std::vector<uint8_t>& frozen, double max_fold,
-                                                    double cap_degrees) {
+                                                    const std::vector<uint8_t>& frozen,
+                                                    double max_fold, double cap_degrees) {
   uint32_t flips = 0, drops = 0;
   auto corners = [&](const Face& f) { return Triangle{v[f[0]], v[f[1]], v[f[2]]}; };
-  auto key = [](uint32_t a, uint32_t b) { return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b); };
+  auto key = [](uint32_t a, uint32_t b) {
+    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+  };
   for (int round = 0; round < 50; ++round) {
     absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edges;
     for (uint32_t f = 0; f < s.faces.size(); ++f) {
@@ -76,7 +79,8 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
         const double len = Norm(v[s.faces[f][(k + 1) % 3]] - v[s.faces[f][k]]);
         if (len > best) best = len, longest = k;
       }
-      const uint32_t a = s.faces[f][longest], b = s.faces[f][(longest + 1) % 3], c = s.faces[f][(longest + 2) % 3];
+      const uint32_t a = s.faces[f][longest], b = s.faces[f][(longest + 1) % 3],
+                     c = s.faces[f][(longest + 2) % 3];
       const std::vector<uint32_t>& across = edges[key(a, b)];
       if (across.size() == 1 && hi > cap_degrees) {
         drop[f] = touched[f] = 1;
@@ -95,9 +99,11 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
       }
       if (kb < 0) continue;
       const uint32_t d = s.faces[g][(kb + 2) % 3];
-      if (c == d || edges.contains(key(c, d)) || frozen[a] || frozen[b] || frozen[c] || frozen[d]) continue;
+      if (c == d || edges.contains(key(c, d)) || frozen[a] || frozen[b] || frozen[c] || frozen[d])
+        continue;
       const Face nf = {a, d, c}, ng = {d, b, c};
-      const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf), tng = corners(ng);
+      const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf),
+                     tng = corners(ng);
       if (AngleBetweenDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) continue;
       if (AngleBetweenDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) continue;
       const Vec3 up = AreaVector(tf) + AreaVector(tg);
@@ -105,10 +111,12 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
       const double old_min = std::min(lo, AngleRange(tg).first);
       const double new_min = std::min(AngleRange(tnf).first, AngleRange(tng).first);
       if (new_min < old_min + 0.5) continue;
-      const bool in_box_face = (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
+      const bool in_box_face =
+          (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
       if (in_box_face) continue;
       const double af = Area(tf), ag = Area(tg);
-      const float t = static_cast<float>((s.thickness[f] * af + s.thickness[g] * ag) / std::max(af + ag, 1e-300));
+      const float t = static_cast<float>((s.thickness[f] * af + s.thickness[g] * ag) /
+                                         std::max(af + ag, 1e-300));
       s.faces[f] = nf;
       s.faces[g] = ng;
       s.thickness[f] = s.thickness[g] = t;
@@ -158,7 +166,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
                              const Placement& placement, const PlcOptions& options,
                              std::vector<Clash>* clashes) {
   if (dims.nx <= 0 || dims.ny <= 0 || dims.nz <= 0) {
-    return absl::InvalidArgumentError(absl::StrCat("volume mesh box ", dims.ToString(), " is empty"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("volume mesh box ", dims.ToString(), " is empty"));
   }
   Plc plc;
   // The box spans the voxels' extent, in index coordinates [-0.5, n - 0.5].
@@ -191,8 +200,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     absl::flat_hash_map<uint64_t, std::vector<uint32_t>> cells;
     const double cell = std::max(options.merge_voxels, 1e-9) * 2;
     auto key = [&](int64_t x, int64_t y, int64_t z) {
-      return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) | (static_cast<uint64_t>(y & 0x1FFFFF) << 21) |
-             static_cast<uint64_t>(z & 0x1FFFFF);
+      return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
+             (static_cast<uint64_t>(y & 0x1FFFFF) << 21) | static_cast<uint64_t>(z & 0x1FFFFF);
     };
     for (uint32_t i = 0; i < v.size(); ++i) {
       const int64_t cx = std::llround(v[i].x / cell), cy = std::llround(v[i].y / cell),
@@ -235,7 +244,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     st.faces.push_back(t);
     st.source.push_back(static_cast<uint32_t>(f));
     st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
-    st.thickness.push_back(sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
+    st.thickness.push_back(
+        sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
   }
   if (options.flip_fold_degrees > 0) {
     // A flip moves the sheet a little; where that makes it cut another sheet (near a
@@ -243,8 +253,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     std::vector<uint8_t> frozen(v.size(), 0);
     for (int attempt = 0; attempt < 5; ++attempt) {
       SheetTriangles better = st;
-      const auto [flips, drops] =
-          ImproveSheetTriangles(better, v, on_face, frozen, options.flip_fold_degrees, options.cap_degrees);
+      const auto [flips, drops] = ImproveSheetTriangles(
+          better, v, on_face, frozen, options.flip_fold_degrees, options.cap_degrees);
       if (flips == 0 && drops == 0) break;
       TriangleMesh check;
       check.vertices = v;
@@ -291,11 +301,13 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
           }
           return s;
         };
-        absl::StrAppendFormat(&list, "; triangles %d %s and %d %s", source[a], fmt(ta), source[b], fmt(tb));
+        absl::StrAppendFormat(&list, "; triangles %d %s and %d %s", source[a], fmt(ta), source[b],
+                              fmt(tb));
       }
-      return absl::FailedPreconditionError(absl::StrCat(
-          pairs.size(), " pairs of sheet triangles intersect", list,
-          pairs.size() > 5 ? "; ..." : "", " (the repair option removes the smaller of each pair)"));
+      return absl::FailedPreconditionError(
+          absl::StrCat(pairs.size(), " pairs of sheet triangles intersect", list,
+                       pairs.size() > 5 ? "; ..." : "",
+                       " (the repair option removes the smaller of each pair)"));
     }
     // Repair: drop the smaller triangle of each clashing pair.
     std::vector<uint8_t> drop(kept.faces.size(), 0);
@@ -320,9 +332,9 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     st.piece = std::move(fixed_st.piece);
     st.thickness = std::move(fixed_st.thickness);
     if (!FindSelfIntersections(fixed, 1, 1.0).empty()) {
-      return absl::FailedPreconditionError(absl::StrCat(
-          "sheet triangles still intersect after removing ", plc.repaired_triangles,
-          " clashing ones; the intersections are not simple"));
+      return absl::FailedPreconditionError(
+          absl::StrCat("sheet triangles still intersect after removing ", plc.repaired_triangles,
+                       " clashing ones; the intersections are not simple"));
     }
     kept = std::move(fixed);
     source = std::move(fixed_source);
@@ -331,7 +343,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   // Compact the used vertices; the 8 box corners go first.
   std::vector<uint32_t> index(v.size(), UINT32_MAX);
   for (int c = 0; c < 8; ++c) {
-    plc.vertices.push_back(placement.ToPhysical(Vec3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z)));
+    plc.vertices.push_back(
+        placement.ToPhysical(Vec3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z)));
   }
   for (const Face& t : kept.faces) {
     Face out;

@@ -22,32 +22,32 @@ struct PlcFacet {
   int32_t marker = 0;
 };
 
-inline constexpr int32_t kBoundaryMarker = 1;      // the box faces
-inline constexpr int32_t kFirstSheetMarker = 10;   // sheet triangle t has marker 10 + t
+inline constexpr int32_t kBoundaryMarker = 1;     // the box faces
+inline constexpr int32_t kFirstSheetMarker = 10;  // sheet triangle t has marker 10 + t
 
 struct Plc {
-  std::vector<Vec3> vertices;           // physical units
-  std::vector<PlcFacet> facets;         // the 6 box faces first, then one per sheet triangle
-  std::vector<Face> sheet_triangles;    // the sheet triangles as kept, in `vertices`
-  std::vector<int32_t> sheet_piece;     // per kept sheet triangle
-  std::vector<float> sheet_thickness;   // per kept sheet triangle, voxels
-  Vec3 box_lo, box_hi;                  // physical
-  uint32_t snapped_vertices = 0;        // moved onto a box face
-  uint32_t merged_vertices = 0;         // merged into a near-duplicate
-  uint32_t dropped_triangles = 0;       // degenerate after snapping, or lying in a box face
-  uint32_t repaired_triangles = 0;      // removed because they clashed (repair mode)
-  uint32_t flipped_edges = 0;           // sheet edges flipped for better triangles
-  uint32_t dropped_caps = 0;            // flat rim triangles dropped
+  std::vector<Vec3> vertices;          // physical units
+  std::vector<PlcFacet> facets;        // the 6 box faces first, then one per sheet triangle
+  std::vector<Face> sheet_triangles;   // the sheet triangles as kept, in `vertices`
+  std::vector<int32_t> sheet_piece;    // per kept sheet triangle
+  std::vector<float> sheet_thickness;  // per kept sheet triangle, voxels
+  Vec3 box_lo, box_hi;                 // physical
+  uint32_t snapped_vertices = 0;       // moved onto a box face
+  uint32_t merged_vertices = 0;        // merged into a near-duplicate
+  uint32_t dropped_triangles = 0;      // degenerate after snapping, or lying in a box face
+  uint32_t repaired_triangles = 0;     // removed because they clashed (repair mode)
+  uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
+  uint32_t dropped_caps = 0;           // flat rim triangles dropped
 
   // The PLC as a TetGen .poly file (0-based numbering).
   std::string ToPoly() const;
 };
 
 struct PlcOptions {
-  double snap_voxels = 0.75;    // vertices this close to a box face move onto it
-  double merge_voxels = 1e-3;   // vertices this close merge
-  bool repair = false;          // remove clashing triangles (the smaller of each pair)
-                                // instead of failing
+  double snap_voxels = 0.75;   // vertices this close to a box face move onto it
+  double merge_voxels = 1e-3;  // vertices this close merge
+  bool repair = false;         // remove clashing triangles (the smaller of each pair)
+                               // instead of failing
   // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
   // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
   // are within flip_fold_degrees is flipped where that raises their smallest angle (0:
@@ -60,7 +60,7 @@ struct PlcOptions {
 // A pair of sheet triangles (indices into the input mesh) that cut through each other.
 struct Clash {
   uint32_t a = 0, b = 0;
-  std::array<Vec3, 3> ta, tb;   // their corners, physical units
+  std::array<Vec3, 3> ta, tb;  // their corners, physical units
 };
 
 // Builds the PLC of `sheets` (voxel index coordinates; face_piece and face_thickness used

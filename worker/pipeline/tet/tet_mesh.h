@@ -14,12 +14,12 @@ namespace sheetmesh {
 using Tet = std::array<uint32_t, 4>;
 
 struct TetMesh {
-  std::vector<Vec3> nodes;                       // physical units
+  std::vector<Vec3> nodes;  // physical units
   std::vector<Tet> tets;
-  std::vector<std::array<uint32_t, 3>> faces;    // faces on the PLC's facets
-  std::vector<int32_t> face_marker;              // per face: 1 = box, >= 10 sheet triangle
-  std::vector<int32_t> face_piece;               // per face: sheet piece, -1 on the box
-  std::vector<float> face_thickness;             // per face: sheet thickness (physical), 0 on the box
+  std::vector<std::array<uint32_t, 3>> faces;  // faces on the PLC's facets
+  std::vector<int32_t> face_marker;            // per face: 1 = box, >= 10 sheet triangle
+  std::vector<int32_t> face_piece;             // per face: sheet piece, -1 on the box
+  std::vector<float> face_thickness;           // per face: sheet thickness (physical), 0 on the box
 
   size_t num_sheet_faces() const;
 };

@@ -47,7 +47,8 @@ TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) 
   const double det = 2 * Dot(u, Cross(w, t));
   double r_circ = 0;
   if (std::abs(det) > 0) {
-    const Vec3 cc = (Cross(w, t) * Norm2(u) + Cross(t, u) * Norm2(w) + Cross(u, w) * Norm2(t)) / det;
+    const Vec3 cc =
+        (Cross(w, t) * Norm2(u) + Cross(t, u) * Norm2(w) + Cross(u, w) * Norm2(t)) / det;
     r_circ = Norm(cc);
   }
   s.radius_aspect = r_circ > 0 ? 3 * r_in / r_circ : 0;
@@ -85,7 +86,8 @@ TetQuality MeasureQuality(const TetMesh& mesh) {
   q.tets = mesh.tets.size();
   q.nodes = mesh.nodes.size();
   for (const Tet& t : mesh.tets) {
-    const Vec3 &a = mesh.nodes[t[0]], &b = mesh.nodes[t[1]], &c = mesh.nodes[t[2]], &d = mesh.nodes[t[3]];
+    const Vec3 &a = mesh.nodes[t[0]], &b = mesh.nodes[t[1]], &c = mesh.nodes[t[2]],
+               &d = mesh.nodes[t[3]];
     const double v = TetVolume(a, b, c, d);
     q.volume += std::abs(v);
     q.inverted += v <= 0;

@@ -23,19 +23,19 @@ struct QualityStat {
   std::string name;
   double min = 0;
   double mean = 0;
-  double lo = 0, hi = 1;             // histogram range
-  std::vector<uint64_t> histogram;   // equal bins over [lo, hi]
+  double lo = 0, hi = 1;            // histogram range
+  std::vector<uint64_t> histogram;  // equal bins over [lo, hi]
 };
 
 struct TetQuality {
-  QualityStat min_dihedral;          // degrees, bins of 5° over [0, 90]
-  QualityStat gamma;                 // bins of 0.05 over [0, 1]
+  QualityStat min_dihedral;  // degrees, bins of 5° over [0, 90]
+  QualityStat gamma;         // bins of 0.05 over [0, 1]
   QualityStat edge_aspect;
   QualityStat radius_aspect;
   uint64_t tets = 0;
   uint64_t nodes = 0;
-  double volume = 0;                 // sum of tetrahedron volumes
-  uint64_t inverted = 0;             // tetrahedra of non-positive volume
+  double volume = 0;      // sum of tetrahedron volumes
+  uint64_t inverted = 0;  // tetrahedra of non-positive volume
 };
 
 TetQuality MeasureQuality(const TetMesh& mesh);

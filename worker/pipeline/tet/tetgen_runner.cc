@@ -29,12 +29,13 @@ absl::StatusOr<std::string> Resolve(const std::string& program) {
     return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' is not executable"));
   }
   const char* path = getenv("PATH");
-  for (absl::string_view dir : absl::StrSplit(path ? path : "/usr/bin:/bin", ':', absl::SkipEmpty())) {
+  for (absl::string_view dir :
+       absl::StrSplit(path ? path : "/usr/bin:/bin", ':', absl::SkipEmpty())) {
     const std::string candidate = absl::StrCat(dir, "/", program);
     if (::access(candidate.c_str(), X_OK) == 0) return candidate;
   }
-  return absl::NotFoundError(absl::StrCat("TetGen program '", program,
-                                          "' was not found on PATH (Debian package tetgen)"));
+  return absl::NotFoundError(
+      absl::StrCat("TetGen program '", program, "' was not found on PATH (Debian package tetgen)"));
 }
 
 std::string Tail(const std::string& path, size_t bytes = 600) {
@@ -79,7 +80,8 @@ absl::StatusOr<std::vector<std::vector<double>>> ReadTable(const std::string& pa
     const size_t hash = line.find('#');
     if (hash != absl::string_view::npos) line = line.substr(0, hash);
     std::vector<double> row;
-    for (absl::string_view tok : absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty())) {
+    for (absl::string_view tok :
+         absl::StrSplit(line, absl::ByAnyChar(" \t\r"), absl::SkipEmpty())) {
       double v = 0;
       if (!absl::SimpleAtod(tok, &v)) {
         return absl::InternalError(absl::StrCat(path, ": unreadable number '", tok, "'"));
@@ -98,27 +100,35 @@ absl::StatusOr<TetMesh> ReadOutput(const std::string& stem, const Plc& plc) {
   SM_ASSIGN_OR_RETURN(auto eles, ReadTable(stem + ".ele"));
   SM_ASSIGN_OR_RETURN(auto faces, ReadTable(stem + ".face"));
   const size_t n = static_cast<size_t>(nodes[0][0]);
-  if (nodes.size() != n + 1) return absl::InternalError(absl::StrCat(stem, ".node: ", nodes.size() - 1, " rows for ", n, " nodes"));
+  if (nodes.size() != n + 1)
+    return absl::InternalError(
+        absl::StrCat(stem, ".node: ", nodes.size() - 1, " rows for ", n, " nodes"));
   for (size_t i = 1; i <= n; ++i) {
     if (nodes[i].size() < 4) return absl::InternalError(absl::StrCat(stem, ".node: short row ", i));
     m.nodes.push_back({nodes[i][1], nodes[i][2], nodes[i][3]});
   }
   const size_t e = static_cast<size_t>(eles[0][0]);
-  if (eles.size() != e + 1) return absl::InternalError(absl::StrCat(stem, ".ele: ", eles.size() - 1, " rows for ", e, " tetrahedra"));
+  if (eles.size() != e + 1)
+    return absl::InternalError(
+        absl::StrCat(stem, ".ele: ", eles.size() - 1, " rows for ", e, " tetrahedra"));
   for (size_t i = 1; i <= e; ++i) {
     if (eles[i].size() < 5) return absl::InternalError(absl::StrCat(stem, ".ele: short row ", i));
     Tet t;
     for (int k = 0; k < 4; ++k) {
       const double id = eles[i][k + 1];
-      if (id < 0 || id >= n) return absl::InternalError(absl::StrCat(stem, ".ele: node ", id, " out of range"));
+      if (id < 0 || id >= n)
+        return absl::InternalError(absl::StrCat(stem, ".ele: node ", id, " out of range"));
       t[k] = static_cast<uint32_t>(id);
     }
     m.tets.push_back(t);
   }
   const size_t f = static_cast<size_t>(faces[0][0]);
-  if (faces.size() != f + 1) return absl::InternalError(absl::StrCat(stem, ".face: ", faces.size() - 1, " rows for ", f, " faces"));
+  if (faces.size() != f + 1)
+    return absl::InternalError(
+        absl::StrCat(stem, ".face: ", faces.size() - 1, " rows for ", f, " faces"));
   for (size_t i = 1; i <= f; ++i) {
-    if (faces[i].size() < 5) return absl::InternalError(absl::StrCat(stem, ".face: row ", i, " has no marker"));
+    if (faces[i].size() < 5)
+      return absl::InternalError(absl::StrCat(stem, ".face: row ", i, " has no marker"));
     std::array<uint32_t, 3> t;
     for (int k = 0; k < 3; ++k) t[k] = static_cast<uint32_t>(faces[i][k + 1]);
     const int32_t marker = static_cast<int32_t>(faces[i][4]);
@@ -199,8 +209,8 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     if (r < 0 && errno != EINTR) return ErrnoStatus(errno, "waiting for TetGen");
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    absl::Status cancel = progress.Update(std::min(0.99, elapsed / options.time_limit_seconds),
-                                          "TetGen running");
+    absl::Status cancel =
+        progress.Update(std::min(0.99, elapsed / options.time_limit_seconds), "TetGen running");
     if (elapsed > options.time_limit_seconds || !cancel.ok()) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, &status, 0);
@@ -225,8 +235,8 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' could not be started"));
   }
   if (code != 0) {
-    return absl::InternalError(absl::StrCat("TetGen exited with code ", code,
-                                            " running '", switches, "': ", Tail(log)));
+    return absl::InternalError(
+        absl::StrCat("TetGen exited with code ", code, " running '", switches, "': ", Tail(log)));
   }
   auto mesh = ReadOutput(scratch.dir() + "/plc.1", plc);
   if (!mesh.ok()) {

@@ -27,10 +27,13 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   std::string out = absl::StrCat(
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
       "byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"",
-      m.nodes.size(), "\" NumberOfCells=\"", cells, "\">\n<Points>\n"
+      m.nodes.size(), "\" NumberOfCells=\"", cells,
+      "\">\n<Points>\n"
       "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
   for (const Vec3& p : m.nodes) absl::StrAppendFormat(&out, "%.12g %.12g %.12g\n", p.x, p.y, p.z);
-  out += "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  out +=
+      "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" "
+      "format=\"ascii\">\n";
   for (const Tet& t : m.tets) absl::StrAppend(&out, t[0], " ", t[1], " ", t[2], " ", t[3], "\n");
   for (const auto& f : m.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
   out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
@@ -40,8 +43,9 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   out += "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
   for (size_t i = 0; i < m.tets.size(); ++i) out += "10\n";
   for (size_t i = 0; i < m.faces.size(); ++i) out += "5\n";
-  out += "</DataArray>\n</Cells>\n<CellData Scalars=\"kind\">\n"
-         "<DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">\n";
+  out +=
+      "</DataArray>\n</Cells>\n<CellData Scalars=\"kind\">\n"
+      "<DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">\n";
   for (size_t i = 0; i < m.tets.size(); ++i) out += "0\n";
   for (size_t f = 0; f < m.faces.size(); ++f) out += m.face_piece[f] >= 0 ? "1\n" : "2\n";
   out += "</DataArray>\n<DataArray type=\"Int32\" Name=\"piece\" format=\"ascii\">\n";
@@ -72,13 +76,15 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
   out += "$EndPhysicalNames\n$Entities\n";
   absl::StrAppend(&out, "0 0 ", groups.size(), " 1\n");
   for (const auto& [piece, faces] : groups) {
-    absl::StrAppendFormat(&out, "%d %.12g %.12g %.12g %.12g %.12g %.12g 1 %d 0\n", surface_tag(piece),
-                          lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, surface_tag(piece));
+    absl::StrAppendFormat(&out, "%d %.12g %.12g %.12g %.12g %.12g %.12g 1 %d 0\n",
+                          surface_tag(piece), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
+                          surface_tag(piece));
   }
-  absl::StrAppendFormat(&out, "1 %.12g %.12g %.12g %.12g %.12g %.12g 1 1 0\n$EndEntities\n", lo.x, lo.y,
-                        lo.z, hi.x, hi.y, hi.z);
+  absl::StrAppendFormat(&out, "1 %.12g %.12g %.12g %.12g %.12g %.12g 1 1 0\n$EndEntities\n", lo.x,
+                        lo.y, lo.z, hi.x, hi.y, hi.z);
   // All nodes in the volume's block; node tags are 1-based.
-  absl::StrAppend(&out, "$Nodes\n1 ", m.nodes.size(), " 1 ", m.nodes.size(), "\n3 1 0 ", m.nodes.size(), "\n");
+  absl::StrAppend(&out, "$Nodes\n1 ", m.nodes.size(), " 1 ", m.nodes.size(), "\n3 1 0 ",
+                  m.nodes.size(), "\n");
   for (size_t i = 0; i < m.nodes.size(); ++i) absl::StrAppend(&out, i + 1, "\n");
   for (const Vec3& p : m.nodes) absl::StrAppendFormat(&out, "%.12g %.12g %.12g\n", p.x, p.y, p.z);
   out += "$EndNodes\n$Elements\n";
@@ -105,14 +111,18 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
   std::string out = absl::StrCat("*HEADING\nsheetmesh ", SHEETMESH_VERSION,
                                  " volume mesh: rock tetrahedra with sheet faces\n*NODE\n");
   for (size_t i = 0; i < m.nodes.size(); ++i) {
-    absl::StrAppendFormat(&out, "%d, %.12g, %.12g, %.12g\n", i + 1, m.nodes[i].x, m.nodes[i].y, m.nodes[i].z);
+    absl::StrAppendFormat(&out, "%d, %.12g, %.12g, %.12g\n", i + 1, m.nodes[i].x, m.nodes[i].y,
+                          m.nodes[i].z);
   }
   out += "*ELEMENT, TYPE=C3D4, ELSET=ROCK\n";
   size_t id = 1;
   for (const Tet& t : m.tets) {
-    absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1, "\n");
+    absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1,
+                    "\n");
   }
-  auto name = [](int32_t piece) { return piece < 0 ? std::string("BOUNDARY") : absl::StrCat("SHEET_", piece); };
+  auto name = [](int32_t piece) {
+    return piece < 0 ? std::string("BOUNDARY") : absl::StrCat("SHEET_", piece);
+  };
   for (const auto& [piece, faces] : groups) {
     absl::StrAppend(&out, "*ELEMENT, TYPE=S3, ELSET=", name(piece), "\n");
     for (size_t f : faces) {
@@ -126,7 +136,8 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
   absl::flat_hash_map<std::array<uint32_t, 3>, std::pair<size_t, int>> owner;
   for (size_t t = 0; t < m.tets.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
-      std::array<uint32_t, 3> key = {m.tets[t][kFace[k][0]], m.tets[t][kFace[k][1]], m.tets[t][kFace[k][2]]};
+      std::array<uint32_t, 3> key = {m.tets[t][kFace[k][0]], m.tets[t][kFace[k][1]],
+                                     m.tets[t][kFace[k][2]]};
       std::sort(key.begin(), key.end());
       owner.emplace(key, std::make_pair(t + 1, k + 1));
     }

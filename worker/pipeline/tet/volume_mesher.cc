@@ -64,8 +64,9 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.conforming != r.conformity.sheet_triangles) {
     return absl::InternalError(absl::StrCat(
-        "the volume mesh does not conform: ", r.conformity.sheet_triangles - r.conformity.conforming,
-        " of ", r.conformity.sheet_triangles, " sheet triangles are not made of tetrahedron faces (first: ",
+        "the volume mesh does not conform: ",
+        r.conformity.sheet_triangles - r.conformity.conforming, " of ",
+        r.conformity.sheet_triangles, " sheet triangles are not made of tetrahedron faces (first: ",
         r.conformity.missing.empty() ? -1 : static_cast<int64_t>(r.conformity.missing[0]),
         ", area error ", r.conformity.worst_area_error, ")"));
   }

@@ -22,10 +22,10 @@ struct VolumeMeshOptions {
 };
 
 struct Conformity {
-  uint64_t sheet_triangles = 0;       // in the PLC
-  uint64_t conforming = 0;            // exactly covered by tetrahedron faces on them
-  double worst_area_error = 0;        // relative, over all sheet triangles
-  std::vector<uint32_t> missing;      // PLC sheet triangles not covered (first 20)
+  uint64_t sheet_triangles = 0;   // in the PLC
+  uint64_t conforming = 0;        // exactly covered by tetrahedron faces on them
+  double worst_area_error = 0;    // relative, over all sheet triangles
+  std::vector<uint32_t> missing;  // PLC sheet triangles not covered (first 20)
 };
 
 struct VolumeMeshResult {
@@ -36,9 +36,9 @@ struct VolumeMeshResult {
   uint32_t merged_vertices = 0;
   uint32_t dropped_triangles = 0;
   uint32_t repaired_triangles = 0;
-  uint32_t flipped_edges = 0;         // sheet edges flipped for better triangles (PlcOptions)
-  uint32_t dropped_caps = 0;          // flat rim triangles dropped
-  double box_volume = 0;              // physical units^3
+  uint32_t flipped_edges = 0;  // sheet edges flipped for better triangles (PlcOptions)
+  uint32_t dropped_caps = 0;   // flat rim triangles dropped
+  double box_volume = 0;       // physical units^3
   double tetgen_seconds = 0;
 };
 

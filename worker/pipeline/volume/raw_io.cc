@@ -12,9 +12,7 @@
 namespace sheetmesh {
 namespace {
 
-bool NeedsSwap(ByteOrder order) {
-  return (order == ByteOrder::kLittle) != NativeIsLittleEndian();
-}
+bool NeedsSwap(ByteOrder order) { return (order == ByteOrder::kLittle) != NativeIsLittleEndian(); }
 
 class RawSource : public VolumeSource {
  public:
@@ -41,10 +39,10 @@ class RawSource : public VolumeSource {
     void* base = ::mmap(nullptr, length, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd_.get(), aligned);
     if (base == MAP_FAILED) return ErrnoStatus(errno, info_.path);
     ::madvise(base, length, MADV_SEQUENTIAL | MADV_WILLNEED);
-    return MappedSlices(base, length,
-                        std::span<const std::byte>(static_cast<const std::byte*>(base) +
-                                                       (offset - aligned),
-                                                   static_cast<size_t>(count * slice_bytes)));
+    return MappedSlices(
+        base, length,
+        std::span<const std::byte>(static_cast<const std::byte*>(base) + (offset - aligned),
+                                   static_cast<size_t>(count * slice_bytes)));
   }
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
@@ -53,8 +51,8 @@ class RawSource : public VolumeSource {
     const int64_t slice_bytes = d.nx * d.ny * bpv;
     if (z0 < 0 || count < 0 || z0 + count > d.nz ||
         out.size() != static_cast<size_t>(count * slice_bytes)) {
-      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": bad slice request z0=", z0,
-                                                     " count=", count));
+      return absl::InvalidArgumentError(
+          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
     }
     SM_RETURN_IF_ERROR(
         ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path));
@@ -106,9 +104,9 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenRawVolume(const std::string& p
   SM_ASSIGN_OR_RETURN(const int64_t size, FileSizeOf(fd.get(), path));
   const int64_t need = options.dims.num_voxels() * BytesPerVoxel(options.dtype);
   if (size != options.header_bytes + need) {
-    const std::string header =
-        options.header_bytes > 0 ? absl::StrCat(" after a ", options.header_bytes, "-byte header")
-                                 : std::string();
+    const std::string header = options.header_bytes > 0
+                                   ? absl::StrCat(" after a ", options.header_bytes, "-byte header")
+                                   : std::string();
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": dims ", options.dims.ToString(), " need ", need, " bytes of ",
         DTypeName(options.dtype), header, " (", options.header_bytes + need,

@@ -61,8 +61,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   const bool is_dir = std::filesystem::is_directory(path, ec);
   std::string format = absl::AsciiStrToLower(options.format);
   if (format.empty()) {
-    const std::string ext =
-        absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
+    const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
     if (is_dir) {
       format = "tiff";
     } else if (ext == ".raw" || ext == ".bin" || ext == ".dat" || ext == ".img") {
@@ -76,9 +75,9 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     } else if (options.raw_dims) {
       format = "raw";
     } else {
-      return absl::InvalidArgumentError(absl::StrCat(
-          path, ": cannot tell the format from the extension '", ext,
-          "'; use .raw/.tif/.nrrd/.nhdr/.vdb or give the format (raw needs dims)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(path, ": cannot tell the format from the extension '", ext,
+                       "'; use .raw/.tif/.nrrd/.nhdr/.vdb or give the format (raw needs dims)"));
     }
   }
   std::unique_ptr<VolumeSource> source;
@@ -90,12 +89,13 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     } else if (from_name) {
       raw.dims = from_name->first;
     } else {
-      return absl::InvalidArgumentError(absl::StrCat(
-          path, ": a raw volume needs its dims (--dims NXxNYxNZ) or a name like "
-                "'rock_512x512x400_u8.raw'"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(path,
+                       ": a raw volume needs its dims (--dims NXxNYxNZ) or a name like "
+                       "'rock_512x512x400_u8.raw'"));
     }
-    raw.dtype = options.raw_dtype ? *options.raw_dtype
-                                  : (from_name ? from_name->second : DType::kUInt8);
+    raw.dtype =
+        options.raw_dtype ? *options.raw_dtype : (from_name ? from_name->second : DType::kUInt8);
     raw.byte_order = options.raw_byte_order;
     raw.header_bytes = options.raw_header_bytes;
     SM_ASSIGN_OR_RETURN(source, OpenRawVolume(path, raw, options.limits));
@@ -117,8 +117,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     for (int k = 0; k < 3; ++k) {
       if (!((*options.spacing)[k] > 0)) {
         return absl::InvalidArgumentError(absl::StrCat(path, ": spacing component ", k, " = ",
-                                                       (*options.spacing)[k],
-                                                       " must be positive"));
+                                                       (*options.spacing)[k], " must be positive"));
       }
     }
   }
@@ -168,9 +167,8 @@ absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source, int64_t max_bytes) {
   const VolumeInfo& info = source.info();
   const int64_t bytes = info.dims.num_voxels() * BytesPerVoxel(info.dtype);
   if (bytes > max_bytes) {
-    return absl::ResourceExhaustedError(absl::StrCat(info.path, ": ", bytes,
-                                                     " bytes do not fit the dense limit of ",
-                                                     max_bytes));
+    return absl::ResourceExhaustedError(
+        absl::StrCat(info.path, ": ", bytes, " bytes do not fit the dense limit of ", max_bytes));
   }
   DenseVolume v;
   v.info = info;
@@ -192,9 +190,10 @@ absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name) {
   if (n == "nrrd") return VolumeFormat::kNrrd;
   if (n == "nrrd-gzip") return VolumeFormat::kNrrdGzip;
   if (n == "vdb") return VolumeFormat::kVdb;
-  return absl::InvalidArgumentError(absl::StrCat(
-      "volume format '", name, "' is not supported; use raw, tiff, tiff-folder, nrrd, "
-                               "nrrd-gzip or vdb"));
+  return absl::InvalidArgumentError(
+      absl::StrCat("volume format '", name,
+                   "' is not supported; use raw, tiff, tiff-folder, nrrd, "
+                   "nrrd-gzip or vdb"));
 }
 
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,

@@ -10,11 +10,10 @@ absl::Status VolumeSink::Advance(int64_t count, size_t bytes) {
     return absl::FailedPreconditionError(absl::StrCat(
         info_.path, ": writing ", count, " slices after ", slices_written_, " exceeds nz ", d.nz));
   }
-  const uint64_t expected =
-      static_cast<uint64_t>(count) * d.nx * d.ny * BytesPerVoxel(info_.dtype);
+  const uint64_t expected = static_cast<uint64_t>(count) * d.nx * d.ny * BytesPerVoxel(info_.dtype);
   if (bytes != expected) {
-    return absl::InvalidArgumentError(absl::StrCat(info_.path, ": ", count, " slices need ",
-                                                   expected, " bytes, got ", bytes));
+    return absl::InvalidArgumentError(
+        absl::StrCat(info_.path, ": ", count, " slices need ", expected, " bytes, got ", bytes));
   }
   slices_written_ += count;
   return absl::OkStatus();

@@ -70,9 +70,8 @@ absl::StatusOr<ByteOrder> ParseByteOrder(absl::string_view name) {
 absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
                        absl::string_view what) {
   if (dims.nx <= 0 || dims.ny <= 0 || dims.nz <= 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(what, ": dims ", dims.nx, "x", dims.ny, "x", dims.nz,
-                     " must all be positive"));
+    return absl::InvalidArgumentError(absl::StrCat(what, ": dims ", dims.nx, "x", dims.ny, "x",
+                                                   dims.nz, " must all be positive"));
   }
   for (int64_t e : {dims.nx, dims.ny, dims.nz}) {
     if (e > limits.max_extent) {
@@ -88,9 +87,9 @@ absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits
         absl::StrCat(what, ": dims ", dims.ToString(), " overflow a 64-bit voxel count"));
   }
   if (dims.num_voxels() > limits.max_voxels) {
-    return absl::ResourceExhaustedError(absl::StrCat(
-        what, ": dims ", dims.ToString(), " hold ", dims.num_voxels(), " voxels of ",
-        DTypeName(dtype), ", above the limit of ", limits.max_voxels, " voxels"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat(what, ": dims ", dims.ToString(), " hold ", dims.num_voxels(), " voxels of ",
+                     DTypeName(dtype), ", above the limit of ", limits.max_voxels, " voxels"));
   }
   return absl::OkStatus();
 }

@@ -49,23 +49,24 @@ absl::StatusOr<NeighborTable> NeighborTable::Build(const VoxelSet& set) {
   const Dims& d = set.dims();
   // The task of slice z writes the x and y entries of slice z, its +z entries and the -z
   // entries of slice z + 1: no entry is written by two tasks.
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.nz), [&](const tbb::blocked_range<int64_t>& r) {
-    for (int64_t z = r.begin(); z < r.end(); ++z) {
-      for (int64_t y = 0; y < d.ny; ++y) {
-        const int64_t row = set.RowId(y, z);
-        for (int64_t i = set.RowBegin(row); i < set.RowBegin(row + 1); ++i) {
-          const Run& run = set.run(i);
-          const uint64_t first = set.RunFirstIndex(i);
-          for (int32_t k = 1; k < run.length(); ++k) {
-            t[first + k][0] = static_cast<uint32_t>(first + k - 1);
-            t[first + k - 1][1] = static_cast<uint32_t>(first + k);
-          }
-        }
-        if (y + 1 < d.ny) LinkRows(set, row, set.RowId(y + 1, z), 3, 2, &t);
-        if (z + 1 < d.nz) LinkRows(set, row, set.RowId(y, z + 1), 5, 4, &t);
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.nz),
+                    [&](const tbb::blocked_range<int64_t>& r) {
+                      for (int64_t z = r.begin(); z < r.end(); ++z) {
+                        for (int64_t y = 0; y < d.ny; ++y) {
+                          const int64_t row = set.RowId(y, z);
+                          for (int64_t i = set.RowBegin(row); i < set.RowBegin(row + 1); ++i) {
+                            const Run& run = set.run(i);
+                            const uint64_t first = set.RunFirstIndex(i);
+                            for (int32_t k = 1; k < run.length(); ++k) {
+                              t[first + k][0] = static_cast<uint32_t>(first + k - 1);
+                              t[first + k - 1][1] = static_cast<uint32_t>(first + k);
+                            }
+                          }
+                          if (y + 1 < d.ny) LinkRows(set, row, set.RowId(y + 1, z), 3, 2, &t);
+                          if (z + 1 < d.nz) LinkRows(set, row, set.RowId(y, z + 1), 5, 4, &t);
+                        }
+                      }
+                    });
   return nt;
 }
 

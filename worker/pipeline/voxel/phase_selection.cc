@@ -52,8 +52,7 @@ absl::StatusOr<PhaseSelection> ParsePhaseSelection(absl::string_view text) {
   if (window) {
     std::vector<absl::string_view> parts = absl::StrSplit(t, ':');
     double lo = 0, hi = 0;
-    if (parts.size() != 2 || !absl::SimpleAtod(parts[0], &lo) ||
-        !absl::SimpleAtod(parts[1], &hi)) {
+    if (parts.size() != 2 || !absl::SimpleAtod(parts[0], &lo) || !absl::SimpleAtod(parts[1], &hi)) {
       return absl::InvalidArgumentError(
           absl::StrCat("selection window '", text, "' must look like LO:HI, e.g. 100:200"));
     }
@@ -67,8 +66,8 @@ absl::StatusOr<PhaseSelection> ParsePhaseSelection(absl::string_view text) {
   for (absl::string_view p : absl::StrSplit(t, ',', absl::SkipEmpty())) {
     double v = 0;
     if (!absl::SimpleAtod(absl::StripAsciiWhitespace(p), &v)) {
-      return absl::InvalidArgumentError(absl::StrCat("selection label '", p, "' in '", text,
-                                                     "' is not a number"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("selection label '", p, "' in '", text, "' is not a number"));
     }
     labels.push_back(v);
   }
@@ -272,10 +271,9 @@ absl::StatusOr<VoxelSet> SelectPhase(VolumeSource& source, const PhaseSelection&
                                      const Progress& progress) {
   const VolumeInfo& info = source.info();
   if (mask != nullptr && !(mask->dims() == info.dims)) {
-    return absl::InvalidArgumentError(absl::StrCat(info.path, ": rock mask dims ",
-                                                   mask->dims().ToString(),
-                                                   " differ from the volume's ",
-                                                   info.dims.ToString()));
+    return absl::InvalidArgumentError(
+        absl::StrCat(info.path, ": rock mask dims ", mask->dims().ToString(),
+                     " differ from the volume's ", info.dims.ToString()));
   }
   if (stats != nullptr) *stats = SelectionStats();
   switch (info.dtype) {

@@ -45,48 +45,51 @@ void CountRow(const VoxelSet& set, int64_t row, int32_t pos, int32_t step, int64
 // Runs along y: slices are independent, so they run in parallel.
 void YRuns(const VoxelSet& set, std::vector<uint16_t>* partial, std::vector<uint16_t>* tau) {
   const Dims& d = set.dims();
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.nz), [&](const tbb::blocked_range<int64_t>& r) {
-    ColumnState state(static_cast<size_t>(d.nx));
-    for (int64_t z = r.begin(); z < r.end(); ++z) {
-      state.Reset();
-      for (int64_t y = 0; y < d.ny; ++y) {
-        CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), 1, 0, &state,
-                 [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
-      }
-      state.Reset();
-      for (int64_t y = d.ny - 1; y >= 0; --y) {
-        CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), -1, 0, &state,
-                 [&](uint64_t i, uint32_t c) {
-                   const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
-                   (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
-                 });
-      }
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, d.nz), [&](const tbb::blocked_range<int64_t>& r) {
+        ColumnState state(static_cast<size_t>(d.nx));
+        for (int64_t z = r.begin(); z < r.end(); ++z) {
+          state.Reset();
+          for (int64_t y = 0; y < d.ny; ++y) {
+            CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), 1, 0, &state,
+                     [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
+          }
+          state.Reset();
+          for (int64_t y = d.ny - 1; y >= 0; --y) {
+            CountRow(set, set.RowId(y, z), static_cast<int32_t>(y), -1, 0, &state,
+                     [&](uint64_t i, uint32_t c) {
+                       const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
+                       (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
+                     });
+          }
+        }
+      });
 }
 
 // Runs along z: columns with different y are independent, so bands of y run in parallel.
 void ZRuns(const VoxelSet& set, std::vector<uint16_t>* partial, std::vector<uint16_t>* tau) {
   const Dims& d = set.dims();
-  tbb::parallel_for(tbb::blocked_range<int64_t>(0, d.ny, 16), [&](const tbb::blocked_range<int64_t>& r) {
-    ColumnState state(static_cast<size_t>((r.end() - r.begin()) * d.nx));
-    for (int64_t z = 0; z < d.nz; ++z) {
-      for (int64_t y = r.begin(); y < r.end(); ++y) {
-        CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), 1, (y - r.begin()) * d.nx,
-                 &state, [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
-      }
-    }
-    state.Reset();
-    for (int64_t z = d.nz - 1; z >= 0; --z) {
-      for (int64_t y = r.begin(); y < r.end(); ++y) {
-        CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), -1, (y - r.begin()) * d.nx,
-                 &state, [&](uint64_t i, uint32_t c) {
-                   const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
-                   (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
-                 });
-      }
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<int64_t>(0, d.ny, 16), [&](const tbb::blocked_range<int64_t>& r) {
+        ColumnState state(static_cast<size_t>((r.end() - r.begin()) * d.nx));
+        for (int64_t z = 0; z < d.nz; ++z) {
+          for (int64_t y = r.begin(); y < r.end(); ++y) {
+            CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), 1, (y - r.begin()) * d.nx,
+                     &state,
+                     [&](uint64_t i, uint32_t c) { (*partial)[i] = static_cast<uint16_t>(c); });
+          }
+        }
+        state.Reset();
+        for (int64_t z = d.nz - 1; z >= 0; --z) {
+          for (int64_t y = r.begin(); y < r.end(); ++y) {
+            CountRow(set, set.RowId(y, z), static_cast<int32_t>(z), -1, (y - r.begin()) * d.nx,
+                     &state, [&](uint64_t i, uint32_t c) {
+                       const uint32_t run = std::min<uint32_t>((*partial)[i] + c - 1, kSaturate);
+                       (*tau)[i] = static_cast<uint16_t>(std::min<uint32_t>((*tau)[i], run));
+                     });
+          }
+        }
+      });
 }
 
 }  // namespace

@@ -61,7 +61,8 @@ TEST(ExtendTest, ACylinderThinnerThanTheSheetRecoversOnlyItsMiddle) {
   ExtendOptions o;
   o.max_rounds = 10;
   SM_ASSERT_OK_AND_ASSIGN(ExtendResult thin, Extend(Labelled(cut), o, &original));
-  EXPECT_FALSE(thin.patch.set.Contains(35, 20, 10)) << "t = 1.5 reaches one voxel off the mid-plane";
+  EXPECT_FALSE(thin.patch.set.Contains(35, 20, 10))
+      << "t = 1.5 reaches one voxel off the mid-plane";
   EXPECT_TRUE(thin.patch.set.Contains(35, 20, 12));
   o.half_thickness_voxels = 2.6;  // 2t covers the thickness
   SM_ASSERT_OK_AND_ASSIGN(ExtendResult thick, Extend(Labelled(cut), o, &original));

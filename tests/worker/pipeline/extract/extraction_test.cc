@@ -60,7 +60,8 @@ TEST(ExtractionTest, RecoveryClosesTheCutWithinTheImageOnly) {
   ExtractionOptions no_recover = with_recover;
   no_recover.recover = false;
   SM_ASSERT_OK_AND_ASSIGN(ExtractionResult cut, ExtractFeatures(Union(plate, pierce), no_recover));
-  SM_ASSERT_OK_AND_ASSIGN(ExtractionResult full, ExtractFeatures(Union(plate, pierce), with_recover));
+  SM_ASSERT_OK_AND_ASSIGN(ExtractionResult full,
+                          ExtractFeatures(Union(plate, pierce), with_recover));
   EXPECT_TRUE(Difference(full.model.set, Union(plate, pierce)).empty());
   // Recovery gives back part of the plate's gap at the crossing.
   const VoxelSet gap = Difference(plate, cut.model.set);
@@ -70,8 +71,8 @@ TEST(ExtractionTest, RecoveryClosesTheCutWithinTheImageOnly) {
 
 TEST(ExtractionTest, SpecksBelowMGoAndNothingLarger) {
   const Dims d{64, 64, 32};
-  VoxelSet s = BoxSet(d, {4, 4, 10}, {60, 60, 14});          // a large sheet
-  s = Union(s, BoxSet(d, {4, 4, 24}, {24, 24, 27}));          // a small sheet: 1200 voxels
+  VoxelSet s = BoxSet(d, {4, 4, 10}, {60, 60, 14});   // a large sheet
+  s = Union(s, BoxSet(d, {4, 4, 24}, {24, 24, 27}));  // a small sheet: 1200 voxels
   for (int k = 0; k < 5; ++k) s = Union(s, BoxSet(d, {8 * k + 4, 40, 28}, {8 * k + 6, 42, 30}));
   ExtractionOptions o;
   o.min_object_voxels = 100;
@@ -87,7 +88,8 @@ TEST(ExtractionTest, SpecksBelowMGoAndNothingLarger) {
 TEST(ExtractionTest, CoplanarFragmentsBelowMSurviveAsOneObject) {
   const Dims d{72, 48, 24};
   // Two fragments of 336 voxels each, 4 apart: each below M = 500, together above.
-  const VoxelSet s = Union(BoxSet(d, {10, 10, 10}, {24, 22, 12}), BoxSet(d, {28, 10, 10}, {42, 22, 12}));
+  const VoxelSet s =
+      Union(BoxSet(d, {10, 10, 10}, {24, 22, 12}), BoxSet(d, {28, 10, 10}, {42, 22, 12}));
   ExtractionOptions o;
   o.min_object_voxels = 500;
   o.separate = false;
@@ -97,8 +99,8 @@ TEST(ExtractionTest, CoplanarFragmentsBelowMSurviveAsOneObject) {
   EXPECT_EQ(r.model.set.size(), s.size()) << "detection kept both fragments";
   EXPECT_EQ(r.model.CountLabels(), 1u) << "as one object";
   o.detect = false;
-  EXPECT_THAT(ExtractFeatures(s, o), StatusIs(absl::StatusCode::kInvalidArgument,
-                                              ::testing::HasSubstr("M = 500")));
+  EXPECT_THAT(ExtractFeatures(s, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("M = 500")));
 }
 
 TEST(ExtractionTest, DpmJunctionGivesItsThreeSlabs) {
@@ -136,18 +138,21 @@ TEST(ExtractionTest, PhantomSheetsAreRecoveredWithTheirNormals) {
   r.model.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
     for (size_t k = 0; k < truth.sheets.size(); ++k) {
       const PhantomSheet& s = truth.sheets[k];
-      if (std::abs(Dot(Vec3(x, y, z) - s.center, s.normal)) <= s.aperture_max / 2 + s.undulation + 1) {
+      if (std::abs(Dot(Vec3(x, y, z) - s.center, s.normal)) <=
+          s.aperture_max / 2 + s.undulation + 1) {
         ++counts[r.model.label[i]][k];
       }
     }
   });
   for (size_t p = 0; p < geology.size(); ++p) {
-    sheet_of[p] = static_cast<int>(std::max_element(counts[p].begin(), counts[p].end()) - counts[p].begin());
+    sheet_of[p] =
+        static_cast<int>(std::max_element(counts[p].begin(), counts[p].end()) - counts[p].begin());
   }
   for (size_t k = 0; k < truth.sheets.size(); ++k) {
     int largest = -1;
     for (size_t p = 0; p < geology.size(); ++p) {
-      if (sheet_of[p] == static_cast<int>(k) && (largest < 0 || geology[p].voxels > geology[largest].voxels)) {
+      if (sheet_of[p] == static_cast<int>(k) &&
+          (largest < 0 || geology[p].voxels > geology[largest].voxels)) {
         largest = static_cast<int>(p);
       }
     }

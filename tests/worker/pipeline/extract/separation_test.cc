@@ -43,8 +43,9 @@ TEST(SeparationTest, PiercedPlateGivesThreePiecesAsFig4) {
 }
 
 TEST(SeparationTest, FlatSlabStaysOnePiece) {
-  SM_ASSERT_OK_AND_ASSIGN(SeparationResult r,
-                          Separate(testing::PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), {}));
+  SM_ASSERT_OK_AND_ASSIGN(
+      SeparationResult r,
+      Separate(testing::PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), {}));
   EXPECT_EQ(r.pieces.CountLabels(), 1u);
   EXPECT_EQ(r.removed_voxels, 0u);
 }

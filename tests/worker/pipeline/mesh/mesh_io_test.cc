@@ -75,15 +75,17 @@ TEST(MeshIoTest, VtpNamesItsArrays) {
 
 TEST(MeshIoTest, MalformedFilesNameWhatIsWrong) {
   TempDir tmp;
-  ASSERT_THAT(WriteFileAtomically(tmp.File("bad.ply"), "ply\nformat ascii 1.0\nelement vertex 2\n"
-                                                       "property float x\nproperty float y\nproperty float z\n"
-                                                       "element face 1\nproperty list uchar int vertex_indices\n"
-                                                       "end_header\n0 0 0\n1 1 1\n3 0 1 9\n"),
+  ASSERT_THAT(WriteFileAtomically(tmp.File("bad.ply"),
+                                  "ply\nformat ascii 1.0\nelement vertex 2\n"
+                                  "property float x\nproperty float y\nproperty float z\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\n"
+                                  "end_header\n0 0 0\n1 1 1\n3 0 1 9\n"),
               IsOk());
   EXPECT_THAT(ReadMesh(tmp.File("bad.ply")),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("vertex index 9")));
-  ASSERT_THAT(WriteFileAtomically(tmp.File("trunc.ply"), "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
-                                                         "property float x\nend_header\n\x01\x02"),
+  ASSERT_THAT(WriteFileAtomically(tmp.File("trunc.ply"),
+                                  "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                                  "property float x\nend_header\n\x01\x02"),
               IsOk());
   EXPECT_THAT(ReadMesh(tmp.File("trunc.ply")),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("truncated")));
@@ -92,7 +94,8 @@ TEST(MeshIoTest, MalformedFilesNameWhatIsWrong) {
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("line 2")));
   EXPECT_THAT(ReadMesh(tmp.File("x.stl")), StatusIs(absl::StatusCode::kNotFound));
   ASSERT_THAT(WriteFileAtomically(tmp.File("x.stl"), "solid"), IsOk());
-  EXPECT_THAT(ReadMesh(tmp.File("x.stl")), StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr(".stl")));
+  EXPECT_THAT(ReadMesh(tmp.File("x.stl")),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr(".stl")));
 }
 
 }  // namespace

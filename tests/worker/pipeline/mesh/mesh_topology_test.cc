@@ -36,7 +36,7 @@ TEST(MeshTopologyTest, GridWithAHoleHasTwoBoundaryLoops) {
 
 TEST(MeshTopologyTest, DuplicateDegenerateAndNonManifoldFacesAreCounted) {
   TriangleMesh m = Grid(2);
-  m.faces.push_back(m.faces[0]);                        // duplicate: makes 3 faces on edges
+  m.faces.push_back(m.faces[0]);  // duplicate: makes 3 faces on edges
   m.faces.push_back({m.faces[1][0], m.faces[1][0], m.faces[1][1]});  // degenerate
   const TopologyReport r = AnalyzeTopology(m);
   EXPECT_EQ(r.duplicate_faces, 1u);
@@ -76,8 +76,8 @@ TEST(MeshTopologyTest, MoebiusBandCannotBeOriented) {
 
 TEST(MeshTopologyTest, SelfIntersectionsAreFound) {
   TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {4, 0, 0}, {0, 4, 0},      // flat triangle
-                {1, 1, -1}, {1, 1, 1}, {3, 3, 1},     // pierces it, no shared vertex
+  m.vertices = {{0, 0, 0},  {4, 0, 0},  {0, 4, 0},    // flat triangle
+                {1, 1, -1}, {1, 1, 1},  {3, 3, 1},    // pierces it, no shared vertex
                 {10, 0, 0}, {14, 0, 0}, {10, 4, 0}};  // far away
   m.faces = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
   EXPECT_THAT(FindSelfIntersections(m), ::testing::ElementsAre(std::make_pair(0u, 1u)));
@@ -94,7 +94,7 @@ TEST(TriangleGeometryTest, DihedralAnglesAreOrientationFree) {
   const Vec3 p(0, 0, 0), q(1, 0, 0);
   EXPECT_NEAR(DihedralAngleDegrees(p, q, {0, 1, 0}, {0, -1, 0}), 180.0, 1e-9);  // flat
   EXPECT_NEAR(DihedralAngleDegrees(p, q, {0, 1, 0}, {0, 0, 1}), 90.0, 1e-9);
-  EXPECT_NEAR(DihedralAngleDegrees(p, q, {0, 1, 0}, {5, 2, 0}), 0.0, 1e-9);     // folded
+  EXPECT_NEAR(DihedralAngleDegrees(p, q, {0, 1, 0}, {5, 2, 0}), 0.0, 1e-9);  // folded
   EXPECT_NEAR(DihedralAngleDegrees(q, p, {0, 0, 1}, {0, 1, 0}), 90.0, 1e-9);
 }
 
@@ -102,8 +102,10 @@ TEST(TriangleGeometryTest, IntersectionAndDistance) {
   const Triangle a = {Vec3(0, 0, 0), Vec3(4, 0, 0), Vec3(0, 4, 0)};
   EXPECT_TRUE(TrianglesIntersect(a, {Vec3(1, 1, -1), Vec3(1, 1, 1), Vec3(2, 2, 1)}));
   EXPECT_FALSE(TrianglesIntersect(a, {Vec3(1, 1, 0.5), Vec3(2, 1, 1), Vec3(1, 2, 1)}));
-  EXPECT_TRUE(TrianglesIntersect(a, {Vec3(1, 1, 0), Vec3(5, 1, 0), Vec3(1, 5, 0)}));  // coplanar overlap
-  EXPECT_FALSE(TrianglesIntersect(a, {Vec3(5, 5, 0), Vec3(9, 5, 0), Vec3(5, 9, 0)}));  // coplanar apart
+  EXPECT_TRUE(
+      TrianglesIntersect(a, {Vec3(1, 1, 0), Vec3(5, 1, 0), Vec3(1, 5, 0)}));  // coplanar overlap
+  EXPECT_FALSE(
+      TrianglesIntersect(a, {Vec3(5, 5, 0), Vec3(9, 5, 0), Vec3(5, 9, 0)}));  // coplanar apart
   EXPECT_DOUBLE_EQ(PointTriangleDistance2({1, 1, 3}, a), 9.0);
   EXPECT_DOUBLE_EQ(PointTriangleDistance2({-3, 0, 4}, a), 25.0);
   EXPECT_NEAR(MinAngleDegrees(a), 45.0, 1e-9);

@@ -87,9 +87,9 @@ TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
   for (const char* f : {"model.vdb", "model_labels_64x56x48_u16.raw", "pieces.csv"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
-  EXPECT_EQ(std::filesystem::file_size(tmp.File("out/model_labels_64x56x48_u16.raw")), 64u * 56 * 48 * 2);
-  const nlohmann::json j =
-      nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
+  EXPECT_EQ(std::filesystem::file_size(tmp.File("out/model_labels_64x56x48_u16.raw")),
+            64u * 56 * 48 * 2);
+  const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
   EXPECT_EQ(j["extraction"]["steps"].size(), 5u);
   EXPECT_EQ(j["pieces"].size(), r.pieces);
   EXPECT_EQ(j["similarity"]["against"], "extracted model");

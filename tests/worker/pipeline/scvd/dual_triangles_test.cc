@@ -44,8 +44,8 @@ std::vector<Face> Sorted(std::vector<Face> faces) {
 }
 
 TEST(DualTrianglesTest, ThreeCellsInABlockGiveOneTriangle) {
-  Fixture f = Make({0, 0, 1, 1, 2, 2, 2, 2}, {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}},
-                   {{0, 1}, {0, 2}, {1, 2}});
+  Fixture f =
+      Make({0, 0, 1, 1, 2, 2, 2, 2}, {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}}, {{0, 1}, {0, 2}, {1, 2}});
   const std::vector<Vec3> pos = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}};
   DualTriangleOptions o;
   o.rim = false;

@@ -88,7 +88,8 @@ TEST(ScvdTest, SameSeedGivesTheSameDiagramAndAnotherSeedDoesNot) {
 
 TEST(ScvdTest, SimultaneousArrivalGoesToTheLowerId) {
   // A line of 5 voxels; seeds at both ends reach the middle in the same round.
-  const VoxelSet line = VoxelSet::FromIndices({5, 1, 1}, {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}});
+  const VoxelSet line =
+      VoxelSet::FromIndices({5, 1, 1}, {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {4, 0, 0}});
   SM_ASSERT_OK_AND_ASSIGN(NeighborTable nt, NeighborTable::Build(line));
   const std::vector<uint32_t> seeds_a = {4, 0};  // cell 0 at x=4, cell 1 at x=0
   SM_ASSERT_OK_AND_ASSIGN(std::vector<uint32_t> cell, GrowCells(nt, seeds_a));

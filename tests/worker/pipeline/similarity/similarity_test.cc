@@ -42,8 +42,8 @@ TEST(MeshModelTest, ZeroThicknessAddsNothingAndTheShellFollowsVertexThickness) {
   TriangleMesh m = RightTriangle(0);
   m.vertex_thickness = {5, 1, 1};  // thick at the origin, thin at the far corners
   SM_ASSERT_OK_AND_ASSIGN(VoxelSet shell, VoxelizePrisms(m, d, PrismHeight::kVertex));
-  EXPECT_TRUE(shell.Contains(0, 0, 7));   // half thickness 2.5 at the origin
-  EXPECT_FALSE(shell.Contains(10, 0, 6)); // half thickness 0.5 at (10, 0)
+  EXPECT_TRUE(shell.Contains(0, 0, 7));    // half thickness 2.5 at the origin
+  EXPECT_FALSE(shell.Contains(10, 0, 6));  // half thickness 0.5 at (10, 0)
   EXPECT_TRUE(shell.Contains(10, 0, 5));
   TriangleMesh bad = RightTriangle(1);
   EXPECT_THAT(VoxelizePrisms(bad, d, PrismHeight::kVertex),

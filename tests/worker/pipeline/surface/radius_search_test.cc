@@ -72,14 +72,17 @@ TEST(RadiusSearchTest, BadRangesAreInvalidArgument) {
   const SheetAnalysis sheet = Sheet();
   RadiusSearchOptions o;
   o.min_radius_voxels = 0;
-  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
+              StatusIs(absl::StatusCode::kInvalidArgument));
   o.min_radius_voxels = 9;
   o.max_radius_voxels = 4;
-  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
+              StatusIs(absl::StatusCode::kInvalidArgument));
   o = {};
   o.goal = RadiusGoal::kTargetSimilarity;
   o.target_similarity = 1.5;
-  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o), StatusIs(absl::StatusCode::kInvalidArgument));
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
+              StatusIs(absl::StatusCode::kInvalidArgument));
 }
 
 }  // namespace

@@ -115,8 +115,8 @@ TEST(SurfaceBuilderTest, DiscWithAHoleHasTwoBoundaryLoops) {
 
 TEST(SurfaceBuilderTest, CrossingSlabsAreNonManifoldOnlyAlongTheCrossing) {
   const Dims d{64, 64, 48};
-  const VoxelSet cross = Union(PlaneSlab(d, {32, 32, 24}, {1, 0, 0}, 5),
-                               PlaneSlab(d, {32, 32, 24}, {0, 1, 0}, 5));
+  const VoxelSet cross =
+      Union(PlaneSlab(d, {32, 32, 24}, {1, 0, 0}, 5), PlaneSlab(d, {32, 32, 24}, {0, 1, 0}, 5));
   const double r = 7;
   const Built b = Build(cross, r);
   ExpectCleanMesh(b);
@@ -142,7 +142,8 @@ TEST(SurfaceBuilderTest, SameSeedGivesTheSameMesh) {
 }
 
 TEST(SurfaceBuilderTest, PaperMethodPutsVerticesOnGeneratorVoxelsWithoutRim) {
-  const Built b = Build(PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), 7, SurfaceOptions::Paper());
+  const Built b =
+      Build(PlaneSlab({64, 64, 16}, {32, 32, 8}, {0, 0, 1}, 5), 7, SurfaceOptions::Paper());
   ExpectCleanMesh(b);
   EXPECT_EQ(b.surface.triangle_stats.rim_vertices, 0u);
   for (const Vec3& v : b.surface.mesh.vertices) {
@@ -155,8 +156,8 @@ TEST(SurfaceBuilderTest, PaperMethodPutsVerticesOnGeneratorVoxelsWithoutRim) {
 
 TEST(SurfaceBuilderTest, ComponentTooSmallForATriangleIsReportedAsSkipped) {
   const Dims d{64, 64, 16};
-  const VoxelSet s = Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 5),
-                           testing::BoxSet(d, {0, 0, 0}, {2, 2, 2}));
+  const VoxelSet s =
+      Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 5), testing::BoxSet(d, {0, 0, 0}, {2, 2, 2}));
   const Built b = Build(s, 7);
   EXPECT_EQ(b.surface.components, 2u);
   EXPECT_EQ(b.surface.skipped_components, 1u);
@@ -167,7 +168,8 @@ TEST(SurfaceBuilderTest, ComponentTooSmallForATriangleIsReportedAsSkipped) {
 
 TEST(SurfaceBuilderTest, FacesCarryTheirComponentAsPiece) {
   const Dims d{64, 64, 40};
-  const VoxelSet s = Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 4), PlaneSlab(d, {32, 32, 30}, {0, 0, 1}, 4));
+  const VoxelSet s =
+      Union(PlaneSlab(d, {32, 32, 8}, {0, 0, 1}, 4), PlaneSlab(d, {32, 32, 30}, {0, 0, 1}, 4));
   const Built b = Build(s, 7);
   std::set<int32_t> pieces(b.surface.mesh.face_piece.begin(), b.surface.mesh.face_piece.end());
   EXPECT_EQ(pieces, (std::set<int32_t>{0, 1}));

@@ -71,7 +71,9 @@ TEST(VolumeMeshIoTest, VtuReadsBackInMeshio) {
   ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
   const auto out = Python(
       "import meshio, numpy as np\n"
-      "m = meshio.read(\"" + tmp.File("m.vtu") + "\")\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.vtu") +
+      "\")\n"
       "piece = np.concatenate(m.cell_data[\"piece\"])\n"
       "kind = np.concatenate(m.cell_data[\"kind\"])\n"
       "print(len(m.points), m.cells_dict[\"tetra\"].shape[0], m.cells_dict[\"triangle\"].shape[0], "
@@ -88,7 +90,9 @@ TEST(VolumeMeshIoTest, GmshReadsBackInMeshioWithPhysicalGroups) {
   ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
   const auto out = Python(
       "import meshio, numpy as np\n"
-      "m = meshio.read(\"" + tmp.File("m.msh") + "\")\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.msh") +
+      "\")\n"
       "tags = {}\n"
       "for block, phys in zip(m.cells, m.cell_data[\"gmsh:physical\"]):\n"
       "    for t in phys: tags[(block.type, int(t))] = tags.get((block.type, int(t)), 0) + 1\n"
@@ -108,10 +112,13 @@ TEST(VolumeMeshIoTest, AbaqusReadsBackInMeshioWithElementSets) {
   ASSERT_THAT(WriteAbaqus(tmp.File("m.inp"), m), IsOk());
   const auto out = Python(
       "import meshio\n"
-      "m = meshio.read(\"" + tmp.File("m.inp") + "\")\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.inp") +
+      "\")\n"
       "sizes = {k: sum(len(x) for x in v) for k, v in m.cell_sets.items()}\n"
       "print(len(m.points), m.cells_dict[\"tetra\"].shape[0], m.cells_dict[\"triangle\"].shape[0], "
-      "sizes.get(\"ROCK\"), sizes.get(\"SHEET_0\"), sizes.get(\"SHEET_3\"), sizes.get(\"BOUNDARY\"))");
+      "sizes.get(\"ROCK\"), sizes.get(\"SHEET_0\"), sizes.get(\"SHEET_3\"), "
+      "sizes.get(\"BOUNDARY\"))");
   if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
   const Counts c = Expected(m);
   EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", m.faces.size(), " ", c.tets, " ",

@@ -81,7 +81,8 @@ TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
 TEST(VolumeMesherTest, WithoutSteinerPointsOnSheetsEachTriangleStaysOneFace) {
   VolumeMeshOptions o;
   o.tetgen.steiner_on_sheets = false;
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, o));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, o));
   EXPECT_EQ(r.mesh.num_sheet_faces(), 32u);
   EXPECT_EQ(r.conformity.conforming, 32u);
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
@@ -131,7 +132,8 @@ bool HasEdge(const Plc& plc, const Vec3& p, const Vec3& q) {
   for (const Face& t : plc.sheet_triangles) {
     for (int k = 0; k < 3; ++k) {
       const Vec3 a = plc.vertices[t[k]], b = plc.vertices[t[(k + 1) % 3]];
-      if ((Norm(a - p) < 1e-9 && Norm(b - q) < 1e-9) || (Norm(a - q) < 1e-9 && Norm(b - p) < 1e-9)) return true;
+      if ((Norm(a - p) < 1e-9 && Norm(b - q) < 1e-9) || (Norm(a - q) < 1e-9 && Norm(b - p) < 1e-9))
+        return true;
     }
   }
   return false;
@@ -203,7 +205,8 @@ TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
   // Removing one triangle of each pair is not enough for a full piercing: still refused,
   // with the reason, and nothing is passed to TetGen.
   if (!fixed.ok()) {
-    EXPECT_THAT(fixed, StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("still intersect")));
+    EXPECT_THAT(fixed,
+                StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("still intersect")));
   } else {
     EXPECT_GT(fixed->repaired_triangles, 0u);
   }
@@ -219,7 +222,8 @@ TEST(VolumeMesherTest, RepairRemovesASimpleClash) {
   m.faces.push_back({base, base + 1, base + 2});
   m.face_piece.push_back(1);
   m.face_thickness.push_back(1);
-  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, {}), StatusIs(absl::StatusCode::kFailedPrecondition));
+  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, {}),
+              StatusIs(absl::StatusCode::kFailedPrecondition));
   VolumeMeshOptions o;
   o.plc.repair = true;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
@@ -249,10 +253,12 @@ TEST(VolumeMesherTest, TetgenThatIsKilledOrFailsGivesTheDocumentedErrors) {
   VolumeMeshOptions o;
   o.tetgen.program = FakeTetgen(tmp, "echo dying; kill -9 $$");
   EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
-              StatusIs(absl::StatusCode::kInternal, ::testing::AllOf(HasSubstr("signal 9"), HasSubstr("dying"))));
+              StatusIs(absl::StatusCode::kInternal,
+                       ::testing::AllOf(HasSubstr("signal 9"), HasSubstr("dying"))));
   o.tetgen.program = FakeTetgen(tmp, "echo 'Error: self-intersection'; exit 3");
   EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
-              StatusIs(absl::StatusCode::kInternal, ::testing::AllOf(HasSubstr("code 3"), HasSubstr("self-intersection"))));
+              StatusIs(absl::StatusCode::kInternal,
+                       ::testing::AllOf(HasSubstr("code 3"), HasSubstr("self-intersection"))));
   o.tetgen.program = "no-such-tetgen-program";
   EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
               StatusIs(absl::StatusCode::kNotFound));

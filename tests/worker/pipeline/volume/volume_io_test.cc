@@ -35,7 +35,7 @@ DenseVolume Pattern(DType dtype, Dims dims = {7, 5, 4}) {
     for (int y = 0; y < dims.ny; ++y) {
       for (int x = 0; x < dims.nx; ++x) {
         double value = (x * 7 + y * 13 + z * 29) % 5 == 0 ? 0 : 1 + x + 10 * y + 50 * z;
-        if (dtype == DType::kUInt16) value *= 200;       // above 255
+        if (dtype == DType::kUInt16) value *= 200;                 // above 255
         if (dtype == DType::kFloat32) value = value * 0.75 - 3.5;  // fractional, negative
         if (dtype == DType::kUInt8) value = std::fmod(value, 256);
         v.Set(x, y, z, value);
@@ -107,7 +107,8 @@ INSTANTIATE_TEST_SUITE_P(
                        ::testing::Values(DType::kUInt8, DType::kUInt16, DType::kFloat32)),
     [](const auto& info) {
       std::string name = std::get<0>(info.param).name;
-      name = name.substr(1) + (std::get<0>(info.param).format == VolumeFormat::kNrrdGzip ? "gz" : "");
+      name =
+          name.substr(1) + (std::get<0>(info.param).format == VolumeFormat::kNrrdGzip ? "gz" : "");
       return name + "_" + std::string(DTypeName(std::get<1>(info.param)));
     });
 
@@ -182,8 +183,8 @@ TEST(RawIoTest, OverflowingAndOversizedDimsAreRefusedBeforeAllocating) {
   EXPECT_THAT(OpenRawVolume(path, o, limits),
               StatusIs(absl::StatusCode::kResourceExhausted, HasSubstr("1000000")));
   o.dims = {0, 5, 5};
-  EXPECT_THAT(OpenRawVolume(path, o), StatusIs(absl::StatusCode::kInvalidArgument,
-                                               HasSubstr("positive")));
+  EXPECT_THAT(OpenRawVolume(path, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("positive")));
 }
 
 TEST(RawIoTest, MissingFileIsNotFound) {
@@ -234,7 +235,8 @@ TEST(VolumeOpenTest, UnknownExtensionAndBadSpacingAreInvalidArgument) {
   ASSERT_THAT(WriteFileAtomically(raw, "x"), IsOk());
   OpenOptions o;
   o.spacing = Vec3(1, 0, 1);
-  EXPECT_THAT(OpenVolume(raw, o), StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("spacing")));
+  EXPECT_THAT(OpenVolume(raw, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("spacing")));
 }
 
 // Writes a two-page TIFF whose pages have the given sizes.
@@ -316,7 +318,8 @@ TEST(TiffIoTest, FolderSlicesAreOrderedByNumberNotByText) {
     info.dims = {3, 2, 1};
     DenseVolume v = DenseVolume::Zeros(info.dims, DType::kUInt8);
     v.Set(0, 0, 0, z);
-    SM_ASSERT_OK_AND_ASSIGN(auto sink, CreateTiffWriter(folder + "/s" + std::to_string(z) + ".tif", info));
+    SM_ASSERT_OK_AND_ASSIGN(auto sink,
+                            CreateTiffWriter(folder + "/s" + std::to_string(z) + ".tif", info));
     ASSERT_THAT(WriteDense(v, *sink), IsOk());
   }
   SM_ASSERT_OK_AND_ASSIGN(auto source, OpenTiffFolder(folder));
@@ -427,7 +430,8 @@ TEST(VdbIoTest, VoxelSetAndLabelsReadBack) {
   SM_ASSERT_OK_AND_ASSIGN(auto lab, OpenVdbVolume(path, "sheet_labels"));
   SM_ASSERT_OK_AND_ASSIGN(DenseVolume l, ReadDense(*lab));
   EXPECT_EQ(l.At(8, 7, 6), 7);
-  EXPECT_THAT(OpenVdbVolume(path, "nope"), StatusIs(absl::StatusCode::kNotFound, HasSubstr("nope")));
+  EXPECT_THAT(OpenVdbVolume(path, "nope"),
+              StatusIs(absl::StatusCode::kNotFound, HasSubstr("nope")));
 }
 
 TEST(VdbIoTest, NotAVdbIsInvalidArgument) {

@@ -6,16 +6,21 @@
 
 namespace sheetmesh {
 
-double MinAngleDegrees(const Triangle& t) {
-  double best = 180.0;
+std::pair<double, double> AngleRangeDegrees(const Triangle& t) {
+  double lo = 180.0, hi = 0.0;
   for (int i = 0; i < 3; ++i) {
     const Vec3 u = t[(i + 1) % 3] - t[i], v = t[(i + 2) % 3] - t[i];
-    const double nu = Norm(u), nv = Norm(v);
-    if (nu == 0 || nv == 0) return 0.0;
-    const double c = std::clamp(Dot(u, v) / (nu * nv), -1.0, 1.0);
-    best = std::min(best, std::acos(c) * 180.0 / std::numbers::pi);
+    const double a = Norm(u) > 0 && Norm(v) > 0 ? AngleDegrees(u, v) : 0.0;
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
   }
-  return best;
+  return {lo, hi};
+}
+
+double AngleDegrees(const Vec3& a, const Vec3& b) {
+  const double na = Norm(a), nb = Norm(b);
+  if (na == 0 || nb == 0) return 180.0;
+  return std::acos(std::clamp(Dot(a, b) / (na * nb), -1.0, 1.0)) * 180.0 / std::numbers::pi;
 }
 
 double DihedralAngleDegrees(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {

@@ -4,6 +4,7 @@
 #define SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_
 
 #include <array>
+#include <utility>
 
 #include "worker/pipeline/core/types.h"
 
@@ -16,8 +17,13 @@ inline Vec3 AreaVector(const Triangle& t) { return Cross(t[1] - t[0], t[2] - t[0
 inline double Area(const Triangle& t) { return 0.5 * Norm(AreaVector(t)); }
 inline Vec3 UnitNormal(const Triangle& t) { return Normalized(AreaVector(t)); }
 
+// The smallest and the largest interior angle, degrees (a corner with a zero-length edge
+// counts as 0).
+std::pair<double, double> AngleRangeDegrees(const Triangle& t);
 // The smallest interior angle, degrees (0 for a degenerate triangle).
-double MinAngleDegrees(const Triangle& t);
+inline double MinAngleDegrees(const Triangle& t) { return AngleRangeDegrees(t).first; }
+// The angle between two vectors, degrees (180 when either is zero).
+double AngleDegrees(const Vec3& a, const Vec3& b);
 
 // Dihedral angle at edge (p, q) between the half-planes towards r and towards s, measured
 // perpendicular to the edge, in degrees: 180 = flat continuation, 0 = folded back

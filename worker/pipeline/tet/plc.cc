@@ -20,32 +20,25 @@ namespace {
 int Axis(int face) { return face / 2; }
 bool Low(int face) { return face % 2 == 0; }
 
-// Angles of triangle t, the smallest and the largest, degrees.
-std::pair<double, double> AngleRange(const Triangle& t) {
-  double lo = 180, hi = 0;
-  for (int k = 0; k < 3; ++k) {
-    const Vec3 u = t[(k + 1) % 3] - t[k], w = t[(k + 2) % 3] - t[k];
-    const double nu = Norm(u), nw = Norm(w);
-    const double a =
-        nu > 0 && nw > 0 ? std::acos(std::clamp(Dot(u, w) / (nu * nw), -1.0, 1.0)) * 180 / M_PI : 0;
-    lo = std::min(lo, a);
-    hi = std::max(hi, a);
-  }
-  return {lo, hi};
-}
-
-double AngleBetweenDegrees(const Vec3& a, const Vec3& b) {
-  const double na = Norm(a), nb = Norm(b);
-  if (na == 0 || nb == 0) return 180;
-  return std::acos(std::clamp(Dot(a, b) / (na * nb), -1.0, 1.0)) * 180 / M_PI;
-}
-
 struct SheetTriangles {
   std::vector<Face> faces;
   std::vector<uint32_t> source;  // input face
   std::vector<int32_t> piece;
   std::vector<float> thickness;
 };
+
+// `s` without the triangles marked in `drop`.
+SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop) {
+  SheetTriangles keep;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    if (drop[f]) continue;
+    keep.faces.push_back(s.faces[f]);
+    keep.source.push_back(s.source[f]);
+    keep.piece.push_back(s.piece[f]);
+    keep.thickness.push_back(s.thickness[f]);
+  }
+  return keep;
+}
 
 // Improves the sheet triangles TetGen must keep, since a thin or flat triangle forces tiny
 // tetrahedra and slivers around it: an edge between two triangles of one piece that are
@@ -71,7 +64,7 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
     uint32_t changed = 0, dropped = 0;
     for (uint32_t f = 0; f < s.faces.size(); ++f) {
       if (touched[f]) continue;
-      const auto [lo, hi] = AngleRange(corners(s.faces[f]));
+      const auto [lo, hi] = AngleRangeDegrees(corners(s.faces[f]));
       // The edge opposite the largest angle: the one a flip or a drop would remove.
       int longest = 0;
       double best = -1;
@@ -104,12 +97,12 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
       const Face nf = {a, d, c}, ng = {d, b, c};
       const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf),
                      tng = corners(ng);
-      if (AngleBetweenDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) continue;
-      if (AngleBetweenDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) continue;
+      if (AngleDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) continue;
+      if (AngleDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) continue;
       const Vec3 up = AreaVector(tf) + AreaVector(tg);
       if (Dot(AreaVector(tnf), up) <= 0 || Dot(AreaVector(tng), up) <= 0) continue;
-      const double old_min = std::min(lo, AngleRange(tg).first);
-      const double new_min = std::min(AngleRange(tnf).first, AngleRange(tng).first);
+      const double old_min = std::min(lo, AngleRangeDegrees(tg).first);
+      const double new_min = std::min(AngleRangeDegrees(tnf).first, AngleRangeDegrees(tng).first);
       if (new_min < old_min + 0.5) continue;
       const bool in_box_face =
           (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
@@ -124,17 +117,7 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
       ++flips;
       ++changed;
     }
-    if (dropped > 0) {
-      SheetTriangles keep;
-      for (size_t f = 0; f < s.faces.size(); ++f) {
-        if (drop[f]) continue;
-        keep.faces.push_back(s.faces[f]);
-        keep.source.push_back(s.source[f]);
-        keep.piece.push_back(s.piece[f]);
-        keep.thickness.push_back(s.thickness[f]);
-      }
-      s = std::move(keep);
-    }
+    if (dropped > 0) s = Without(s, drop);
     if (changed == 0) break;
   }
   return {flips, drops};
@@ -275,7 +258,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   TriangleMesh kept;
   kept.faces = st.faces;
   kept.vertices = v;
-  std::vector<uint32_t> source = st.source;
+  const std::vector<uint32_t>& source = st.source;
 
   // Facets must not cut through each other: check before TetGen, and name the clashes.
   std::vector<std::pair<uint32_t, uint32_t>> pairs = FindSelfIntersections(kept, 10000, 1.0);
@@ -315,29 +298,14 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       if (drop[a] || drop[b]) continue;
       drop[Area(Corners(kept, a)) < Area(Corners(kept, b)) ? a : b] = 1;
     }
-    TriangleMesh fixed;
-    fixed.vertices = kept.vertices;
-    std::vector<uint32_t> fixed_source;
-    SheetTriangles fixed_st;
-    for (size_t f = 0; f < kept.faces.size(); ++f) {
-      if (drop[f]) {
-        ++plc.repaired_triangles;
-        continue;
-      }
-      fixed.faces.push_back(kept.faces[f]);
-      fixed_source.push_back(source[f]);
-      fixed_st.piece.push_back(st.piece[f]);
-      fixed_st.thickness.push_back(st.thickness[f]);
-    }
-    st.piece = std::move(fixed_st.piece);
-    st.thickness = std::move(fixed_st.thickness);
-    if (!FindSelfIntersections(fixed, 1, 1.0).empty()) {
+    st = Without(st, drop);
+    plc.repaired_triangles = static_cast<uint32_t>(kept.faces.size() - st.faces.size());
+    kept.faces = st.faces;
+    if (!FindSelfIntersections(kept, 1, 1.0).empty()) {
       return absl::FailedPreconditionError(
           absl::StrCat("sheet triangles still intersect after removing ", plc.repaired_triangles,
                        " clashing ones; the intersections are not simple"));
     }
-    kept = std::move(fixed);
-    source = std::move(fixed_source);
   }
 
   // Compact the used vertices; the 8 box corners go first.

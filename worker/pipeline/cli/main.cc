@@ -103,6 +103,14 @@ ABSL_FLAG(
     double, flip_fold, 15,
     "volume: flip sheet edges between nearly coplanar triangles (normals within this many degrees) "
     "where that gives better triangles; 0: keep the sheet triangles as given");
+ABSL_FLAG(int, improve_passes, 4,
+          "volume: rounds of flips, smoothing and insertion on TetGen's output (0: none)");
+ABSL_FLAG(double, improve_target, 50,
+          "volume: tetrahedra below this smallest dihedral angle (degrees) are improved");
+ABSL_FLAG(double, improve_insert, 20,
+          "volume: slivers below this angle after the flips get a new vertex (degrees; 0: none)");
+ABSL_FLAG(double, improve_floor, 30,
+          "volume: smoothing for the mean never lowers a vertex's worst tetrahedron below this");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
 ABSL_FLAG(std::string, volume_formats, "vtu,msh,inp", "volume: files to write");
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
@@ -289,6 +297,11 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("tetgen")) t.program = absl::GetFlag(FLAGS_tetgen);
   if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
   if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
+  TetImproveOptions& im = o->volume.improve;
+  if (Given("improve_passes")) im.passes = absl::GetFlag(FLAGS_improve_passes);
+  if (Given("improve_target")) im.target_degrees = absl::GetFlag(FLAGS_improve_target);
+  if (Given("improve_insert")) im.insert_below_degrees = absl::GetFlag(FLAGS_improve_insert);
+  if (Given("improve_floor")) im.smoothing_floor_degrees = absl::GetFlag(FLAGS_improve_floor);
   if (Given("volume_formats")) {
     o->output.vtu = o->output.msh = o->output.inp = false;
     for (absl::string_view f :

@@ -111,6 +111,7 @@ struct PipelineReport {
   uint32_t volume_repaired = 0;
   uint32_t volume_flipped = 0;
   uint32_t volume_dropped_caps = 0;
+  TetImproveReport volume_improvement;
   double voxels_per_tet = 0;  // the paper's 1 : 6704 is 6704 here
   std::vector<StageTime> timings;
   std::vector<std::string> files;  // written, relative to output.dir

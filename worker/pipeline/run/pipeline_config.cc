@@ -456,6 +456,22 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.cap_degrees);
                   }},
+                 {"improve_passes",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Integer(w, q, &o->volume.improve.passes);
+                  }},
+                 {"improve_target_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.improve.target_degrees);
+                  }},
+                 {"improve_insert_below_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.improve.insert_below_degrees);
+                  }},
+                 {"improve_floor_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.improve.smoothing_floor_degrees);
+                  }},
              });
        }},
       {"output",
@@ -572,6 +588,21 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   }
   if (!(o.volume.plc.cap_degrees > 90 && o.volume.plc.cap_degrees <= 180)) {
     return bad("volume_mesh.cap_degrees", o.volume.plc.cap_degrees, "must be in (90, 180]");
+  }
+  const TetImproveOptions& im = o.volume.improve;
+  if (!(im.passes >= 0 && im.passes <= 100)) {
+    return bad("volume_mesh.improve_passes", im.passes, "must be in [0, 100]");
+  }
+  if (!(im.target_degrees >= 0 && im.target_degrees <= 70.6)) {
+    return bad("volume_mesh.improve_target_degrees", im.target_degrees, "must be in [0, 70.6]");
+  }
+  if (!(im.insert_below_degrees >= 0 && im.insert_below_degrees <= im.target_degrees)) {
+    return bad("volume_mesh.improve_insert_below_degrees", im.insert_below_degrees,
+               "must be in [0, improve_target_degrees]");
+  }
+  if (!(im.smoothing_floor_degrees >= 0 && im.smoothing_floor_degrees <= 70.6)) {
+    return bad("volume_mesh.improve_floor_degrees", im.smoothing_floor_degrees,
+               "must be in [0, 70.6]");
   }
   for (int k : o.score.grid_rates) {
     if (k < 1) return bad("grid_rates", k, "must be >= 1");

@@ -194,6 +194,9 @@ std::string PipelineReport::ToJson() const {
                           {"gamma", stat(volume_quality.gamma)},
                           {"edge_aspect", stat(volume_quality.edge_aspect)},
                           {"radius_aspect", stat(volume_quality.radius_aspect)}}}};
+    for (const auto& [name, value] : volume_improvement.Fields()) {
+      j["volume_mesh"]["improvement"][name] = value;
+    }
   }
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;

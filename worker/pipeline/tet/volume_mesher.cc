@@ -1,7 +1,10 @@
 #include "worker/pipeline/tet/volume_mesher.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "worker/pipeline/core/status_macros.h"
@@ -13,6 +16,20 @@ namespace {
 Conformity CheckConformity(const Plc& plc, const TetMesh& mesh) {
   Conformity c;
   c.sheet_triangles = plc.sheet_triangles.size();
+  // Every facet face must be a face of a tetrahedron.
+  absl::flat_hash_set<std::array<uint32_t, 3>> tet_faces;
+  for (const Tet& t : mesh.tets) {
+    for (int f = 0; f < 4; ++f) {
+      std::array<uint32_t, 3> k = {t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]};
+      std::sort(k.begin(), k.end());
+      tet_faces.insert(k);
+    }
+  }
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    std::array<uint32_t, 3> k = mesh.faces[f];
+    std::sort(k.begin(), k.end());
+    if (!tet_faces.contains(k)) ++c.orphan_faces;
+  }
   std::vector<double> covered(plc.sheet_triangles.size(), 0.0);
   std::vector<uint8_t> off_plane(plc.sheet_triangles.size(), 0);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -61,7 +78,14 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
   r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi, options.improve,
+                                    &r.improvement, progress.Sub(0.9, 0.98)));
   r.conformity = CheckConformity(plc, r.mesh);
+  if (r.conformity.orphan_faces > 0) {
+    return absl::InternalError(absl::StrCat("the volume mesh does not conform: ",
+                                            r.conformity.orphan_faces,
+                                            " facet faces are faces of no tetrahedron"));
+  }
   if (r.conformity.conforming != r.conformity.sheet_triangles) {
     return absl::InternalError(absl::StrCat(
         "the volume mesh does not conform: ",
@@ -71,6 +95,10 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
         ", area error ", r.conformity.worst_area_error, ")"));
   }
   r.quality = MeasureQuality(r.mesh);
+  if (r.quality.inverted > 0) {
+    return absl::InternalError(
+        absl::StrCat("the volume mesh has ", r.quality.inverted, " inverted tetrahedra"));
+  }
   if (std::abs(r.quality.volume - r.box_volume) > 1e-6 * r.box_volume) {
     return absl::InternalError(absl::StrCat("the tetrahedra's volume ", r.quality.volume,
                                             " differs from the box's ", r.box_volume));

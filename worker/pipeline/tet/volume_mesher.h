@@ -11,6 +11,7 @@
 #include "worker/pipeline/core/progress.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_quality.h"
 #include "worker/pipeline/tet/tetgen_runner.h"
 
@@ -19,6 +20,7 @@ namespace sheetmesh {
 struct VolumeMeshOptions {
   PlcOptions plc;
   TetgenOptions tetgen;
+  TetImproveOptions improve;  // the clean-up of TetGen's output
 };
 
 struct Conformity {
@@ -26,6 +28,7 @@ struct Conformity {
   uint64_t conforming = 0;        // exactly covered by tetrahedron faces on them
   double worst_area_error = 0;    // relative, over all sheet triangles
   std::vector<uint32_t> missing;  // PLC sheet triangles not covered (first 20)
+  uint64_t orphan_faces = 0;      // facet faces (box or sheet) that are no tetrahedron's face
 };
 
 struct VolumeMeshResult {
@@ -40,6 +43,7 @@ struct VolumeMeshResult {
   uint32_t dropped_caps = 0;   // flat rim triangles dropped
   double box_volume = 0;       // physical units^3
   double tetgen_seconds = 0;
+  TetImproveReport improvement;
 };
 
 // Meshes the box of `dims` (placed by `placement`) with `sheets` (voxel index coordinates)

@@ -1,0 +1,793 @@
+#include "worker/pipeline/tet/tet_improve.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "absl/container/flat_hash_set.h"
+#include "absl/time/clock.h"
+
+namespace sheetmesh {
+
+double MinDihedralDegrees(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 ab = b - a, ac = c - a, ad = d - a;
+  if (Dot(Cross(ab, ac), ad) <= 0) return -1.0;
+  // Outward normals of the faces opposite d, c, b and a (the tetrahedron is positive).
+  Vec3 n[4] = {Cross(ac, ab), Cross(ab, ad), Cross(ad, ac), Cross(c - b, d - b)};
+  for (Vec3& v : n) {
+    const double len = Norm(v);
+    if (!(len > 0)) return -1.0;
+    v = v / len;
+  }
+  // The dihedral angle between faces i and j is π minus the angle between their normals;
+  // the smallest angle has the largest -n_i·n_j.
+  double worst = -1.0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) worst = std::max(worst, -Dot(n[i], n[j]));
+  return std::acos(std::clamp(worst, -1.0, 1.0)) * (180.0 / std::numbers::pi);
+}
+
+std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
+  return {{"passes", passes},
+          {"edge_removals", static_cast<double>(edge_removals)},
+          {"face_removals", static_cast<double>(face_removals)},
+          {"smoothing_moves", static_cast<double>(smoothing_moves)},
+          {"inserted_vertices", static_cast<double>(inserted_vertices)},
+          {"movable_vertices", movable_vertices},
+          {"min_dihedral_before", min_dihedral_before},
+          {"mean_dihedral_before", mean_dihedral_before},
+          {"min_dihedral_after", min_dihedral_after},
+          {"mean_dihedral_after", mean_dihedral_after},
+          {"seconds", seconds}};
+}
+
+namespace {
+
+using FaceKey = std::array<uint32_t, 3>;
+
+FaceKey Key(uint32_t a, uint32_t b, uint32_t c) {
+  FaceKey k = {a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
+
+constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
+constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedra
+
+class Improver {
+ public:
+  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, double floor)
+      : m_(*mesh), floor_(floor) {
+    const size_t n = m_.nodes.size();
+    star_.resize(n);
+    q_.resize(m_.tets.size());
+    dead_.assign(m_.tets.size(), 0);
+    for (uint32_t t = 0; t < m_.tets.size(); ++t) {
+      for (uint32_t v : m_.tets[t]) star_[v].push_back(t);
+      q_[t] = Quality(m_.tets[t]);
+    }
+    // Which coordinates each vertex may change: none on a sheet; on the box, not the ones
+    // that put it on a box face.
+    mask_.assign(n, 7);
+    const Vec3 ext = hi - lo;
+    const double tol = 1e-9 * std::max({std::abs(ext.x), std::abs(ext.y), std::abs(ext.z)});
+    for (size_t v = 0; v < n; ++v) {
+      for (int k = 0; k < 3; ++k) {
+        const double x = m_.nodes[v][k];
+        if (std::abs(x - lo[k]) <= tol || std::abs(x - hi[k]) <= tol) mask_[v] &= ~(1 << k);
+      }
+    }
+    for (size_t f = 0; f < m_.faces.size(); ++f) {
+      const auto& face = m_.faces[f];
+      constrained_.insert(Key(face[0], face[1], face[2]));
+      if (m_.face_piece[f] >= 0) {
+        for (uint32_t v : face) mask_[v] = 0;
+      }
+    }
+  }
+
+  uint32_t movable() const {
+    return static_cast<uint32_t>(std::count_if(mask_.begin(), mask_.end(), [](uint8_t m) {
+      return m != 0;
+    }));
+  }
+
+  std::pair<double, double> MinMean() const {
+    double mn = 1e300, sum = 0;
+    size_t count = 0;
+    for (size_t t = 0; t < q_.size(); ++t) {
+      if (dead_[t]) continue;
+      mn = std::min(mn, q_[t]);
+      sum += q_[t];
+      ++count;
+    }
+    return {count ? mn : 0.0, count ? sum / count : 0.0};
+  }
+
+  // Tetrahedra below `target`, worst first.
+  std::vector<uint32_t> Bad(double target) const {
+    std::vector<uint32_t> bad;
+    for (uint32_t t = 0; t < q_.size(); ++t) {
+      if (!dead_[t] && q_[t] < target) bad.push_back(t);
+    }
+    std::sort(bad.begin(), bad.end(), [&](uint32_t a, uint32_t b) { return q_[a] < q_[b]; });
+    return bad;
+  }
+
+  bool alive(uint32_t t) const { return !dead_[t]; }
+  uint32_t num_nodes() const { return static_cast<uint32_t>(m_.nodes.size()); }
+  double quality(uint32_t t) const { return q_[t]; }
+  const Tet& tet(uint32_t t) const { return m_.tets[t]; }
+  bool may_move(uint32_t v) const { return mask_[v] != 0; }
+  double StarMin(uint32_t v) const {
+    double mn = 1e300;
+    for (uint32_t t : star_[v]) mn = std::min(mn, q_[t]);
+    return mn;
+  }
+
+  // Replaces the tetrahedra around the edge (u, v) by the best triangulation of the ring of
+  // their other vertices, each triangle joined to u and to v (Shewchuk's edge removal).
+  // With mean < 0 "best" raises the worst tetrahedron; otherwise it raises the sum of
+  // (quality - mean), i.e. the mesh's mean quality, without going below the old worst.
+  bool RemoveEdge(uint32_t u, uint32_t v, double mean = -1) {
+    std::array<uint32_t, kMaxRing> ids;
+    size_t m = 0;
+    for (uint32_t t : star_[u]) {
+      if (!Has(m_.tets[t], v)) continue;
+      if (m == kMaxRing) return false;
+      ids[m++] = t;
+    }
+    if (m < 3) return false;
+    // Each tetrahedron (u, v, x, y) gives the ring edge x -> y, directed so that the
+    // tetrahedron is positive; the edges of an interior edge's ring form one cycle.
+    std::array<std::pair<uint32_t, uint32_t>, kMaxRing> edges;
+    double current = 1e300;
+    for (size_t i = 0; i < m; ++i) {
+      const Tet& t = m_.tets[ids[i]];
+      uint32_t other[2], k = 0;
+      for (uint32_t w : t) {
+        if (w != u && w != v) other[k++] = w;
+      }
+      if (constrained_.contains(Key(u, v, other[0])) ||
+          constrained_.contains(Key(u, v, other[1]))) {
+        return false;
+      }
+      if (TetVolume(P(u), P(v), P(other[0]), P(other[1])) < 0) std::swap(other[0], other[1]);
+      edges[i] = {other[0], other[1]};
+      current = std::min(current, q_[ids[i]]);
+    }
+    std::array<uint32_t, kMaxRing> ring;
+    std::array<bool, kMaxRing> used{};
+    ring[0] = edges[0].first;
+    uint32_t at = edges[0].first;
+    for (size_t k = 0; k < m; ++k) {
+      size_t e = m;
+      for (size_t i = 0; i < m; ++i) {
+        if (!used[i] && edges[i].first == at) {
+          e = i;
+          break;
+        }
+      }
+      if (e == m) return false;  // an open ring: the edge is on the boundary
+      used[e] = true;
+      at = edges[e].second;
+      if (k + 1 < m) {
+        ring[k + 1] = at;
+      } else if (at != ring[0]) {
+        return false;
+      }
+    }
+    // Optimal triangulation of the ring polygon by dynamic programming over its chords.
+    const bool by_mean = mean >= 0;
+    double before = 0;
+    for (size_t i = 0; i < m; ++i) before += q_[ids[i]] - mean;
+    double best[kMaxRing][kMaxRing];
+    int split[kMaxRing][kMaxRing];
+    constexpr double kNone = -1e300;
+    for (size_t i = 0; i + 1 < m; ++i) best[i][i + 1] = by_mean ? 0 : 1e300;
+    for (size_t len = 2; len < m; ++len) {
+      for (size_t i = 0; i + len < m; ++i) {
+        const size_t j = i + len;
+        best[i][j] = kNone;
+        split[i][j] = -1;
+        for (size_t k = i + 1; k < j; ++k) {
+          if (best[i][k] == kNone || best[k][j] == kNone) continue;
+          if (!by_mean && std::min(best[i][k], best[k][j]) <= best[i][j]) continue;
+          // Triangle (ring i, k, j) is counter-clockwise seen from v.
+          const double qv = MinDihedralDegrees(P(ring[i]), P(ring[k]), P(ring[j]), P(v));
+          if (!(qv > (by_mean ? current : best[i][j]))) continue;
+          const double qu = MinDihedralDegrees(P(ring[k]), P(ring[i]), P(ring[j]), P(u));
+          if (!(qu > (by_mean ? current : best[i][j]))) continue;
+          const double val = by_mean ? best[i][k] + best[k][j] + (qv - mean) + (qu - mean)
+                                     : std::min({best[i][k], best[k][j], qv, qu});
+          if (val > best[i][j]) {
+            best[i][j] = val;
+            split[i][j] = static_cast<int>(k);
+          }
+        }
+      }
+    }
+    if (best[0][m - 1] == kNone) return false;
+    if (!(best[0][m - 1] > (by_mean ? before : current) + kGain)) return false;
+    for (size_t i = 0; i < m; ++i) Kill(ids[i]);
+    std::vector<std::pair<size_t, size_t>> todo = {{0, m - 1}};
+    while (!todo.empty()) {
+      const auto [i, j] = todo.back();
+      todo.pop_back();
+      if (j < i + 2) continue;
+      const size_t k = split[i][j];
+      Add({ring[i], ring[k], ring[j], v});
+      Add({ring[k], ring[i], ring[j], u});
+      todo.push_back({i, k});
+      todo.push_back({k, j});
+    }
+    return true;
+  }
+
+  // The 2-3 flip of the face of tetrahedron t opposite its vertex `f`; `mean` as for
+  // RemoveEdge.
+  bool RemoveFace(uint32_t t, int f, double mean = -1) {
+    const Tet tet = m_.tets[t];
+    const uint32_t d = tet[f];
+    uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
+    if (constrained_.contains(Key(a, b, c))) return false;
+    if (TetVolume(P(a), P(b), P(c), P(d)) < 0) std::swap(a, b);
+    uint32_t n = UINT32_MAX;
+    for (uint32_t s : star_[a]) {
+      if (s != t && Has(m_.tets[s], b) && Has(m_.tets[s], c)) {
+        n = s;
+        break;
+      }
+    }
+    if (n == UINT32_MAX) return false;  // a boundary face
+    uint32_t e = 0;
+    for (uint32_t w : m_.tets[n]) {
+      if (w != a && w != b && w != c) e = w;
+    }
+    const double current = std::min(q_[t], q_[n]);
+    const Tet nt[3] = {{a, b, e, d}, {b, c, e, d}, {c, a, e, d}};
+    double after = 0;
+    for (const Tet& x : nt) {
+      const double q = Quality(x);
+      if (!(q > current + (mean >= 0 ? 0 : kGain))) return false;
+      after += q - mean;
+    }
+    if (mean >= 0 && !(after > q_[t] + q_[n] - 2 * mean + kGain)) return false;
+    Kill(t);
+    Kill(n);
+    for (const Tet& x : nt) Add(x);
+    return true;
+  }
+
+  // Moves vertex v (within the coordinates it may change) to raise the smallest dihedral
+  // angle of its star, or, keeping that, the star's mean.
+  bool Smooth(uint32_t v) {
+    if (mask_[v] == 0) return false;
+    const std::vector<uint32_t>& star = star_[v];
+    const Vec3 start = m_.nodes[v];
+    double cur_min = 1e300, cur_sum = 0, length = 0;
+    std::vector<uint32_t> ring;
+    for (uint32_t t : star) {
+      cur_min = std::min(cur_min, q_[t]);
+      cur_sum += q_[t];
+      for (uint32_t w : m_.tets[t]) {
+        if (w != v) ring.push_back(w);
+      }
+    }
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    Vec3 centroid{0, 0, 0};
+    for (uint32_t w : ring) {
+      centroid += m_.nodes[w];
+      length += Norm(m_.nodes[w] - start);
+    }
+    centroid = centroid / static_cast<double>(ring.size());
+    length /= static_cast<double>(ring.size());
+    auto masked = [&](Vec3 d) {
+      for (int k = 0; k < 3; ++k) {
+        if (!(mask_[v] & (1 << k))) d[k] = 0;
+      }
+      return d;
+    };
+    // The star's worst and mean at p.
+    auto eval = [&](const Vec3& p, double* mn, double* sum) {
+      m_.nodes[v] = p;
+      *mn = 1e300;
+      *sum = 0;
+      for (uint32_t t : star) {
+        const double q = Quality(m_.tets[t]);
+        *mn = std::min(*mn, q);
+        *sum += q;
+        if (q < 0) break;
+      }
+      m_.nodes[v] = start;
+    };
+    Vec3 best = start;
+    bool moved = false;
+    {
+      const Vec3 p = start + masked(centroid - start);
+      double mn, sum;
+      eval(p, &mn, &sum);
+      if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
+        best = p;
+        cur_min = mn;
+        cur_sum = sum;
+        moved = true;
+      }
+    }
+    // The optimal-Delaunay position: the volume-weighted mean of the star's circumcentres.
+    {
+      Vec3 odt{0, 0, 0};
+      double weight = 0;
+      for (uint32_t t : star) {
+        const Tet& x = m_.tets[t];
+        const Vec3 a = P(x[0]), u = P(x[1]) - a, w = P(x[2]) - a, s = P(x[3]) - a;
+        const double det = 2 * Dot(u, Cross(w, s));
+        if (!(det > 0)) continue;
+        const Vec3 cc =
+            a + (Cross(w, s) * Norm2(u) + Cross(s, u) * Norm2(w) + Cross(u, w) * Norm2(s)) / det;
+        odt += cc * (det / 12);
+        weight += det / 12;
+      }
+      if (weight > 0) {
+        const Vec3 p = start + masked(odt / weight - start);
+        double mn, sum;
+        eval(p, &mn, &sum);
+        if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
+          best = p;
+          cur_min = mn;
+          cur_sum = sum;
+          moved = true;
+        }
+      }
+    }
+    // Ascent on the worst tetrahedra: the direction that raises the two worst together.
+    for (int iter = 0; iter < 8; ++iter) {
+      m_.nodes[v] = best;
+      uint32_t worst[2] = {UINT32_MAX, UINT32_MAX};
+      double wq[2] = {1e300, 1e300};
+      for (uint32_t t : star) {
+        const double q = Quality(m_.tets[t]);
+        if (q < wq[0]) {
+          worst[1] = worst[0];
+          wq[1] = wq[0];
+          worst[0] = t;
+          wq[0] = q;
+        } else if (q < wq[1]) {
+          worst[1] = t;
+          wq[1] = q;
+        }
+      }
+      const double h = 1e-5 * length;
+      Vec3 g[2];
+      for (int w = 0; w < 2; ++w) {
+        if (worst[w] == UINT32_MAX) continue;
+        for (int k = 0; k < 3; ++k) {
+          g[w][k] = 0;
+          if (!(mask_[v] & (1 << k))) continue;
+          Vec3 p = best;
+          p[k] += h;
+          m_.nodes[v] = p;
+          const double up = Quality(m_.tets[worst[w]]);
+          p[k] = best[k] - h;
+          m_.nodes[v] = p;
+          const double down = Quality(m_.tets[worst[w]]);
+          g[w][k] = (up - down) / (2 * h);
+        }
+      }
+      m_.nodes[v] = start;
+      Vec3 dir = g[0];
+      if (worst[1] != UINT32_MAX && wq[1] < wq[0] + 1.0) {
+        // The point of the segment between the two gradients nearest the origin.
+        const Vec3 diff = g[0] - g[1];
+        const double d2 = Norm2(diff);
+        const double s = d2 > 0 ? std::clamp(Dot(g[0], diff) / d2, 0.0, 1.0) : 0.0;
+        dir = g[0] - diff * s;
+      }
+      const double dn = Norm(dir);
+      if (!(dn > 0)) break;
+      dir = dir / dn;
+      bool stepped = false;
+      for (double step = 0.2 * length; step > 1e-3 * length; step *= 0.5) {
+        const Vec3 p = best + dir * step;
+        double mn, sum;
+        eval(p, &mn, &sum);
+        if (mn > cur_min + kGain) {
+          best = p;
+          cur_min = mn;
+          cur_sum = sum;
+          stepped = moved = true;
+          break;
+        }
+      }
+      if (!stepped) break;
+    }
+    // Then ascent on the star's mean, never lowering its worst.
+    for (int iter = 0; iter < 6; ++iter) {
+      const double h = 1e-5 * length;
+      Vec3 g{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        if (!(mask_[v] & (1 << k))) continue;
+        Vec3 p = best;
+        double mn, up, down;
+        p[k] += h;
+        eval(p, &mn, &up);
+        p[k] = best[k] - h;
+        eval(p, &mn, &down);
+        g[k] = (up - down) / (2 * h);
+      }
+      const double gn = Norm(g);
+      if (!(gn > 0)) break;
+      const Vec3 dir = g / gn;
+      bool stepped = false;
+      for (double step = 0.1 * length; step > 1e-3 * length; step *= 0.5) {
+        const Vec3 p = best + dir * step;
+        double mn, sum;
+        eval(p, &mn, &sum);
+        if (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain) {
+          best = p;
+          cur_min = mn;
+          cur_sum = sum;
+          stepped = moved = true;
+          break;
+        }
+      }
+      if (!stepped) break;
+    }
+    m_.nodes[v] = best;
+    if (moved) {
+      for (uint32_t t : star) q_[t] = Quality(m_.tets[t]);
+    }
+    return moved;
+  }
+
+  // Inserts a new vertex off the sliver t, on one side of its plane, into the cavity of
+  // the tetrahedra around it (those whose circumsphere holds the point, grown or shrunk
+  // until every face of the cavity's boundary sees the point, never across a facet), then
+  // smooths it. Kept only if the cavity's worst tetrahedron improves.
+  bool InsertNear(uint32_t t) {
+    const Tet tet = m_.tets[t];
+    // The new vertex goes inside the facets the sliver lies on (the sum of their inward
+    // normals), or, when it has none, to either side of its largest face.
+    Vec3 n{0, 0, 0}, largest{0, 0, 0};
+    bool on_facet = false;
+    for (int f = 0; f < 4; ++f) {
+      const auto face = InwardFace(t, f);
+      const Vec3 normal = Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]));
+      if (Norm2(normal) > Norm2(largest)) largest = normal;
+      if (constrained_.contains(Key(face[0], face[1], face[2])) && Norm2(normal) > 0) {
+        n += Normalized(normal);
+        on_facet = true;
+      }
+    }
+    if (!on_facet) n = largest;
+    if (!(Norm2(n) > 0)) return false;
+    n = Normalized(n);
+    double length = 0;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) length += Norm(P(tet[i]) - P(tet[j]));
+    length /= 6;
+    const Vec3 centre = (P(tet[0]) + P(tet[1]) + P(tet[2]) + P(tet[3])) / 4.0;
+    struct Candidate {
+      Vec3 p;
+      std::vector<uint32_t> cavity;
+      std::vector<Tet> fill;
+      double quality = -1e300;
+    };
+    Candidate best;
+    for (double side : {1.0, -1.0}) {
+      if (on_facet && side < 0) break;
+      for (double h : {0.7, 0.45, 0.25}) {
+        Candidate c;
+        c.p = centre + n * (side * h * length);
+        if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;
+        c.quality = 1e300;
+        for (const Tet& x : c.fill) {
+          c.quality = std::min(
+              c.quality, MinDihedralDegrees(P(x[0]), P(x[1]), P(x[2]), c.p));
+        }
+        if (c.quality > best.quality) best = std::move(c);
+      }
+    }
+    if (best.cavity.empty()) return false;
+    double current = 1e300;
+    for (uint32_t x : best.cavity) current = std::min(current, q_[x]);
+    if (!(best.quality > current + kGain)) return false;
+    const uint32_t v = static_cast<uint32_t>(m_.nodes.size());
+    m_.nodes.push_back(best.p);
+    star_.emplace_back();
+    mask_.push_back(7);
+    for (uint32_t x : best.cavity) Kill(x);
+    for (Tet x : best.fill) {
+      x[3] = v;
+      Add(x);
+    }
+    Smooth(v);
+    return true;
+  }
+
+  // Writes the live tetrahedra back into the mesh.
+  void Finish() {
+    size_t out = 0;
+    for (size_t t = 0; t < m_.tets.size(); ++t) {
+      if (!dead_[t]) m_.tets[out++] = m_.tets[t];
+    }
+    m_.tets.resize(out);
+  }
+
+ private:
+  const Vec3& P(uint32_t v) const { return m_.nodes[v]; }
+
+  // The tetrahedron sharing face `f` (the face opposite tet[f]) of t, or UINT32_MAX on the
+  // boundary.
+  uint32_t Neighbor(uint32_t t, int f) const {
+    const Tet& tet = m_.tets[t];
+    const uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
+    for (uint32_t s : star_[a]) {
+      if (s != t && Has(m_.tets[s], b) && Has(m_.tets[s], c)) return s;
+    }
+    return UINT32_MAX;
+  }
+
+  // Face f of t oriented so that the tetrahedron's inside is on its positive side.
+  std::array<uint32_t, 3> InwardFace(uint32_t t, int f) const {
+    const Tet& tet = m_.tets[t];
+    std::array<uint32_t, 3> face = {tet[(f + 1) % 4], tet[(f + 2) % 4], tet[(f + 3) % 4]};
+    if (TetVolume(P(face[0]), P(face[1]), P(face[2]), P(tet[f])) < 0) std::swap(face[0], face[1]);
+    return face;
+  }
+
+  // Whether face f of cavity tetrahedron x bounds the cavity: its neighbour is outside, or
+  // it is a facet's face (the cavity can reach both sides of a sheet around its rim; such
+  // a face must stay, so it bounds the cavity on both sides and one side then fails to see
+  // the new vertex).
+  bool OnCavityBoundary(const absl::flat_hash_set<uint32_t>& in, uint32_t x, int f) const {
+    const uint32_t y = Neighbor(x, f);
+    if (y == UINT32_MAX || !in.contains(y)) return true;
+    const Tet& t = m_.tets[x];
+    return constrained_.contains(Key(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
+  }
+
+  bool InCircumsphere(const Tet& t, const Vec3& p) const {
+    const Vec3 a = P(t[0]), u = P(t[1]) - a, w = P(t[2]) - a, s = P(t[3]) - a;
+    const double det = 2 * Dot(u, Cross(w, s));
+    if (!(std::abs(det) > 0)) return false;
+    const Vec3 cc =
+        (Cross(w, s) * Norm2(u) + Cross(s, u) * Norm2(w) + Cross(u, w) * Norm2(s)) / det;
+    return Norm2(p - a - cc) < Norm2(cc);
+  }
+
+  // The cavity of point p for the insertion near sliver t, and the tetrahedra that fill it
+  // (each boundary face with slot 3 left for the new vertex). False when p is not inside
+  // the domain on this side of the facets, or no valid cavity holds t.
+  bool Cavity(uint32_t t, const Vec3& p, std::vector<uint32_t>* cavity, std::vector<Tet>* fill) {
+    constexpr int kMaxWalk = 64;
+    constexpr size_t kMaxCavity = 128;
+    // Walk from t to the tetrahedron holding p.
+    uint32_t at = t;
+    for (int step = 0;; ++step) {
+      if (step == kMaxWalk) return false;
+      // Leave through the face p is farthest behind, but never through a facet.
+      int exit = -1;
+      bool behind_facet = false;
+      double most = 0;
+      for (int f = 0; f < 4; ++f) {
+        const auto face = InwardFace(at, f);
+        const double side = TetVolume(P(face[0]), P(face[1]), P(face[2]), p);
+        if (side >= 0) continue;
+        if (constrained_.contains(Key(face[0], face[1], face[2]))) {
+          behind_facet = true;
+        } else if (side < most) {
+          most = side;
+          exit = f;
+        }
+      }
+      if (exit < 0) {
+        if (behind_facet) return false;
+        break;
+      }
+      at = Neighbor(at, exit);
+      if (at == UINT32_MAX) return false;
+    }
+    absl::flat_hash_set<uint32_t> in = {at, t};
+    std::vector<uint32_t> queue = {at, t};
+    while (!queue.empty() && in.size() < kMaxCavity) {
+      const uint32_t x = queue.back();
+      queue.pop_back();
+      for (int f = 0; f < 4; ++f) {
+        const auto face = InwardFace(x, f);
+        if (constrained_.contains(Key(face[0], face[1], face[2]))) continue;
+        const uint32_t y = Neighbor(x, f);
+        if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(m_.tets[y], p)) continue;
+        in.insert(y);
+        queue.push_back(y);
+      }
+    }
+    // Make every boundary face see p, growing across it where allowed, else dropping its
+    // owner; then drop tetrahedra until no vertex is inside the cavity (it would be lost).
+    // A dropped tetrahedron never comes back, so this ends.
+    absl::flat_hash_set<uint32_t> dropped;
+    auto drop = [&](uint32_t x) {
+      if (x == t || x == at) return false;
+      in.erase(x);
+      dropped.insert(x);
+      return true;
+    };
+    for (int round = 0;; ++round) {
+      if (round == 64 || in.size() > kMaxCavity) return false;
+      std::vector<std::pair<uint32_t, int>> hidden;
+      for (uint32_t x : in) {
+        for (int f = 0; f < 4; ++f) {
+          if (!OnCavityBoundary(in, x, f)) continue;
+          const auto face = InwardFace(x, f);
+          if (!(TetVolume(P(face[0]), P(face[1]), P(face[2]), p) > 0)) hidden.push_back({x, f});
+        }
+      }
+      for (const auto& [x, f] : hidden) {
+        if (!in.contains(x)) continue;
+        const auto face = InwardFace(x, f);
+        const uint32_t y = Neighbor(x, f);
+        if (y != UINT32_MAX && !dropped.contains(y) &&
+            !constrained_.contains(Key(face[0], face[1], face[2]))) {
+          in.insert(y);
+        } else if (!drop(x)) {
+          return false;
+        }
+      }
+      if (!hidden.empty()) continue;
+      bool inside = false;
+      for (uint32_t x : std::vector<uint32_t>(in.begin(), in.end())) {
+        for (uint32_t w : m_.tets[x]) {
+          if (!in.contains(x)) break;
+          const bool all_in = std::all_of(star_[w].begin(), star_[w].end(),
+                                          [&](uint32_t s) { return in.contains(s); });
+          if (!all_in) continue;
+          inside = true;
+          bool any = false;
+          for (uint32_t s : star_[w]) {
+            if (drop(s)) {
+              any = true;
+              break;
+            }
+          }
+          if (!any) return false;
+        }
+      }
+      if (!inside) break;
+    }
+    // Fill: p joined to every boundary face; every vertex of the cavity must stay on it.
+    cavity->assign(in.begin(), in.end());
+    fill->clear();
+    absl::flat_hash_set<uint32_t> on_boundary, all;
+    for (uint32_t x : *cavity) {
+      for (int f = 0; f < 4; ++f) {
+        all.insert(m_.tets[x][f]);
+        if (!OnCavityBoundary(in, x, f)) continue;
+        const auto face = InwardFace(x, f);
+        // Inward face (f0, f1, f2) with p on its positive side: (f0, f1, f2, p) is positive.
+        fill->push_back({face[0], face[1], face[2], UINT32_MAX});
+        on_boundary.insert(face.begin(), face.end());
+      }
+    }
+    return all.size() == on_boundary.size();
+  }
+  double Quality(const Tet& t) const { return MinDihedralDegrees(P(t[0]), P(t[1]), P(t[2]), P(t[3])); }
+
+  void Kill(uint32_t t) {
+    dead_[t] = 1;
+    for (uint32_t v : m_.tets[t]) {
+      auto& s = star_[v];
+      auto it = std::find(s.begin(), s.end(), t);
+      *it = s.back();
+      s.pop_back();
+    }
+    free_.push_back(t);
+  }
+
+  void Add(const Tet& tet) {
+    uint32_t t;
+    if (!free_.empty()) {
+      t = free_.back();
+      free_.pop_back();
+      m_.tets[t] = tet;
+      dead_[t] = 0;
+      q_[t] = Quality(tet);
+    } else {
+      t = static_cast<uint32_t>(m_.tets.size());
+      m_.tets.push_back(tet);
+      dead_.push_back(0);
+      q_.push_back(Quality(tet));
+    }
+    for (uint32_t v : tet) star_[v].push_back(t);
+  }
+
+  TetMesh& m_;
+  std::vector<std::vector<uint32_t>> star_;  // vertex -> live tetrahedra
+  std::vector<double> q_;                    // per tetrahedron: smallest dihedral angle
+  std::vector<uint8_t> dead_;
+  std::vector<uint32_t> free_;  // dead slots to reuse
+  std::vector<uint8_t> mask_;   // per vertex: bit k set = coordinate k may change
+  absl::flat_hash_set<FaceKey> constrained_;
+  const double floor_;  // smoothing for the mean keeps every star above min(worst, floor_)
+};
+
+}  // namespace
+
+absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_hi,
+                            const TetImproveOptions& options, TetImproveReport* report,
+                            const Progress& progress) {
+  const absl::Time start = absl::Now();
+  *report = {};
+  Improver im(mesh, box_lo, box_hi, options.smoothing_floor_degrees);
+  report->movable_vertices = im.movable();
+  std::tie(report->min_dihedral_before, report->mean_dihedral_before) = im.MinMean();
+  absl::Status status;
+  for (int pass = 0; pass < options.passes && status.ok(); ++pass) {
+    uint64_t changes = 0;
+    const std::vector<uint32_t> bad = im.Bad(options.target_degrees);
+    for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
+      status = progress.Tick(i, bad.size(), 4096);
+      const uint32_t t = bad[i];
+      if (!im.alive(t) || im.quality(t) >= options.target_degrees) continue;
+      const Tet tet = im.tet(t);
+      bool done = false;
+      for (int a = 0; a < 4 && !done; ++a)
+        for (int b = a + 1; b < 4 && !done; ++b) done = im.RemoveEdge(tet[a], tet[b]);
+      if (done) {
+        ++report->edge_removals;
+        ++changes;
+        continue;
+      }
+      for (int f = 0; f < 4 && !done; ++f) done = im.RemoveFace(t, f);
+      if (done) {
+        ++report->face_removals;
+        ++changes;
+        continue;
+      }
+      if (im.quality(t) < options.insert_below_degrees && im.InsertNear(t)) {
+        ++report->inserted_vertices;
+        ++changes;
+      }
+    }
+    // Then flips that raise the mean.
+    const double mean = im.MinMean().second;
+    for (uint32_t t : im.Bad(options.target_degrees)) {
+      if (!im.alive(t)) continue;
+      const Tet tet = im.tet(t);
+      bool done = false;
+      for (int a = 0; a < 4 && !done; ++a)
+        for (int b = a + 1; b < 4 && !done; ++b) done = im.RemoveEdge(tet[a], tet[b], mean);
+      if (done) {
+        ++report->edge_removals;
+        ++changes;
+        continue;
+      }
+      for (int f = 0; f < 4 && !done; ++f) done = im.RemoveFace(t, f, mean);
+      if (done) {
+        ++report->face_removals;
+        ++changes;
+      }
+    }
+    for (uint32_t v = 0; v < im.num_nodes() && status.ok(); ++v) {
+      if (!im.may_move(v) || im.StarMin(v) >= options.target_degrees) continue;
+      if (im.Smooth(v)) {
+        ++report->smoothing_moves;
+        ++changes;
+      }
+    }
+    report->passes = pass + 1;
+    if (status.ok()) status = progress.Update(static_cast<double>(pass + 1) / options.passes);
+    if (changes == 0) break;
+  }
+  std::tie(report->min_dihedral_after, report->mean_dihedral_after) = im.MinMean();
+  im.Finish();
+  report->seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  return status;
+}
+
+}  // namespace sheetmesh

@@ -26,6 +26,8 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
       "surface": {"r": 9, "seed": 5, "method": "paper", "lloyd_tol": 0.01},
       "radius_search": {"goal": "target", "target_similarity": 0.6},
       "similarity": {"model": "vertex", "grid_rates": [2]},
+      "volume_mesh": {"improve_passes": 2, "improve_target_degrees": 45,
+                      "improve_insert_below_degrees": 12, "improve_floor_degrees": 25},
       "output": {"formats": ["ply"], "model": false}})",
                                   "c.json", &o),
               IsOk());
@@ -51,6 +53,10 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
   EXPECT_TRUE(o.output.ply);
   EXPECT_FALSE(o.output.vtp);
   EXPECT_FALSE(o.output.model);
+  EXPECT_EQ(o.volume.improve.passes, 2);
+  EXPECT_EQ(o.volume.improve.target_degrees, 45);
+  EXPECT_EQ(o.volume.improve.insert_below_degrees, 12);
+  EXPECT_EQ(o.volume.improve.smoothing_floor_degrees, 25);
 }
 
 TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
@@ -67,6 +73,11 @@ TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"input": {"window": [5, 1]}})", "'input.window'"},
       {R"({"M": -3})", "'M' = -3"},
       {R"({"extract": true, "detect": {"R": 0}})", "detect.R = 0"},
+      {R"({"volume_mesh": {"improve_passes": -1}})", "volume_mesh.improve_passes = -1"},
+      {R"({"volume_mesh": {"improve_target_degrees": 80}})", "improve_target_degrees = 80"},
+      {R"({"volume_mesh": {"improve_insert_below_degrees": 60}})",
+       "improve_insert_below_degrees = 60"},
+      {R"({"volume_mesh": {"improve_floor_degrees": -2}})", "improve_floor_degrees = -2"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

@@ -1,0 +1,173 @@
+#include "worker/pipeline/tet/tet_improve.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "tests/testing/status_matchers.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+double Worst(const TetMesh& m) {
+  double w = 1e300;
+  for (const Tet& t : m.tets) {
+    w = std::min(w, MinDihedralDegrees(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]));
+  }
+  return w;
+}
+
+double Volume(const TetMesh& m) {
+  double v = 0;
+  for (const Tet& t : m.tets) v += TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]);
+  return v;
+}
+
+TEST(TetImproveTest, MinDihedralOfARegularTetrahedronAndOfAnInvertedOne) {
+  const Vec3 a{1, 1, 1}, b{1, -1, -1}, c{-1, 1, -1}, d{-1, -1, 1};
+  const double q = MinDihedralDegrees(a, b, c, d) > 0 ? MinDihedralDegrees(a, b, c, d)
+                                                      : MinDihedralDegrees(b, a, c, d);
+  EXPECT_NEAR(q, std::acos(1.0 / 3) * 180 / M_PI, 1e-9);
+  // The same tetrahedron with two vertices swapped is inverted.
+  EXPECT_LT(std::min(MinDihedralDegrees(a, b, c, d), MinDihedralDegrees(b, a, c, d)), 0);
+  EXPECT_LT(MinDihedralDegrees(a, b, c, (a + b + c) / 3.0), 0) << "flat";
+}
+
+// A bipyramid: the ring a, b, c around the edge u-v. Three tetrahedra around u-v, or two
+// sharing the face a-b-c; the hull's faces are facet faces, so no vertex may move.
+TetMesh Bipyramid() {
+  TetMesh m;
+  m.nodes = {{1, 0, 0}, {-0.5, std::sqrt(0.75), 0}, {-0.5, -std::sqrt(0.75), 0}, {0, 0, -0.6},
+             {0, 0, 0.6}};
+  const uint32_t a = 0, b = 1, c = 2, u = 3, v = 4;
+  m.tets = {{u, v, a, b}, {u, v, b, c}, {u, v, c, a}};
+  m.faces = {{a, b, u}, {b, c, u}, {c, a, u}, {a, b, v}, {b, c, v}, {c, a, v}};
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    m.face_marker.push_back(kFirstSheetMarker + static_cast<int32_t>(f));
+    m.face_piece.push_back(0);
+    m.face_thickness.push_back(1);
+  }
+  return m;
+}
+
+TEST(TetImproveTest, ThreeTetrahedraAroundAnEdgeBecomeTheBetterTwo) {
+  TetMesh m = Bipyramid();
+  for (const Tet& t : m.tets) {
+    ASSERT_GT(TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]), 0);
+  }
+  const double volume = Volume(m), three = Worst(m);
+  TetMesh two = m;
+  two.tets = {{0, 1, 2, 4}, {1, 0, 2, 3}};
+  ASSERT_GT(Worst(two), three + 1) << "the two-tetrahedron configuration is the better one";
+  TetImproveReport report;
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, {}, &report).ok());
+  EXPECT_EQ(m.tets.size(), 2u);
+  EXPECT_EQ(report.edge_removals, 1u);
+  EXPECT_EQ(report.movable_vertices, 0u);
+  EXPECT_NEAR(Volume(m), volume, 1e-12);
+  EXPECT_NEAR(Worst(m), Worst(two), 1e-9);
+  EXPECT_NEAR(report.min_dihedral_before, three, 1e-9);
+  EXPECT_NEAR(report.min_dihedral_after, Worst(two), 1e-9);
+  for (const Tet& t : m.tets) {
+    const std::set<uint32_t> s(t.begin(), t.end());
+    EXPECT_TRUE(s.count(0) && s.count(1) && s.count(2)) << "both share the face a-b-c";
+  }
+}
+
+TEST(TetImproveTest, AnEdgeOnAFacetFaceIsNeverRemoved) {
+  TetMesh m = Bipyramid();
+  // The triangle u-v-a now lies on a facet: the edge u-v must stay.
+  m.faces.push_back({3, 4, 0});
+  m.face_marker.push_back(kFirstSheetMarker + 6);
+  m.face_piece.push_back(1);
+  m.face_thickness.push_back(1);
+  TetImproveReport report;
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, {}, &report).ok());
+  EXPECT_EQ(m.tets.size(), 3u);
+  EXPECT_EQ(report.edge_removals, 0u);
+}
+
+// A square sheet of n x n quads at height z over [a, b] in x and y, voxel coordinates, its
+// vertices lifted by `wave` alternately (nearly coplanar: the source of slivers).
+TriangleMesh WavySquare(double a, double b, double z, int n, double wave) {
+  TriangleMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.vertices.push_back({a + (b - a) * i / n, a + (b - a) * j / n, z + ((i + j) % 2 ? wave : 0)});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t v = j * (n + 1) + i;
+      m.faces.push_back({v, v + 1, v + n + 2});
+      m.faces.push_back({v, v + n + 2, v + n + 1});
+    }
+  m.face_piece.assign(m.faces.size(), 0);
+  m.face_thickness.assign(m.faces.size(), 2);
+  return m;
+}
+
+TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
+  const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
+  const Dims dims{20, 20, 20};
+  VolumeMeshOptions off;
+  off.improve.passes = 0;
+  off.tetgen.max_volume = 4;
+  VolumeMeshOptions on = off;
+  on.improve = {};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult before, BuildVolumeMesh(sheet, dims, {}, off));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult after, BuildVolumeMesh(sheet, dims, {}, on));
+  const TetImproveReport& r = after.improvement;
+  EXPECT_EQ(before.improvement.passes, 0);
+  // The report's before is TetGen's mesh; its after is what was measured.
+  EXPECT_NEAR(r.min_dihedral_before, before.quality.min_dihedral.min, 1e-9);
+  EXPECT_NEAR(r.mean_dihedral_before, before.quality.min_dihedral.mean, 1e-9);
+  EXPECT_NEAR(r.min_dihedral_after, after.quality.min_dihedral.min, 1e-9);
+  EXPECT_NEAR(r.mean_dihedral_after, after.quality.min_dihedral.mean, 1e-6);
+  EXPECT_GT(r.edge_removals + r.face_removals, 0u);
+  EXPECT_GT(r.smoothing_moves, 0u);
+  // Better: the worst and the mean rise.
+  EXPECT_GT(after.quality.min_dihedral.min, before.quality.min_dihedral.min + 1);
+  EXPECT_GT(after.quality.min_dihedral.mean, before.quality.min_dihedral.mean + 3);
+  EXPECT_GT(after.quality.radius_aspect.mean, before.quality.radius_aspect.mean);
+  // Valid and conforming (BuildVolumeMesh checks these too).
+  EXPECT_EQ(after.quality.inverted, 0u);
+  EXPECT_NEAR(after.quality.volume, after.box_volume, 1e-9 * after.box_volume);
+  EXPECT_EQ(after.conformity.conforming, after.conformity.sheet_triangles);
+  EXPECT_EQ(after.conformity.orphan_faces, 0u);
+  // TetGen's nodes come first in both; no sheet node moved and box nodes stayed on the
+  // faces they were on.
+  ASSERT_GE(after.mesh.nodes.size(), before.mesh.nodes.size());
+  EXPECT_EQ(after.mesh.nodes.size() - before.mesh.nodes.size(), r.inserted_vertices);
+  for (size_t f = 0; f < after.mesh.faces.size(); ++f) {
+    for (uint32_t v : after.mesh.faces[f]) {
+      ASSERT_LT(v, before.mesh.nodes.size());
+      const Vec3 &p = after.mesh.nodes[v], &q = before.mesh.nodes[v];
+      if (after.mesh.face_piece[f] >= 0) {
+        EXPECT_EQ(p, q) << "sheet node " << v;
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          if (q[k] == 0 || q[k] == 20) EXPECT_EQ(p[k], q[k]) << "box node " << v;
+        }
+      }
+    }
+  }
+}
+
+TEST(TetImproveTest, ZeroPassesLeavesTheMeshAsItIs) {
+  TetMesh m = Bipyramid();
+  const TetMesh copy = m;
+  TetImproveOptions o;
+  o.passes = 0;
+  TetImproveReport report;
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, o, &report).ok());
+  EXPECT_EQ(m.tets, copy.tets);
+  EXPECT_EQ(report.passes, 0);
+  EXPECT_EQ(report.min_dihedral_after, report.min_dihedral_before);
+}
+
+}  // namespace
+}  // namespace sheetmesh

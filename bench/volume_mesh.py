@@ -151,7 +151,14 @@ def main():
     for name, raw, dims, value in fidelity.volumes(cli, out_root):
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
-        rep, wall = ours(cli, raw, value, args.r, vdir)
+        try:
+            rep, wall = ours(cli, raw, value, args.r, vdir)
+        except subprocess.CalledProcessError as e:
+            line = "| %s | %d | volume stage failed: %s |" % (name, dims[0] * dims[1] * dims[2],
+                                                           (e.stderr or "").strip().splitlines()[-1])
+            print(line, flush=True)
+            lines.append(line)
+            continue
         vm, q = rep["volume_mesh"], rep["volume_mesh"]["quality"]
         sim = rep["similarity"]["similarity"]
         tri = rep["surface"]["triangles"]

@@ -145,6 +145,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   j["flipped_edges"] = r.flipped_edges;
   j["dropped_caps"] = r.dropped_caps;
   j["tetgen_seconds"] = r.tetgen_seconds;
+  j["rederived_facets"] = r.rederived_facets;
   for (const auto& [name, value] : r.improvement.Fields()) j["improvement"][name] = value;
   files.push_back("volume_report.json");
   j["files"] = files;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -59,6 +60,81 @@ Conformity CheckConformity(const Plc& plc, const TetMesh& mesh) {
   return c;
 }
 
+using FaceKey = std::array<uint32_t, 3>;
+
+FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c) {
+  FaceKey k = {a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+// TetGen 1.5 at times lists triangles for a sheet facet that are not faces of its
+// tetrahedra (seen on the NETL fracture, all on one sheet triangle) while the tetrahedra
+// do cover the facet. Then the sheet faces are taken again from the tetrahedra. Returns how
+// many sheet facets had faces that are no tetrahedron's (0: the list is kept as TetGen wrote
+// it); the conformity check then verifies the result.
+uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
+  absl::flat_hash_set<FaceKey> tet_faces;
+  for (const Tet& t : mesh->tets) {
+    for (int f = 0; f < 4; ++f) tet_faces.insert(SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
+  }
+  absl::flat_hash_set<int32_t> broken;
+  for (size_t f = 0; f < mesh->faces.size(); ++f) {
+    const auto& face = mesh->faces[f];
+    if (mesh->face_marker[f] >= kFirstSheetMarker &&
+        !tet_faces.contains(SortedFace(face[0], face[1], face[2]))) {
+      broken.insert(mesh->face_marker[f]);
+    }
+  }
+  if (broken.empty()) return 0;
+  // Every sheet face is derived again: a tetrahedron face whose corners all lie on listed
+  // sheet faces belongs to the sheet triangle (among those its corners are listed with)
+  // that it lies on. Box faces stay as listed.
+  absl::flat_hash_map<uint32_t, std::vector<int32_t>> markers;  // vertex -> sheet markers
+  TetMesh kept = *mesh;
+  kept.faces.clear();
+  kept.face_marker.clear();
+  kept.face_piece.clear();
+  kept.face_thickness.clear();
+  for (size_t f = 0; f < mesh->faces.size(); ++f) {
+    const int32_t marker = mesh->face_marker[f];
+    if (marker >= kFirstSheetMarker) {
+      for (uint32_t v : mesh->faces[f]) markers[v].push_back(marker);
+      continue;
+    }
+    kept.faces.push_back(mesh->faces[f]);
+    kept.face_marker.push_back(marker);
+    kept.face_piece.push_back(mesh->face_piece[f]);
+    kept.face_thickness.push_back(mesh->face_thickness[f]);
+  }
+  for (const FaceKey& k : tet_faces) {
+    if (!markers.contains(k[0]) || !markers.contains(k[1]) || !markers.contains(k[2])) continue;
+    std::vector<int32_t> candidates;
+    for (uint32_t v : k) {
+      const auto& m = markers.at(v);
+      candidates.insert(candidates.end(), m.begin(), m.end());
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    for (int32_t marker : candidates) {
+      const size_t t = marker - kFirstSheetMarker;
+      const Face& s = plc.sheet_triangles[t];
+      const Triangle tri = {plc.vertices[s[0]], plc.vertices[s[1]], plc.vertices[s[2]]};
+      const double tol = 1e-6 * (std::sqrt(Area(tri)) + 1e-300);
+      bool on = true;
+      for (uint32_t v : k) on = on && PointTriangleDistance2(mesh->nodes[v], tri) <= tol * tol;
+      if (!on) continue;
+      kept.faces.push_back(k);
+      kept.face_marker.push_back(marker);
+      kept.face_piece.push_back(plc.sheet_piece[t]);
+      kept.face_thickness.push_back(plc.sheet_thickness[t]);
+      break;
+    }
+  }
+  *mesh = std::move(kept);
+  return static_cast<uint32_t>(broken.size());
+}
+
 }  // namespace
 
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
@@ -78,6 +154,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
   r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  r.rederived_facets = RederiveFacetFaces(plc, &r.mesh);
   SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi, options.improve,
                                     &r.improvement, progress.Sub(0.9, 0.98)));
   r.conformity = CheckConformity(plc, r.mesh);

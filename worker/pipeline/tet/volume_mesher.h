@@ -43,6 +43,8 @@ struct VolumeMeshResult {
   uint32_t dropped_caps = 0;   // flat rim triangles dropped
   double box_volume = 0;       // physical units^3
   double tetgen_seconds = 0;
+  uint32_t rederived_facets = 0;  // sheet facets whose faces TetGen listed wrongly (taken
+                                  // again from the tetrahedra)
   TetImproveReport improvement;
 };
 

@@ -61,8 +61,7 @@ constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedr
 
 class Improver {
  public:
-  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, double floor)
-      : m_(*mesh), floor_(floor) {
+  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, double floor) : m_(*mesh), floor_(floor) {
     const size_t n = m_.nodes.size();
     star_.resize(n);
     q_.resize(m_.tets.size());
@@ -92,9 +91,8 @@ class Improver {
   }
 
   uint32_t movable() const {
-    return static_cast<uint32_t>(std::count_if(mask_.begin(), mask_.end(), [](uint8_t m) {
-      return m != 0;
-    }));
+    return static_cast<uint32_t>(
+        std::count_if(mask_.begin(), mask_.end(), [](uint8_t m) { return m != 0; }));
   }
 
   std::pair<double, double> MinMean() const {
@@ -488,8 +486,7 @@ class Improver {
         if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;
         c.quality = 1e300;
         for (const Tet& x : c.fill) {
-          c.quality = std::min(
-              c.quality, MinDihedralDegrees(P(x[0]), P(x[1]), P(x[2]), c.p));
+          c.quality = std::min(c.quality, MinDihedralDegrees(P(x[0]), P(x[1]), P(x[2]), c.p));
         }
         if (c.quality > best.quality) best = std::move(c);
       }
@@ -676,7 +673,9 @@ class Improver {
     }
     return all.size() == on_boundary.size();
   }
-  double Quality(const Tet& t) const { return MinDihedralDegrees(P(t[0]), P(t[1]), P(t[2]), P(t[3])); }
+  double Quality(const Tet& t) const {
+    return MinDihedralDegrees(P(t[0]), P(t[1]), P(t[2]), P(t[3]));
+  }
 
   void Kill(uint32_t t) {
     dead_[t] = 1;

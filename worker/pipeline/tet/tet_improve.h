@@ -42,12 +42,12 @@ struct TetImproveOptions {
 };
 
 struct TetImproveReport {
-  int passes = 0;                 // rounds run (stops early when a round changes nothing)
-  uint64_t edge_removals = 0;     // edges removed (3-2, 4-4, 5-6, ... flips)
-  uint64_t face_removals = 0;     // 2-3 flips
-  uint64_t smoothing_moves = 0;   // vertex moves accepted
+  int passes = 0;                  // rounds run (stops early when a round changes nothing)
+  uint64_t edge_removals = 0;      // edges removed (3-2, 4-4, 5-6, ... flips)
+  uint64_t face_removals = 0;      // 2-3 flips
+  uint64_t smoothing_moves = 0;    // vertex moves accepted
   uint64_t inserted_vertices = 0;  // new vertices off slivers
-  uint32_t movable_vertices = 0;  // vertices on no sheet face and not a box corner
+  uint32_t movable_vertices = 0;   // vertices on no sheet face and not a box corner
   double min_dihedral_before = 0, mean_dihedral_before = 0;  // degrees
   double min_dihedral_after = 0, mean_dihedral_after = 0;
   double seconds = 0;

@@ -76,7 +76,8 @@ FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c) {
 uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
   absl::flat_hash_set<FaceKey> tet_faces;
   for (const Tet& t : mesh->tets) {
-    for (int f = 0; f < 4; ++f) tet_faces.insert(SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
+    for (int f = 0; f < 4; ++f)
+      tet_faces.insert(SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
   }
   absl::flat_hash_set<int32_t> broken;
   for (size_t f = 0; f < mesh->faces.size(); ++f) {
@@ -159,9 +160,9 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
                                     &r.improvement, progress.Sub(0.9, 0.98)));
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.orphan_faces > 0) {
-    return absl::InternalError(absl::StrCat("the volume mesh does not conform: ",
-                                            r.conformity.orphan_faces,
-                                            " facet faces are faces of no tetrahedron"));
+    return absl::InternalError(
+        absl::StrCat("the volume mesh does not conform: ", r.conformity.orphan_faces,
+                     " facet faces are faces of no tetrahedron"));
   }
   if (r.conformity.conforming != r.conformity.sheet_triangles) {
     return absl::InternalError(absl::StrCat(

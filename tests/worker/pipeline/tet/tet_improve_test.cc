@@ -23,7 +23,8 @@ double Worst(const TetMesh& m) {
 
 double Volume(const TetMesh& m) {
   double v = 0;
-  for (const Tet& t : m.tets) v += TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]);
+  for (const Tet& t : m.tets)
+    v += TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]);
   return v;
 }
 
@@ -41,7 +42,10 @@ TEST(TetImproveTest, MinDihedralOfARegularTetrahedronAndOfAnInvertedOne) {
 // sharing the face a-b-c; the hull's faces are facet faces, so no vertex may move.
 TetMesh Bipyramid() {
   TetMesh m;
-  m.nodes = {{1, 0, 0}, {-0.5, std::sqrt(0.75), 0}, {-0.5, -std::sqrt(0.75), 0}, {0, 0, -0.6},
+  m.nodes = {{1, 0, 0},
+             {-0.5, std::sqrt(0.75), 0},
+             {-0.5, -std::sqrt(0.75), 0},
+             {0, 0, -0.6},
              {0, 0, 0.6}};
   const uint32_t a = 0, b = 1, c = 2, u = 3, v = 4;
   m.tets = {{u, v, a, b}, {u, v, b, c}, {u, v, c, a}};
@@ -97,7 +101,8 @@ TriangleMesh WavySquare(double a, double b, double z, int n, double wave) {
   TriangleMesh m;
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
-      m.vertices.push_back({a + (b - a) * i / n, a + (b - a) * j / n, z + ((i + j) % 2 ? wave : 0)});
+      m.vertices.push_back(
+          {a + (b - a) * i / n, a + (b - a) * j / n, z + ((i + j) % 2 ? wave : 0)});
     }
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {

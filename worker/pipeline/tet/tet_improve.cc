@@ -46,14 +46,6 @@ std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
 
 namespace {
 
-using FaceKey = std::array<uint32_t, 3>;
-
-FaceKey Key(uint32_t a, uint32_t b, uint32_t c) {
-  FaceKey k = {a, b, c};
-  std::sort(k.begin(), k.end());
-  return k;
-}
-
 bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
 
 constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
@@ -83,7 +75,7 @@ class Improver {
     }
     for (size_t f = 0; f < m_.faces.size(); ++f) {
       const auto& face = m_.faces[f];
-      constrained_.insert(Key(face[0], face[1], face[2]));
+      constrained_.insert(SortedFace(face[0], face[1], face[2]));
       if (m_.face_piece[f] >= 0) {
         for (uint32_t v : face) mask_[v] = 0;
       }
@@ -151,8 +143,8 @@ class Improver {
       for (uint32_t w : t) {
         if (w != u && w != v) other[k++] = w;
       }
-      if (constrained_.contains(Key(u, v, other[0])) ||
-          constrained_.contains(Key(u, v, other[1]))) {
+      if (constrained_.contains(SortedFace(u, v, other[0])) ||
+          constrained_.contains(SortedFace(u, v, other[1]))) {
         return false;
       }
       if (TetVolume(P(u), P(v), P(other[0]), P(other[1])) < 0) std::swap(other[0], other[1]);
@@ -233,7 +225,7 @@ class Improver {
     const Tet tet = m_.tets[t];
     const uint32_t d = tet[f];
     uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
-    if (constrained_.contains(Key(a, b, c))) return false;
+    if (constrained_.contains(SortedFace(a, b, c))) return false;
     if (TetVolume(P(a), P(b), P(c), P(d)) < 0) std::swap(a, b);
     uint32_t n = UINT32_MAX;
     for (uint32_t s : star_[a]) {
@@ -307,6 +299,23 @@ class Improver {
     };
     Vec3 best = start;
     bool moved = false;
+    // Backtracking along dir from best: the first step (halving from max_step) whose star
+    // (worst, sum) `accept` takes becomes the new best.
+    auto search = [&](const Vec3& dir, double max_step, auto accept) {
+      for (double step = max_step; step > 1e-3 * length; step *= 0.5) {
+        const Vec3 p = best + dir * step;
+        double mn, sum;
+        eval(p, &mn, &sum);
+        if (accept(mn, sum)) {
+          best = p;
+          cur_min = mn;
+          cur_sum = sum;
+          moved = true;
+          return true;
+        }
+      }
+      return false;
+    };
     {
       const Vec3 p = start + masked(centroid - start);
       double mn, sum;
@@ -324,13 +333,11 @@ class Improver {
       double weight = 0;
       for (uint32_t t : star) {
         const Tet& x = m_.tets[t];
-        const Vec3 a = P(x[0]), u = P(x[1]) - a, w = P(x[2]) - a, s = P(x[3]) - a;
-        const double det = 2 * Dot(u, Cross(w, s));
-        if (!(det > 0)) continue;
-        const Vec3 cc =
-            a + (Cross(w, s) * Norm2(u) + Cross(s, u) * Norm2(w) + Cross(u, w) * Norm2(s)) / det;
-        odt += cc * (det / 12);
-        weight += det / 12;
+        const double volume = TetVolume(P(x[0]), P(x[1]), P(x[2]), P(x[3]));
+        Vec3 cc;
+        if (!(volume > 0) || !Circumcentre(P(x[0]), P(x[1]), P(x[2]), P(x[3]), &cc)) continue;
+        odt += cc * volume;
+        weight += volume;
       }
       if (weight > 0) {
         const Vec3 p = start + masked(odt / weight - start);
@@ -390,20 +397,9 @@ class Improver {
       const double dn = Norm(dir);
       if (!(dn > 0)) break;
       dir = dir / dn;
-      bool stepped = false;
-      for (double step = 0.2 * length; step > 1e-3 * length; step *= 0.5) {
-        const Vec3 p = best + dir * step;
-        double mn, sum;
-        eval(p, &mn, &sum);
-        if (mn > cur_min + kGain) {
-          best = p;
-          cur_min = mn;
-          cur_sum = sum;
-          stepped = moved = true;
-          break;
-        }
+      if (!search(dir, 0.2 * length, [&](double mn, double) { return mn > cur_min + kGain; })) {
+        break;
       }
-      if (!stepped) break;
     }
     // Then ascent on the star's mean, never lowering its worst.
     for (int iter = 0; iter < 6; ++iter) {
@@ -421,21 +417,11 @@ class Improver {
       }
       const double gn = Norm(g);
       if (!(gn > 0)) break;
-      const Vec3 dir = g / gn;
-      bool stepped = false;
-      for (double step = 0.1 * length; step > 1e-3 * length; step *= 0.5) {
-        const Vec3 p = best + dir * step;
-        double mn, sum;
-        eval(p, &mn, &sum);
-        if (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain) {
-          best = p;
-          cur_min = mn;
-          cur_sum = sum;
-          stepped = moved = true;
-          break;
-        }
+      if (!search(g / gn, 0.1 * length, [&](double mn, double sum) {
+            return mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain;
+          })) {
+        break;
       }
-      if (!stepped) break;
     }
     m_.nodes[v] = best;
     if (moved) {
@@ -458,7 +444,7 @@ class Improver {
       const auto face = InwardFace(t, f);
       const Vec3 normal = Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]));
       if (Norm2(normal) > Norm2(largest)) largest = normal;
-      if (constrained_.contains(Key(face[0], face[1], face[2])) && Norm2(normal) > 0) {
+      if (constrained_.contains(SortedFace(face[0], face[1], face[2])) && Norm2(normal) > 0) {
         n += Normalized(normal);
         on_facet = true;
       }
@@ -547,16 +533,13 @@ class Improver {
     const uint32_t y = Neighbor(x, f);
     if (y == UINT32_MAX || !in.contains(y)) return true;
     const Tet& t = m_.tets[x];
-    return constrained_.contains(Key(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
+    return constrained_.contains(TetFace(t, f));
   }
 
   bool InCircumsphere(const Tet& t, const Vec3& p) const {
-    const Vec3 a = P(t[0]), u = P(t[1]) - a, w = P(t[2]) - a, s = P(t[3]) - a;
-    const double det = 2 * Dot(u, Cross(w, s));
-    if (!(std::abs(det) > 0)) return false;
-    const Vec3 cc =
-        (Cross(w, s) * Norm2(u) + Cross(s, u) * Norm2(w) + Cross(u, w) * Norm2(s)) / det;
-    return Norm2(p - a - cc) < Norm2(cc);
+    Vec3 cc;
+    return Circumcentre(P(t[0]), P(t[1]), P(t[2]), P(t[3]), &cc) &&
+           Norm2(p - cc) < Norm2(P(t[0]) - cc);
   }
 
   // The cavity of point p for the insertion near sliver t, and the tetrahedra that fill it
@@ -577,7 +560,7 @@ class Improver {
         const auto face = InwardFace(at, f);
         const double side = TetVolume(P(face[0]), P(face[1]), P(face[2]), p);
         if (side >= 0) continue;
-        if (constrained_.contains(Key(face[0], face[1], face[2]))) {
+        if (constrained_.contains(SortedFace(face[0], face[1], face[2]))) {
           behind_facet = true;
         } else if (side < most) {
           most = side;
@@ -598,7 +581,7 @@ class Improver {
       queue.pop_back();
       for (int f = 0; f < 4; ++f) {
         const auto face = InwardFace(x, f);
-        if (constrained_.contains(Key(face[0], face[1], face[2]))) continue;
+        if (constrained_.contains(SortedFace(face[0], face[1], face[2]))) continue;
         const uint32_t y = Neighbor(x, f);
         if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(m_.tets[y], p)) continue;
         in.insert(y);
@@ -630,7 +613,7 @@ class Improver {
         const auto face = InwardFace(x, f);
         const uint32_t y = Neighbor(x, f);
         if (y != UINT32_MAX && !dropped.contains(y) &&
-            !constrained_.contains(Key(face[0], face[1], face[2]))) {
+            !constrained_.contains(SortedFace(face[0], face[1], face[2]))) {
           in.insert(y);
         } else if (!drop(x)) {
           return false;
@@ -726,51 +709,44 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
   report->movable_vertices = im.movable();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = im.MinMean();
   absl::Status status;
+  // One flip on tetrahedron t, for its worst (mean < 0) or for the mesh's mean; counts it.
+  auto flip = [&](uint32_t t, double mean) {
+    const Tet tet = im.tet(t);
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        if (im.RemoveEdge(tet[a], tet[b], mean)) {
+          ++report->edge_removals;
+          return true;
+        }
+      }
+    for (int f = 0; f < 4; ++f) {
+      if (im.RemoveFace(t, f, mean)) {
+        ++report->face_removals;
+        return true;
+      }
+    }
+    return false;
+  };
   for (int pass = 0; pass < options.passes && status.ok(); ++pass) {
     uint64_t changes = 0;
-    const std::vector<uint32_t> bad = im.Bad(options.target_degrees);
+    std::vector<uint32_t> bad = im.Bad(options.target_degrees);
     for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
       status = progress.Tick(i, bad.size(), 4096);
       const uint32_t t = bad[i];
       if (!im.alive(t) || im.quality(t) >= options.target_degrees) continue;
-      const Tet tet = im.tet(t);
-      bool done = false;
-      for (int a = 0; a < 4 && !done; ++a)
-        for (int b = a + 1; b < 4 && !done; ++b) done = im.RemoveEdge(tet[a], tet[b]);
-      if (done) {
-        ++report->edge_removals;
+      if (flip(t, -1)) {
         ++changes;
-        continue;
-      }
-      for (int f = 0; f < 4 && !done; ++f) done = im.RemoveFace(t, f);
-      if (done) {
-        ++report->face_removals;
-        ++changes;
-        continue;
-      }
-      if (im.quality(t) < options.insert_below_degrees && im.InsertNear(t)) {
+      } else if (im.quality(t) < options.insert_below_degrees && im.InsertNear(t)) {
         ++report->inserted_vertices;
         ++changes;
       }
     }
     // Then flips that raise the mean.
     const double mean = im.MinMean().second;
-    for (uint32_t t : im.Bad(options.target_degrees)) {
-      if (!im.alive(t)) continue;
-      const Tet tet = im.tet(t);
-      bool done = false;
-      for (int a = 0; a < 4 && !done; ++a)
-        for (int b = a + 1; b < 4 && !done; ++b) done = im.RemoveEdge(tet[a], tet[b], mean);
-      if (done) {
-        ++report->edge_removals;
-        ++changes;
-        continue;
-      }
-      for (int f = 0; f < 4 && !done; ++f) done = im.RemoveFace(t, f, mean);
-      if (done) {
-        ++report->face_removals;
-        ++changes;
-      }
+    bad = im.Bad(options.target_degrees);
+    for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
+      status = progress.Tick(i, bad.size(), 4096);
+      if (im.alive(bad[i]) && flip(bad[i], mean)) ++changes;
     }
     for (uint32_t v = 0; v < im.num_nodes() && status.ok(); ++v) {
       if (!im.may_move(v) || im.StarMin(v) >= options.target_degrees) continue;

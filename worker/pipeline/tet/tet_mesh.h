@@ -27,6 +27,17 @@ struct TetMesh {
 // Signed volume of a tetrahedron: ((b - a) x (c - a)) . (d - a) / 6.
 double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// The centre of the sphere through a, b, c and d; false when they are coplanar.
+bool Circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3* centre);
+
+// A triangle's vertex ids in increasing order: the same key for every orientation.
+using FaceKey = std::array<uint32_t, 3>;
+FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c);
+// The face of t opposite its vertex f, as a key.
+inline FaceKey TetFace(const Tet& t, int f) {
+  return SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]);
+}
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_

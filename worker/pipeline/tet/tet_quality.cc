@@ -43,14 +43,8 @@ TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) 
   s.min_dihedral_degrees = v > 0 ? dmin : 0;
   // Inradius 3V / A; circumradius from the circumcentre.
   const double r_in = area > 0 ? 3 * v / area : 0;
-  const Vec3 u = b - a, w = c - a, t = d - a;
-  const double det = 2 * Dot(u, Cross(w, t));
-  double r_circ = 0;
-  if (std::abs(det) > 0) {
-    const Vec3 cc =
-        (Cross(w, t) * Norm2(u) + Cross(t, u) * Norm2(w) + Cross(u, w) * Norm2(t)) / det;
-    r_circ = Norm(cc);
-  }
+  Vec3 cc;
+  const double r_circ = Circumcentre(a, b, c, d, &cc) ? Norm(cc - a) : 0;
   s.radius_aspect = r_circ > 0 ? 3 * r_in / r_circ : 0;
   return s;
 }

@@ -14,22 +14,21 @@
 namespace sheetmesh {
 namespace {
 
+absl::flat_hash_set<FaceKey> TetFaces(const TetMesh& mesh) {
+  absl::flat_hash_set<FaceKey> faces;
+  for (const Tet& t : mesh.tets) {
+    for (int f = 0; f < 4; ++f) faces.insert(TetFace(t, f));
+  }
+  return faces;
+}
+
 Conformity CheckConformity(const Plc& plc, const TetMesh& mesh) {
   Conformity c;
   c.sheet_triangles = plc.sheet_triangles.size();
   // Every facet face must be a face of a tetrahedron.
-  absl::flat_hash_set<std::array<uint32_t, 3>> tet_faces;
-  for (const Tet& t : mesh.tets) {
-    for (int f = 0; f < 4; ++f) {
-      std::array<uint32_t, 3> k = {t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]};
-      std::sort(k.begin(), k.end());
-      tet_faces.insert(k);
-    }
-  }
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    std::array<uint32_t, 3> k = mesh.faces[f];
-    std::sort(k.begin(), k.end());
-    if (!tet_faces.contains(k)) ++c.orphan_faces;
+  const absl::flat_hash_set<FaceKey> tet_faces = TetFaces(mesh);
+  for (const auto& face : mesh.faces) {
+    if (!tet_faces.contains(SortedFace(face[0], face[1], face[2]))) ++c.orphan_faces;
   }
   std::vector<double> covered(plc.sheet_triangles.size(), 0.0);
   std::vector<uint8_t> off_plane(plc.sheet_triangles.size(), 0);
@@ -60,25 +59,13 @@ Conformity CheckConformity(const Plc& plc, const TetMesh& mesh) {
   return c;
 }
 
-using FaceKey = std::array<uint32_t, 3>;
-
-FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c) {
-  FaceKey k = {a, b, c};
-  std::sort(k.begin(), k.end());
-  return k;
-}
-
 // TetGen 1.5 at times lists triangles for a sheet facet that are not faces of its
 // tetrahedra (seen on the NETL fracture, all on one sheet triangle) while the tetrahedra
 // do cover the facet. Then the sheet faces are taken again from the tetrahedra. Returns how
 // many sheet facets had faces that are no tetrahedron's (0: the list is kept as TetGen wrote
 // it); the conformity check then verifies the result.
 uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
-  absl::flat_hash_set<FaceKey> tet_faces;
-  for (const Tet& t : mesh->tets) {
-    for (int f = 0; f < 4; ++f)
-      tet_faces.insert(SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]));
-  }
+  const absl::flat_hash_set<FaceKey> tet_faces = TetFaces(*mesh);
   absl::flat_hash_set<int32_t> broken;
   for (size_t f = 0; f < mesh->faces.size(); ++f) {
     const auto& face = mesh->faces[f];

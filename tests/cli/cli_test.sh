@@ -25,6 +25,13 @@ grep -q "volume mesh" "$tmp/run.txt" || fail "the config's volume_mesh must appl
 for f in model.vdb pieces.csv volume.vtu volume.msh volume.inp report.json; do [ -f "$tmp/run/$f" ] || fail "run wrote no $f"; done
 "$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol" | grep -q "conform" || fail volume
 [ -f "$tmp/vol/volume_report.json" ] || fail "volume report"
+# Two processes (each with its own hash seed) give the same volume mesh, byte for byte.
+"$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol2" \
+  --volume_formats=vtu,msh > /dev/null || fail "volume again"
+"$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol3" \
+  --volume_formats=vtu,msh > /dev/null || fail "volume a third time"
+cmp -s "$tmp/vol2/volume.vtu" "$tmp/vol3/volume.vtu" && cmp -s "$tmp/vol2/volume.msh" "$tmp/vol3/volume.msh" \
+  || fail "the volume mesh differs between two runs"
 
 # Bad input: a clear message naming the problem, exit code 2 (invalid argument).
 expect_error() {

@@ -46,6 +46,14 @@ std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
 
 namespace {
 
+// The set's members in increasing order: hash-set order changes from run to run, and the
+// result must not.
+std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
+  std::vector<uint32_t> v(set.begin(), set.end());
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
 bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
 
 constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
@@ -601,7 +609,7 @@ class Improver {
     for (int round = 0;; ++round) {
       if (round == 64 || in.size() > kMaxCavity) return false;
       std::vector<std::pair<uint32_t, int>> hidden;
-      for (uint32_t x : in) {
+      for (uint32_t x : Sorted(in)) {
         for (int f = 0; f < 4; ++f) {
           if (!OnCavityBoundary(in, x, f)) continue;
           const auto face = InwardFace(x, f);
@@ -621,7 +629,7 @@ class Improver {
       }
       if (!hidden.empty()) continue;
       bool inside = false;
-      for (uint32_t x : std::vector<uint32_t>(in.begin(), in.end())) {
+      for (uint32_t x : Sorted(in)) {
         for (uint32_t w : m_.tets[x]) {
           if (!in.contains(x)) break;
           const bool all_in = std::all_of(star_[w].begin(), star_[w].end(),
@@ -641,7 +649,7 @@ class Improver {
       if (!inside) break;
     }
     // Fill: p joined to every boundary face; every vertex of the cavity must stay on it.
-    cavity->assign(in.begin(), in.end());
+    *cavity = Sorted(in);
     fill->clear();
     absl::flat_hash_set<uint32_t> on_boundary, all;
     for (uint32_t x : *cavity) {

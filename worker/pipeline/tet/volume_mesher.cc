@@ -95,8 +95,8 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
     kept.face_piece.push_back(mesh->face_piece[f]);
     kept.face_thickness.push_back(mesh->face_thickness[f]);
   }
-  for (const FaceKey& k : tet_faces) {
-    if (!markers.contains(k[0]) || !markers.contains(k[1]) || !markers.contains(k[2])) continue;
+  auto AssignToSheet = [&](const FaceKey& k) {
+    if (!markers.contains(k[0]) || !markers.contains(k[1]) || !markers.contains(k[2])) return;
     std::vector<int32_t> candidates;
     for (uint32_t v : k) {
       const auto& m = markers.at(v);
@@ -117,6 +117,14 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
       kept.face_piece.push_back(plc.sheet_piece[t]);
       kept.face_thickness.push_back(plc.sheet_thickness[t]);
       break;
+    }
+  };
+  // In tetrahedron order, so that the faces come out the same on every run.
+  absl::flat_hash_set<FaceKey> seen;
+  for (const Tet& t : mesh->tets) {
+    for (int f = 0; f < 4; ++f) {
+      const FaceKey k = TetFace(t, f);
+      if (seen.insert(k).second) AssignToSheet(k);
     }
   }
   *mesh = std::move(kept);

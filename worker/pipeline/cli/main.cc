@@ -103,6 +103,9 @@ ABSL_FLAG(
     double, flip_fold, 15,
     "volume: flip sheet edges between nearly coplanar triangles (normals within this many degrees) "
     "where that gives better triangles; 0: keep the sheet triangles as given");
+ABSL_FLAG(double, overlap, 0.5,
+          "volume: drop a sheet's rim triangle that runs within this many voxels of another "
+          "sheet, nearly parallel to it (it forces slivers); 0: keep them");
 ABSL_FLAG(int, improve_passes, 4,
           "volume: rounds of flips, smoothing and insertion on TetGen's output (0: none)");
 ABSL_FLAG(double, improve_target, 50,
@@ -297,6 +300,7 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("tetgen")) t.program = absl::GetFlag(FLAGS_tetgen);
   if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
   if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
+  if (Given("overlap")) o->volume.plc.overlap_voxels = absl::GetFlag(FLAGS_overlap);
   TetImproveOptions& im = o->volume.improve;
   if (Given("improve_passes")) im.passes = absl::GetFlag(FLAGS_improve_passes);
   if (Given("improve_target")) im.target_degrees = absl::GetFlag(FLAGS_improve_target);

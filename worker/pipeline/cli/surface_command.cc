@@ -144,6 +144,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   j["repaired_triangles"] = r.repaired_triangles;
   j["flipped_edges"] = r.flipped_edges;
   j["dropped_caps"] = r.dropped_caps;
+  j["dropped_overlaps"] = r.dropped_overlaps;
   j["tetgen_seconds"] = r.tetgen_seconds;
   j["rederived_facets"] = r.rederived_facets;
   for (const auto& [name, value] : r.improvement.Fields()) j["improvement"][name] = value;

@@ -456,6 +456,14 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.cap_degrees);
                   }},
+                 {"overlap_voxels",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.overlap_voxels);
+                  }},
+                 {"overlap_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.overlap_degrees);
+                  }},
                  {"improve_passes",
                   [&](const Json& w, const std::string& q) {
                     return rd.Integer(w, q, &o->volume.improve.passes);
@@ -588,6 +596,13 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   }
   if (!(o.volume.plc.cap_degrees > 90 && o.volume.plc.cap_degrees <= 180)) {
     return bad("volume_mesh.cap_degrees", o.volume.plc.cap_degrees, "must be in (90, 180]");
+  }
+  if (!(o.volume.plc.overlap_voxels >= 0 && o.volume.plc.overlap_voxels <= 10)) {
+    return bad("volume_mesh.overlap_voxels", o.volume.plc.overlap_voxels, "must be in [0, 10]");
+  }
+  if (!(o.volume.plc.overlap_degrees >= 0 && o.volume.plc.overlap_degrees < 90)) {
+    return bad("volume_mesh.overlap_degrees", o.volume.plc.overlap_degrees,
+               "must be in [0, 90)");
   }
   const TetImproveOptions& im = o.volume.improve;
   if (!(im.passes >= 0 && im.passes <= 100)) {

@@ -185,6 +185,7 @@ std::string PipelineReport::ToJson() const {
                         {"repaired_triangles", volume_repaired},
                         {"flipped_edges", volume_flipped},
                         {"dropped_caps", volume_dropped_caps},
+                        {"dropped_overlaps", volume_dropped_overlaps},
                         {"rederived_facets", volume_rederived_facets},
                         {"conformity",
                          {{"sheet_triangles", volume_conformity.sheet_triangles},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <numbers>
 #include <set>
 
 #include "absl/container/flat_hash_map.h"
@@ -121,6 +122,102 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
     if (changed == 0) break;
   }
   return {flips, drops};
+}
+
+// Drops sheet triangles that lie on another sheet. Where part of one triangle comes within
+// `gap` of another's interior while their planes are within max_degrees of parallel (they
+// run alongside, not into each other), TetGen must fill the thin wedge between them with
+// tetrahedra as thin as the gap, slivers that nothing after can mend. Of such a pair the
+// one with more rim edges goes (ties: the smaller), if it has a rim edge at all: a fragment
+// lying on a sheet, or a sheet's rim running over another sheet. Two interior triangles
+// are left as they are, as dropping one would open a hole. Returns the number dropped.
+uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
+                      double max_degrees) {
+  constexpr int kSamples = 6;  // points per edge of the barycentric grid sampled
+  const double max_sin = std::sin(max_degrees * std::numbers::pi / 180.0);
+  auto corners = [&](uint32_t f) {
+    return Triangle{v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]};
+  };
+  // Whether some point of b lies within gap of a's plane and projects inside a (beyond
+  // the vertices they share).
+  auto near_interior = [&](uint32_t fa, uint32_t fb) {
+    const Triangle a = corners(fa), b = corners(fb);
+    const Vec3 n = AreaVector(a);
+    const double n2 = Norm2(n);
+    for (int i = 0; i <= kSamples; ++i)
+      for (int j = 0; i + j <= kSamples; ++j) {
+        const double u = static_cast<double>(i) / kSamples, w = static_cast<double>(j) / kSamples;
+        const Vec3 p = b[0] + (b[1] - b[0]) * u + (b[2] - b[0]) * w;
+        if (std::any_of(a.begin(), a.end(), [&](const Vec3& q) { return Norm2(p - q) < 1e-18; }))
+          continue;
+        // Barycentric coordinates of p's projection: signed areas against a's normal.
+        const double l0 = Dot(Cross(a[1] - p, a[2] - p), n) / n2,
+                     l1 = Dot(Cross(a[2] - p, a[0] - p), n) / n2, l2 = 1 - l0 - l1;
+        if (l0 <= 1e-6 || l1 <= 1e-6 || l2 <= 1e-6) continue;
+        if (std::abs(Dot(p - a[0], n)) < gap * std::sqrt(n2)) return true;
+      }
+    return false;
+  };
+  auto key = [](uint32_t a, uint32_t b) {
+    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+  };
+  uint32_t dropped = 0;
+  for (int round = 0; round < 20; ++round) {
+    const size_t n = s.faces.size();
+    absl::flat_hash_map<uint64_t, int> edge_uses;
+    for (const Face& f : s.faces) {
+      for (int k = 0; k < 3; ++k) ++edge_uses[key(f[k], f[(k + 1) % 3])];
+    }
+    std::vector<int> rim(n, 0);
+    std::vector<double> area(n), lo_x(n), hi_x(n);
+    std::vector<uint32_t> order(n);
+    for (uint32_t f = 0; f < n; ++f) {
+      for (int k = 0; k < 3; ++k) rim[f] += edge_uses[key(s.faces[f][k], s.faces[f][(k + 1) % 3])] == 1;
+      const Triangle t = corners(f);
+      area[f] = Area(t);
+      lo_x[f] = std::min({t[0].x, t[1].x, t[2].x}) - gap;
+      hi_x[f] = std::max({t[0].x, t[1].x, t[2].x}) + gap;
+      order[f] = f;
+    }
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return lo_x[a] < lo_x[b] || (lo_x[a] == lo_x[b] && a < b); });
+    std::vector<uint8_t> drop(n, 0);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t a = order[i];
+      for (size_t j = i + 1; j < n && lo_x[order[j]] <= hi_x[a]; ++j) {
+        const uint32_t b = order[j];
+        if (drop[a] || drop[b]) continue;
+        const Triangle ta = corners(a), tb = corners(b);
+        // Boxes apart, an edge shared (a fold there is the flips' business), or planes at an
+        // angle: no overlap.
+        bool apart = false;
+        for (int k = 1; k < 3 && !apart; ++k) {
+          const double alo = std::min({ta[0][k], ta[1][k], ta[2][k]}),
+                       ahi = std::max({ta[0][k], ta[1][k], ta[2][k]}),
+                       blo = std::min({tb[0][k], tb[1][k], tb[2][k]}),
+                       bhi = std::max({tb[0][k], tb[1][k], tb[2][k]});
+          apart = blo > ahi + gap || alo > bhi + gap;
+        }
+        if (apart) continue;
+        int shared = 0;
+        for (uint32_t x : s.faces[a]) shared += x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2];
+        if (shared >= 2) continue;
+        const Vec3 na = AreaVector(ta), nb = AreaVector(tb);
+        if (Norm(Cross(na, nb)) > max_sin * Norm(na) * Norm(nb)) continue;
+        if (!near_interior(a, b) && !near_interior(b, a)) continue;
+        const uint32_t loser =
+            rim[a] != rim[b] ? (rim[a] > rim[b] ? a : b) : (area[a] <= area[b] ? a : b);
+        if (rim[loser] == 0) continue;
+        drop[loser] = 1;
+        ++count;
+      }
+    }
+    if (count == 0) break;
+    s = Without(s, drop);
+    dropped += count;
+  }
+  return dropped;
 }
 
 }  // namespace
@@ -306,6 +403,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
           absl::StrCat("sheet triangles still intersect after removing ", plc.repaired_triangles,
                        " clashing ones; the intersections are not simple"));
     }
+  }
+  if (options.overlap_voxels > 0) {
+    plc.dropped_overlaps =
+        DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
+    kept.faces = st.faces;
   }
 
   // Compact the used vertices; the 8 box corners go first.

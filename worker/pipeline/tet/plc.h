@@ -38,6 +38,7 @@ struct Plc {
   uint32_t repaired_triangles = 0;     // removed because they clashed (repair mode)
   uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;           // flat rim triangles dropped
+  uint32_t dropped_overlaps = 0;       // rim triangles dropped for lying on another sheet
 
   // The PLC as a TetGen .poly file (0-based numbering).
   std::string ToPoly() const;
@@ -55,6 +56,12 @@ struct PlcOptions {
   // cap_degrees (it covers almost nothing) is dropped.
   double flip_fold_degrees = 15.0;
   double cap_degrees = 160.0;
+  // A sheet triangle that runs within overlap_voxels of another one's interior, their
+  // planes within overlap_degrees of parallel, forces slivers in the thin wedge between
+  // them; the one of the two on a sheet's rim (a fragment lying on a sheet, a rim running
+  // over another sheet) is dropped. 0: keep them all.
+  double overlap_voxels = 0.5;
+  double overlap_degrees = 25.0;
 };
 
 // A pair of sheet triangles (indices into the input mesh) that cut through each other.

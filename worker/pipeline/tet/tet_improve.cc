@@ -37,6 +37,7 @@ std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
           {"smoothing_moves", static_cast<double>(smoothing_moves)},
           {"inserted_vertices", static_cast<double>(inserted_vertices)},
           {"movable_vertices", movable_vertices},
+          {"sliding_vertices", sliding_vertices},
           {"min_dihedral_before", min_dihedral_before},
           {"mean_dihedral_before", mean_dihedral_before},
           {"min_dihedral_after", min_dihedral_after},
@@ -61,7 +62,8 @@ constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedr
 
 class Improver {
  public:
-  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, double floor) : m_(*mesh), floor_(floor) {
+  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, uint32_t input_nodes, double floor)
+      : m_(*mesh), floor_(floor) {
     const size_t n = m_.nodes.size();
     star_.resize(n);
     q_.resize(m_.tets.size());
@@ -81,6 +83,7 @@ class Improver {
         if (std::abs(x - lo[k]) <= tol || std::abs(x - hi[k]) <= tol) mask_[v] &= ~(1 << k);
       }
     }
+    const std::vector<uint8_t> off_box = mask_;
     for (size_t f = 0; f < m_.faces.size(); ++f) {
       const auto& face = m_.faces[f];
       constrained_.insert(SortedFace(face[0], face[1], face[2]));
@@ -88,11 +91,17 @@ class Improver {
         for (uint32_t v : face) mask_[v] = 0;
       }
     }
+    ClassifySheetNodes(input_nodes, off_box);
   }
 
   uint32_t movable() const {
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < mask_.size(); ++v) n += may_move(v);
+    return n;
+  }
+  uint32_t sliding() const {
     return static_cast<uint32_t>(
-        std::count_if(mask_.begin(), mask_.end(), [](uint8_t m) { return m != 0; }));
+        std::count_if(slide_.begin(), slide_.end(), [](Slide s) { return s != Slide::kNone; }));
   }
 
   std::pair<double, double> MinMean() const {
@@ -121,7 +130,7 @@ class Improver {
   uint32_t num_nodes() const { return static_cast<uint32_t>(m_.nodes.size()); }
   double quality(uint32_t t) const { return q_[t]; }
   const Tet& tet(uint32_t t) const { return m_.tets[t]; }
-  bool may_move(uint32_t v) const { return mask_[v] != 0; }
+  bool may_move(uint32_t v) const { return mask_[v] != 0 || slide_[v] != Slide::kNone; }
   double StarMin(uint32_t v) const {
     double mn = 1e300;
     for (uint32_t t : star_[v]) mn = std::min(mn, q_[t]);
@@ -265,7 +274,7 @@ class Improver {
   // Moves vertex v (within the coordinates it may change) to raise the smallest dihedral
   // angle of its star, or, keeping that, the star's mean.
   bool Smooth(uint32_t v) {
-    if (mask_[v] == 0) return false;
+    if (!may_move(v)) return false;
     const std::vector<uint32_t>& star = star_[v];
     const Vec3 start = m_.nodes[v];
     double cur_min = 1e300, cur_sum = 0, length = 0;
@@ -286,12 +295,7 @@ class Improver {
     }
     centroid = centroid / static_cast<double>(ring.size());
     length /= static_cast<double>(ring.size());
-    auto masked = [&](Vec3 d) {
-      for (int k = 0; k < 3; ++k) {
-        if (!(mask_[v] & (1 << k))) d[k] = 0;
-      }
-      return d;
-    };
+    auto masked = [&](const Vec3& d) { return Constrain(v, d); };
     // The star's worst and mean at p.
     auto eval = [&](const Vec3& p, double* mn, double* sum) {
       m_.nodes[v] = p;
@@ -311,7 +315,7 @@ class Improver {
     // (worst, sum) `accept` takes becomes the new best.
     auto search = [&](const Vec3& dir, double max_step, auto accept) {
       for (double step = max_step; step > 1e-3 * length; step *= 0.5) {
-        const Vec3 p = best + dir * step;
+        const Vec3 p = Place(v, best + dir * step);
         double mn, sum;
         eval(p, &mn, &sum);
         if (accept(mn, sum)) {
@@ -325,7 +329,7 @@ class Improver {
       return false;
     };
     {
-      const Vec3 p = start + masked(centroid - start);
+      const Vec3 p = Place(v, start + masked(centroid - start));
       double mn, sum;
       eval(p, &mn, &sum);
       if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
@@ -348,7 +352,7 @@ class Improver {
         weight += volume;
       }
       if (weight > 0) {
-        const Vec3 p = start + masked(odt / weight - start);
+        const Vec3 p = Place(v, start + masked(odt / weight - start));
         double mn, sum;
         eval(p, &mn, &sum);
         if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
@@ -382,7 +386,7 @@ class Improver {
         if (worst[w] == UINT32_MAX) continue;
         for (int k = 0; k < 3; ++k) {
           g[w][k] = 0;
-          if (!(mask_[v] & (1 << k))) continue;
+          if (!Varies(v, k)) continue;
           Vec3 p = best;
           p[k] += h;
           m_.nodes[v] = p;
@@ -392,6 +396,7 @@ class Improver {
           const double down = Quality(m_.tets[worst[w]]);
           g[w][k] = (up - down) / (2 * h);
         }
+        g[w] = masked(g[w]);
       }
       m_.nodes[v] = start;
       Vec3 dir = g[0];
@@ -400,10 +405,12 @@ class Improver {
         const Vec3 diff = g[0] - g[1];
         const double d2 = Norm2(diff);
         const double s = d2 > 0 ? std::clamp(Dot(g[0], diff) / d2, 0.0, 1.0) : 0.0;
-        dir = g[0] - diff * s;
+        // Opposite gradients cancel to rounding noise off the allowed moves: constrain the
+        // result again, and stop where it is no real direction.
+        dir = masked(g[0] - diff * s);
       }
       const double dn = Norm(dir);
-      if (!(dn > 0)) break;
+      if (!(dn > 1e-9 * Norm(g[0]))) break;
       dir = dir / dn;
       if (!search(dir, 0.2 * length, [&](double mn, double) { return mn > cur_min + kGain; })) {
         break;
@@ -414,7 +421,7 @@ class Improver {
       const double h = 1e-5 * length;
       Vec3 g{0, 0, 0};
       for (int k = 0; k < 3; ++k) {
-        if (!(mask_[v] & (1 << k))) continue;
+        if (!Varies(v, k)) continue;
         Vec3 p = best;
         double mn, up, down;
         p[k] += h;
@@ -423,6 +430,7 @@ class Improver {
         eval(p, &mn, &down);
         g[k] = (up - down) / (2 * h);
       }
+      g = masked(g);
       const double gn = Norm(g);
       if (!(gn > 0)) break;
       if (!search(g / gn, 0.1 * length, [&](double mn, double sum) {
@@ -445,21 +453,41 @@ class Improver {
   bool InsertNear(uint32_t t) {
     const Tet tet = m_.tets[t];
     // The new vertex goes inside the facets the sliver lies on (the sum of their inward
-    // normals), or, when it has none, to either side of its largest face.
-    Vec3 n{0, 0, 0}, largest{0, 0, 0};
-    bool on_facet = false;
+    // normals); in a crease of a sheet that may hide the facets of the slivers next to it,
+    // so the facets of its neighbours count in a second try. A sliver on no facet tries
+    // both sides of its largest face.
+    Vec3 own{0, 0, 0}, near{0, 0, 0}, largest{0, 0, 0};
+    auto facet_normals = [&](uint32_t x, Vec3* sum) {
+      bool any = false;
+      for (int f = 0; f < 4; ++f) {
+        const auto face = InwardFace(x, f);
+        if (!constrained_.contains(SortedFace(face[0], face[1], face[2]))) continue;
+        const Vec3 normal = Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]));
+        if (!(Norm2(normal) > 0)) continue;
+        *sum += Normalized(normal);
+        any = true;
+      }
+      return any;
+    };
+    const bool on_facet = facet_normals(t, &own);
+    near = own;
     for (int f = 0; f < 4; ++f) {
       const auto face = InwardFace(t, f);
       const Vec3 normal = Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]));
       if (Norm2(normal) > Norm2(largest)) largest = normal;
-      if (constrained_.contains(SortedFace(face[0], face[1], face[2])) && Norm2(normal) > 0) {
-        n += Normalized(normal);
-        on_facet = true;
+      const uint32_t y = Neighbor(t, f);
+      if (y != UINT32_MAX && !constrained_.contains(TetFace(tet, f))) facet_normals(y, &near);
+    }
+    std::vector<Vec3> directions;
+    for (const Vec3& d : on_facet ? std::vector<Vec3>{own, near}
+                                  : std::vector<Vec3>{largest, largest * -1.0, near}) {
+      if (!(Norm2(d) > 0)) continue;
+      const Vec3 u = Normalized(d);
+      if (std::none_of(directions.begin(), directions.end(),
+                       [&](const Vec3& e) { return Dot(e, u) > 1 - 1e-6; })) {
+        directions.push_back(u);
       }
     }
-    if (!on_facet) n = largest;
-    if (!(Norm2(n) > 0)) return false;
-    n = Normalized(n);
     double length = 0;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) length += Norm(P(tet[i]) - P(tet[j]));
@@ -472,11 +500,10 @@ class Improver {
       double quality = -1e300;
     };
     Candidate best;
-    for (double side : {1.0, -1.0}) {
-      if (on_facet && side < 0) break;
+    for (const Vec3& n : directions) {
       for (double h : {0.7, 0.45, 0.25}) {
         Candidate c;
-        c.p = centre + n * (side * h * length);
+        c.p = centre + n * (h * length);
         if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;
         c.quality = 1e300;
         for (const Tet& x : c.fill) {
@@ -493,6 +520,9 @@ class Improver {
     m_.nodes.push_back(best.p);
     star_.emplace_back();
     mask_.push_back(7);
+    slide_.push_back(Slide::kNone);
+    axis_.push_back({0, 0, 0});
+    anchor_.push_back(best.p);
     for (uint32_t x : best.cavity) Kill(x);
     for (Tet x : best.fill) {
       x[3] = v;
@@ -512,7 +542,121 @@ class Improver {
   }
 
  private:
+  // How a sheet vertex TetGen added may move: within the sheet triangle it lies inside
+  // (in the plane of normal axis_), or along the sheet edge it lies on (direction axis_).
+  // Either way the sheet's faces still tile the input triangles, as long as no tetrahedron
+  // inverts, which every move checks.
+  enum class Slide : uint8_t { kNone, kPlane, kLine };
+
   const Vec3& P(uint32_t v) const { return m_.nodes[v]; }
+
+  // d restricted to the moves vertex v may make.
+  Vec3 Constrain(uint32_t v, Vec3 d) const {
+    switch (slide_[v]) {
+      case Slide::kPlane:
+        return d - axis_[v] * Dot(d, axis_[v]);
+      case Slide::kLine:
+        return axis_[v] * Dot(d, axis_[v]);
+      case Slide::kNone:
+        break;
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (!(mask_[v] & (1 << k))) d[k] = 0;
+    }
+    return d;
+  }
+  // p put back exactly on v's plane or line (through its first position). Constrain alone
+  // leaves rounding noise of the size of the move's discarded part, which can be large (an
+  // optimal-Delaunay point far off a sheet), and it would add up over moves.
+  Vec3 Place(uint32_t v, const Vec3& p) const {
+    switch (slide_[v]) {
+      case Slide::kPlane:
+        return p - axis_[v] * Dot(p - anchor_[v], axis_[v]);
+      case Slide::kLine:
+        return anchor_[v] + axis_[v] * Dot(p - anchor_[v], axis_[v]);
+      case Slide::kNone:
+        break;
+    }
+    return p;
+  }
+  // Whether coordinate k of v can change at all (a partial derivative worth taking).
+  bool Varies(uint32_t v, int k) const {
+    return slide_[v] != Slide::kNone || (mask_[v] & (1 << k));
+  }
+
+  // Finds the sheet vertices TetGen added (ids from input_nodes on) that may slide: one
+  // whose sheet faces all belong to one input triangle and close a fan around it lies inside
+  // that triangle; one whose fans (one per input triangle) each open onto two neighbours on
+  // one line through it lies on an input edge. Vertices on the box stay where they are.
+  // off_box[v] == 7: v lies on no box plane.
+  void ClassifySheetNodes(uint32_t input_nodes, const std::vector<uint8_t>& off_box) {
+    slide_.assign(m_.nodes.size(), Slide::kNone);
+    axis_.assign(m_.nodes.size(), Vec3{0, 0, 0});
+    anchor_ = m_.nodes;
+    // Per vertex: (input triangle marker, one of its faces); vertices on the box.
+    std::vector<std::vector<std::pair<int32_t, uint32_t>>> faces_of(m_.nodes.size());
+    std::vector<uint8_t> on_box(m_.nodes.size(), 0);
+    for (uint32_t f = 0; f < m_.faces.size(); ++f) {
+      for (uint32_t v : m_.faces[f]) {
+        if (m_.face_piece[f] < 0) {
+          on_box[v] = 1;
+        } else {
+          faces_of[v].push_back({m_.face_marker[f], f});
+        }
+      }
+    }
+    for (uint32_t v = input_nodes; v < m_.nodes.size(); ++v) {
+      auto& fs = faces_of[v];
+      if (fs.empty() || on_box[v] || off_box[v] != 7) continue;
+      std::sort(fs.begin(), fs.end());
+      std::vector<uint32_t> open;  // neighbours across the fans' open ends
+      size_t groups = 0;
+      Vec3 normal{0, 0, 0};
+      for (size_t i = 0; i < fs.size();) {
+        size_t j = i;
+        std::vector<uint32_t> ends;
+        while (j < fs.size() && fs[j].first == fs[i].first) {
+          const auto& face = m_.faces[fs[j].second];
+          for (uint32_t w : face) {
+            if (w != v) ends.push_back(w);
+          }
+          const Vec3 n = Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]));
+          if (Norm2(n) > Norm2(normal)) normal = n;
+          ++j;
+        }
+        std::sort(ends.begin(), ends.end());
+        for (size_t k = 0; k < ends.size();) {
+          size_t l = k;
+          while (l < ends.size() && ends[l] == ends[k]) ++l;
+          if (l - k == 1) open.push_back(ends[k]);
+          k = l;
+        }
+        ++groups;
+        i = j;
+      }
+      if (open.empty()) {
+        if (groups == 1 && Norm2(normal) > 0) {
+          slide_[v] = Slide::kPlane;
+          axis_[v] = Normalized(normal);
+        }
+        continue;
+      }
+      if (open.size() != 2 * groups) continue;
+      // On an input edge: every open neighbour on one line through v, on both sides.
+      Vec3 dir = Normalized(P(open[0]) - P(v));
+      bool line = Norm2(dir) > 0, before = false, after = false;
+      for (uint32_t w : open) {
+        const Vec3 d = P(w) - P(v);
+        const double along = Dot(d, dir);
+        line = line && Norm2(Cross(d, dir)) <= 1e-18 * Norm2(d);
+        (along > 0 ? after : before) = true;
+      }
+      if (line && before && after) {
+        slide_[v] = Slide::kLine;
+        axis_[v] = dir;
+      }
+    }
+  }
 
   // The tetrahedron sharing face `f` (the face opposite tet[f]) of t, or UINT32_MAX on the
   // boundary.
@@ -702,6 +846,9 @@ class Improver {
   std::vector<uint8_t> dead_;
   std::vector<uint32_t> free_;  // dead slots to reuse
   std::vector<uint8_t> mask_;   // per vertex: bit k set = coordinate k may change
+  std::vector<Slide> slide_;    // per vertex: sheet vertices that may slide
+  std::vector<Vec3> axis_;      // per vertex: the plane's normal or the line's direction
+  std::vector<Vec3> anchor_;    // per sliding vertex: its position before any move
   absl::flat_hash_set<FaceKey> constrained_;
   const double floor_;  // smoothing for the mean keeps every star above min(worst, floor_)
 };
@@ -709,12 +856,13 @@ class Improver {
 }  // namespace
 
 absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_hi,
-                            const TetImproveOptions& options, TetImproveReport* report,
-                            const Progress& progress) {
+                            uint32_t input_nodes, const TetImproveOptions& options,
+                            TetImproveReport* report, const Progress& progress) {
   const absl::Time start = absl::Now();
   *report = {};
-  Improver im(mesh, box_lo, box_hi, options.smoothing_floor_degrees);
+  Improver im(mesh, box_lo, box_hi, input_nodes, options.smoothing_floor_degrees);
   report->movable_vertices = im.movable();
+  report->sliding_vertices = im.sliding();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = im.MinMean();
   absl::Status status;
   // One flip on tetrahedron t, for its worst (mean < 0) or for the mesh's mean; counts it.

@@ -7,8 +7,10 @@
 //    worst tetrahedron they touch, then for the mean;
 //  - a new vertex off a sliver that the flips cannot mend, inserted into a star-shaped
 //    cavity that never crosses a facet;
-//  - smoothing of the vertices on no sheet (box vertices slide within their face or edge,
-//    so the domain is unchanged).
+//  - smoothing of the vertices: box vertices slide within their face or edge, so the
+//    domain is unchanged; the vertices TetGen added on a sheet slide within the sheet
+//    triangle or along the sheet edge they lie on, so the sheets are unchanged too (their
+//    faces still tile every input triangle); the PLC's own vertices never move.
 // A flip or an insertion is kept only if it raises the worst tetrahedron it touches (or,
 // for the mean, raises the mean without lowering that worst), and nothing ever inverts.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_IMPROVE_H_
@@ -47,7 +49,9 @@ struct TetImproveReport {
   uint64_t face_removals = 0;      // 2-3 flips
   uint64_t smoothing_moves = 0;    // vertex moves accepted
   uint64_t inserted_vertices = 0;  // new vertices off slivers
-  uint32_t movable_vertices = 0;   // vertices on no sheet face and not a box corner
+  uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)
+  uint32_t sliding_vertices = 0;   // sheet vertices TetGen added, free within their sheet
+                                   // triangle or along their sheet edge
   double min_dihedral_before = 0, mean_dihedral_before = 0;  // degrees
   double min_dihedral_after = 0, mean_dihedral_after = 0;
   double seconds = 0;
@@ -56,13 +60,15 @@ struct TetImproveReport {
   std::vector<std::pair<std::string, double>> Fields() const;
 };
 
-// Improves `mesh` in place. Its faces (the facets' triangles, box and sheets) stay faces,
-// sheet vertices do not move, and vertices on the box faces stay on them, so the mesh keeps
-// conforming to the PLC bounded by [box_lo, box_hi]. Tetrahedra must be positively
-// oriented (TetVolume > 0). Returns kCancelled if `progress` asks, leaving a valid mesh.
+// Improves `mesh` in place. Nodes [0, input_nodes) are the PLC's vertices and never move
+// if they are on a sheet. The faces (the facets' triangles, box and sheets) stay faces,
+// each of them within the facet it tiles, and vertices on the box faces stay on them, so the
+// mesh keeps conforming to the PLC bounded by [box_lo, box_hi]. Tetrahedra must be
+// positively oriented (TetVolume > 0). Returns kCancelled if `progress` asks, leaving a
+// valid mesh.
 absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_hi,
-                            const TetImproveOptions& options, TetImproveReport* report,
-                            const Progress& progress = {});
+                            uint32_t input_nodes, const TetImproveOptions& options,
+                            TetImproveReport* report, const Progress& progress = {});
 
 // The smallest dihedral angle of the tetrahedron (a, b, c, d) in degrees, or a negative
 // number when it is inverted or flat (TetVolume <= 0).

@@ -181,6 +181,11 @@ std::string TetgenSwitches(const TetgenOptions& o) {
     absl::StrAppend(&s, "q", o.max_radius_edge_ratio, "/", o.min_dihedral_degrees);
   }
   if (o.max_volume > 0) absl::StrAppend(&s, "a", o.max_volume);
+  // TetGen's own optimization with flips and smoothing only (-O level 2, operations 1 + 2).
+  // Its vertex insertion and deletion (operation 4, on by default) can leave facet faces in
+  // the .face file that no tetrahedron has any more (seen on the NETL fracture at r = 7);
+  // sheetmesh's improvement pass inserts vertices itself, keeping the facets.
+  s += "O2/3";
   if (!o.steiner_on_sheets) s += "Y";
   return s;
 }

@@ -145,13 +145,15 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.repaired_triangles = plc.repaired_triangles;
   r.flipped_edges = plc.flipped_edges;
   r.dropped_caps = plc.dropped_caps;
+  r.dropped_overlaps = plc.dropped_overlaps;
   const Vec3 ext = plc.box_hi - plc.box_lo;
   r.box_volume = std::abs(ext.x * ext.y * ext.z);
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
   r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
   r.rederived_facets = RederiveFacetFaces(plc, &r.mesh);
-  SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi, options.improve,
+  SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi,
+                                    static_cast<uint32_t>(plc.vertices.size()), options.improve,
                                     &r.improvement, progress.Sub(0.9, 0.98)));
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.orphan_faces > 0) {

@@ -27,7 +27,8 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
       "radius_search": {"goal": "target", "target_similarity": 0.6},
       "similarity": {"model": "vertex", "grid_rates": [2]},
       "volume_mesh": {"improve_passes": 2, "improve_target_degrees": 45,
-                      "improve_insert_below_degrees": 12, "improve_floor_degrees": 25},
+                      "improve_insert_below_degrees": 12, "improve_floor_degrees": 25,
+                      "overlap_voxels": 0.8, "overlap_degrees": 20},
       "output": {"formats": ["ply"], "model": false}})",
                                   "c.json", &o),
               IsOk());
@@ -57,6 +58,8 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
   EXPECT_EQ(o.volume.improve.target_degrees, 45);
   EXPECT_EQ(o.volume.improve.insert_below_degrees, 12);
   EXPECT_EQ(o.volume.improve.smoothing_floor_degrees, 25);
+  EXPECT_EQ(o.volume.plc.overlap_voxels, 0.8);
+  EXPECT_EQ(o.volume.plc.overlap_degrees, 20);
 }
 
 TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
@@ -78,6 +81,8 @@ TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"volume_mesh": {"improve_insert_below_degrees": 60}})",
        "improve_insert_below_degrees = 60"},
       {R"({"volume_mesh": {"improve_floor_degrees": -2}})", "improve_floor_degrees = -2"},
+      {R"({"volume_mesh": {"overlap_voxels": -1}})", "volume_mesh.overlap_voxels = -1"},
+      {R"({"volume_mesh": {"overlap_degrees": 90}})", "volume_mesh.overlap_degrees = 90"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

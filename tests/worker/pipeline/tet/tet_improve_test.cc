@@ -7,7 +7,9 @@
 #include <cmath>
 #include <set>
 
+#include "absl/container/flat_hash_set.h"
 #include "tests/testing/status_matchers.h"
+#include "worker/pipeline/tet/plc.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -68,7 +70,7 @@ TEST(TetImproveTest, ThreeTetrahedraAroundAnEdgeBecomeTheBetterTwo) {
   two.tets = {{0, 1, 2, 4}, {1, 0, 2, 3}};
   ASSERT_GT(Worst(two), three + 1) << "the two-tetrahedron configuration is the better one";
   TetImproveReport report;
-  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, {}, &report).ok());
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5, {}, &report).ok());
   EXPECT_EQ(m.tets.size(), 2u);
   EXPECT_EQ(report.edge_removals, 1u);
   EXPECT_EQ(report.movable_vertices, 0u);
@@ -90,7 +92,7 @@ TEST(TetImproveTest, AnEdgeOnAFacetFaceIsNeverRemoved) {
   m.face_piece.push_back(1);
   m.face_thickness.push_back(1);
   TetImproveReport report;
-  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, {}, &report).ok());
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5, {}, &report).ok());
   EXPECT_EQ(m.tets.size(), 3u);
   EXPECT_EQ(report.edge_removals, 0u);
 }
@@ -143,16 +145,29 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   EXPECT_NEAR(after.quality.volume, after.box_volume, 1e-9 * after.box_volume);
   EXPECT_EQ(after.conformity.conforming, after.conformity.sheet_triangles);
   EXPECT_EQ(after.conformity.orphan_faces, 0u);
-  // TetGen's nodes come first in both; no sheet node moved and box nodes stayed on the
-  // faces they were on.
+  // TetGen's nodes come first in both. The PLC's own sheet vertices did not move; the
+  // sheet vertices TetGen added may slide, but stay on their input triangle (within it, as
+  // the area check of the conformity test above shows). Box nodes stayed on the faces they
+  // were on.
+  SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(sheet, dims, {}, on.plc));
   ASSERT_GE(after.mesh.nodes.size(), before.mesh.nodes.size());
   EXPECT_EQ(after.mesh.nodes.size() - before.mesh.nodes.size(), r.inserted_vertices);
+  EXPECT_GT(r.sliding_vertices, 0u);
+  absl::flat_hash_set<uint32_t> slid;
   for (size_t f = 0; f < after.mesh.faces.size(); ++f) {
     for (uint32_t v : after.mesh.faces[f]) {
       ASSERT_LT(v, before.mesh.nodes.size());
       const Vec3 &p = after.mesh.nodes[v], &q = before.mesh.nodes[v];
       if (after.mesh.face_piece[f] >= 0) {
-        EXPECT_EQ(p, q) << "sheet node " << v;
+        if (v < plc.vertices.size()) {
+          EXPECT_EQ(p, q) << "PLC sheet vertex " << v;
+          continue;
+        }
+        if (p != q) slid.insert(v);
+        const Face& t = plc.sheet_triangles[after.mesh.face_marker[f] - kFirstSheetMarker];
+        const Vec3 n = Normalized(Cross(plc.vertices[t[1]] - plc.vertices[t[0]],
+                                        plc.vertices[t[2]] - plc.vertices[t[0]]));
+        EXPECT_NEAR(Dot(p - plc.vertices[t[0]], n), 0, 1e-9) << "sheet node " << v;
       } else {
         for (int k = 0; k < 3; ++k) {
           if (q[k] == 0 || q[k] == 20) EXPECT_EQ(p[k], q[k]) << "box node " << v;
@@ -160,6 +175,7 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
       }
     }
   }
+  EXPECT_GT(slid.size(), 0u);
 }
 
 TEST(TetImproveTest, ZeroPassesLeavesTheMeshAsItIs) {
@@ -168,7 +184,7 @@ TEST(TetImproveTest, ZeroPassesLeavesTheMeshAsItIs) {
   TetImproveOptions o;
   o.passes = 0;
   TetImproveReport report;
-  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, o, &report).ok());
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5, o, &report).ok());
   EXPECT_EQ(m.tets, copy.tets);
   EXPECT_EQ(report.passes, 0);
   EXPECT_EQ(report.min_dihedral_after, report.min_dihedral_before);

@@ -193,6 +193,55 @@ TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
   EXPECT_EQ(r.conformity.conforming, 1u);
 }
 
+TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
+  // A 4 x 4 square sheet at z = 10 and a lone triangle 0.2 voxel above it, tilted by ~2
+  // degrees: TetGen would fill the 0.2-voxel wedge between them with slivers.
+  TriangleMesh fragment;
+  fragment.vertices = {{6, 6, 10.2}, {11, 6, 10.2}, {6, 11, 10.37}};
+  fragment.faces = {{0, 1, 2}};
+  fragment.face_piece = {1};
+  fragment.face_thickness = {2};
+  const TriangleMesh m = Append(Square(4, 16, 10, 4), fragment);
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
+  EXPECT_EQ(plc.dropped_overlaps, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 32u);
+  for (int32_t piece : plc.sheet_piece) EXPECT_EQ(piece, 0);
+  // Off: kept (and TetGen meshes the wedge).
+  PlcOptions keep;
+  keep.overlap_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(m, {20, 20, 20}, {}, keep));
+  EXPECT_EQ(kept.dropped_overlaps, 0u);
+  EXPECT_EQ(kept.sheet_triangles.size(), 33u);
+  // The volume mesh without the fragment has no sliver from it, and says what went.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
+  EXPECT_EQ(r.dropped_overlaps, 1u);
+  EXPECT_EQ(r.conformity.conforming, 32u);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult with, BuildVolumeMesh(m, {20, 20, 20}, {}, [] {
+                            VolumeMeshOptions o;
+                            o.plc.overlap_voxels = 0;
+                            return o;
+                          }()));
+  EXPECT_EQ(with.conformity.conforming, 33u);
+  EXPECT_GT(r.quality.min_dihedral.min, with.quality.min_dihedral.min);
+}
+
+TEST(PlcTest, SheetsMeetingAtAnAngleOrFarApartAreNotOverlaps) {
+  // A vertical sheet whose rim ends 0.2 voxel above a horizontal one (a T, not parallel),
+  // and a parallel sheet 2 voxels above it (beyond the gap): nothing is dropped.
+  const TriangleMesh t = Append(Square(4, 16, 10, 4), Square(10.2, 16, 10, 2, 1, 3, 0));
+  SM_ASSERT_OK_AND_ASSIGN(Plc tee, BuildPlc(t, {20, 20, 20}, {}));
+  EXPECT_EQ(tee.dropped_overlaps, 0u);
+  const TriangleMesh parallel = Append(Square(4, 16, 10, 4), Square(6, 12, 12, 2, 1));
+  SM_ASSERT_OK_AND_ASSIGN(Plc par, BuildPlc(parallel, {20, 20, 20}, {}));
+  EXPECT_EQ(par.dropped_overlaps, 0u);
+  // Within a wider gap the parallel sheets do overlap, and rim triangles go.
+  PlcOptions wide;
+  wide.overlap_voxels = 3;
+  SM_ASSERT_OK_AND_ASSIGN(Plc close, BuildPlc(parallel, {20, 20, 20}, {}, wide));
+  EXPECT_GT(close.dropped_overlaps, 0u);
+  EXPECT_EQ(close.sheet_triangles.size() + close.dropped_overlaps, 40u);
+}
+
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
   // A vertical square piercing a horizontal one without sharing edges.
   TriangleMesh m = Append(Square(4, 15, 10, 2), Square(5, 14, 9.5, 2, 1, 3, /*axis=*/0));

@@ -110,8 +110,9 @@ ABSL_FLAG(int, improve_passes, 4,
           "volume: rounds of flips, smoothing and insertion on TetGen's output (0: none)");
 ABSL_FLAG(double, improve_target, 50,
           "volume: tetrahedra below this smallest dihedral angle (degrees) are improved");
-ABSL_FLAG(double, improve_insert, 20,
-          "volume: slivers below this angle after the flips get a new vertex (degrees; 0: none)");
+ABSL_FLAG(double, improve_insert, 50,
+          "volume: tetrahedra below this angle after the flips get a new vertex beside them "
+          "(degrees; 0: none)");
 ABSL_FLAG(double, improve_floor, 30,
           "volume: smoothing for the mean never lowers a vertex's worst tetrahedron below this");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");

@@ -68,6 +68,7 @@ class Improver {
     star_.resize(n);
     q_.resize(m_.tets.size());
     dead_.assign(m_.tets.size(), 0);
+    failed_.assign(m_.tets.size(), 0);
     for (uint32_t t = 0; t < m_.tets.size(); ++t) {
       for (uint32_t v : m_.tets[t]) star_[v].push_back(t);
       q_[t] = Quality(m_.tets[t]);
@@ -441,7 +442,10 @@ class Improver {
     }
     m_.nodes[v] = best;
     if (moved) {
-      for (uint32_t t : star) q_[t] = Quality(m_.tets[t]);
+      for (uint32_t t : star) {
+        q_[t] = Quality(m_.tets[t]);
+        failed_[t] = 0;
+      }
     }
     return moved;
   }
@@ -450,7 +454,11 @@ class Improver {
   // the tetrahedra around it (those whose circumsphere holds the point, grown or shrunk
   // until every face of the cavity's boundary sees the point, never across a facet), then
   // smooths it. Kept only if the cavity's worst tetrahedron improves.
-  bool InsertNear(uint32_t t) {
+  bool InsertNear(uint32_t t, double good_enough) {
+    // A sliver whose corners have not moved since its last failed try fails again (nearly
+    // always): most of the pass's time went into such retries.
+    if (failed_[t]) return false;
+    failed_[t] = 1;
     const Tet tet = m_.tets[t];
     // The new vertex goes inside the facets the sliver lies on (the sum of their inward
     // normals); in a crease of a sheet that may hide the facets of the slivers next to it,
@@ -501,7 +509,10 @@ class Improver {
     };
     Candidate best;
     for (const Vec3& n : directions) {
+      // The first candidate reaching good_enough is taken without trying the others.
+      if (best.quality >= good_enough) break;
       for (double h : {0.7, 0.45, 0.25}) {
+        if (best.quality >= good_enough) break;
         Candidate c;
         c.p = centre + n * (h * length);
         if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;
@@ -830,11 +841,13 @@ class Improver {
       free_.pop_back();
       m_.tets[t] = tet;
       dead_[t] = 0;
+      failed_[t] = 0;
       q_[t] = Quality(tet);
     } else {
       t = static_cast<uint32_t>(m_.tets.size());
       m_.tets.push_back(tet);
       dead_.push_back(0);
+      failed_.push_back(0);
       q_.push_back(Quality(tet));
     }
     for (uint32_t v : tet) star_[v].push_back(t);
@@ -844,6 +857,7 @@ class Improver {
   std::vector<std::vector<uint32_t>> star_;  // vertex -> live tetrahedra
   std::vector<double> q_;                    // per tetrahedron: smallest dihedral angle
   std::vector<uint8_t> dead_;
+  std::vector<uint8_t> failed_;  // per tetrahedron: insertion tried and failed, unchanged since
   std::vector<uint32_t> free_;  // dead slots to reuse
   std::vector<uint8_t> mask_;   // per vertex: bit k set = coordinate k may change
   std::vector<Slide> slide_;    // per vertex: sheet vertices that may slide
@@ -892,7 +906,8 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       if (!im.alive(t) || im.quality(t) >= options.target_degrees) continue;
       if (flip(t, -1)) {
         ++changes;
-      } else if (im.quality(t) < options.insert_below_degrees && im.InsertNear(t)) {
+      } else if (im.quality(t) < options.insert_below_degrees &&
+                 im.InsertNear(t, options.target_degrees)) {
         ++report->inserted_vertices;
         ++changes;
       }

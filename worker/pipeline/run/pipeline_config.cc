@@ -601,8 +601,7 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
     return bad("volume_mesh.overlap_voxels", o.volume.plc.overlap_voxels, "must be in [0, 10]");
   }
   if (!(o.volume.plc.overlap_degrees >= 0 && o.volume.plc.overlap_degrees < 90)) {
-    return bad("volume_mesh.overlap_degrees", o.volume.plc.overlap_degrees,
-               "must be in [0, 90)");
+    return bad("volume_mesh.overlap_degrees", o.volume.plc.overlap_degrees, "must be in [0, 90)");
   }
   const TetImproveOptions& im = o.volume.improve;
   if (!(im.passes >= 0 && im.passes <= 100)) {

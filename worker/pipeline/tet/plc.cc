@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 #include <numbers>
+#include <numeric>
 #include <set>
 
 #include "absl/container/flat_hash_map.h"
@@ -172,15 +172,17 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
     std::vector<double> area(n), lo_x(n), hi_x(n);
     std::vector<uint32_t> order(n);
     for (uint32_t f = 0; f < n; ++f) {
-      for (int k = 0; k < 3; ++k) rim[f] += edge_uses[key(s.faces[f][k], s.faces[f][(k + 1) % 3])] == 1;
+      for (int k = 0; k < 3; ++k)
+        rim[f] += edge_uses[key(s.faces[f][k], s.faces[f][(k + 1) % 3])] == 1;
       const Triangle t = corners(f);
       area[f] = Area(t);
       lo_x[f] = std::min({t[0].x, t[1].x, t[2].x}) - gap;
       hi_x[f] = std::max({t[0].x, t[1].x, t[2].x}) + gap;
       order[f] = f;
     }
-    std::sort(order.begin(), order.end(),
-              [&](uint32_t a, uint32_t b) { return lo_x[a] < lo_x[b] || (lo_x[a] == lo_x[b] && a < b); });
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return lo_x[a] < lo_x[b] || (lo_x[a] == lo_x[b] && a < b);
+    });
     std::vector<uint8_t> drop(n, 0);
     uint32_t count = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -201,7 +203,8 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
         }
         if (apart) continue;
         int shared = 0;
-        for (uint32_t x : s.faces[a]) shared += x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2];
+        for (uint32_t x : s.faces[a])
+          shared += x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2];
         if (shared >= 2) continue;
         const Vec3 na = AreaVector(ta), nb = AreaVector(tb);
         if (Norm(Cross(na, nb)) > max_sin * Norm(na) * Norm(nb)) continue;
@@ -405,8 +408,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     }
   }
   if (options.overlap_voxels > 0) {
-    plc.dropped_overlaps =
-        DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
+    plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
     kept.faces = st.faces;
   }
 

@@ -858,11 +858,11 @@ class Improver {
   std::vector<double> q_;                    // per tetrahedron: smallest dihedral angle
   std::vector<uint8_t> dead_;
   std::vector<uint8_t> failed_;  // per tetrahedron: insertion tried and failed, unchanged since
-  std::vector<uint32_t> free_;  // dead slots to reuse
-  std::vector<uint8_t> mask_;   // per vertex: bit k set = coordinate k may change
-  std::vector<Slide> slide_;    // per vertex: sheet vertices that may slide
-  std::vector<Vec3> axis_;      // per vertex: the plane's normal or the line's direction
-  std::vector<Vec3> anchor_;    // per sliding vertex: its position before any move
+  std::vector<uint32_t> free_;   // dead slots to reuse
+  std::vector<uint8_t> mask_;    // per vertex: bit k set = coordinate k may change
+  std::vector<Slide> slide_;     // per vertex: sheet vertices that may slide
+  std::vector<Vec3> axis_;       // per vertex: the plane's normal or the line's direction
+  std::vector<Vec3> anchor_;     // per sliding vertex: its position before any move
   absl::flat_hash_set<FaceKey> constrained_;
   const double floor_;  // smoothing for the mean keeps every star above min(worst, floor_)
 };

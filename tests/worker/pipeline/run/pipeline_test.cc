@@ -155,5 +155,30 @@ TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
   EXPECT_EQ(r.topology.inconsistent_edges, 0u);
 }
 
+TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
+  // The NETL sheet at r = 7 once gave TetGen output whose .face file listed sheet faces no
+  // tetrahedron had (TetGen's own vertex insertion), and rim triangles lying on the sheet
+  // filled the mesh with slivers below 0.01 degrees.
+  SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
+  o.input.selection = PhaseSelection::Labels({255});
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = 7;
+  o.score.hausdorff = false;
+  o.volume_mesh = true;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  EXPECT_GT(r.volume_conformity.sheet_triangles, 400u);
+  EXPECT_EQ(r.volume_conformity.conforming, r.volume_conformity.sheet_triangles);
+  EXPECT_EQ(r.volume_conformity.orphan_faces, 0u);
+  EXPECT_NEAR(r.volume_quality.volume, 200.0 * 42 * 100, 1e-9 * 200 * 42 * 100);
+  EXPECT_EQ(r.volume_quality.inverted, 0u);
+  EXPECT_GT(r.volume_dropped_overlaps, 0u);
+  EXPECT_GT(r.volume_quality.min_dihedral.min, 1.0);
+  EXPECT_GT(r.volume_quality.min_dihedral.mean, 45.0);
+  EXPECT_GT(r.volume_improvement.sliding_vertices, 0u);
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -10,6 +10,7 @@
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/core/file_util.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/tetgen_runner.h"
 
 namespace sheetmesh {
 namespace {
@@ -286,6 +287,17 @@ std::string FakeTetgen(const TempDir& tmp, const std::string& body) {
   EXPECT_TRUE(WriteFileAtomically(path, "#!/bin/sh\n" + body + "\n").ok());
   std::filesystem::permissions(path, std::filesystem::perms::owner_all);
   return path;
+}
+
+TEST(VolumeMesherTest, TetgenSwitchesLeaveOutTetgensOwnVertexInsertion) {
+  // -O2/3: TetGen's flips and smoothing only; its vertex insertion/deletion (operation 4)
+  // listed facet faces no tetrahedron had.
+  EXPECT_EQ(TetgenSwitches({}), "-pzQq1.5/10O2/3");
+  TetgenOptions o;
+  o.max_radius_edge_ratio = 0;
+  o.max_volume = 5;
+  o.steiner_on_sheets = false;
+  EXPECT_EQ(TetgenSwitches(o), "-pzQa5O2/3Y");
 }
 
 TEST(VolumeMesherTest, TetgenThatHangsIsKilledAtTheTimeLimit) {

@@ -158,55 +158,50 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
       }
     return false;
   };
-  auto key = [](uint32_t a, uint32_t b) {
-    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-  };
   uint32_t dropped = 0;
   for (int round = 0; round < 20; ++round) {
     const size_t n = s.faces.size();
-    absl::flat_hash_map<uint64_t, int> edge_uses;
-    for (const Face& f : s.faces) {
-      for (int k = 0; k < 3; ++k) ++edge_uses[key(f[k], f[(k + 1) % 3])];
-    }
+    // Rim edges per triangle (edges of one triangle only), areas, and bounding boxes grown
+    // by the gap.
     std::vector<int> rim(n, 0);
-    std::vector<double> area(n), lo_x(n), hi_x(n);
+    TriangleMesh faces_only;
+    faces_only.faces = s.faces;
+    const EdgeIndex edges(faces_only);
+    for (const EdgeIndex::Edge& e : edges.edges()) {
+      if (e.count == 1) ++rim[edges.faces(e)[0]];
+    }
+    std::vector<double> area(n);
+    std::vector<Vec3> lo(n), hi(n);
     std::vector<uint32_t> order(n);
     for (uint32_t f = 0; f < n; ++f) {
-      for (int k = 0; k < 3; ++k)
-        rim[f] += edge_uses[key(s.faces[f][k], s.faces[f][(k + 1) % 3])] == 1;
       const Triangle t = corners(f);
       area[f] = Area(t);
-      lo_x[f] = std::min({t[0].x, t[1].x, t[2].x}) - gap;
-      hi_x[f] = std::max({t[0].x, t[1].x, t[2].x}) + gap;
+      for (int k = 0; k < 3; ++k) {
+        lo[f][k] = std::min({t[0][k], t[1][k], t[2][k]}) - gap;
+        hi[f][k] = std::max({t[0][k], t[1][k], t[2][k]}) + gap;
+      }
       order[f] = f;
     }
+    // Sweep along x; pairs whose grown boxes meet on all three axes are tested.
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-      return lo_x[a] < lo_x[b] || (lo_x[a] == lo_x[b] && a < b);
+      return lo[a].x < lo[b].x || (lo[a].x == lo[b].x && a < b);
     });
     std::vector<uint8_t> drop(n, 0);
     uint32_t count = 0;
     for (size_t i = 0; i < n; ++i) {
       const uint32_t a = order[i];
-      for (size_t j = i + 1; j < n && lo_x[order[j]] <= hi_x[a]; ++j) {
+      for (size_t j = i + 1; j < n && lo[order[j]].x <= hi[a].x; ++j) {
         const uint32_t b = order[j];
         if (drop[a] || drop[b]) continue;
-        const Triangle ta = corners(a), tb = corners(b);
-        // Boxes apart, an edge shared (a fold there is the flips' business), or planes at an
-        // angle: no overlap.
-        bool apart = false;
-        for (int k = 1; k < 3 && !apart; ++k) {
-          const double alo = std::min({ta[0][k], ta[1][k], ta[2][k]}),
-                       ahi = std::max({ta[0][k], ta[1][k], ta[2][k]}),
-                       blo = std::min({tb[0][k], tb[1][k], tb[2][k]}),
-                       bhi = std::max({tb[0][k], tb[1][k], tb[2][k]});
-          apart = blo > ahi + gap || alo > bhi + gap;
-        }
-        if (apart) continue;
+        if (lo[b].y > hi[a].y || lo[a].y > hi[b].y || lo[b].z > hi[a].z || lo[a].z > hi[b].z)
+          continue;
+        // An edge shared (a fold there is the flips' business) or planes at an angle: no
+        // overlap.
         int shared = 0;
         for (uint32_t x : s.faces[a])
           shared += x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2];
         if (shared >= 2) continue;
-        const Vec3 na = AreaVector(ta), nb = AreaVector(tb);
+        const Vec3 na = AreaVector(corners(a)), nb = AreaVector(corners(b));
         if (Norm(Cross(na, nb)) > max_sin * Norm(na) * Norm(nb)) continue;
         if (!near_interior(a, b) && !near_interior(b, a)) continue;
         const uint32_t loser =

@@ -454,7 +454,7 @@ class Improver {
   // the tetrahedra around it (those whose circumsphere holds the point, grown or shrunk
   // until every face of the cavity's boundary sees the point, never across a facet), then
   // smooths it. Kept only if the cavity's worst tetrahedron improves.
-  bool InsertNear(uint32_t t, double good_enough) {
+  bool InsertNear(uint32_t t) {
     // A sliver whose corners have not moved since its last failed try fails again (nearly
     // always): most of the pass's time went into such retries.
     if (failed_[t]) return false;
@@ -509,10 +509,7 @@ class Improver {
     };
     Candidate best;
     for (const Vec3& n : directions) {
-      // The first candidate reaching good_enough is taken without trying the others.
-      if (best.quality >= good_enough) break;
       for (double h : {0.7, 0.45, 0.25}) {
-        if (best.quality >= good_enough) break;
         Candidate c;
         c.p = centre + n * (h * length);
         if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;
@@ -906,8 +903,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       if (!im.alive(t) || im.quality(t) >= options.target_degrees) continue;
       if (flip(t, -1)) {
         ++changes;
-      } else if (im.quality(t) < options.insert_below_degrees &&
-                 im.InsertNear(t, options.target_degrees)) {
+      } else if (im.quality(t) < options.insert_below_degrees && im.InsertNear(t)) {
         ++report->inserted_vertices;
         ++changes;
       }

@@ -44,9 +44,10 @@ SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop
 // Improves the sheet triangles TetGen must keep, since a thin or flat triangle forces tiny
 // tetrahedra and slivers around it: an edge between two triangles of one piece that are
 // nearly coplanar (normals within max_fold) is flipped where that raises the smaller of
-// the two triangles' smallest angles (Lawson's rule on the sheet); a flat cap (largest
-// angle over cap_degrees) whose long edge is on the sheet's rim is dropped, as it covers
-// almost nothing. No flip touches a `frozen` vertex. Returns the number of flips and drops.
+// the two triangles' smallest angles (Lawson's rule on the sheet). A flat triangle (largest
+// angle over cap_degrees) has its long edge flipped whatever the fold, and where no flip
+// applies and it has an edge on the sheet's rim it is dropped, as it covers almost nothing.
+// No flip touches a `frozen` vertex. Returns the number of flips and drops.
 std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std::vector<Vec3>& v,
                                                     const std::vector<uint8_t>& on_face,
                                                     const std::vector<uint8_t>& frozen,
@@ -75,48 +76,66 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
       }
       const uint32_t a = s.faces[f][longest], b = s.faces[f][(longest + 1) % 3],
                      c = s.faces[f][(longest + 2) % 3];
-      const std::vector<uint32_t>& across = edges[key(a, b)];
-      if (across.size() == 1 && hi > cap_degrees) {
+      const std::vector<uint32_t>& across = edges.at(key(a, b));
+      // A flat triangle's plane is ill-defined, so the facet it makes cuts the sheet at an
+      // arbitrary angle: inside the sheet its long edge is flipped whatever the fold (its
+      // obtuse vertex lies nearly on that edge, and the flip trades it and its neighbour
+      // for two halves of the neighbour); on the rim, where no flip applies, it is dropped,
+      // as it covers almost nothing.
+      const bool flat = hi > cap_degrees;
+      auto drop_it = [&] {
         drop[f] = touched[f] = 1;
         ++drops;
         ++dropped;
         ++changed;
+      };
+      if (flat && across.size() == 1) {
+        drop_it();
         continue;
       }
-      if (across.size() != 2) continue;
-      const uint32_t g = across[0] == f ? across[1] : across[0];
-      if (touched[g] || s.piece[f] != s.piece[g]) continue;
-      // g must run b -> a (consistent orientation); d is its third vertex.
-      int kb = -1;
-      for (int k = 0; k < 3; ++k) {
-        if (s.faces[g][k] == b && s.faces[g][(k + 1) % 3] == a) kb = k;
+      // Flips the edge a-b shared with g, the other triangle on it; false where that is not
+      // allowed or not better.
+      auto flip = [&]() -> bool {
+        if (across.size() != 2) return false;
+        const uint32_t g = across[0] == f ? across[1] : across[0];
+        if (touched[g] || s.piece[f] != s.piece[g]) return false;
+        // g must run b -> a (consistent orientation); d is its third vertex.
+        int kb = -1;
+        for (int k = 0; k < 3; ++k) {
+          if (s.faces[g][k] == b && s.faces[g][(k + 1) % 3] == a) kb = k;
+        }
+        if (kb < 0) return false;
+        const uint32_t d = s.faces[g][(kb + 2) % 3];
+        if (c == d || edges.contains(key(c, d)) || frozen[a] || frozen[b] || frozen[c] || frozen[d])
+          return false;
+        const Face nf = {a, d, c}, ng = {d, b, c};
+        const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf),
+                       tng = corners(ng);
+        if (!flat && AngleDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) return false;
+        if (AngleDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) return false;
+        const Vec3 up = AreaVector(tf) + AreaVector(tg);
+        if (Dot(AreaVector(tnf), up) <= 0 || Dot(AreaVector(tng), up) <= 0) return false;
+        const double old_min = std::min(lo, AngleRangeDegrees(tg).first);
+        const double new_min = std::min(AngleRangeDegrees(tnf).first, AngleRangeDegrees(tng).first);
+        if (new_min < old_min + 0.5) return false;
+        const bool in_box_face =
+            (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
+        if (in_box_face) return false;
+        const double af = Area(tf), ag = Area(tg);
+        const float t = static_cast<float>((s.thickness[f] * af + s.thickness[g] * ag) /
+                                           std::max(af + ag, 1e-300));
+        s.faces[f] = nf;
+        s.faces[g] = ng;
+        s.thickness[f] = s.thickness[g] = t;
+        touched[f] = touched[g] = 1;
+        return true;
+      };
+      if (flip()) {
+        ++flips;
+        ++changed;
+      } else if (flat && (edges.at(key(b, c)).size() == 1 || edges.at(key(c, a)).size() == 1)) {
+        drop_it();
       }
-      if (kb < 0) continue;
-      const uint32_t d = s.faces[g][(kb + 2) % 3];
-      if (c == d || edges.contains(key(c, d)) || frozen[a] || frozen[b] || frozen[c] || frozen[d])
-        continue;
-      const Face nf = {a, d, c}, ng = {d, b, c};
-      const Triangle tf = corners(s.faces[f]), tg = corners(s.faces[g]), tnf = corners(nf),
-                     tng = corners(ng);
-      if (AngleDegrees(AreaVector(tf), AreaVector(tg)) > max_fold) continue;
-      if (AngleDegrees(AreaVector(tnf), AreaVector(tng)) > max_fold) continue;
-      const Vec3 up = AreaVector(tf) + AreaVector(tg);
-      if (Dot(AreaVector(tnf), up) <= 0 || Dot(AreaVector(tng), up) <= 0) continue;
-      const double old_min = std::min(lo, AngleRangeDegrees(tg).first);
-      const double new_min = std::min(AngleRangeDegrees(tnf).first, AngleRangeDegrees(tng).first);
-      if (new_min < old_min + 0.5) continue;
-      const bool in_box_face =
-          (on_face[a] & on_face[d] & on_face[c]) || (on_face[d] & on_face[b] & on_face[c]);
-      if (in_box_face) continue;
-      const double af = Area(tf), ag = Area(tg);
-      const float t = static_cast<float>((s.thickness[f] * af + s.thickness[g] * ag) /
-                                         std::max(af + ag, 1e-300));
-      s.faces[f] = nf;
-      s.faces[g] = ng;
-      s.thickness[f] = s.thickness[g] = t;
-      touched[f] = touched[g] = 1;
-      ++flips;
-      ++changed;
     }
     if (dropped > 0) s = Without(s, drop);
     if (changed == 0) break;

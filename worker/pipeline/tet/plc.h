@@ -52,8 +52,9 @@ struct PlcOptions {
   // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
   // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
   // are within flip_fold_degrees is flipped where that raises their smallest angle (0:
-  // no flips, the sheet triangles are kept as given); a rim triangle with an angle over
-  // cap_degrees (it covers almost nothing) is dropped.
+  // no flips, the sheet triangles are kept as given). A flat triangle, with an angle over
+  // cap_degrees, has no plane to speak of: its long edge is flipped whatever the fold, or,
+  // where that cannot be and it lies on the rim (it covers almost nothing), it is dropped.
   double flip_fold_degrees = 15.0;
   double cap_degrees = 160.0;
   // A sheet triangle that runs within overlap_voxels of another one's interior, their

@@ -119,10 +119,11 @@ TEST(VolumeMesherTest, SheetsReachingTheBoxEndOnIt) {
 }
 
 // Two triangles of a flat quad split along its long diagonal a-b (a thin pair), with the
-// fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given.
-TriangleMesh ThinPair(double lift, int32_t piece_f, int32_t piece_g) {
+// fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given. c lies
+// `bulge` off a-b: at 1.5 its angle is ~163 degrees (a flat triangle), at 2.5 ~152.
+TriangleMesh ThinPair(double lift, int32_t piece_f, int32_t piece_g, double bulge = 1.5) {
   TriangleMesh m;
-  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 11.5, 20}, {20, 8.5, 20 + lift}};  // a b c d
+  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10 + bulge, 20}, {20, 8.5, 20 + lift}};  // a b c d
   m.faces = {{0, 1, 2}, {1, 0, 3}};
   m.face_piece = {piece_f, piece_g};
   m.face_thickness = {2, 4};
@@ -167,12 +168,45 @@ TEST(PlcTest, FlipsKeepPiecesFoldsAndCanBeTurnedOff) {
   EXPECT_EQ(kept.flipped_edges, 0u);
   EXPECT_TRUE(HasEdge(kept, {10, 10, 20}, {30, 10, 20}));
   // Two pieces meeting along an edge keep it.
-  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(0, 0, 1), {40, 20, 40}, {}));
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(0, 0, 1, 2.5), {40, 20, 40}, {}));
   EXPECT_EQ(pieces.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(pieces, {10, 10, 20}, {30, 10, 20}));
   // A fold (d lifted 3 voxels: the normals are ~60 degrees apart) is a shape, not noise.
-  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}));
+  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0, 2.5), {40, 20, 40}, {}));
   EXPECT_EQ(fold.flipped_edges, 0u);
   EXPECT_TRUE(HasEdge(fold, {10, 10, 20}, {30, 10, 20}));
+  EXPECT_EQ(fold.sheet_triangles.size(), 2u);
+}
+
+TEST(PlcTest, AFlatTriangleIsFlippedAwayAcrossAFoldOrDroppedOnTheRim) {
+  // c lies 1.5 voxels off the 20-voxel edge a-b (a ~163 degree angle), and g = b a d is
+  // folded ~60 degrees away: f's plane says nothing about the sheet, and TetGen would
+  // have to follow it. The flip trades f and g for two halves of g.
+  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}));
+  EXPECT_EQ(fold.flipped_edges, 1u);
+  EXPECT_EQ(fold.dropped_caps, 0u);
+  ASSERT_EQ(fold.sheet_triangles.size(), 2u);
+  EXPECT_TRUE(HasEdge(fold, {20, 11.5, 20}, {20, 8.5, 23}));
+  std::vector<Vec3> normals;
+  for (const Face& t : fold.sheet_triangles) {
+    const Triangle c = {fold.vertices[t[0]], fold.vertices[t[1]], fold.vertices[t[2]]};
+    EXPECT_LT(AngleRangeDegrees(c).second, 160.0);
+    normals.push_back(AreaVector(c));
+  }
+  EXPECT_LT(AngleDegrees(normals[0], normals[1]), 15.0);  // no new fold
+  // Where the two belong to different pieces no flip applies: f has edges on the rim, covers
+  // almost nothing and is dropped, its obtuse corner with it.
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(3, 0, 1), {40, 20, 40}, {}));
+  EXPECT_EQ(pieces.flipped_edges, 0u);
+  EXPECT_EQ(pieces.dropped_caps, 1u);
+  ASSERT_EQ(pieces.sheet_triangles.size(), 1u);
+  EXPECT_EQ(pieces.vertices.size(), 8u + 3u);  // box corners and g's corners
+  // With the flips off, the sheet triangles stay as given.
+  PlcOptions off;
+  off.flip_fold_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}, off));
+  EXPECT_EQ(kept.sheet_triangles.size(), 2u);
+  EXPECT_EQ(kept.flipped_edges + kept.dropped_caps, 0u);
 }
 
 TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {

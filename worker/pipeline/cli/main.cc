@@ -106,6 +106,10 @@ ABSL_FLAG(
 ABSL_FLAG(double, overlap, 0.5,
           "volume: drop a sheet's rim triangle that runs within this many voxels of another "
           "sheet, nearly parallel to it (it forces slivers); 0: keep them");
+ABSL_FLAG(double, lattice, 0,
+          "volume: seed TetGen with a graded body-centred cubic lattice off the sheets, spaced "
+          "this many times the sheets' median edge (0.85 is a good start; more tetrahedra, "
+          "better shaped); 0: none");
 ABSL_FLAG(int, improve_passes, 4,
           "volume: rounds of flips, smoothing and insertion on TetGen's output (0: none)");
 ABSL_FLAG(double, improve_target, 50,
@@ -302,6 +306,7 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
   if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
   if (Given("overlap")) o->volume.plc.overlap_voxels = absl::GetFlag(FLAGS_overlap);
+  if (Given("lattice")) o->volume.plc.lattice = absl::GetFlag(FLAGS_lattice);
   TetImproveOptions& im = o->volume.improve;
   if (Given("improve_passes")) im.passes = absl::GetFlag(FLAGS_improve_passes);
   if (Given("improve_target")) im.target_degrees = absl::GetFlag(FLAGS_improve_target);

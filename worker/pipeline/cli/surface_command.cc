@@ -145,6 +145,8 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   j["flipped_edges"] = r.flipped_edges;
   j["dropped_caps"] = r.dropped_caps;
   j["dropped_overlaps"] = r.dropped_overlaps;
+  j["seed_points"] = r.seed_points;
+  j["lattice_spacing"] = r.lattice_spacing;
   j["tetgen_seconds"] = r.tetgen_seconds;
   j["rederived_facets"] = r.rederived_facets;
   for (const auto& [name, value] : r.improvement.Fields()) j["improvement"][name] = value;

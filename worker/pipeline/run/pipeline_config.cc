@@ -464,6 +464,10 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.overlap_degrees);
                   }},
+                 {"lattice",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.lattice);
+                  }},
                  {"improve_passes",
                   [&](const Json& w, const std::string& q) {
                     return rd.Integer(w, q, &o->volume.improve.passes);
@@ -599,6 +603,9 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   }
   if (!(o.volume.plc.overlap_voxels >= 0 && o.volume.plc.overlap_voxels <= 10)) {
     return bad("volume_mesh.overlap_voxels", o.volume.plc.overlap_voxels, "must be in [0, 10]");
+  }
+  if (!(o.volume.plc.lattice == 0 || (o.volume.plc.lattice >= 0.25 && o.volume.plc.lattice <= 8))) {
+    return bad("volume_mesh.lattice", o.volume.plc.lattice, "must be 0 or in [0.25, 8]");
   }
   if (!(o.volume.plc.overlap_degrees >= 0 && o.volume.plc.overlap_degrees < 90)) {
     return bad("volume_mesh.overlap_degrees", o.volume.plc.overlap_degrees, "must be in [0, 90)");

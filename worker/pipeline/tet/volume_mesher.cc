@@ -146,6 +146,8 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.flipped_edges = plc.flipped_edges;
   r.dropped_caps = plc.dropped_caps;
   r.dropped_overlaps = plc.dropped_overlaps;
+  r.seed_points = plc.seed_points;
+  r.lattice_spacing = plc.lattice_spacing;
   const Vec3 ext = plc.box_hi - plc.box_lo;
   r.box_volume = std::abs(ext.x * ext.y * ext.z);
   const absl::Time start = absl::Now();

@@ -228,6 +228,81 @@ TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
   EXPECT_EQ(r.conformity.conforming, 1u);
 }
 
+TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
+  // A 40 x 40 square sheet of 8 x 8 quads (edges 5 and 7.07 voxels: median 5) in a 60^3
+  // box; the lattice at 1 x the median edge has spacing 5 next to the sheet.
+  const TriangleMesh sheet = Square(10, 50, 30, 8);
+  PlcOptions o;
+  o.lattice = 1.0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  EXPECT_NEAR(plc.lattice_spacing, 5.0, 1e-9);
+  ASSERT_GT(plc.seed_points, 0u);
+  const size_t first_seed = plc.vertices.size() - plc.seed_points;
+  EXPECT_EQ(first_seed, 8u + 81u);  // box corners, sheet vertices, then the seeds
+  for (const PlcFacet& f : plc.facets) {
+    for (const auto& poly : f.polygons) {
+      for (uint32_t v : poly) EXPECT_LT(v, first_seed) << "a seed on a facet";
+    }
+  }
+  std::vector<Triangle> tris;
+  for (const Face& f : plc.sheet_triangles) {
+    tris.push_back({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
+  }
+  auto distance = [&](const Vec3& p) {
+    double d2 = 1e300;
+    for (const Triangle& t : tris) d2 = std::min(d2, PointTriangleDistance2(p, t));
+    return std::sqrt(d2);
+  };
+  // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
+  // 5) reaches 0.6 * 5 + 2 * 5 = 13 from the sheet, level 1 (spacing 10) 33.
+  std::vector<Vec3> near, far;
+  for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
+    const Vec3& p = plc.vertices[i];
+    const double d = distance(p);
+    EXPECT_GT(d, 3.0 - 1e-9);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
+      EXPECT_LE(p[k], 59.5 - 3.0 + 1e-9);
+    }
+    (d <= 13.0 ? near : far).push_back(p);
+  }
+  ASSERT_FALSE(near.empty());
+  ASSERT_FALSE(far.empty());
+  auto closest_pair = [](const std::vector<Vec3>& pts) {
+    double best = 1e300;
+    for (size_t i = 0; i < pts.size(); ++i)
+      for (size_t j = i + 1; j < pts.size(); ++j) best = std::min(best, Norm(pts[i] - pts[j]));
+    return best;
+  };
+  // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
+  EXPECT_NEAR(closest_pair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
+  EXPECT_GE(closest_pair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+  // Off by default.
+  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}));
+  EXPECT_EQ(plain.seed_points, 0u);
+  EXPECT_EQ(plain.vertices.size(), first_seed);
+}
+
+TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {
+  const TriangleMesh sheet = Square(10, 30, 20, 4);  // edges 5 voxels, in a 40^3 box
+  VolumeMeshOptions plain, seeded;
+  seeded.plc.lattice = 0.85;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult a, BuildVolumeMesh(sheet, {40, 40, 40}, {}, plain));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult b, BuildVolumeMesh(sheet, {40, 40, 40}, {}, seeded));
+  EXPECT_EQ(a.seed_points, 0u);
+  EXPECT_GT(b.seed_points, 0u);
+  EXPECT_NEAR(b.lattice_spacing, 0.85 * 5, 1e-9);
+  EXPECT_EQ(b.conformity.conforming, b.conformity.sheet_triangles);
+  EXPECT_EQ(b.conformity.orphan_faces, 0u);
+  EXPECT_NEAR(b.quality.volume, b.box_volume, 1e-9 * b.box_volume);
+  EXPECT_GE(b.quality.min_dihedral.min, 10.0 - 1e-6);
+  EXPECT_GE(b.mesh.nodes.size(), 8u + 25u + b.seed_points);  // every seed is a node
+  // The lattice's near-ideal tetrahedra lift the means.
+  EXPECT_GT(b.quality.min_dihedral.mean, a.quality.min_dihedral.mean + 1.0)
+      << a.mesh.tets.size() << " vs " << b.mesh.tets.size() << " tets";
+  EXPECT_GT(b.quality.radius_aspect.mean, a.quality.radius_aspect.mean);
+}
+
 TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   // A 4 x 4 square sheet at z = 10 and a lone triangle 0.2 voxel above it, tilted by ~2
   // degrees: TetGen would fill the 0.2-voxel wedge between them with slivers.

@@ -174,11 +174,7 @@ std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleM
   SpatialGrid grid(cell);
   std::vector<Vec3> lo(mesh.faces.size()), hi(mesh.faces.size());
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto c = Corners(mesh, f);
-    lo[f] = {std::min({c[0].x, c[1].x, c[2].x}), std::min({c[0].y, c[1].y, c[2].y}),
-             std::min({c[0].z, c[1].z, c[2].z})};
-    hi[f] = {std::max({c[0].x, c[1].x, c[2].x}), std::max({c[0].y, c[1].y, c[2].y}),
-             std::max({c[0].z, c[1].z, c[2].z})};
+    TriangleBox(Corners(mesh, f), 0.0, &lo[f], &hi[f]);
     grid.Insert(f, lo[f], hi[f]);
   }
   std::vector<uint32_t> stamp(mesh.faces.size(), UINT32_MAX);

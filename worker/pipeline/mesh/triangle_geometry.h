@@ -3,6 +3,7 @@
 #ifndef SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_
 #define SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_
 
+#include <algorithm>
 #include <array>
 #include <utility>
 
@@ -16,6 +17,13 @@ using Triangle = std::array<Vec3, 3>;
 inline Vec3 AreaVector(const Triangle& t) { return Cross(t[1] - t[0], t[2] - t[0]); }
 inline double Area(const Triangle& t) { return 0.5 * Norm(AreaVector(t)); }
 inline Vec3 UnitNormal(const Triangle& t) { return Normalized(AreaVector(t)); }
+// The triangle's axis-aligned bounding box, grown by `grow` on every side.
+inline void TriangleBox(const Triangle& t, double grow, Vec3* lo, Vec3* hi) {
+  for (int k = 0; k < 3; ++k) {
+    (*lo)[k] = std::min({t[0][k], t[1][k], t[2][k]}) - grow;
+    (*hi)[k] = std::max({t[0][k], t[1][k], t[2][k]}) + grow;
+  }
+}
 
 // The smallest and the largest interior angle, degrees (a corner with a zero-length edge
 // counts as 0).

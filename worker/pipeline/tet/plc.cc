@@ -197,10 +197,7 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
     for (uint32_t f = 0; f < n; ++f) {
       const Triangle t = corners(f);
       area[f] = Area(t);
-      for (int k = 0; k < 3; ++k) {
-        lo[f][k] = std::min({t[0][k], t[1][k], t[2][k]}) - gap;
-        hi[f][k] = std::max({t[0][k], t[1][k], t[2][k]}) + gap;
-      }
+      TriangleBox(t, gap, &lo[f], &hi[f]);
       order[f] = f;
     }
     // Sweep along x; pairs whose grown boxes meet on all three axes are tested.
@@ -255,8 +252,10 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
   std::vector<Vec3> seeds;
   const Vec3 lo = plc.box_lo, hi = plc.box_hi;
   std::vector<Triangle> tris;
+  std::vector<Vec3> box_lo, box_hi;
   for (const Face& f : plc.sheet_triangles) {
     tris.push_back({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
+    TriangleBox(tris.back(), 0.0, &box_lo.emplace_back(), &box_hi.emplace_back());
   }
   double inner = kLatticeKeep * spacing;  // where this level starts
   for (int level = 0; level < kLatticeLevels; ++level) {
@@ -266,13 +265,7 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
     // Triangles near a point are found in a grid whose cells are as wide as the band's
     // outer edge, so a query touches at most 27 cells.
     SpatialGrid grid(outer);
-    for (uint32_t t = 0; t < tris.size(); ++t) {
-      Vec3 a = tris[t][0], b = tris[t][0];
-      for (const Vec3& p : tris[t]) {
-        for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], p[k]), b[k] = std::max(b[k], p[k]);
-      }
-      grid.Insert(t, a, b);
-    }
+    for (uint32_t t = 0; t < tris.size(); ++t) grid.Insert(t, box_lo[t], box_hi[t]);
     const double margin = kLatticeKeep * h;
     auto take = [&](const Vec3& p) {
       for (int k = 0; k < 3; ++k) {

@@ -177,6 +177,7 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
   if (p.has_tet_max_volume()) t.max_volume = p.tet_max_volume();
   if (p.has_tet_steiner_on_sheets()) t.steiner_on_sheets = p.tet_steiner_on_sheets();
   if (p.has_repair()) o.volume.plc.repair = p.repair();
+  if (p.has_volume_lattice()) o.volume.plc.lattice = p.volume_lattice();
   const absl::Status valid = ValidatePipelineOptions(o);
   if (!valid.ok()) return absl::InvalidArgumentError(absl::StrCat("parameters: ", valid.message()));
   return o;

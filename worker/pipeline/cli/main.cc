@@ -95,7 +95,9 @@ ABSL_FLAG(double, tet_ratio, 1.5,
 ABSL_FLAG(double, tet_min_dihedral, 10, "volume: smallest dihedral angle asked of TetGen, degrees");
 ABSL_FLAG(double, tet_max_volume, 0,
           "volume: largest tetrahedron volume, physical units^3 (0: none)");
-ABSL_FLAG(bool, tet_steiner, true, "volume: allow TetGen to add points on the sheets (false: -Y)");
+ABSL_FLAG(bool, tet_steiner, false,
+          "volume: allow TetGen to add points on the sheets and box (default false: -Y, each "
+          "sheet triangle stays one face and the box faces are seeded)");
 ABSL_FLAG(double, tet_time_limit, 600, "volume: seconds before TetGen is killed");
 ABSL_FLAG(double, tet_memory_gb, 8, "volume: memory limit of TetGen, GiB");
 ABSL_FLAG(std::string, tetgen, "tetgen", "volume: the TetGen program");
@@ -106,10 +108,10 @@ ABSL_FLAG(
 ABSL_FLAG(double, overlap, 0.5,
           "volume: drop a sheet's rim triangle that runs within this many voxels of another "
           "sheet, nearly parallel to it (it forces slivers); 0: keep them");
-ABSL_FLAG(double, lattice, 0,
+ABSL_FLAG(double, lattice, 0.85,
           "volume: seed TetGen with a graded body-centred cubic lattice off the sheets, spaced "
-          "this many times the sheets' median edge (0.85 is a good start; more tetrahedra, "
-          "better shaped); 0: none");
+          "this many times the sheets' median edge (smaller: more tetrahedra, better shaped); "
+          "0: none, TetGen places the points");
 ABSL_FLAG(int, improve_passes, 4,
           "volume: rounds of flips, smoothing and insertion on TetGen's output (0: none)");
 ABSL_FLAG(double, improve_target, 50,

@@ -159,6 +159,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     report.volume_flipped = volume.flipped_edges;
     report.volume_dropped_caps = volume.dropped_caps;
     report.volume_dropped_overlaps = volume.dropped_overlaps;
+    report.volume_box_points = volume.box_points;
     report.volume_seed_points = volume.seed_points;
     report.volume_improvement = volume.improvement;
     report.volume_rederived_facets = volume.rederived_facets;

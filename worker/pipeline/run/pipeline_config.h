@@ -21,9 +21,9 @@
 //                      "r_min": 2, "r_max": 0},
 //    "similarity": {"model": "face", "hausdorff": true, "grid_rates": [2, 3, 4]},
 //    "volume_mesh": {"enabled": false, "radius_edge_ratio": 1.5, "min_dihedral": 10,
-//                    "max_volume": 0, "steiner_on_sheets": true, "time_limit_seconds": 600,
+//                    "max_volume": 0, "steiner_on_sheets": false, "time_limit_seconds": 600,
 //                    "memory_limit_bytes": 8589934592, "tetgen": "tetgen", "repair": false,
-//                    "snap_voxels": 0.75},
+//                    "snap_voxels": 0.75, "lattice": 0.85},
 //    "output": {"formats": ["ply", "vtp", "obj"], "model": true,
 //               "volume_formats": ["vtu", "msh", "inp"]}}
 #ifndef SHEETMESH_WORKER_PIPELINE_RUN_PIPELINE_CONFIG_H_

@@ -1,6 +1,7 @@
 #include "worker/pipeline/tet/plc.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -248,9 +249,11 @@ constexpr double kLatticeKeep = 0.6;
 constexpr double kLatticeWidth = 2.0;
 constexpr int kLatticeLevels = 4;
 
-std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
-  std::vector<Vec3> seeds;
-  const Vec3 lo = plc.box_lo, hi = plc.box_hi;
+// Walks the seeding's levels, finest first: calls candidates(h, in_band) with level l's
+// spacing h = spacing · 2^l, where in_band(p) tells whether p's distance to the sheets
+// lies in that level's band.
+template <class Candidates>
+void ForEachLevel(const Plc& plc, double spacing, Candidates&& candidates) {
   std::vector<Triangle> tris;
   std::vector<Vec3> box_lo, box_hi;
   for (const Face& f : plc.sheet_triangles) {
@@ -266,11 +269,7 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
     // outer edge, so a query touches at most 27 cells.
     SpatialGrid grid(outer);
     for (uint32_t t = 0; t < tris.size(); ++t) grid.Insert(t, box_lo[t], box_hi[t]);
-    const double margin = kLatticeKeep * h;
-    auto take = [&](const Vec3& p) {
-      for (int k = 0; k < 3; ++k) {
-        if (p[k] < lo[k] + margin || p[k] > hi[k] - margin) return;
-      }
+    auto in_band = [&](const Vec3& p) {
       double near2 = std::numeric_limits<double>::infinity();
       const Vec3 r(outer, outer, outer);
       bool too_close = false;
@@ -279,9 +278,24 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
         near2 = std::min(near2, PointTriangleDistance2(p, tris[t]));
         too_close = near2 <= inner * inner;
       });
-      if (too_close) return;                       // a finer level's, or TetGen's
-      if (!last && near2 > outer * outer) return;  // a coarser level's
-      seeds.push_back(p);
+      if (too_close) return false;                    // a finer level's, or TetGen's
+      return last || near2 <= outer * outer;          // else a coarser level's
+    };
+    candidates(h, in_band);
+    inner = outer;
+  }
+}
+
+std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
+  std::vector<Vec3> seeds;
+  const Vec3 lo = plc.box_lo, hi = plc.box_hi;
+  ForEachLevel(plc, spacing, [&](double h, const auto& in_band) {
+    const double margin = kLatticeKeep * h;
+    auto take = [&](const Vec3& p) {
+      for (int k = 0; k < 3; ++k) {
+        if (p[k] < lo[k] + margin || p[k] > hi[k] - margin) return;
+      }
+      if (in_band(p)) seeds.push_back(p);
     };
     int64_t n[3];
     for (int k = 0; k < 3; ++k) n[k] = static_cast<int64_t>(std::floor((hi[k] - lo[k]) / h));
@@ -294,9 +308,61 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
         }
       }
     }
-    inner = outer;
-  }
+  });
   return seeds;
+}
+
+// A point on the box's surface: on the faces whose bits are set (bit `face`, as on_face).
+struct BoxPoint {
+  Vec3 p;
+  uint8_t on_face = 0;
+};
+
+// Points on the box's edges and faces for a TetGen that may add none there (-Y), graded
+// like the lattice: on each edge, points every h of their level; on each face, rows h
+// apart with every other row shifted by h/2 (triangles of angles near 63°, 63° and 53°),
+// kept kLatticeKeep · h off the face's edges. Sheet traces keep their band free, as for
+// the lattice.
+std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing) {
+  std::vector<BoxPoint> points;
+  const Vec3 lo = plc.box_lo, hi = plc.box_hi;
+  ForEachLevel(plc, spacing, [&](double h, const auto& in_band) {
+    const double margin = kLatticeKeep * h;
+    for (int k = 0; k < 3; ++k) {
+      const int a = (k + 1) % 3, b = (k + 2) % 3;
+      // The 4 edges along axis k.
+      for (int side = 0; side < 4; ++side) {
+        Vec3 p = lo;
+        p[a] = side & 1 ? hi[a] : lo[a];
+        p[b] = side & 2 ? hi[b] : lo[b];
+        const uint8_t bits = static_cast<uint8_t>((1 << (2 * a + (side & 1))) |
+                                                  (1 << (2 * b + (side & 2 ? 1 : 0))));
+        for (int64_t i = 1;; ++i) {
+          p[k] = lo[k] + i * h;
+          if (p[k] > hi[k] - margin) break;
+          if (p[k] >= lo[k] + margin && in_band(p)) points.push_back({p, bits});
+        }
+      }
+      // The 2 faces across axis k: rows along a, stepping in b.
+      for (int high = 0; high < 2; ++high) {
+        Vec3 p;
+        p[k] = high ? hi[k] : lo[k];
+        const uint8_t bits = static_cast<uint8_t>(1 << (2 * k + high));
+        for (int64_t j = 1;; ++j) {
+          p[b] = lo[b] + j * h;
+          if (p[b] > hi[b] - margin) break;
+          for (int64_t i = 0;; ++i) {
+            p[a] = lo[a] + (i + (j % 2 ? 0.5 : 0.0)) * h;
+            if (p[a] > hi[a] - margin) break;
+            if (p[a] >= lo[a] + margin && p[b] >= lo[b] + margin && in_band(p)) {
+              points.push_back({p, bits});
+            }
+          }
+        }
+      }
+    }
+  });
+  return points;
 }
 
 }  // namespace
@@ -508,6 +574,26 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.sheet_piece.push_back(st.piece[f]);
     plc.sheet_thickness.push_back(st.thickness[f]);
   }
+  // The sheets' median edge sets the spacing of the seeded points, so that the tetrahedra
+  // off the sheets are about as large as those on them.
+  double median_edge = 0;
+  if (!plc.sheet_triangles.empty()) {
+    std::vector<double> edges;
+    for (const Face& f : plc.sheet_triangles) {
+      for (int k = 0; k < 3; ++k)
+        edges.push_back(Norm(plc.vertices[f[(k + 1) % 3]] - plc.vertices[f[k]]));
+    }
+    std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+    median_edge = edges[edges.size() / 2];
+  }
+  // Points of the box's surface, when TetGen may add none there.
+  std::vector<BoxPoint> box_points;
+  const uint32_t first_box_point = static_cast<uint32_t>(plc.vertices.size());
+  if (options.seed_box && median_edge > 0) {
+    box_points = SeedBox(plc, (options.lattice > 0 ? options.lattice : 1.0) * median_edge);
+    for (const BoxPoint& b : box_points) plc.vertices.push_back(b.p);
+    plc.box_points = static_cast<uint32_t>(box_points.size());
+  }
   // Box faces. Corner c has bit 0 = x high, bit 1 = y high, bit 2 = z high. Each face is a
   // polygon through its 4 corners and the sheet vertices on its edges, in order, plus the
   // sheet edges and vertices that lie in it.
@@ -540,6 +626,14 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
         if (Norm(x - (pp + dir * t)) > 1e-9 * (1 + Norm(dir))) continue;
         along.emplace_back(t, index[i]);
       }
+      for (uint32_t i = 0; i < box_points.size(); ++i) {
+        const BoxPoint& bp = box_points[i];
+        if (!(bp.on_face & (1 << face)) || std::popcount(bp.on_face) != 2) continue;
+        const double t = Dot(bp.p - pp, dir) / Norm2(dir);
+        if (t <= 1e-12 || t >= 1 - 1e-12) continue;
+        if (Norm(bp.p - (pp + dir * t)) > 1e-9 * (1 + Norm(dir))) continue;
+        along.emplace_back(t, first_box_point + i);
+      }
       std::sort(along.begin(), along.end());
       for (const auto& [t, id] : along) polygon.push_back(id);
     }
@@ -568,22 +662,17 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       points.erase(u);
     }
     for (uint32_t p : points) facet.polygons.push_back({p});
+    for (uint32_t i = 0; i < box_points.size(); ++i) {
+      if (box_points[i].on_face == (1 << face)) facet.polygons.push_back({first_box_point + i});
+    }
     plc.facets.push_back(std::move(facet));
   }
   for (size_t t = 0; t < plc.sheet_triangles.size(); ++t) {
     const Face& f = plc.sheet_triangles[t];
     plc.facets.push_back({{{f[0], f[1], f[2]}}, kFirstSheetMarker + static_cast<int32_t>(t)});
   }
-  if (options.lattice > 0 && !plc.sheet_triangles.empty()) {
-    // The lattice's spacing follows the sheet triangles' median edge, so that the
-    // tetrahedra off the sheets are about as large as those on them.
-    std::vector<double> edges;
-    for (const Face& f : plc.sheet_triangles) {
-      for (int k = 0; k < 3; ++k)
-        edges.push_back(Norm(plc.vertices[f[(k + 1) % 3]] - plc.vertices[f[k]]));
-    }
-    std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
-    plc.lattice_spacing = options.lattice * edges[edges.size() / 2];
+  if (options.lattice > 0 && median_edge > 0) {
+    plc.lattice_spacing = options.lattice * median_edge;
     const std::vector<Vec3> seeds = SeedLattice(plc, plc.lattice_spacing);
     plc.seed_points = static_cast<uint32_t>(seeds.size());
     plc.vertices.insert(plc.vertices.end(), seeds.begin(), seeds.end());

@@ -39,6 +39,8 @@ struct Plc {
   uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;           // flat rim triangles dropped
   uint32_t dropped_overlaps = 0;       // rim triangles dropped for lying on another sheet
+  uint32_t box_points = 0;             // points seeded on the box's edges and faces
+                                       // (PlcOptions::seed_box), after the sheets' vertices
   uint32_t seed_points = 0;            // lattice points seeded off the sheets (the last
                                        // vertices, on no facet)
   double lattice_spacing = 0;          // physical units; 0 without seeding
@@ -69,9 +71,12 @@ struct PlcOptions {
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
   // spacing this many times the sheets' median edge, doubling every two spacings outward.
   // The lattice's tetrahedra are near-ideal (60° smallest dihedral angle), so the mean
-  // quality rises, for more tetrahedra (bench/RESULTS.md). 0: none, TetGen places all
-  // points.
-  double lattice = 0;
+  // quality rises (bench/RESULTS.md). 0: none, TetGen places all points.
+  double lattice = 0.85;
+  // Seeds the box's edges and faces with points, graded like the lattice (its spacing, or
+  // the median edge without one), embedded in the box facets. For a TetGen that may add
+  // no points on facets (-Y), which would otherwise keep each box face as two triangles.
+  bool seed_box = false;
 };
 
 // A pair of sheet triangles (indices into the input mesh) that cut through each other.

@@ -20,9 +20,10 @@ struct TetgenOptions {
   double max_radius_edge_ratio = 1.5;  // -q ratio (TetGen's default is 2.0); 0: no -q
   double min_dihedral_degrees = 10.0;  // -q /angle: the smallest dihedral angle asked for
   double max_volume = 0.0;             // -a, physical units^3; 0: none
-  bool steiner_on_sheets = true;       // false: -Y, TetGen adds no point on any facet (the
-                                       // box's included), so every sheet triangle stays one
-                                       // face, at the cost of quality near the facets
+  // false (the default): -Y, TetGen adds no point on any facet, so every sheet triangle
+  // stays one face; the box's faces must then carry their own points (PlcOptions::
+  // seed_box). true: TetGen may split facets while it refines.
+  bool steiner_on_sheets = false;
   double time_limit_seconds = 600.0;   // killed beyond this
   uint64_t memory_limit_bytes = uint64_t{8} << 30;  // address-space limit of the child
   std::string scratch_dir;                          // "" = $TMPDIR or /tmp

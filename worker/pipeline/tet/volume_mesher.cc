@@ -138,7 +138,11 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
                                                  const VolumeMeshOptions& options,
                                                  const Progress& progress) {
   VolumeMeshResult r;
-  SM_ASSIGN_OR_RETURN(Plc plc, BuildPlc(sheets, dims, placement, options.plc));
+  // A TetGen that may add no points on facets needs the box faces seeded, else they
+  // stay two triangles each.
+  PlcOptions plc_options = options.plc;
+  plc_options.seed_box = plc_options.seed_box || !options.tetgen.steiner_on_sheets;
+  SM_ASSIGN_OR_RETURN(Plc plc, BuildPlc(sheets, dims, placement, plc_options));
   r.snapped_vertices = plc.snapped_vertices;
   r.merged_vertices = plc.merged_vertices;
   r.dropped_triangles = plc.dropped_triangles;
@@ -146,6 +150,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.flipped_edges = plc.flipped_edges;
   r.dropped_caps = plc.dropped_caps;
   r.dropped_overlaps = plc.dropped_overlaps;
+  r.box_points = plc.box_points;
   r.seed_points = plc.seed_points;
   r.lattice_spacing = plc.lattice_spacing;
   const Vec3 ext = plc.box_hi - plc.box_lo;

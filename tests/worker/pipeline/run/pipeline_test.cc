@@ -177,7 +177,11 @@ TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
   EXPECT_GT(r.volume_dropped_overlaps, 0u);
   EXPECT_GT(r.volume_quality.min_dihedral.min, 1.0);
   EXPECT_GT(r.volume_quality.min_dihedral.mean, 45.0);
-  EXPECT_GT(r.volume_improvement.sliding_vertices, 0u);
+  // By default TetGen adds no point on a facet: each sheet triangle is one tetrahedron
+  // face, and the box faces and the space off the sheets are seeded.
+  EXPECT_EQ(r.volume_sheet_faces, r.volume_conformity.sheet_triangles);
+  EXPECT_GT(r.volume_box_points, 0u);
+  EXPECT_GT(r.volume_seed_points, 0u);
 }
 
 }  // namespace

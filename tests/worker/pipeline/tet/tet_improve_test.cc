@@ -120,9 +120,13 @@ TriangleMesh WavySquare(double a, double b, double z, int n, double wave) {
 TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
   const Dims dims{20, 20, 20};
+  // TetGen's own refinement, with points on the sheets and no lattice: the mesh with the
+  // most for the pass to do, and sheet points that slide.
   VolumeMeshOptions off;
   off.improve.passes = 0;
   off.tetgen.max_volume = 4;
+  off.tetgen.steiner_on_sheets = true;
+  off.plc.lattice = 0;
   VolumeMeshOptions on = off;
   on.improve = {};
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult before, BuildVolumeMesh(sheet, dims, {}, off));

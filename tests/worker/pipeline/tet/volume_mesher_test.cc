@@ -196,7 +196,9 @@ TEST(PlcTest, AFlatTriangleIsFlippedAwayAcrossAFoldOrDroppedOnTheRim) {
   EXPECT_LT(AngleDegrees(normals[0], normals[1]), 15.0);  // no new fold
   // Where the two belong to different pieces no flip applies: f has edges on the rim, covers
   // almost nothing and is dropped, its obtuse corner with it.
-  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(3, 0, 1), {40, 20, 40}, {}));
+  PlcOptions unseeded;
+  unseeded.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(3, 0, 1), {40, 20, 40}, {}, unseeded));
   EXPECT_EQ(pieces.flipped_edges, 0u);
   EXPECT_EQ(pieces.dropped_caps, 1u);
   ASSERT_EQ(pieces.sheet_triangles.size(), 1u);
@@ -277,8 +279,10 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
   EXPECT_NEAR(closest_pair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
   EXPECT_GE(closest_pair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
-  // Off by default.
-  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}));
+  // None at 0.
+  PlcOptions off;
+  off.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, off));
   EXPECT_EQ(plain.seed_points, 0u);
   EXPECT_EQ(plain.vertices.size(), first_seed);
 }
@@ -286,6 +290,7 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
 TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {
   const TriangleMesh sheet = Square(10, 30, 20, 4);  // edges 5 voxels, in a 40^3 box
   VolumeMeshOptions plain, seeded;
+  plain.plc.lattice = 0;
   seeded.plc.lattice = 0.85;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult a, BuildVolumeMesh(sheet, {40, 40, 40}, {}, plain));
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult b, BuildVolumeMesh(sheet, {40, 40, 40}, {}, seeded));
@@ -401,12 +406,13 @@ std::string FakeTetgen(const TempDir& tmp, const std::string& body) {
 TEST(VolumeMesherTest, TetgenSwitchesLeaveOutTetgensOwnVertexInsertion) {
   // -O2/3: TetGen's flips and smoothing only; its vertex insertion/deletion (operation 4)
   // listed facet faces no tetrahedron had.
-  EXPECT_EQ(TetgenSwitches({}), "-pzQq1.5/10O2/3");
+  // -Y by default: TetGen adds no point on a facet.
+  EXPECT_EQ(TetgenSwitches({}), "-pzQq1.5/10O2/3Y");
   TetgenOptions o;
   o.max_radius_edge_ratio = 0;
   o.max_volume = 5;
-  o.steiner_on_sheets = false;
-  EXPECT_EQ(TetgenSwitches(o), "-pzQa5O2/3Y");
+  o.steiner_on_sheets = true;
+  EXPECT_EQ(TetgenSwitches(o), "-pzQa5O2/3");
 }
 
 TEST(VolumeMesherTest, TetgenThatHangsIsKilledAtTheTimeLimit) {

@@ -552,6 +552,8 @@ TEST_F(ServiceTest, BadParametersAreInvalidArgumentNamingTheField) {
       {[](v1::PipelineParameters* p) { p->set_method("magic"); }, "parameters.method = 'magic'"},
       {[](v1::PipelineParameters* p) { p->set_tet_min_dihedral(80); },
        "parameters.tet_min_dihedral = 80"},
+      {[](v1::PipelineParameters* p) { p->set_volume_lattice(0.1); },
+       "parameters.volume_lattice = 0.1"},
       {[](v1::PipelineParameters* p) { p->set_config_json("{\"surface\": {\"rr\": 3}}"); }, "rr"},
       {[](v1::PipelineParameters* p) { p->set_config_json("{not json"); },
        "parameters.config_json"},

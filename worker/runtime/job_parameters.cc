@@ -112,6 +112,10 @@ absl::StatusOr<PipelineOptions> ToPipelineOptions(const v1::PipelineParameters& 
     return Bad("tet_min_dihedral", p.tet_min_dihedral(), "must be in [0, 70)");
   }
   SM_RETURN_IF_ERROR(not_negative("tet_max_volume", p.has_tet_max_volume(), p.tet_max_volume()));
+  if (p.has_volume_lattice() && p.volume_lattice() != 0 &&
+      !(p.volume_lattice() >= 0.25 && p.volume_lattice() <= 8)) {
+    return Bad("volume_lattice", p.volume_lattice(), "must be 0 (none) or in [0.25, 8]");
+  }
   for (int i = 0; i < p.labels_size(); ++i) {
     if (!std::isfinite(p.labels(i)))
       return Bad(absl::StrCat("labels[", i, "]"), p.labels(i), "must be finite");

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <filesystem>
 #include <set>
 
@@ -79,14 +80,103 @@ TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
   EXPECT_GT(r.quality.min_dihedral.mean, 40.0);
 }
 
-TEST(VolumeMesherTest, WithoutSteinerPointsOnSheetsEachTriangleStaysOneFace) {
-  VolumeMeshOptions o;
-  o.tetgen.steiner_on_sheets = false;
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
-                          BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, o));
+TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) {
+  // TetGen adds no point on a facet (-Y), so the box faces carry seeded points.
+  const TriangleMesh sheet = Square(10, 30, 20, 4);  // edges 5 voxels, in a 40^3 box
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, {40, 40, 40}, {}, {}));
   EXPECT_EQ(r.mesh.num_sheet_faces(), 32u);
   EXPECT_EQ(r.conformity.conforming, 32u);
+  EXPECT_EQ(r.conformity.orphan_faces, 0u);
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_GT(r.box_points, 0u);
+  EXPECT_GT(r.seed_points, 0u);
+  // Every box point is a node, and the box faces are triangulated on the box points and
+  // nothing else: by Euler's formula, a face with b points on its outline and i inside has
+  // 2i + b - 2 triangles, which over the 6 faces sums to 2 x (box points) + 12.
+  EXPECT_GE(r.mesh.nodes.size(), 8u + 25u + r.box_points + r.seed_points);
+  EXPECT_EQ(r.mesh.faces.size() - r.mesh.num_sheet_faces(), 12u + 2u * r.box_points);
+  // The angle asked of TetGen (10 degrees) holds, and the mean is well above TetGen's ~40
+  // (measured 54.0 degrees, radius aspect 0.85).
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
+  EXPECT_GT(r.quality.min_dihedral.mean, 50.0);
+  EXPECT_GT(r.quality.radius_aspect.mean, 0.82);
+  // With TetGen free to split facets, it does split the sheet triangles.
+  VolumeMeshOptions free;
+  free.tetgen.steiner_on_sheets = true;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(sheet, {40, 40, 40}, {}, free));
+  EXPECT_EQ(s.box_points, 0u);
+  EXPECT_GT(s.mesh.num_sheet_faces(), 32u);
+  EXPECT_EQ(s.conformity.conforming, 32u);
+}
+
+TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
+  // The 40 x 40 sheet of the lattice test below in a 60^3 box [-0.5, 59.5]^3, spacing 5:
+  // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33.
+  const TriangleMesh sheet = Square(10, 50, 30, 8);
+  PlcOptions o;
+  o.lattice = 1.0;
+  o.seed_box = true;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  ASSERT_GT(plc.box_points, 0u);
+  const uint32_t first = 8 + 81, end = first + plc.box_points;
+  ASSERT_EQ(plc.vertices.size(), end + plc.seed_points);
+  auto faces_of = [](const Vec3& p) {
+    int bits = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(p[k] + 0.5) < 1e-12) bits |= 1 << (2 * k);
+      if (std::abs(p[k] - 59.5) < 1e-12) bits |= 1 << (2 * k + 1);
+    }
+    return bits;
+  };
+  // Each box point is on the box, in the facet of each face it lies on, and nowhere else:
+  // points inside a face as a point of its facet, points on an edge in both faces' outlines.
+  std::vector<int> seen(plc.vertices.size(), 0);
+  for (size_t f = 0; f < plc.facets.size(); ++f) {
+    for (const auto& poly : plc.facets[f].polygons) {
+      for (uint32_t v : poly) {
+        if (v < first || v >= end) continue;
+        ASSERT_LT(f, 6u) << "box point " << v << " on a sheet facet";
+        EXPECT_TRUE(faces_of(plc.vertices[v]) & (1 << f)) << "box point " << v << " facet " << f;
+        EXPECT_EQ(poly.size() == 1, std::popcount(static_cast<unsigned>(
+                                        faces_of(plc.vertices[v]))) == 1);
+        seen[v] |= 1 << f;
+      }
+    }
+  }
+  std::vector<Vec3> near;
+  for (uint32_t v = first; v < end; ++v) {
+    const Vec3& p = plc.vertices[v];
+    const int bits = faces_of(p);
+    ASSERT_NE(bits, 0) << "box point " << v << " off the box";
+    EXPECT_EQ(seen[v], bits) << "box point " << v;
+    // 3 off the box's corners and edges of its own level, and off the sheet.
+    double d2 = 1e300;
+    for (const Face& t : plc.sheet_triangles) {
+      d2 = std::min(d2, PointTriangleDistance2(
+                            p, {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]}));
+    }
+    EXPECT_GT(std::sqrt(d2), 3.0 - 1e-9);
+    if (std::sqrt(d2) < 13.0) near.push_back(p);
+  }
+  // Each outline runs once round its face, in order: its length is the face's perimeter.
+  for (int f = 0; f < 6; ++f) {
+    const auto& outline = plc.facets[f].polygons[0];
+    double length = 0;
+    for (size_t i = 0; i < outline.size(); ++i) {
+      length += Norm(plc.vertices[outline[(i + 1) % outline.size()]] - plc.vertices[outline[i]]);
+    }
+    EXPECT_NEAR(length, 4 * 60.0, 1e-9) << "face " << f;
+  }
+  // Level 0 points are 5 apart along rows and edges.
+  ASSERT_GT(near.size(), 1u);
+  double closest = 1e300;
+  for (size_t i = 0; i < near.size(); ++i)
+    for (size_t j = i + 1; j < near.size(); ++j) closest = std::min(closest, Norm(near[i] - near[j]));
+  EXPECT_NEAR(closest, 5.0, 1e-9);
+  // Not seeded unless asked.
+  o.seed_box = false;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  EXPECT_EQ(plain.box_points, 0u);
 }
 
 TEST(VolumeMesherTest, CrossingSheetsMeetingAlongAnEdge) {

@@ -1,18 +1,19 @@
 #!/usr/bin/python3
 """Volume mesh: node and tet counts, Table 3 quality and wall time, against a peer.
 
-sheetmesh: `surface --volume_mesh` at r (the one-layer sheets as internal facets of the box,
-TetGen with sheetmesh's default switches). Peer: marching cubes (scikit-image) of the sheet
-phase, decimated with VTK's quadric decimation to the fewest triangles (from a ladder of
-multiples of sheetmesh's count) whose enclosed volume scores at least sheetmesh's
-similarity; that closed surface goes into a box one voxel larger on every side and the same
-TetGen switches mesh it. Both are scored by sheetmesh's scorer; the peer's tet quality is
-computed here with the same formulas (ALGORITHM §11).
+sheetmesh: `surface --volume_mesh` at r with its defaults (the one-layer sheets as internal
+facets of the box, TetGen adding no points on them). Peer: marching cubes (scikit-image) of
+the sheet phase, decimated with VTK's quadric decimation to the fewest triangles (from a
+ladder of multiples of sheetmesh's count) whose enclosed volume scores at least sheetmesh's
+similarity; that closed surface goes into a box one voxel larger on every side and TetGen
+meshes it with the same quality bound (`-pzQq1.5/10O2/3`, free to refine its facets). Both
+are scored by sheetmesh's scorer; the peer's tet quality is computed here with the same
+formulas (ALGORITHM §11).
 
-Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--lattice 0.85]
-Writes bench/out/volume_mesh.md and prints the table. With --lattice, sheetmesh seeds TetGen
-with its lattice at that spacing, the peer (which does not depend on it) is left out, and
-the table goes to bench/out/volume_mesh_lattice.md.
+Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--flags "--lattice=0" --tag NAME]
+Writes bench/out/volume_mesh.md and prints the table. With --flags (extra sheetmesh-pipeline
+flags, e.g. the 0.3 defaults "--lattice=0 --tet_steiner=true"), the peer (which does not
+depend on them) is left out and the table goes to bench/out/volume_mesh_NAME.md.
 """
 import argparse
 import json
@@ -29,12 +30,15 @@ import fidelity  # noqa: E402  (marching cubes + decimation peer, benchmark volu
 ROOT = fidelity.ROOT
 
 
-def ours(cli, raw, value, r, out_dir, lattice=0):
-    d = os.path.join(out_dir, "ours_vol_r%g%s" % (r, "_lattice%g" % lattice if lattice else ""))
+PEER_SWITCHES = "-pzQq1.5/10O2/3"
+
+
+def ours(cli, raw, value, r, out_dir, flags=(), tag=""):
+    d = os.path.join(out_dir, "ours_vol_r%g%s" % (r, "_" + tag if tag else ""))
     t = time.perf_counter()
     fidelity.run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--formats=ply",
-                  "--hausdorff=false", "--grid_rates=", "--volume_mesh", "--volume_formats=vtu",
-                  "--lattice=%g" % lattice])
+                  "--hausdorff=false", "--grid_rates=", "--volume_mesh", "--volume_formats=vtu"]
+                 + list(flags))
     wall = time.perf_counter() - t
     rep = json.load(open(os.path.join(d, "report.json")))
     return rep, wall
@@ -142,7 +146,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("build", nargs="?", default=os.path.join(ROOT, "build"))
     ap.add_argument("--r", type=float, default=7)
-    ap.add_argument("--lattice", type=float, default=0)
+    ap.add_argument("--flags", default="", help="extra sheetmesh-pipeline flags (peer left out)")
+    ap.add_argument("--tag", default="variant", help="names the output table with --flags")
     args = ap.parse_args()
     cli = os.path.join(args.build, "worker", "pipeline", "sheetmesh-pipeline")
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
@@ -156,7 +161,8 @@ def main():
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
         try:
-            rep, wall = ours(cli, raw, value, args.r, vdir, args.lattice)
+            rep, wall = ours(cli, raw, value, args.r, vdir, args.flags.split(),
+                             args.tag if args.flags else "")
         except subprocess.CalledProcessError as e:
             line = "| %s | %d | volume stage failed: %s |" % (name, dims[0] * dims[1] * dims[2],
                                                            (e.stderr or "").strip().splitlines()[-1])
@@ -167,8 +173,8 @@ def main():
         sim = rep["similarity"]["similarity"]
         tri = rep["surface"]["triangles"]
         vox = dims[0] * dims[1] * dims[2]
-        p = ({"error": ["not run (--lattice)"]} if args.lattice else
-             peer(cli, raw, dims, value, tri, sim, vm["parameters"]["tetgen_switches"], vdir))
+        p = ({"error": ["not run (--flags)"]} if args.flags else
+             peer(cli, raw, dims, value, tri, sim, PEER_SWITCHES, vdir))
         if "error" in p:
             peer_cols = "%s | | | | |" % "; ".join(p["error"])
         else:
@@ -181,7 +187,7 @@ def main():
             q["radius_aspect"]["mean"], rep["seconds"]["volume"], wall, peer_cols)
         print(line, flush=True)
         lines.append(line)
-    name = "volume_mesh_lattice.md" if args.lattice else "volume_mesh.md"
+    name = "volume_mesh_%s.md" % args.tag if args.flags else "volume_mesh.md"
     with open(os.path.join(out_root, "..", name), "w") as f:
         f.write("\n".join(lines) + "\n")
 

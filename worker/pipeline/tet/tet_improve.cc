@@ -58,7 +58,8 @@ std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
 bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
 
 constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
-constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedra
+constexpr int kMaxRing = 7;
+constexpr double kWideSearchDegrees = 15.0;  // below this, insertion tries many more points     // edge removal looks at rings of 3..7 tetrahedra
 
 class Improver {
  public:
@@ -507,9 +508,20 @@ class Improver {
       std::vector<Tet> fill;
       double quality = -1e300;
     };
+    // The worst tetrahedra (a handful per mesh, wedged between sheets) also try the 26
+    // directions of a cube's faces, edges and corners.
+    std::vector<double> heights = {0.7, 0.45, 0.25};
+    if (q_[t] < kWideSearchDegrees) {
+      for (int x = -1; x <= 1; ++x)
+        for (int y = -1; y <= 1; ++y)
+          for (int z = -1; z <= 1; ++z) {
+            if (x || y || z) directions.push_back(Normalized(Vec3(x, y, z)));
+          }
+      heights.push_back(0.12);
+    }
     Candidate best;
     for (const Vec3& n : directions) {
-      for (double h : {0.7, 0.45, 0.25}) {
+      for (double h : heights) {
         Candidate c;
         c.p = centre + n * (h * length);
         if (!Cavity(t, c.p, &c.cavity, &c.fill)) continue;

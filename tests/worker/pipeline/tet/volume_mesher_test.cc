@@ -109,6 +109,17 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
   EXPECT_EQ(s.conformity.conforming, 32u);
 }
 
+TEST(VolumeMesherTest, WithoutSheetsTheBoxIsStillFilled) {
+  // No sheet, so no length scale to seed by: no seeds, and the box is meshed as it is.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(TriangleMesh{}, {10, 20, 30}, {}, {}));
+  EXPECT_EQ(r.box_points + r.seed_points, 0u);
+  EXPECT_EQ(r.mesh.num_sheet_faces(), 0u);
+  EXPECT_GT(r.mesh.tets.size(), 0u);
+  EXPECT_NEAR(r.quality.volume, 10.0 * 20 * 30, 1e-9 * 6000);
+  EXPECT_EQ(r.quality.inverted, 0u);
+}
+
 TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   // The 40 x 40 sheet of the lattice test below in a 60^3 box [-0.5, 59.5]^3, spacing 5:
   // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33.

@@ -278,8 +278,8 @@ void ForEachLevel(const Plc& plc, double spacing, Candidates&& candidates) {
         near2 = std::min(near2, PointTriangleDistance2(p, tris[t]));
         too_close = near2 <= inner * inner;
       });
-      if (too_close) return false;                    // a finer level's, or TetGen's
-      return last || near2 <= outer * outer;          // else a coarser level's
+      if (too_close) return false;            // a finer level's, or TetGen's
+      return last || near2 <= outer * outer;  // else a coarser level's
     };
     candidates(h, in_band);
     inner = outer;
@@ -335,8 +335,8 @@ std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing) {
         Vec3 p = lo;
         p[a] = side & 1 ? hi[a] : lo[a];
         p[b] = side & 2 ? hi[b] : lo[b];
-        const uint8_t bits = static_cast<uint8_t>((1 << (2 * a + (side & 1))) |
-                                                  (1 << (2 * b + (side & 2 ? 1 : 0))));
+        const uint8_t bits =
+            static_cast<uint8_t>((1 << (2 * a + (side & 1))) | (1 << (2 * b + (side & 2 ? 1 : 0))));
         for (int64_t i = 1;; ++i) {
           p[k] = lo[k] + i * h;
           if (p[k] > hi[k] - margin) break;

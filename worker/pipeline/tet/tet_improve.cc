@@ -58,8 +58,9 @@ std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
 bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
 
 constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
-constexpr int kMaxRing = 7;
-constexpr double kWideSearchDegrees = 15.0;  // below this, insertion tries many more points     // edge removal looks at rings of 3..7 tetrahedra
+constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedra
+// Below this, insertion tries many more points (26 more directions and a closer one).
+constexpr double kWideSearchDegrees = 15.0;
 
 class Improver {
  public:

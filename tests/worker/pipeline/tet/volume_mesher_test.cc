@@ -148,8 +148,8 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
         if (v < first || v >= end) continue;
         ASSERT_LT(f, 6u) << "box point " << v << " on a sheet facet";
         EXPECT_TRUE(faces_of(plc.vertices[v]) & (1 << f)) << "box point " << v << " facet " << f;
-        EXPECT_EQ(poly.size() == 1, std::popcount(static_cast<unsigned>(
-                                        faces_of(plc.vertices[v]))) == 1);
+        EXPECT_EQ(poly.size() == 1,
+                  std::popcount(static_cast<unsigned>(faces_of(plc.vertices[v]))) == 1);
         seen[v] |= 1 << f;
       }
     }
@@ -182,7 +182,8 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   ASSERT_GT(near.size(), 1u);
   double closest = 1e300;
   for (size_t i = 0; i < near.size(); ++i)
-    for (size_t j = i + 1; j < near.size(); ++j) closest = std::min(closest, Norm(near[i] - near[j]));
+    for (size_t j = i + 1; j < near.size(); ++j)
+      closest = std::min(closest, Norm(near[i] - near[j]));
   EXPECT_NEAR(closest, 5.0, 1e-9);
   // Not seeded unless asked.
   o.seed_box = false;

@@ -331,8 +331,10 @@ class Improver {
       }
       return false;
     };
-    {
-      const Vec3 p = Place(v, start + masked(centroid - start));
+    // A candidate position is taken if it raises the star's worst, or its sum without
+    // lowering the worst below the floor (or below where it already is).
+    auto take_if_better = [&](const Vec3& target) {
+      const Vec3 p = Place(v, start + masked(target - start));
       double mn, sum;
       eval(p, &mn, &sum);
       if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
@@ -341,7 +343,8 @@ class Improver {
         cur_sum = sum;
         moved = true;
       }
-    }
+    };
+    take_if_better(centroid);
     // The optimal-Delaunay position: the volume-weighted mean of the star's circumcentres.
     {
       Vec3 odt{0, 0, 0};
@@ -354,17 +357,7 @@ class Improver {
         odt += cc * volume;
         weight += volume;
       }
-      if (weight > 0) {
-        const Vec3 p = Place(v, start + masked(odt / weight - start));
-        double mn, sum;
-        eval(p, &mn, &sum);
-        if (mn > cur_min + kGain || (mn >= std::min(cur_min, floor_) && sum > cur_sum + kGain)) {
-          best = p;
-          cur_min = mn;
-          cur_sum = sum;
-          moved = true;
-        }
-      }
+      if (weight > 0) take_if_better(odt / weight);
     }
     // Ascent on the worst tetrahedra: the direction that raises the two worst together.
     for (int iter = 0; iter < 8; ++iter) {

@@ -24,7 +24,7 @@ struct TetgenOptions {
   // stays one face; the box's faces must then carry their own points (PlcOptions::
   // seed_box). true: TetGen may split facets while it refines.
   bool steiner_on_sheets = false;
-  double time_limit_seconds = 600.0;   // killed beyond this
+  double time_limit_seconds = 600.0;                // killed beyond this
   uint64_t memory_limit_bytes = uint64_t{8} << 30;  // address-space limit of the child
   std::string scratch_dir;                          // "" = $TMPDIR or /tmp
   bool keep_scratch = false;                        // keep the scratch folder (debugging)

@@ -53,6 +53,23 @@ TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
   return a;
 }
 
+// The distance from p to the PLC's nearest sheet triangle.
+double DistanceToSheets(const Plc& plc, const Vec3& p) {
+  double d2 = 1e300;
+  for (const Face& t : plc.sheet_triangles) {
+    d2 = std::min(d2, PointTriangleDistance2(
+                          p, {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]}));
+  }
+  return std::sqrt(d2);
+}
+
+// The smallest distance between two of `pts`.
+double ClosestPair(const std::vector<Vec3>& pts) {
+  double best = 1e300;
+  for (size_t i = 0; i < pts.size(); ++i)
+    for (size_t j = i + 1; j < pts.size(); ++j) best = std::min(best, Norm(pts[i] - pts[j]));
+  return best;
+}
 TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
   Placement pl;
   pl.spacing = {0.5, 0.5, 0.5};
@@ -161,13 +178,9 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
     ASSERT_NE(bits, 0) << "box point " << v << " off the box";
     EXPECT_EQ(seen[v], bits) << "box point " << v;
     // 3 off the box's corners and edges of its own level, and off the sheet.
-    double d2 = 1e300;
-    for (const Face& t : plc.sheet_triangles) {
-      d2 = std::min(d2, PointTriangleDistance2(
-                            p, {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]}));
-    }
-    EXPECT_GT(std::sqrt(d2), 3.0 - 1e-9);
-    if (std::sqrt(d2) < 13.0) near.push_back(p);
+    const double d = DistanceToSheets(plc, p);
+    EXPECT_GT(d, 3.0 - 1e-9);
+    if (d < 13.0) near.push_back(p);
   }
   // Each outline runs once round its face, in order: its length is the face's perimeter.
   for (int f = 0; f < 6; ++f) {
@@ -180,11 +193,7 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   }
   // Level 0 points are 5 apart along rows and edges.
   ASSERT_GT(near.size(), 1u);
-  double closest = 1e300;
-  for (size_t i = 0; i < near.size(); ++i)
-    for (size_t j = i + 1; j < near.size(); ++j)
-      closest = std::min(closest, Norm(near[i] - near[j]));
-  EXPECT_NEAR(closest, 5.0, 1e-9);
+  EXPECT_NEAR(ClosestPair(near), 5.0, 1e-9);
   // Not seeded unless asked.
   o.seed_box = false;
   SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, o));
@@ -348,21 +357,12 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
       for (uint32_t v : poly) EXPECT_LT(v, first_seed) << "a seed on a facet";
     }
   }
-  std::vector<Triangle> tris;
-  for (const Face& f : plc.sheet_triangles) {
-    tris.push_back({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
-  }
-  auto distance = [&](const Vec3& p) {
-    double d2 = 1e300;
-    for (const Triangle& t : tris) d2 = std::min(d2, PointTriangleDistance2(p, t));
-    return std::sqrt(d2);
-  };
   // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
   // 5) reaches 0.6 * 5 + 2 * 5 = 13 from the sheet, level 1 (spacing 10) 33.
   std::vector<Vec3> near, far;
   for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
     const Vec3& p = plc.vertices[i];
-    const double d = distance(p);
+    const double d = DistanceToSheets(plc, p);
     EXPECT_GT(d, 3.0 - 1e-9);
     for (int k = 0; k < 3; ++k) {
       EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
@@ -372,15 +372,9 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   }
   ASSERT_FALSE(near.empty());
   ASSERT_FALSE(far.empty());
-  auto closest_pair = [](const std::vector<Vec3>& pts) {
-    double best = 1e300;
-    for (size_t i = 0; i < pts.size(); ++i)
-      for (size_t j = i + 1; j < pts.size(); ++j) best = std::min(best, Norm(pts[i] - pts[j]));
-    return best;
-  };
   // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
-  EXPECT_NEAR(closest_pair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
-  EXPECT_GE(closest_pair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+  EXPECT_NEAR(ClosestPair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
   // None at 0.
   PlcOptions off;
   off.lattice = 0;

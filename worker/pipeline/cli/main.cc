@@ -119,6 +119,10 @@ ABSL_FLAG(double, improve_target, 50,
 ABSL_FLAG(double, improve_insert, 50,
           "volume: tetrahedra below this angle after the flips get a new vertex beside them "
           "(degrees; 0: none)");
+ABSL_FLAG(double, improve_split, 15,
+          "volume: a tetrahedron below this angle that no new vertex off the sheets mends may "
+          "get one on a sheet face or edge beside it, splitting that face (degrees; 0: every "
+          "sheet triangle stays one face)");
 ABSL_FLAG(double, improve_floor, 30,
           "volume: smoothing for the mean never lowers a vertex's worst tetrahedron below this");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
@@ -314,6 +318,7 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("improve_target")) im.target_degrees = absl::GetFlag(FLAGS_improve_target);
   if (Given("improve_insert")) im.insert_below_degrees = absl::GetFlag(FLAGS_improve_insert);
   if (Given("improve_floor")) im.smoothing_floor_degrees = absl::GetFlag(FLAGS_improve_floor);
+  if (Given("improve_split")) im.split_sheets_below_degrees = absl::GetFlag(FLAGS_improve_split);
   if (Given("volume_formats")) {
     o->output.vtu = o->output.msh = o->output.inp = false;
     for (absl::string_view f :

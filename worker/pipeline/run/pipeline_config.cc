@@ -484,6 +484,10 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.improve.smoothing_floor_degrees);
                   }},
+                 {"improve_split_sheets_below_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.improve.split_sheets_below_degrees);
+                  }},
              });
        }},
       {"output",
@@ -623,6 +627,10 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   }
   if (!(im.smoothing_floor_degrees >= 0 && im.smoothing_floor_degrees <= 70.6)) {
     return bad("volume_mesh.improve_floor_degrees", im.smoothing_floor_degrees,
+               "must be in [0, 70.6]");
+  }
+  if (!(im.split_sheets_below_degrees >= 0 && im.split_sheets_below_degrees <= 70.6)) {
+    return bad("volume_mesh.improve_split_sheets_below_degrees", im.split_sheets_below_degrees,
                "must be in [0, 70.6]");
   }
   for (int k : o.score.grid_rates) {

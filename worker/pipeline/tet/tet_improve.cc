@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/time/clock.h"
 
@@ -36,6 +37,8 @@ std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
           {"face_removals", static_cast<double>(face_removals)},
           {"smoothing_moves", static_cast<double>(smoothing_moves)},
           {"inserted_vertices", static_cast<double>(inserted_vertices)},
+          {"sheet_face_splits", static_cast<double>(sheet_face_splits)},
+          {"sheet_edge_splits", static_cast<double>(sheet_edge_splits)},
           {"movable_vertices", movable_vertices},
           {"sliding_vertices", sliding_vertices},
           {"min_dihedral_before", min_dihedral_before},
@@ -64,8 +67,9 @@ constexpr double kWideSearchDegrees = 15.0;
 
 class Improver {
  public:
-  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, uint32_t input_nodes, double floor)
-      : m_(*mesh), floor_(floor) {
+  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, uint32_t input_nodes, double floor,
+           double split_below)
+      : m_(*mesh), floor_(floor), split_below_(split_below) {
     const size_t n = m_.nodes.size();
     star_.resize(n);
     q_.resize(m_.tets.size());
@@ -87,11 +91,15 @@ class Improver {
       }
     }
     const std::vector<uint8_t> off_box = mask_;
-    for (size_t f = 0; f < m_.faces.size(); ++f) {
+    sheet_faces_of_.resize(n);
+    for (uint32_t f = 0; f < m_.faces.size(); ++f) {
       const auto& face = m_.faces[f];
-      constrained_.insert(SortedFace(face[0], face[1], face[2]));
+      constrained_[SortedFace(face[0], face[1], face[2])] = f;
       if (m_.face_piece[f] >= 0) {
-        for (uint32_t v : face) mask_[v] = 0;
+        for (uint32_t v : face) {
+          mask_[v] = 0;
+          sheet_faces_of_[v].push_back(f);
+        }
       }
     }
     ClassifySheetNodes(input_nodes, off_box);
@@ -496,12 +504,6 @@ class Improver {
       for (int j = i + 1; j < 4; ++j) length += Norm(P(tet[i]) - P(tet[j]));
     length /= 6;
     const Vec3 centre = (P(tet[0]) + P(tet[1]) + P(tet[2]) + P(tet[3])) / 4.0;
-    struct Candidate {
-      Vec3 p;
-      std::vector<uint32_t> cavity;
-      std::vector<Tet> fill;
-      double quality = -1e300;
-    };
     // The worst tetrahedra (a handful per mesh, wedged between sheets) also try the 26
     // directions of a cube's faces, edges and corners.
     std::vector<double> heights = {0.7, 0.45, 0.25};
@@ -526,25 +528,243 @@ class Improver {
         if (c.quality > best.quality) best = std::move(c);
       }
     }
-    if (best.cavity.empty()) return false;
-    double current = 1e300;
-    for (uint32_t x : best.cavity) current = std::min(current, q_[x]);
-    if (!(best.quality > current + kGain)) return false;
+    auto gain = [&](const Candidate& c) {
+      double current = 1e300;
+      for (uint32_t x : c.cavity) current = std::min(current, q_[x]);
+      return c.quality - current;
+    };
+    // Where no point off the sheets lifts the sliver above split_below_, its corners are
+    // pinned by the sheets around it; a point on a sheet face or edge near it may do better.
+    if ((best.cavity.empty() || !(gain(best) > kGain) || best.quality < split_below_) &&
+        q_[t] < split_below_) {
+      Candidate split = BestSheetSplit(t);
+      if (!split.cavity.empty() && gain(split) > kGain && split.quality > best.quality) {
+        best = std::move(split);
+      }
+    }
+    if (best.cavity.empty() || !(gain(best) > kGain)) return false;
+    Apply(best);
+    return true;
+  }
+
+  // A candidate new vertex: its cavity and fill; for a point on a sheet, the sheet faces it
+  // splits (indices into m_.faces) and, on a sheet edge, that edge.
+  struct Candidate {
+    Vec3 p;
+    std::vector<uint32_t> cavity;
+    std::vector<Tet> fill;
+    double quality = -1e300;  // the fill's worst tetrahedron
+    std::vector<uint32_t> split;
+    std::array<uint32_t, 2> edge = {UINT32_MAX, UINT32_MAX};
+  };
+
+  // The best point on a sheet face or sheet edge of, or next to, sliver t: inside each sheet
+  // face holding an edge of t, its centroid and the feet of t's other corners; on each
+  // sheet edge of t (not on the box), its midpoint and the feet of t's other two corners.
+  // Such a point splits the face (into three) or every face on the edge (each into two), so
+  // the sheet faces still tile the input triangles.
+  Candidate BestSheetSplit(uint32_t t) {
+    const Tet tet = m_.tets[t];
+    Candidate best;
+    auto consider = [&](Candidate c, const std::vector<uint32_t>& seeds,
+                        const absl::flat_hash_set<FaceKey>& opened) {
+      std::vector<std::pair<uint32_t, uint32_t>> keep;
+      for (uint32_t f : c.split) {
+        const auto& face = m_.faces[f];
+        for (int i = 0; i < 3; ++i) {
+          const auto e = std::minmax(face[i], face[(i + 1) % 3]);
+          if (e != std::minmax(c.edge[0], c.edge[1])) keep.push_back(e);
+        }
+      }
+      if (!GrowCavity(c.p, seeds, opened, keep, &c.cavity, &c.fill)) return;
+      // Every split face's new pieces must be faces of the fill: each edge of a piece that
+      // does not end at p must be an edge of the cavity's boundary.
+      absl::flat_hash_set<std::pair<uint32_t, uint32_t>> rim;
+      for (const Tet& x : c.fill) {
+        for (int i = 0; i < 3; ++i) {
+          rim.insert(std::minmax(x[i], x[(i + 1) % 3]));
+        }
+      }
+      for (uint32_t f : c.split) {
+        const auto& face = m_.faces[f];
+        for (int i = 0; i < 3; ++i) {
+          const auto e = std::minmax(face[i], face[(i + 1) % 3]);
+          if (e != std::minmax(c.edge[0], c.edge[1]) && !rim.contains(e)) return;
+        }
+      }
+      c.quality = 1e300;
+      for (const Tet& x : c.fill) {
+        c.quality = std::min(c.quality, MinDihedralDegrees(P(x[0]), P(x[1]), P(x[2]), c.p));
+      }
+      if (c.quality > best.quality) best = std::move(c);
+    };
+    // Sheet faces holding an edge of t.
+    std::vector<uint32_t> faces;
+    for (uint32_t v : tet) {
+      for (uint32_t f : sheet_faces_of_[v]) {
+        int shared = 0;
+        for (uint32_t w : m_.faces[f]) shared += Has(tet, w);
+        if (shared >= 2) faces.push_back(f);
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    for (uint32_t f : faces) {
+      const auto face = m_.faces[f];
+      const Vec3 a = P(face[0]), b = P(face[1]), c = P(face[2]);
+      const Vec3 normal = Cross(b - a, c - a);
+      const double area2 = Norm2(normal);
+      if (!(area2 > 0)) continue;
+      const FaceKey key = SortedFace(face[0], face[1], face[2]);
+      std::vector<uint32_t> seeds;
+      for (uint32_t s : star_[face[0]]) {
+        if (Has(m_.tets[s], face[1]) && Has(m_.tets[s], face[2])) seeds.push_back(s);
+      }
+      if (seeds.size() != 2) continue;
+      // The sliver must go: it is a seed of the cavity too.
+      if (seeds[0] != t && seeds[1] != t) seeds.push_back(t);
+      // A grid of points well inside the face (barycentric sixths, none on an edge).
+      std::vector<Vec3> points;
+      for (int i = 1; i <= 4; ++i)
+        for (int j = 1; i + j <= 5; ++j) points.push_back((a * i + b * j + c * (6 - i - j)) / 6.0);
+      for (uint32_t w : tet) {
+        if (w == face[0] || w == face[1] || w == face[2]) continue;
+        // Barycentric coordinates of w's foot, kept 0.15 inside every edge.
+        const Vec3 q = P(w);
+        double l[3] = {Dot(Cross(c - b, q - b), normal) / area2,
+                       Dot(Cross(a - c, q - c), normal) / area2, 0};
+        l[2] = 1 - l[0] - l[1];
+        double sum = 0;
+        for (double& x : l) {
+          x = std::max(x, 0.15);
+          sum += x;
+        }
+        points.push_back((a * l[0] + b * l[1] + c * l[2]) / sum);
+      }
+      for (const Vec3& p : points) {
+        Candidate cand;
+        cand.p = p;
+        cand.split = {f};
+        consider(std::move(cand), seeds, {key});
+      }
+    }
+    // Sheet edges of t.
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const uint32_t u = tet[i], w = tet[j];
+        std::vector<uint32_t> split;
+        bool on_box = false;
+        for (uint32_t f : sheet_faces_of_[u]) {
+          const auto& face = m_.faces[f];
+          if (face[0] == w || face[1] == w || face[2] == w) split.push_back(f);
+        }
+        if (split.empty()) continue;
+        std::vector<uint32_t> ring;
+        absl::flat_hash_set<FaceKey> opened;
+        for (uint32_t s : star_[u]) {
+          if (!Has(m_.tets[s], w)) continue;
+          ring.push_back(s);
+          for (int f = 0; f < 4; ++f) {
+            const FaceKey key = TetFace(m_.tets[s], f);
+            const bool holds = std::find(key.begin(), key.end(), u) != key.end() &&
+                               std::find(key.begin(), key.end(), w) != key.end();
+            if (!holds) continue;
+            const auto it = constrained_.find(key);
+            if (it == constrained_.end()) continue;
+            if (m_.face_piece[it->second] < 0) on_box = true;
+            opened.insert(key);
+          }
+        }
+        if (on_box || opened.size() != split.size()) continue;
+        const Vec3 a = P(u), d = P(w) - P(u);
+        const double len2 = Norm2(d);
+        if (!(len2 > 0)) continue;
+        std::vector<double> along = {0.25, 0.375, 0.5, 0.625, 0.75};
+        for (uint32_t x : tet) {
+          if (x != u && x != w) along.push_back(std::clamp(Dot(P(x) - a, d) / len2, 0.2, 0.8));
+        }
+        for (double s : along) {
+          Candidate cand;
+          cand.p = a + d * s;
+          cand.split = split;
+          cand.edge = {u, w};
+          consider(std::move(cand), ring, opened);
+        }
+      }
+    return best;
+  }
+
+  // Inserts the candidate's vertex: its cavity's tetrahedra replaced by the fill; on a
+  // sheet, each split face replaced by its pieces (same input triangle, piece and
+  // thickness, same orientation) and the vertex free to slide in that face or edge.
+  void Apply(const Candidate& c) {
     const uint32_t v = static_cast<uint32_t>(m_.nodes.size());
-    m_.nodes.push_back(best.p);
+    m_.nodes.push_back(c.p);
     star_.emplace_back();
-    mask_.push_back(7);
-    slide_.push_back(Slide::kNone);
-    axis_.push_back({0, 0, 0});
-    anchor_.push_back(best.p);
-    for (uint32_t x : best.cavity) Kill(x);
-    for (Tet x : best.fill) {
+    sheet_faces_of_.emplace_back();
+    anchor_.push_back(c.p);
+    if (c.split.empty()) {
+      mask_.push_back(7);
+      slide_.push_back(Slide::kNone);
+      axis_.push_back({0, 0, 0});
+    } else if (c.edge[0] == UINT32_MAX) {
+      const auto& face = m_.faces[c.split[0]];
+      mask_.push_back(0);
+      slide_.push_back(Slide::kPlane);
+      axis_.push_back(Normalized(Cross(P(face[1]) - P(face[0]), P(face[2]) - P(face[0]))));
+      ++facet_splits_;
+    } else {
+      mask_.push_back(0);
+      slide_.push_back(Slide::kLine);
+      axis_.push_back(Normalized(P(c.edge[1]) - P(c.edge[0])));
+      ++edge_splits_;
+    }
+    for (uint32_t x : c.cavity) Kill(x);
+    for (Tet x : c.fill) {
       x[3] = v;
       Add(x);
     }
+    for (uint32_t f : c.split) {
+      const std::array<uint32_t, 3> face = m_.faces[f];
+      constrained_.erase(SortedFace(face[0], face[1], face[2]));
+      for (uint32_t w : face) {
+        auto& of = sheet_faces_of_[w];
+        of.erase(std::remove(of.begin(), of.end(), f), of.end());
+      }
+      std::vector<std::array<uint32_t, 3>> pieces;
+      for (int i = 0; i < 3; ++i) {
+        std::array<uint32_t, 3> piece = face;
+        if (c.edge[0] == UINT32_MAX) {
+          piece[(i + 2) % 3] = v;  // (face[i], face[i + 1], v)
+        } else if (face[i] == c.edge[0] || face[i] == c.edge[1]) {
+          piece[i] = v;
+        } else {
+          continue;
+        }
+        pieces.push_back(piece);
+      }
+      for (size_t k = 0; k < pieces.size(); ++k) {
+        uint32_t index = f;
+        if (k == 0) {
+          m_.faces[f] = pieces[k];
+        } else {
+          index = static_cast<uint32_t>(m_.faces.size());
+          const int32_t marker = m_.face_marker[f], piece = m_.face_piece[f];
+          const float thickness = m_.face_thickness[f];
+          m_.faces.push_back(pieces[k]);
+          m_.face_marker.push_back(marker);
+          m_.face_piece.push_back(piece);
+          m_.face_thickness.push_back(thickness);
+        }
+        constrained_[SortedFace(pieces[k][0], pieces[k][1], pieces[k][2])] = index;
+        for (uint32_t w : pieces[k]) sheet_faces_of_[w].push_back(index);
+      }
+    }
     Smooth(v);
-    return true;
   }
+
+  uint64_t facet_splits() const { return facet_splits_; }
+  uint64_t edge_splits() const { return edge_splits_; }
 
   // Writes the live tetrahedra back into the mesh.
   void Finish() {
@@ -694,12 +914,16 @@ class Improver {
   // Whether face f of cavity tetrahedron x bounds the cavity: its neighbour is outside, or
   // it is a facet's face (the cavity can reach both sides of a sheet around its rim; such
   // a face must stay, so it bounds the cavity on both sides and one side then fails to see
-  // the new vertex).
-  bool OnCavityBoundary(const absl::flat_hash_set<uint32_t>& in, uint32_t x, int f) const {
+  // the new vertex). Facets in `opened` are the ones the new vertex splits: they do not
+  // bound the cavity.
+  bool OnCavityBoundary(const absl::flat_hash_set<uint32_t>& in, uint32_t x, int f,
+                        const absl::flat_hash_set<FaceKey>& opened) const {
     const uint32_t y = Neighbor(x, f);
     if (y == UINT32_MAX || !in.contains(y)) return true;
-    const Tet& t = m_.tets[x];
-    return constrained_.contains(TetFace(t, f));
+    return Blocks(TetFace(m_.tets[x], f), opened);
+  }
+  bool Blocks(const FaceKey& face, const absl::flat_hash_set<FaceKey>& opened) const {
+    return constrained_.contains(face) && !opened.contains(face);
   }
 
   bool InCircumsphere(const Tet& t, const Vec3& p) const {
@@ -713,7 +937,6 @@ class Improver {
   // the domain on this side of the facets, or no valid cavity holds t.
   bool Cavity(uint32_t t, const Vec3& p, std::vector<uint32_t>* cavity, std::vector<Tet>* fill) {
     constexpr int kMaxWalk = 64;
-    constexpr size_t kMaxCavity = 128;
     // Walk from t to the tetrahedron holding p.
     uint32_t at = t;
     for (int step = 0;; ++step) {
@@ -740,14 +963,25 @@ class Improver {
       at = Neighbor(at, exit);
       if (at == UINT32_MAX) return false;
     }
-    absl::flat_hash_set<uint32_t> in = {at, t};
-    std::vector<uint32_t> queue = {at, t};
+    return GrowCavity(p, {at, t}, {}, {}, cavity, fill);
+  }
+
+  // The cavity of point p grown from the `seeds` (which it must keep: those p lies in or
+  // on) and its fill, as for Cavity. The facets in `opened` (those p lies on) are split by
+  // p: the cavity spans both their sides, and must keep their edges, given in `keep`, on
+  // its boundary (not all the tetrahedra around one inside).
+  bool GrowCavity(const Vec3& p, const std::vector<uint32_t>& seeds,
+                  const absl::flat_hash_set<FaceKey>& opened,
+                  const std::vector<std::pair<uint32_t, uint32_t>>& keep,
+                  std::vector<uint32_t>* cavity, std::vector<Tet>* fill) {
+    constexpr size_t kMaxCavity = 128;
+    absl::flat_hash_set<uint32_t> in(seeds.begin(), seeds.end());
+    std::vector<uint32_t> queue(seeds.begin(), seeds.end());
     while (!queue.empty() && in.size() < kMaxCavity) {
       const uint32_t x = queue.back();
       queue.pop_back();
       for (int f = 0; f < 4; ++f) {
-        const auto face = InwardFace(x, f);
-        if (constrained_.contains(SortedFace(face[0], face[1], face[2]))) continue;
+        if (Blocks(TetFace(m_.tets[x], f), opened)) continue;
         const uint32_t y = Neighbor(x, f);
         if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(m_.tets[y], p)) continue;
         in.insert(y);
@@ -759,7 +993,7 @@ class Improver {
     // A dropped tetrahedron never comes back, so this ends.
     absl::flat_hash_set<uint32_t> dropped;
     auto drop = [&](uint32_t x) {
-      if (x == t || x == at) return false;
+      if (std::find(seeds.begin(), seeds.end(), x) != seeds.end()) return false;
       in.erase(x);
       dropped.insert(x);
       return true;
@@ -769,17 +1003,15 @@ class Improver {
       std::vector<std::pair<uint32_t, int>> hidden;
       for (uint32_t x : Sorted(in)) {
         for (int f = 0; f < 4; ++f) {
-          if (!OnCavityBoundary(in, x, f)) continue;
+          if (!OnCavityBoundary(in, x, f, opened)) continue;
           const auto face = InwardFace(x, f);
           if (!(TetVolume(P(face[0]), P(face[1]), P(face[2]), p) > 0)) hidden.push_back({x, f});
         }
       }
       for (const auto& [x, f] : hidden) {
         if (!in.contains(x)) continue;
-        const auto face = InwardFace(x, f);
         const uint32_t y = Neighbor(x, f);
-        if (y != UINT32_MAX && !dropped.contains(y) &&
-            !constrained_.contains(SortedFace(face[0], face[1], face[2]))) {
+        if (y != UINT32_MAX && !dropped.contains(y) && !Blocks(TetFace(m_.tets[x], f), opened)) {
           in.insert(y);
         } else if (!drop(x)) {
           return false;
@@ -804,6 +1036,18 @@ class Improver {
           if (!any) return false;
         }
       }
+      for (const auto& [u, w] : keep) {
+        std::vector<uint32_t> around;
+        for (uint32_t s : star_[u]) {
+          if (Has(m_.tets[s], w)) around.push_back(s);
+        }
+        if (!std::all_of(around.begin(), around.end(),
+                         [&](uint32_t s) { return in.contains(s); })) {
+          continue;
+        }
+        inside = true;
+        if (std::none_of(around.begin(), around.end(), drop)) return false;
+      }
       if (!inside) break;
     }
     // Fill: p joined to every boundary face; every vertex of the cavity must stay on it.
@@ -813,7 +1057,7 @@ class Improver {
     for (uint32_t x : *cavity) {
       for (int f = 0; f < 4; ++f) {
         all.insert(m_.tets[x][f]);
-        if (!OnCavityBoundary(in, x, f)) continue;
+        if (!OnCavityBoundary(in, x, f, opened)) continue;
         const auto face = InwardFace(x, f);
         // Inward face (f0, f1, f2) with p on its positive side: (f0, f1, f2, p) is positive.
         fill->push_back({face[0], face[1], face[2], UINT32_MAX});
@@ -866,8 +1110,11 @@ class Improver {
   std::vector<Slide> slide_;     // per vertex: sheet vertices that may slide
   std::vector<Vec3> axis_;       // per vertex: the plane's normal or the line's direction
   std::vector<Vec3> anchor_;     // per sliding vertex: its position before any move
-  absl::flat_hash_set<FaceKey> constrained_;
-  const double floor_;  // smoothing for the mean keeps every star above min(worst, floor_)
+  absl::flat_hash_map<FaceKey, uint32_t> constrained_;  // facets' faces -> index in m_.faces
+  std::vector<std::vector<uint32_t>> sheet_faces_of_;   // vertex -> its sheet faces
+  const double floor_;        // smoothing for the mean keeps every star above min(worst, floor_)
+  const double split_below_;  // tetrahedra below this may split a sheet face or edge
+  uint64_t facet_splits_ = 0, edge_splits_ = 0;
 };
 
 }  // namespace
@@ -877,7 +1124,8 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
                             TetImproveReport* report, const Progress& progress) {
   const absl::Time start = absl::Now();
   *report = {};
-  Improver im(mesh, box_lo, box_hi, input_nodes, options.smoothing_floor_degrees);
+  Improver im(mesh, box_lo, box_hi, input_nodes, options.smoothing_floor_degrees,
+              options.split_sheets_below_degrees);
   report->movable_vertices = im.movable();
   report->sliding_vertices = im.sliding();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = im.MinMean();
@@ -933,6 +1181,8 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     if (changes == 0) break;
   }
   std::tie(report->min_dihedral_after, report->mean_dihedral_after) = im.MinMean();
+  report->sheet_face_splits = im.facet_splits();
+  report->sheet_edge_splits = im.edge_splits();
   im.Finish();
   report->seconds = absl::ToDoubleSeconds(absl::Now() - start);
   return status;

@@ -44,6 +44,13 @@ struct TetImproveOptions {
   // optimal Delaunay smoothing, and up the mean's gradient). A move for the mean may lower
   // the star's worst tetrahedron, but never below this angle or below where it already is.
   double smoothing_floor_degrees = 30.0;
+  // A tetrahedron below this that no point off the sheets lifts above it (its corners held
+  // by the sheets around it: a sheet vertex just off another sheet's face, a flat gap
+  // framed by sheet edges) may get its new vertex on a sheet face or sheet edge next to
+  // it, which splits that face in three or the faces on that edge in two. The sheet faces
+  // still tile every input triangle; only these few triangles become more than one face.
+  // 0 keeps every sheet face as it came from TetGen.
+  double split_sheets_below_degrees = 15.0;
 };
 
 struct TetImproveReport {
@@ -51,7 +58,9 @@ struct TetImproveReport {
   uint64_t edge_removals = 0;      // edges removed (3-2, 4-4, 5-6, ... flips)
   uint64_t face_removals = 0;      // 2-3 flips
   uint64_t smoothing_moves = 0;    // vertex moves accepted
-  uint64_t inserted_vertices = 0;  // new vertices off slivers
+  uint64_t inserted_vertices = 0;  // new vertices (off slivers, or on sheets next to them)
+  uint64_t sheet_face_splits = 0;  // of those, on a sheet face (splitting it in three)
+  uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
   uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)
   uint32_t sliding_vertices = 0;   // sheet vertices TetGen added, free within their sheet
                                    // triangle or along their sheet edge

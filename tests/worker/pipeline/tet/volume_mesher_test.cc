@@ -126,6 +126,70 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
   EXPECT_EQ(s.conformity.conforming, 32u);
 }
 
+// The 36 sheet triangles (24 vertices, voxel coordinates) around the worst tetrahedron
+// of the 192^3 phantom's volume mesh at r = 7, moved into a 56^3 box: where sheets meet,
+// two triangular gaps framed by sheet edges lie nearly in one plane, and with every
+// sheet triangle kept whole (-Y) the sliver between them has all four corners on sheets.
+TriangleMesh PhantomJunction() {
+  TriangleMesh m;
+  m.vertices = {
+      {38.5717, 44.8649, 25.0522}, {32.3411, 32.1136, 23.0660}, {29.7590, 37.6313, 28.5249},
+      {30.1685, 35.4181, 15.9297}, {26.2623, 45.1684, 20.2036}, {40.8566, 31.0954, 20.0773},
+      {28.6724, 28.9082, 9.5122},  {33.0913, 19.3873, 18.4013}, {28.7829, 21.9877, 25.5706},
+      {31.8115, 17.9860, 26.5811}, {20.9569, 20.1665, 34.8380}, {32.8349, 48.4435, 37.5914},
+      {34.3266, 23.1402, 30.9897}, {33.5967, 26.5864, 22.2899}, {16.3610, 35.1879, 35.4050},
+      {24.3535, 40.2620, 26.3535}, {37.0706, 10.9787, 39.8335}, {33.2900, 20.5300, 33.3100},
+      {43.4162, 20.6744, 15.2814}, {19.9873, 45.5016, 39.9714}, {34.5279, 35.2977, 42.8106},
+      {24.3085, 16.7557, 27.5591}, {38.7093, 26.8192, 30.9065}, {19.2381, 40.5702, 41.1843}};
+  m.faces = {{1, 2, 3},   {1, 3, 5},    {1, 6, 3},    {7, 8, 9},   {1, 2, 5},   {2, 3, 0},
+             {10, 12, 8}, {1, 5, 13},   {7, 13, 8},   {14, 2, 1},  {1, 13, 2},  {2, 14, 15},
+             {2, 4, 0},   {2, 4, 3},    {7, 6, 13},   {2, 15, 4},  {6, 5, 13},  {12, 16, 17},
+             {12, 8, 13}, {2, 0, 5},    {2, 19, 0},   {2, 8, 12},  {2, 13, 8},  {10, 2, 12},
+             {14, 19, 2}, {12, 17, 9},  {12, 9, 8},   {13, 5, 18}, {7, 13, 18}, {14, 1, 10},
+             {10, 8, 21}, {16, 12, 22}, {13, 22, 12}, {11, 2, 23}, {20, 2, 11}, {2, 20, 23}};
+  m.face_piece.assign(m.faces.size(), 0);
+  m.face_thickness.assign(m.faces.size(), 2.f);
+  return m;
+}
+
+TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsStillTile) {
+  const TriangleMesh sheets = PhantomJunction();
+  const Dims dims{56, 56, 56};
+  VolumeMeshOptions whole;
+  whole.improve.split_sheets_below_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult a, BuildVolumeMesh(sheets, dims, {}, whole));
+  // Kept whole, each sheet triangle is one face and the sliver stays (2.88 degrees).
+  EXPECT_EQ(a.mesh.num_sheet_faces(), a.conformity.sheet_triangles);
+  EXPECT_EQ(a.improvement.sheet_face_splits + a.improvement.sheet_edge_splits, 0u);
+  EXPECT_LT(a.quality.min_dihedral.min, 5.0);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult b, BuildVolumeMesh(sheets, dims, {}, {}));
+  // By default a vertex on a sheet edge or face next to it mends it (10.6 degrees).
+  EXPECT_GT(b.improvement.sheet_face_splits + b.improvement.sheet_edge_splits, 0u);
+  EXPECT_GT(b.mesh.num_sheet_faces(), b.conformity.sheet_triangles);
+  EXPECT_GE(b.quality.min_dihedral.min, 10.0);
+  EXPECT_GT(b.quality.min_dihedral.mean, 48.0);
+  // Still conforming: every input triangle is exactly tiled by faces on it, carrying its
+  // piece and thickness; nothing inverted, the box filled.
+  EXPECT_EQ(b.conformity.conforming, b.conformity.sheet_triangles);
+  EXPECT_EQ(b.conformity.orphan_faces, 0u);
+  EXPECT_LT(b.conformity.worst_area_error, 1e-9);
+  EXPECT_EQ(b.quality.inverted, 0u);
+  EXPECT_NEAR(b.quality.volume, b.box_volume, 1e-9 * b.box_volume);
+  // The sheet faces cover what the whole triangles did (the PLC's, after its flips).
+  auto sheet_area = [](const TetMesh& mesh) {
+    double area = 0;
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (mesh.face_piece[f] < 0) continue;
+      EXPECT_EQ(mesh.face_piece[f], 0);
+      EXPECT_EQ(mesh.face_thickness[f], 2.f);
+      const auto& x = mesh.faces[f];
+      area += Area({mesh.nodes[x[0]], mesh.nodes[x[1]], mesh.nodes[x[2]]});
+    }
+    return area;
+  };
+  EXPECT_NEAR(sheet_area(b.mesh), sheet_area(a.mesh), 1e-9 * sheet_area(a.mesh));
+}
+
 TEST(VolumeMesherTest, WithoutSheetsTheBoxIsStillFilled) {
   // No sheet, so no length scale to seed by: no seeds, and the box is meshed as it is.
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,

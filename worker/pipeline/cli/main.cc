@@ -96,8 +96,8 @@ ABSL_FLAG(double, tet_min_dihedral, 10, "volume: smallest dihedral angle asked o
 ABSL_FLAG(double, tet_max_volume, 0,
           "volume: largest tetrahedron volume, physical units^3 (0: none)");
 ABSL_FLAG(bool, tet_steiner, false,
-          "volume: allow TetGen to add points on the sheets and box (default false: -Y, each "
-          "sheet triangle stays one face and the box faces are seeded)");
+          "volume: allow TetGen to add points on the sheets and box (default false: -Y, TetGen "
+          "keeps each sheet triangle one face and the box faces are seeded)");
 ABSL_FLAG(double, tet_time_limit, 600, "volume: seconds before TetGen is killed");
 ABSL_FLAG(double, tet_memory_gb, 8, "volume: memory limit of TetGen, GiB");
 ABSL_FLAG(std::string, tetgen, "tetgen", "volume: the TetGen program");

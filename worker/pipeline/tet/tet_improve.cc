@@ -559,8 +559,9 @@ class Improver {
   };
 
   // The best point on a sheet face or sheet edge of, or next to, sliver t: inside each sheet
-  // face holding an edge of t, its centroid and the feet of t's other corners; on each
-  // sheet edge of t (not on the box), its midpoint and the feet of t's other two corners.
+  // face holding an edge of t, a grid of ten points and the feet of t's other corners; on
+  // each sheet edge of t (not on the box), five points along it and the feet of t's other
+  // two corners. The cavity must hold t.
   // Such a point splits the face (into three) or every face on the edge (each into two), so
   // the sheet faces still tile the input triangles.
   Candidate BestSheetSplit(uint32_t t) {

@@ -6,7 +6,10 @@
 //    the ring around an edge: 3-2, 4-4, 5-6, ... flips) and 2-3 face removal, first for the
 //    worst tetrahedron they touch, then for the mean;
 //  - a new vertex off a sliver that the flips cannot mend, inserted into a star-shaped
-//    cavity that never crosses a facet;
+//    cavity that never crosses a facet; or, for the few slivers whose corners the sheets
+//    pin (split_sheets_below_degrees), a new vertex on a sheet face or sheet edge beside
+//    it, splitting that face in three or the faces on that edge in two, each piece keeping
+//    its input triangle, piece and thickness;
 //  - smoothing of the vertices: box vertices slide within their face or edge, so the
 //    domain is unchanged; the vertices TetGen added on a sheet slide within the sheet
 //    triangle or along the sheet edge they lie on, so the sheets are unchanged too (their
@@ -49,7 +52,8 @@ struct TetImproveOptions {
   // framed by sheet edges) may get its new vertex on a sheet face or sheet edge next to
   // it, which splits that face in three or the faces on that edge in two. The sheet faces
   // still tile every input triangle; only these few triangles become more than one face.
-  // 0 keeps every sheet face as it came from TetGen.
+  // 0 keeps every sheet face as it came from TetGen. Only tetrahedra below
+  // insert_below_degrees get a new vertex at all, so the lower of the two applies.
   double split_sheets_below_degrees = 15.0;
 };
 

@@ -71,7 +71,12 @@ class PythonClientTest(unittest.TestCase):
 
         job = self.client.mesh(self.volume, out, on_update=on_update, r=5)
         self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
-        self.assertEqual(stages, list(range(1, job.progress.stage_count + 1)))
+        # The watch starts once the job is created, so on a loaded machine the first stage
+        # (reading a small volume) may be over before it; from the first stage seen on, every
+        # stage is streamed, in order, up to the last.
+        self.assertTrue(stages, "no progress streamed")
+        self.assertLessEqual(stages[0], 2, stages)
+        self.assertEqual(stages, list(range(stages[0], job.progress.stage_count + 1)))
         names = {a.name for a in job.artifacts}
         self.assertTrue({"surface.ply", "report.json"} <= names, names)
         for a in job.artifacts:

@@ -586,12 +586,8 @@ class Improver {
           rim.insert(std::minmax(x[i], x[(i + 1) % 3]));
         }
       }
-      for (uint32_t f : c.split) {
-        const auto& face = m_.faces[f];
-        for (int i = 0; i < 3; ++i) {
-          const auto e = std::minmax(face[i], face[(i + 1) % 3]);
-          if (e != std::minmax(c.edge[0], c.edge[1]) && !rim.contains(e)) return;
-        }
+      for (const auto& e : keep) {
+        if (!rim.contains(e)) return;
       }
       c.quality = 1e300;
       for (const Tet& x : c.fill) {

@@ -123,8 +123,11 @@ ABSL_FLAG(double, improve_split, 15,
           "volume: a tetrahedron below this angle that no new vertex off the sheets mends may "
           "get one on a sheet face or edge beside it, splitting that face (degrees; 0: every "
           "sheet triangle stays one face)");
-ABSL_FLAG(double, improve_floor, 30,
+ABSL_FLAG(double, improve_floor, 20,
           "volume: smoothing for the mean never lowers a vertex's worst tetrahedron below this");
+ABSL_FLAG(double, improve_radius_weight, 0.5,
+          "volume: smoothing raises the mean of (1-w) x smallest dihedral angle + w x 70.53 "
+          "degrees x radius aspect (0: the dihedral angle alone)");
 ABSL_FLAG(bool, repair, false, "volume: drop the smaller of each pair of clashing sheet triangles");
 ABSL_FLAG(std::string, volume_formats, "vtu,msh,inp", "volume: files to write");
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
@@ -319,6 +322,9 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("improve_insert")) im.insert_below_degrees = absl::GetFlag(FLAGS_improve_insert);
   if (Given("improve_floor")) im.smoothing_floor_degrees = absl::GetFlag(FLAGS_improve_floor);
   if (Given("improve_split")) im.split_sheets_below_degrees = absl::GetFlag(FLAGS_improve_split);
+  if (Given("improve_radius_weight")) {
+    im.radius_weight = absl::GetFlag(FLAGS_improve_radius_weight);
+  }
   if (Given("volume_formats")) {
     o->output.vtu = o->output.msh = o->output.inp = false;
     for (absl::string_view f :

@@ -488,6 +488,10 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.improve.split_sheets_below_degrees);
                   }},
+                 {"improve_radius_weight",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.improve.radius_weight);
+                  }},
              });
        }},
       {"output",
@@ -632,6 +636,9 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   if (!(im.split_sheets_below_degrees >= 0 && im.split_sheets_below_degrees <= 70.6)) {
     return bad("volume_mesh.improve_split_sheets_below_degrees", im.split_sheets_below_degrees,
                "must be in [0, 70.6]");
+  }
+  if (!(im.radius_weight >= 0 && im.radius_weight <= 1)) {
+    return bad("volume_mesh.improve_radius_weight", im.radius_weight, "must be in [0, 1]");
   }
   for (int k : o.score.grid_rates) {
     if (k < 1) return bad("grid_rates", k, "must be >= 1");

@@ -10,6 +10,7 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/time/clock.h"
+#include "worker/pipeline/tet/tet_quality.h"
 
 namespace sheetmesh {
 
@@ -60,6 +61,7 @@ std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
 
 bool Has(const Tet& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v || t[3] == v; }
 
+constexpr double kRegularDihedral = 70.528779365509308;  // acos(1/3), degrees
 constexpr double kGain = 1e-6;  // degrees: the least rise that counts as an improvement
 constexpr int kMaxRing = 7;     // edge removal looks at rings of 3..7 tetrahedra
 // Below this, insertion tries many more points (26 more directions and a closer one).
@@ -67,9 +69,12 @@ constexpr double kWideSearchDegrees = 15.0;
 
 class Improver {
  public:
-  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, uint32_t input_nodes, double floor,
-           double split_below)
-      : m_(*mesh), floor_(floor), split_below_(split_below) {
+  Improver(TetMesh* mesh, const Vec3& lo, const Vec3& hi, uint32_t input_nodes,
+           const TetImproveOptions& options)
+      : m_(*mesh),
+        floor_(options.smoothing_floor_degrees),
+        radius_weight_(options.radius_weight),
+        split_below_(options.split_sheets_below_degrees) {
     const size_t n = m_.nodes.size();
     star_.resize(n);
     q_.resize(m_.tets.size());
@@ -292,7 +297,7 @@ class Improver {
     std::vector<uint32_t> ring;
     for (uint32_t t : star) {
       cur_min = std::min(cur_min, q_[t]);
-      cur_sum += q_[t];
+      cur_sum += Shape(m_.tets[t]);
       for (uint32_t w : m_.tets[t]) {
         if (w != v) ring.push_back(w);
       }
@@ -315,7 +320,7 @@ class Improver {
       for (uint32_t t : star) {
         const double q = Quality(m_.tets[t]);
         *mn = std::min(*mn, q);
-        *sum += q;
+        *sum += Shape(m_.tets[t]);
         if (q < 0) break;
       }
       m_.nodes[v] = start;
@@ -1066,6 +1071,13 @@ class Improver {
   double Quality(const Tet& t) const {
     return MinDihedralDegrees(P(t[0]), P(t[1]), P(t[2]), P(t[3]));
   }
+  // What the smoothing's second stage raises the star's sum of: the smallest dihedral
+  // angle blended with the radius aspect (TetImproveOptions::radius_weight).
+  double Shape(const Tet& t) const {
+    if (radius_weight_ == 0) return Quality(t);
+    const double ra = RadiusAspect(P(t[0]), P(t[1]), P(t[2]), P(t[3]));
+    return (1 - radius_weight_) * Quality(t) + radius_weight_ * kRegularDihedral * ra;
+  }
 
   void Kill(uint32_t t) {
     dead_[t] = 1;
@@ -1110,6 +1122,7 @@ class Improver {
   absl::flat_hash_map<FaceKey, uint32_t> constrained_;  // facets' faces -> index in m_.faces
   std::vector<std::vector<uint32_t>> sheet_faces_of_;   // vertex -> its sheet faces
   const double floor_;        // smoothing for the mean keeps every star above min(worst, floor_)
+  const double radius_weight_;  // the smoothing's mean shape (Shape)
   const double split_below_;  // tetrahedra below this may split a sheet face or edge
   uint64_t facet_splits_ = 0, edge_splits_ = 0;
 };
@@ -1121,8 +1134,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
                             TetImproveReport* report, const Progress& progress) {
   const absl::Time start = absl::Now();
   *report = {};
-  Improver im(mesh, box_lo, box_hi, input_nodes, options.smoothing_floor_degrees,
-              options.split_sheets_below_degrees);
+  Improver im(mesh, box_lo, box_hi, input_nodes, options);
   report->movable_vertices = im.movable();
   report->sliding_vertices = im.sliding();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = im.MinMean();

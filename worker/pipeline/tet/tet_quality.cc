@@ -41,12 +41,24 @@ TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) 
       dmin = std::min(dmin, std::acos(cosang) * 180.0 / std::numbers::pi);
     }
   s.min_dihedral_degrees = v > 0 ? dmin : 0;
+  s.radius_aspect = RadiusAspect(v, area, a, b, c, d);
+  return s;
+}
+
+double RadiusAspect(double volume, double area, const Vec3& a, const Vec3& b, const Vec3& c,
+                    const Vec3& d) {
   // Inradius 3V / A; circumradius from the circumcentre.
-  const double r_in = area > 0 ? 3 * v / area : 0;
+  const double r_in = area > 0 ? 3 * volume / area : 0;
   Vec3 cc;
   const double r_circ = Circumcentre(a, b, c, d, &cc) ? Norm(cc - a) : 0;
-  s.radius_aspect = r_circ > 0 ? 3 * r_in / r_circ : 0;
-  return s;
+  return r_circ > 0 ? 3 * r_in / r_circ : 0;
+}
+
+double RadiusAspect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double v = std::abs(TetVolume(a, b, c, d));
+  const double area = 0.5 * (Norm(Cross(c - b, d - b)) + Norm(Cross(d - a, c - a)) +
+                             Norm(Cross(b - a, d - a)) + Norm(Cross(c - a, b - a)));
+  return RadiusAspect(v, area, a, b, c, d);
 }
 
 namespace {

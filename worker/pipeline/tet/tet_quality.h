@@ -19,6 +19,12 @@ struct TetShape {
 };
 TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// 3 r_in / R_circ of the tetrahedron (1 when regular, 0 when flat).
+double RadiusAspect(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+// The same from its (unsigned) volume and total face area, when those are at hand.
+double RadiusAspect(double volume, double area, const Vec3& a, const Vec3& b, const Vec3& c,
+                    const Vec3& d);
+
 struct QualityStat {
   std::string name;
   double min = 0;

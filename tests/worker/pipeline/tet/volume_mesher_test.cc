@@ -623,5 +623,14 @@ TEST(TetQualityTest, RegularTetrahedronScoresOne) {
   EXPECT_LT(flat.radius_aspect, 0.05);
 }
 
+TEST(TetQualityTest, RadiusAspectOfTheCornerTetrahedronIsRootThreeMinusOne) {
+  // r_in = 1 / (3 + sqrt 3), R = sqrt 3 / 2: 3 r_in / R = sqrt 3 - 1.
+  const Vec3 o{0, 0, 0}, x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
+  EXPECT_NEAR(RadiusAspect(o, x, y, z), std::sqrt(3.0) - 1, 1e-12);
+  EXPECT_NEAR(RadiusAspect(o, y, x, z), std::sqrt(3.0) - 1, 1e-12);  // either orientation
+  EXPECT_NEAR(MeasureTet(o, x, y, z).radius_aspect, std::sqrt(3.0) - 1, 1e-12);
+  EXPECT_EQ(RadiusAspect(o, x, y, {2, 3, 0}), 0);  // flat
+}
+
 }  // namespace
 }  // namespace sheetmesh

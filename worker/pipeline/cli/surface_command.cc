@@ -141,6 +141,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
                   {"edge_aspect", stat(q.edge_aspect)},
                   {"radius_aspect", stat(q.radius_aspect)}};
   j["snapped_vertices"] = r.snapped_vertices;
+  j["snap_held_vertices"] = r.snap_held_vertices;
   j["repaired_triangles"] = r.repaired_triangles;
   j["flipped_edges"] = r.flipped_edges;
   j["dropped_caps"] = r.dropped_caps;

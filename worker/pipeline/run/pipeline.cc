@@ -155,6 +155,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     report.volume_quality = volume.quality;
     report.volume_conformity = volume.conformity;
     report.volume_snapped = volume.snapped_vertices;
+    report.volume_snap_held = volume.snap_held_vertices;
     report.volume_repaired = volume.repaired_triangles;
     report.volume_flipped = volume.flipped_edges;
     report.volume_dropped_caps = volume.dropped_caps;

@@ -108,6 +108,7 @@ struct PipelineReport {
   TetQuality volume_quality;
   Conformity volume_conformity;
   uint32_t volume_snapped = 0;
+  uint32_t volume_snap_held = 0;
   uint32_t volume_repaired = 0;
   uint32_t volume_flipped = 0;
   uint32_t volume_dropped_caps = 0;

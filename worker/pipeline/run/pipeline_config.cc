@@ -448,6 +448,10 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.snap_voxels);
                   }},
+                 {"snap_clear_voxels",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.snap_clear_voxels);
+                  }},
                  {"flip_fold_degrees",
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.flip_fold_degrees);
@@ -602,6 +606,10 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
     return bad("volume_mesh.time_limit_seconds", tg.time_limit_seconds, "must be positive");
   if (!(o.volume.plc.snap_voxels >= 0))
     return bad("volume_mesh.snap_voxels", o.volume.plc.snap_voxels, "must not be negative");
+  if (!(o.volume.plc.snap_clear_voxels >= 0 && o.volume.plc.snap_clear_voxels <= 10)) {
+    return bad("volume_mesh.snap_clear_voxels", o.volume.plc.snap_clear_voxels,
+               "must be in [0, 10]");
+  }
   if (!(o.volume.plc.flip_fold_degrees >= 0 && o.volume.plc.flip_fold_degrees < 90)) {
     return bad("volume_mesh.flip_fold_degrees", o.volume.plc.flip_fold_degrees,
                "must be in [0, 90)");

@@ -182,6 +182,7 @@ std::string PipelineReport::ToJson() const {
                         {"voxels_per_tetrahedron", voxels_per_tet},
                         {"volume", volume_quality.volume},
                         {"snapped_vertices", volume_snapped},
+                        {"snap_held_vertices", volume_snap_held},
                         {"repaired_triangles", volume_repaired},
                         {"flipped_edges", volume_flipped},
                         {"dropped_caps", volume_dropped_caps},

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "absl/container/flat_hash_map.h"
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "worker/pipeline/core/status_macros.h"
@@ -365,6 +366,100 @@ std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing) {
   return points;
 }
 
+// Merges vertices within `merge` of an earlier one into it (snapping can bring vertices
+// together): returns each vertex's representative; the faces a merged vertex lies on pass
+// to its representative.
+std::vector<uint32_t> MergeNearDuplicates(const std::vector<Vec3>& v, double merge,
+                                          std::vector<uint8_t>* on_face, uint32_t* merged) {
+  std::vector<uint32_t> rep(v.size());
+  std::iota(rep.begin(), rep.end(), 0u);
+  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> cells;
+  const double cell = std::max(merge, 1e-9) * 2;
+  auto key = [&](int64_t x, int64_t y, int64_t z) {
+    return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
+           (static_cast<uint64_t>(y & 0x1FFFFF) << 21) | static_cast<uint64_t>(z & 0x1FFFFF);
+  };
+  for (uint32_t i = 0; i < v.size(); ++i) {
+    const int64_t cx = std::llround(v[i].x / cell), cy = std::llround(v[i].y / cell),
+                  cz = std::llround(v[i].z / cell);
+    bool found = false;
+    for (int dz = -1; dz <= 1 && !found; ++dz)
+      for (int dy = -1; dy <= 1 && !found; ++dy)
+        for (int dx = -1; dx <= 1 && !found; ++dx) {
+          auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
+          if (it == cells.end()) continue;
+          for (uint32_t j : it->second) {
+            if (Norm(v[i] - v[j]) <= merge) {
+              rep[i] = j;
+              (*on_face)[j] |= (*on_face)[i];
+              found = true;
+              break;
+            }
+          }
+        }
+    if (found) {
+      ++*merged;
+    } else {
+      cells[key(cx, cy, cz)].push_back(i);
+    }
+  }
+  return rep;
+}
+
+// The sheets' triangles on the merged vertices that are still triangles and do not lie in
+// a box face (each once).
+SheetTriangles KeepTriangles(const TriangleMesh& sheets, const std::vector<Vec3>& v,
+                             const std::vector<uint32_t>& rep, const std::vector<uint8_t>& on_face,
+                             uint32_t* dropped) {
+  SheetTriangles st;
+  std::set<std::array<uint32_t, 3>> seen;
+  for (size_t f = 0; f < sheets.faces.size(); ++f) {
+    Face t = {rep[sheets.faces[f][0]], rep[sheets.faces[f][1]], rep[sheets.faces[f][2]]};
+    std::array<uint32_t, 3> s = t;
+    std::sort(s.begin(), s.end());
+    const bool in_face = (on_face[t[0]] & on_face[t[1]] & on_face[t[2]]) != 0;
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || in_face || !seen.insert(s).second ||
+        Area({v[t[0]], v[t[1]], v[t[2]]}) < 1e-9) {
+      ++*dropped;
+      continue;
+    }
+    st.faces.push_back(t);
+    st.source.push_back(static_cast<uint32_t>(f));
+    st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
+    st.thickness.push_back(
+        sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
+  }
+  return st;
+}
+
+// ImproveSheetTriangles, kept only where it makes no clash: a flip moves the sheet a
+// little, and where that makes it cut another sheet (near a crossing), the vertices of the
+// clash are frozen and the improvement starts over. Returns the flips and drops kept.
+std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::vector<Vec3>& v,
+                                                 const std::vector<uint8_t>& on_face,
+                                                 double fold_degrees, double cap_degrees) {
+  std::vector<uint8_t> frozen(v.size(), 0);
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    SheetTriangles better = st;
+    const auto [flips, drops] =
+        ImproveSheetTriangles(better, v, on_face, frozen, fold_degrees, cap_degrees);
+    if (flips == 0 && drops == 0) break;
+    TriangleMesh check;
+    check.vertices = v;
+    check.faces = better.faces;
+    const auto clash = FindSelfIntersections(check, 1000, 1.0);
+    if (clash.empty()) {
+      st = std::move(better);
+      return {flips, drops};
+    }
+    for (const auto& [a, b] : clash) {
+      for (uint32_t x : better.faces[a]) frozen[x] = 1;
+      for (uint32_t x : better.faces[b]) frozen[x] = 1;
+    }
+  }
+  return {0, 0};
+}
+
 }  // namespace
 
 std::string Plc::ToPoly() const {
@@ -400,102 +495,67 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   plc.box_lo = placement.ToPhysical(lo);
   plc.box_hi = placement.ToPhysical(hi);
 
-  // Snap vertices onto box faces; note which faces each lies on.
-  std::vector<Vec3> v = sheets.vertices;
-  std::vector<uint8_t> on_face(v.size(), 0);  // bit k: on box face k
-  for (size_t i = 0; i < v.size(); ++i) {
-    bool moved = false;
-    for (int k = 0; k < 3; ++k) {
-      if (v[i][k] - lo[k] < options.snap_voxels) {
-        moved |= v[i][k] != lo[k];
-        v[i][k] = lo[k];
-        on_face[i] |= 1 << (2 * k);
-      } else if (hi[k] - v[i][k] < options.snap_voxels) {
-        moved |= v[i][k] != hi[k];
-        v[i][k] = hi[k];
-        on_face[i] |= 1 << (2 * k + 1);
-      }
-    }
-    plc.snapped_vertices += moved;
-  }
-  // Merge near-duplicates (snapping can bring vertices together).
-  std::vector<uint32_t> rep(v.size());
-  std::iota(rep.begin(), rep.end(), 0u);
-  {
-    absl::flat_hash_map<uint64_t, std::vector<uint32_t>> cells;
-    const double cell = std::max(options.merge_voxels, 1e-9) * 2;
-    auto key = [&](int64_t x, int64_t y, int64_t z) {
-      return (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
-             (static_cast<uint64_t>(y & 0x1FFFFF) << 21) | static_cast<uint64_t>(z & 0x1FFFFF);
-    };
-    for (uint32_t i = 0; i < v.size(); ++i) {
-      const int64_t cx = std::llround(v[i].x / cell), cy = std::llround(v[i].y / cell),
-                    cz = std::llround(v[i].z / cell);
-      bool merged = false;
-      for (int dz = -1; dz <= 1 && !merged; ++dz)
-        for (int dy = -1; dy <= 1 && !merged; ++dy)
-          for (int dx = -1; dx <= 1 && !merged; ++dx) {
-            auto it = cells.find(key(cx + dx, cy + dy, cz + dz));
-            if (it == cells.end()) continue;
-            for (uint32_t j : it->second) {
-              if (Norm(v[i] - v[j]) <= options.merge_voxels) {
-                rep[i] = j;
-                on_face[j] |= on_face[i];
-                merged = true;
-                break;
-              }
-            }
-          }
-      if (merged) {
-        ++plc.merged_vertices;
-      } else {
-        cells[key(cx, cy, cz)].push_back(i);
-      }
-    }
-  }
-  // Keep triangles that are still triangles and do not lie in a box face.
+  // Snap vertices onto box faces; note which faces each lies on. Vertices within
+  // snap_voxels always snap; those out to snap_clear_voxels snap unless that makes their
+  // triangles cut another sheet's (then they stay, and everything after is redone).
+  std::vector<Vec3> v;
+  std::vector<uint8_t> on_face;  // bit k: on box face k
+  std::vector<uint32_t> rep;
   SheetTriangles st;
-  std::set<std::array<uint32_t, 3>> seen;
-  for (size_t f = 0; f < sheets.faces.size(); ++f) {
-    Face t = {rep[sheets.faces[f][0]], rep[sheets.faces[f][1]], rep[sheets.faces[f][2]]};
-    std::array<uint32_t, 3> s = t;
-    std::sort(s.begin(), s.end());
-    const bool in_face = (on_face[t[0]] & on_face[t[1]] & on_face[t[2]]) != 0;
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || in_face || !seen.insert(s).second ||
-        Area({v[t[0]], v[t[1]], v[t[2]]}) < 1e-9) {
-      ++plc.dropped_triangles;
-      continue;
-    }
-    st.faces.push_back(t);
-    st.source.push_back(static_cast<uint32_t>(f));
-    st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
-    st.thickness.push_back(
-        sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
-  }
-  if (options.flip_fold_degrees > 0) {
-    // A flip moves the sheet a little; where that makes it cut another sheet (near a
-    // crossing), the vertices of the clash are frozen and the improvement starts over.
-    std::vector<uint8_t> frozen(v.size(), 0);
-    for (int attempt = 0; attempt < 5; ++attempt) {
-      SheetTriangles better = st;
-      const auto [flips, drops] = ImproveSheetTriangles(
-          better, v, on_face, frozen, options.flip_fold_degrees, options.cap_degrees);
-      if (flips == 0 && drops == 0) break;
-      TriangleMesh check;
-      check.vertices = v;
-      check.faces = better.faces;
-      const auto clash = FindSelfIntersections(check, 1000, 1.0);
-      if (clash.empty()) {
-        st = std::move(better);
-        plc.flipped_edges = flips;
-        plc.dropped_caps = drops;
-        break;
+  std::vector<uint8_t> hold(sheets.vertices.size(), 0);  // kept off the box at the wider reach
+  const double reach = std::max(options.snap_voxels, options.snap_clear_voxels);
+  for (int attempt = 0;; ++attempt) {
+    plc.snapped_vertices = plc.merged_vertices = plc.dropped_triangles = 0;
+    plc.flipped_edges = plc.dropped_caps = 0;
+    plc.snap_held_vertices = static_cast<uint32_t>(std::count(hold.begin(), hold.end(), 1));
+    std::vector<uint8_t> wide(sheets.vertices.size(), 0);  // snapped from beyond snap_voxels
+    v = sheets.vertices;
+    on_face.assign(v.size(), 0);
+    for (size_t i = 0; i < v.size(); ++i) {
+      const double limit = hold[i] ? options.snap_voxels : reach;
+      bool moved = false;
+      for (int k = 0; k < 3; ++k) {
+        const double below = v[i][k] - lo[k], above = hi[k] - v[i][k];
+        if (below < limit) {
+          moved |= v[i][k] != lo[k];
+          wide[i] |= below >= options.snap_voxels;
+          v[i][k] = lo[k];
+          on_face[i] |= 1 << (2 * k);
+        } else if (above < limit) {
+          moved |= v[i][k] != hi[k];
+          wide[i] |= above >= options.snap_voxels;
+          v[i][k] = hi[k];
+          on_face[i] |= 1 << (2 * k + 1);
+        }
       }
-      for (const auto& [a, b] : clash) {
-        for (uint32_t x : better.faces[a]) frozen[x] = 1;
-        for (uint32_t x : better.faces[b]) frozen[x] = 1;
-      }
+      plc.snapped_vertices += moved;
     }
+    rep = MergeNearDuplicates(v, options.merge_voxels, &on_face, &plc.merged_vertices);
+    st = KeepTriangles(sheets, v, rep, on_face, &plc.dropped_triangles);
+    if (options.flip_fold_degrees > 0) {
+      std::tie(plc.flipped_edges, plc.dropped_caps) =
+          FlipSheetTriangles(st, v, on_face, options.flip_fold_degrees, options.cap_degrees);
+    }
+    if (attempt == 4 || std::none_of(wide.begin(), wide.end(), [](uint8_t w) { return w; })) {
+      break;
+    }
+    TriangleMesh check;
+    check.vertices = v;
+    check.faces = st.faces;
+    const auto clash = FindSelfIntersections(check, 1000, 1.0);
+    if (clash.empty()) break;
+    // Hold back the widely snapped vertices (and those merged into them) of the clashing
+    // triangles; a clash none of them is in stays, for the check below to report.
+    absl::flat_hash_set<uint32_t> in_clash;
+    for (const auto& [a, b] : clash) {
+      in_clash.insert(st.faces[a].begin(), st.faces[a].end());
+      in_clash.insert(st.faces[b].begin(), st.faces[b].end());
+    }
+    bool held = false;
+    for (uint32_t i = 0; i < v.size(); ++i) {
+      if (wide[i] && in_clash.contains(rep[i])) held = hold[i] = 1;
+    }
+    if (!held) break;
   }
   TriangleMesh kept;
   kept.faces = st.faces;

@@ -33,6 +33,8 @@ struct Plc {
   std::vector<float> sheet_thickness;  // per kept sheet triangle, voxels
   Vec3 box_lo, box_hi;                 // physical
   uint32_t snapped_vertices = 0;       // moved onto a box face
+  uint32_t snap_held_vertices = 0;     // within snap_clear_voxels of a box face, left off
+                                       // it since snapping them made a clash
   uint32_t merged_vertices = 0;        // merged into a near-duplicate
   uint32_t dropped_triangles = 0;      // degenerate after snapping, or lying in a box face
   uint32_t repaired_triangles = 0;     // removed because they clashed (repair mode)
@@ -50,7 +52,13 @@ struct Plc {
 };
 
 struct PlcOptions {
-  double snap_voxels = 0.75;   // vertices this close to a box face move onto it
+  double snap_voxels = 0.75;  // vertices this close to a box face move onto it
+  // Vertices farther off a box face than snap_voxels but within this move onto it too,
+  // unless that makes one of their triangles cut another (such a vertex stays where it
+  // is). A sheet vertex just off a box face pins slivers between the two that nothing
+  // after can mend; a sheet that ends within a voxel or so of the box reaches it in the
+  // image. 0 (or below snap_voxels): only snap_voxels.
+  double snap_clear_voxels = 1.5;
   double merge_voxels = 1e-3;  // vertices this close merge
   bool repair = false;         // remove clashing triangles (the smaller of each pair)
                                // instead of failing

@@ -144,6 +144,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   plc_options.seed_box = plc_options.seed_box || !options.tetgen.steiner_on_sheets;
   SM_ASSIGN_OR_RETURN(Plc plc, BuildPlc(sheets, dims, placement, plc_options));
   r.snapped_vertices = plc.snapped_vertices;
+  r.snap_held_vertices = plc.snap_held_vertices;
   r.merged_vertices = plc.merged_vertices;
   r.dropped_triangles = plc.dropped_triangles;
   r.repaired_triangles = plc.repaired_triangles;

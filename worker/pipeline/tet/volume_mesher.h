@@ -36,6 +36,7 @@ struct VolumeMeshResult {
   TetQuality quality;
   Conformity conformity;
   uint32_t snapped_vertices = 0;
+  uint32_t snap_held_vertices = 0;  // PlcOptions::snap_clear_voxels
   uint32_t merged_vertices = 0;
   uint32_t dropped_triangles = 0;
   uint32_t repaired_triangles = 0;

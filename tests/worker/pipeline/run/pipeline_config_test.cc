@@ -29,6 +29,7 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
       "volume_mesh": {"improve_passes": 2, "improve_target_degrees": 45,
                       "improve_insert_below_degrees": 12, "improve_floor_degrees": 25,
                       "improve_split_sheets_below_degrees": 9, "improve_radius_weight": 0.25,
+                      "snap_clear_voxels": 2.5,
                       "overlap_voxels": 0.8, "overlap_degrees": 20, "lattice": 0.85},
       "output": {"formats": ["ply"], "model": false}})",
                                   "c.json", &o),
@@ -61,6 +62,7 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
   EXPECT_EQ(o.volume.improve.smoothing_floor_degrees, 25);
   EXPECT_EQ(o.volume.improve.split_sheets_below_degrees, 9);
   EXPECT_EQ(o.volume.improve.radius_weight, 0.25);
+  EXPECT_EQ(o.volume.plc.snap_clear_voxels, 2.5);
   EXPECT_EQ(o.volume.plc.overlap_voxels, 0.8);
   EXPECT_EQ(o.volume.plc.overlap_degrees, 20);
   EXPECT_EQ(o.volume.plc.lattice, 0.85);
@@ -87,6 +89,7 @@ TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"volume_mesh": {"improve_floor_degrees": -2}})", "improve_floor_degrees = -2"},
       {R"({"volume_mesh": {"improve_split_sheets_below_degrees": 75}})",
        "volume_mesh.improve_split_sheets_below_degrees = 75"},
+      {R"({"volume_mesh": {"snap_clear_voxels": -1}})", "volume_mesh.snap_clear_voxels = -1"},
       {R"({"volume_mesh": {"improve_radius_weight": 1.5}})",
        "volume_mesh.improve_radius_weight = 1.5"},
       {R"({"volume_mesh": {"overlap_voxels": -1}})", "volume_mesh.overlap_voxels = -1"},

@@ -293,6 +293,76 @@ TEST(VolumeMesherTest, SheetsReachingTheBoxEndOnIt) {
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
 }
 
+TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakesAClash) {
+  // The square's rim lies 1 voxel inside the x and y faces of the box: beyond snap_voxels
+  // (0.75), within snap_clear_voxels (1.5).
+  const TriangleMesh square = Square(0.5, 18.5, 10, 5);
+  auto on_box = [](const Plc& plc) {
+    uint32_t n = 0;
+    for (uint32_t i = 8; i < plc.vertices.size(); ++i) {
+      const Vec3& p = plc.vertices[i];
+      n += p.x == -0.5 || p.x == 19.5 || p.y == -0.5 || p.y == 19.5;
+    }
+    return n;
+  };
+  PlcOptions near_only;
+  near_only.snap_clear_voxels = 0;
+  near_only.seed_box = false;
+  PlcOptions wide = near_only;
+  wide.snap_clear_voxels = 1.5;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc a, BuildPlc(square, {20, 20, 20}, {}, near_only));
+  SM_ASSERT_OK_AND_ASSIGN(const Plc b, BuildPlc(square, {20, 20, 20}, {}, wide));
+  EXPECT_EQ(a.snapped_vertices, 0u);
+  EXPECT_EQ(on_box(a), 0u);
+  EXPECT_EQ(b.snapped_vertices, 20u);  // the 5 x 4 rim vertices
+  EXPECT_EQ(on_box(b), 20u);
+  EXPECT_EQ(b.snap_held_vertices, 0u);
+  EXPECT_EQ(PlcOptions().snap_clear_voxels, 1.5);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(square, {20, 20, 20}, {}, {}));
+  EXPECT_EQ(r.snapped_vertices, 20u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
+
+  // Triangle A (in the plane y = 10) has its corner P 1 voxel off the face x = -0.5;
+  // triangle B's two corners 0.6 off that face always snap. Snapped, P would swing A
+  // through B (in the plane y = 10, B runs from (-0.5, z 9.8) up to (2, z 11.4), above A's
+  // edge P-R but below where that edge goes once P is at x = -0.5), so P stays.
+  TriangleMesh clash;
+  clash.vertices = {{0.5, 10, 10}, {4, 10, 7},     {4, 10, 13},     // A: P, Q, R
+                    {0.1, 9, 9.8}, {0.1, 11, 9.8}, {2, 10, 11.4}};  // B
+  clash.faces = {{0, 1, 2}, {3, 4, 5}};
+  clash.face_piece = {0, 1};
+  clash.face_thickness = {1, 1};
+  const Dims dims{16, 20, 20};
+  SM_ASSERT_OK_AND_ASSIGN(const Plc held, BuildPlc(clash, dims, {}, wide));
+  EXPECT_EQ(held.snap_held_vertices, 1u);
+  EXPECT_EQ(held.snapped_vertices, 2u);  // B's two
+  EXPECT_EQ(held.sheet_triangles.size(), 2u);
+  auto has = [](const Plc& plc, const Vec3& q) {
+    return std::any_of(plc.vertices.begin(), plc.vertices.end(),
+                       [&](const Vec3& p) { return Norm(p - q) < 1e-12; });
+  };
+  EXPECT_TRUE(has(held, {0.5, 10, 10}));
+  EXPECT_TRUE(has(held, {-0.5, 9, 9.8}));
+  // Snapping P regardless makes the clash, which the check reports.
+  PlcOptions forced = near_only;
+  forced.snap_voxels = 1.5;
+  EXPECT_THAT(BuildPlc(clash, dims, {}, forced),
+              StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("intersect")));
+  // Without B, P snaps.
+  TriangleMesh alone = clash;
+  alone.faces.pop_back();
+  alone.face_piece.pop_back();
+  alone.face_thickness.pop_back();
+  SM_ASSERT_OK_AND_ASSIGN(const Plc free, BuildPlc(alone, dims, {}, wide));
+  EXPECT_EQ(free.snap_held_vertices, 0u);
+  EXPECT_TRUE(has(free, {-0.5, 10, 10}));
+  // The whole volume mesh builds with P held back.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult v, BuildVolumeMesh(clash, dims, {}, {}));
+  EXPECT_EQ(v.snap_held_vertices, 1u);
+  EXPECT_EQ(v.conformity.conforming, v.conformity.sheet_triangles);
+}
+
 // Two triangles of a flat quad split along its long diagonal a-b (a thin pair), with the
 // fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given. c lies
 // `bulge` off a-b: at 1.5 its angle is ~163 degrees (a flat triangle), at 2.5 ~152.

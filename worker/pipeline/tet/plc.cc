@@ -553,7 +553,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     }
     bool held = false;
     for (uint32_t i = 0; i < v.size(); ++i) {
-      if (wide[i] && in_clash.contains(rep[i])) held = hold[i] = 1;
+      if (wide[i] && in_clash.contains(rep[i])) {
+        hold[i] = 1;
+        held = true;
+      }
     }
     if (!held) break;
   }

@@ -504,6 +504,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   SheetTriangles st;
   std::vector<uint8_t> hold(sheets.vertices.size(), 0);  // kept off the box at the wider reach
   const double reach = std::max(options.snap_voxels, options.snap_clear_voxels);
+  bool checked_clean = false;  // the last round's triangles were found not to clash
   for (int attempt = 0;; ++attempt) {
     plc.snapped_vertices = plc.merged_vertices = plc.dropped_triangles = 0;
     plc.flipped_edges = plc.dropped_caps = 0;
@@ -543,7 +544,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     check.vertices = v;
     check.faces = st.faces;
     const auto clash = FindSelfIntersections(check, 1000, 1.0);
-    if (clash.empty()) break;
+    checked_clean = clash.empty();
+    if (checked_clean) break;
     // Hold back the widely snapped vertices (and those merged into them) of the clashing
     // triangles; a clash none of them is in stays, for the check below to report.
     absl::flat_hash_set<uint32_t> in_clash;
@@ -565,8 +567,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   kept.vertices = v;
   const std::vector<uint32_t>& source = st.source;
 
-  // Facets must not cut through each other: check before TetGen, and name the clashes.
-  std::vector<std::pair<uint32_t, uint32_t>> pairs = FindSelfIntersections(kept, 10000, 1.0);
+  // Facets must not cut through each other: check before TetGen (unless the snapping just
+  // did), and name the clashes.
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  if (!checked_clean) pairs = FindSelfIntersections(kept, 10000, 1.0);
   if (!pairs.empty()) {
     if (clashes != nullptr) {
       for (const auto& [a, b] : pairs) {

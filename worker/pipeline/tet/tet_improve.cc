@@ -1121,9 +1121,9 @@ class Improver {
   std::vector<Vec3> anchor_;     // per sliding vertex: its position before any move
   absl::flat_hash_map<FaceKey, uint32_t> constrained_;  // facets' faces -> index in m_.faces
   std::vector<std::vector<uint32_t>> sheet_faces_of_;   // vertex -> its sheet faces
-  const double floor_;        // smoothing for the mean keeps every star above min(worst, floor_)
+  const double floor_;          // smoothing for the mean keeps every star above min(worst, floor_)
   const double radius_weight_;  // the smoothing's mean shape (Shape)
-  const double split_below_;  // tetrahedra below this may split a sheet face or edge
+  const double split_below_;    // tetrahedra below this may split a sheet face or edge
   uint64_t facet_splits_ = 0, edge_splits_ = 0;
 };
 

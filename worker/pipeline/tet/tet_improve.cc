@@ -297,7 +297,7 @@ class Improver {
     std::vector<uint32_t> ring;
     for (uint32_t t : star) {
       cur_min = std::min(cur_min, q_[t]);
-      cur_sum += Shape(m_.tets[t]);
+      cur_sum += Shape(m_.tets[t], q_[t]);
       for (uint32_t w : m_.tets[t]) {
         if (w != v) ring.push_back(w);
       }
@@ -320,7 +320,7 @@ class Improver {
       for (uint32_t t : star) {
         const double q = Quality(m_.tets[t]);
         *mn = std::min(*mn, q);
-        *sum += Shape(m_.tets[t]);
+        *sum += Shape(m_.tets[t], q);
         if (q < 0) break;
       }
       m_.nodes[v] = start;
@@ -1072,11 +1072,12 @@ class Improver {
     return MinDihedralDegrees(P(t[0]), P(t[1]), P(t[2]), P(t[3]));
   }
   // What the smoothing's second stage raises the star's sum of: the smallest dihedral
-  // angle blended with the radius aspect (TetImproveOptions::radius_weight).
-  double Shape(const Tet& t) const {
-    if (radius_weight_ == 0) return Quality(t);
+  // angle blended with the radius aspect (TetImproveOptions::radius_weight), given the
+  // tetrahedron's Quality q.
+  double Shape(const Tet& t, double q) const {
+    if (radius_weight_ == 0) return q;
     const double ra = RadiusAspect(P(t[0]), P(t[1]), P(t[2]), P(t[3]));
-    return (1 - radius_weight_) * Quality(t) + radius_weight_ * kRegularDihedral * ra;
+    return (1 - radius_weight_) * q + radius_weight_ * kRegularDihedral * ra;
   }
 
   void Kill(uint32_t t) {

@@ -108,6 +108,10 @@ ABSL_FLAG(
 ABSL_FLAG(double, overlap, 0.5,
           "volume: drop a sheet's rim triangle that runs within this many voxels of another "
           "sheet, nearly parallel to it (it forces slivers); 0: keep them");
+ABSL_FLAG(double, wedge, 12,
+          "volume: move a sheet vertex up to --wedge_voxels off another sheet face's plane where "
+          "its edge runs within this many degrees of the face from a shared corner; 0: never");
+ABSL_FLAG(double, wedge_voxels, 1, "volume: the farthest a vertex moves to open a wedge (--wedge)");
 ABSL_FLAG(double, lattice, 0.85,
           "volume: seed TetGen with a graded body-centred cubic lattice off the sheets, spaced "
           "this many times the sheets' median edge (smaller: more tetrahedra, better shaped); "
@@ -315,6 +319,8 @@ absl::Status VolumeFromFlags(PipelineOptions* o) {
   if (Given("repair")) o->volume.plc.repair = absl::GetFlag(FLAGS_repair);
   if (Given("flip_fold")) o->volume.plc.flip_fold_degrees = absl::GetFlag(FLAGS_flip_fold);
   if (Given("overlap")) o->volume.plc.overlap_voxels = absl::GetFlag(FLAGS_overlap);
+  if (Given("wedge")) o->volume.plc.wedge_degrees = absl::GetFlag(FLAGS_wedge);
+  if (Given("wedge_voxels")) o->volume.plc.wedge_voxels = absl::GetFlag(FLAGS_wedge_voxels);
   if (Given("lattice")) o->volume.plc.lattice = absl::GetFlag(FLAGS_lattice);
   TetImproveOptions& im = o->volume.improve;
   if (Given("improve_passes")) im.passes = absl::GetFlag(FLAGS_improve_passes);

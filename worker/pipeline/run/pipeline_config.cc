@@ -468,6 +468,14 @@ absl::Status ApplyPipelineConfig(absl::string_view text, absl::string_view sourc
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.overlap_degrees);
                   }},
+                 {"wedge_degrees",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.wedge_degrees);
+                  }},
+                 {"wedge_voxels",
+                  [&](const Json& w, const std::string& q) {
+                    return rd.Number(w, q, &o->volume.plc.wedge_voxels);
+                  }},
                  {"lattice",
                   [&](const Json& w, const std::string& q) {
                     return rd.Number(w, q, &o->volume.plc.lattice);
@@ -625,6 +633,12 @@ absl::Status ValidatePipelineOptions(const PipelineOptions& o) {
   }
   if (!(o.volume.plc.overlap_degrees >= 0 && o.volume.plc.overlap_degrees < 90)) {
     return bad("volume_mesh.overlap_degrees", o.volume.plc.overlap_degrees, "must be in [0, 90)");
+  }
+  if (!(o.volume.plc.wedge_degrees >= 0 && o.volume.plc.wedge_degrees <= 30)) {
+    return bad("volume_mesh.wedge_degrees", o.volume.plc.wedge_degrees, "must be in [0, 30]");
+  }
+  if (!(o.volume.plc.wedge_voxels >= 0 && o.volume.plc.wedge_voxels <= 5)) {
+    return bad("volume_mesh.wedge_voxels", o.volume.plc.wedge_voxels, "must be in [0, 5]");
   }
   const TetImproveOptions& im = o.volume.improve;
   if (!(im.passes >= 0 && im.passes <= 100)) {

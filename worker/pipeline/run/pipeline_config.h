@@ -23,7 +23,8 @@
 //    "volume_mesh": {"enabled": false, "radius_edge_ratio": 1.5, "min_dihedral": 10,
 //                    "max_volume": 0, "steiner_on_sheets": false, "time_limit_seconds": 600,
 //                    "memory_limit_bytes": 8589934592, "tetgen": "tetgen", "repair": false,
-//                    "snap_voxels": 0.75, "snap_clear_voxels": 1.5, "lattice": 0.85},
+//                    "snap_voxels": 0.75, "snap_clear_voxels": 1.5, "wedge_degrees": 12,
+//                    "wedge_voxels": 1, "lattice": 0.85},
 //    "output": {"formats": ["ply", "vtp", "obj"], "model": true,
 //               "volume_formats": ["vtu", "msh", "inp"]}}
 #ifndef SHEETMESH_WORKER_PIPELINE_RUN_PIPELINE_CONFIG_H_

@@ -460,6 +460,120 @@ std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::
   return {0, 0};
 }
 
+// Opens the narrow wedges between a sheet face and a sheet edge that leaves one of its
+// corners just off its plane, over the face (the edge's direction, projected onto the
+// plane, lies inside the face's angle at that corner). TetGen must fill such a wedge with
+// tetrahedra whose dihedral angle there is about as small as the wedge, and nothing
+// after can mend them without splitting the face many times over. The edge's far end
+// moves straight away from the face's plane until the edge stands min_degrees off it, by
+// at most max_move in all, and only where that opens the narrowest wedge around it and
+// its neighbours; vertices on the box stay. A move that makes triangles clash is undone.
+// Returns the number of vertices moved.
+uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
+                    double min_degrees, double max_move, std::vector<Vec3>& v) {
+  if (!(min_degrees > 0) || !(max_move > 0) || st.faces.empty()) return 0;
+  const double sin_min = std::sin(min_degrees * std::numbers::pi / 180.0);
+  const double tan_min = std::tan(min_degrees * std::numbers::pi / 180.0);
+  std::vector<std::vector<uint32_t>> faces_of(v.size());
+  std::vector<std::vector<uint32_t>> next(v.size());
+  for (uint32_t f = 0; f < st.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = st.faces[f][k];
+      faces_of[a].push_back(f);
+      for (int j = 1; j < 3; ++j) next[a].push_back(st.faces[f][(k + j) % 3]);
+    }
+  }
+  for (auto& n : next) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  struct Wedge {
+    double sine = 2;    // of the edge's angle to the face's plane
+    uint32_t far = 0;   // the edge's far end
+    double height = 0;  // of the far end over the face's plane (signed), and
+    double length = 0;  // the edge's length
+    Vec3 normal;        // the face's unit normal
+  };
+  // The narrowest wedge at corner u (sine 2: none).
+  auto narrowest = [&](uint32_t u) {
+    Wedge best;
+    for (uint32_t f : faces_of[u]) {
+      const Face& t = st.faces[f];
+      const int k = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      const Vec3 e1 = v[t[(k + 1) % 3]] - v[u], e2 = v[t[(k + 2) % 3]] - v[u];
+      const Vec3 n = Cross(e1, e2);
+      const double n2 = Norm2(n);
+      if (!(n2 > 0)) continue;
+      const Vec3 unit = n / std::sqrt(n2);
+      for (uint32_t x : next[u]) {
+        if (x == t[0] || x == t[1] || x == t[2]) continue;
+        const Vec3 d = v[x] - v[u];
+        const double len = Norm(d);
+        if (!(len > 0)) continue;
+        const double h = Dot(d, unit);
+        // Inside the angle: d's projection is a positive combination of e1 and e2.
+        if (!(Dot(Cross(e1, d), n) > 0 && Dot(Cross(d, e2), n) > 0)) continue;
+        const double sine = std::abs(h) / len;
+        if (sine < best.sine) best = {sine, x, h, len, unit};
+      }
+    }
+    return best;
+  };
+  auto around = [&](uint32_t w) {
+    double m = narrowest(w).sine;
+    for (uint32_t x : next[w]) m = std::min(m, narrowest(x).sine);
+    return m;
+  };
+  const std::vector<Vec3> original = v;
+  std::vector<uint8_t> moved(v.size(), 0);
+  for (int round = 0; round < 3; ++round) {
+    bool any = false;
+    for (uint32_t u = 0; u < v.size(); ++u) {
+      if (faces_of[u].empty()) continue;
+      const Wedge w = narrowest(u);
+      if (!(w.sine < sin_min) || on_face[w.far] != 0) continue;
+      const double before = around(w.far);
+      // Moving along the normal keeps the edge's length in the plane.
+      const double in_plane = std::sqrt(std::max(0.0, w.length * w.length - w.height * w.height));
+      const double need = in_plane * tan_min - std::abs(w.height);
+      const Vec3 start = v[w.far];
+      Vec3 to = start + w.normal * ((w.height < 0 ? -1.0 : 1.0) * need);
+      // At most max_move from where the vertex began.
+      const Vec3 off = to - original[w.far];
+      if (Norm(off) > max_move) to = original[w.far] + off * (max_move / Norm(off));
+      v[w.far] = to;
+      if (around(w.far) > before + 1e-9) {
+        moved[w.far] = 1;
+        any = true;
+      } else {
+        v[w.far] = start;
+      }
+    }
+    if (!any) break;
+  }
+  // Undo the moves of vertices in clashing triangles, until none clash.
+  for (int round = 0; round < 8; ++round) {
+    TriangleMesh check;
+    check.vertices = v;
+    check.faces = st.faces;
+    const auto clash = FindSelfIntersections(check, 1000, 1.0);
+    if (clash.empty()) break;
+    bool undone = false;
+    for (const auto& [a, b] : clash) {
+      for (const uint32_t f : {a, b}) {
+        for (uint32_t x : st.faces[f]) {
+          if (!moved[x]) continue;
+          v[x] = original[x];
+          moved[x] = 0;
+          undone = true;
+        }
+      }
+    }
+    if (!undone) break;
+  }
+  return static_cast<uint32_t>(std::count(moved.begin(), moved.end(), 1));
+}
+
 }  // namespace
 
 std::string Plc::ToPoly() const {
@@ -619,6 +733,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   if (options.overlap_voxels > 0) {
     plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
     kept.faces = st.faces;
+  }
+
+  if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
+    plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
+    kept.vertices = v;
   }
 
   // Compact the used vertices; the 8 box corners go first.

@@ -41,6 +41,8 @@ struct Plc {
   uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;           // flat rim triangles dropped
   uint32_t dropped_overlaps = 0;       // rim triangles dropped for lying on another sheet
+  uint32_t opened_wedges = 0;          // sheet vertices moved off a sheet face's plane
+                                       // to open a narrow wedge (PlcOptions::wedge_degrees)
   uint32_t box_points = 0;             // points seeded on the box's edges and faces
                                        // (PlcOptions::seed_box), after the sheets' vertices
   uint32_t seed_points = 0;            // lattice points seeded off the sheets (the last
@@ -76,6 +78,15 @@ struct PlcOptions {
   // over another sheet) is dropped. 0: keep them all.
   double overlap_voxels = 0.5;
   double overlap_degrees = 25.0;
+  // A sheet edge that leaves a corner of a sheet face within wedge_degrees of the face's
+  // plane, running over the face (a sheet ending or folding just off another one at a
+  // shared vertex), makes a wedge that TetGen fills with tetrahedra whose dihedral angle
+  // is as small as the wedge, and that nothing after can mend. The edge's far end moves
+  // straight away from the face's plane until the wedge is wedge_degrees wide, by at most
+  // wedge_voxels, where that widens the narrowest wedge around it and makes no clash;
+  // vertices on the box stay (bench/RESULTS.md). 0 for either: no moves.
+  double wedge_degrees = 12.0;
+  double wedge_voxels = 1.0;
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
   // spacing this many times the sheets' median edge, doubling every two spacings outward.
   // The lattice's tetrahedra are near-ideal (60° smallest dihedral angle), so the mean

@@ -29,7 +29,7 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
       "volume_mesh": {"improve_passes": 2, "improve_target_degrees": 45,
                       "improve_insert_below_degrees": 12, "improve_floor_degrees": 25,
                       "improve_split_sheets_below_degrees": 9, "improve_radius_weight": 0.25,
-                      "snap_clear_voxels": 2.5,
+                      "snap_clear_voxels": 2.5, "wedge_degrees": 15, "wedge_voxels": 0.5,
                       "overlap_voxels": 0.8, "overlap_degrees": 20, "lattice": 0.85},
       "output": {"formats": ["ply"], "model": false}})",
                                   "c.json", &o),
@@ -63,6 +63,8 @@ TEST(PipelineConfigTest, EveryGroupSetsItsParameters) {
   EXPECT_EQ(o.volume.improve.split_sheets_below_degrees, 9);
   EXPECT_EQ(o.volume.improve.radius_weight, 0.25);
   EXPECT_EQ(o.volume.plc.snap_clear_voxels, 2.5);
+  EXPECT_EQ(o.volume.plc.wedge_degrees, 15);
+  EXPECT_EQ(o.volume.plc.wedge_voxels, 0.5);
   EXPECT_EQ(o.volume.plc.overlap_voxels, 0.8);
   EXPECT_EQ(o.volume.plc.overlap_degrees, 20);
   EXPECT_EQ(o.volume.plc.lattice, 0.85);
@@ -93,6 +95,8 @@ TEST(PipelineConfigTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"volume_mesh": {"improve_radius_weight": 1.5}})",
        "volume_mesh.improve_radius_weight = 1.5"},
       {R"({"volume_mesh": {"overlap_voxels": -1}})", "volume_mesh.overlap_voxels = -1"},
+      {R"({"volume_mesh": {"wedge_degrees": 40}})", "volume_mesh.wedge_degrees = 40"},
+      {R"({"volume_mesh": {"wedge_voxels": -0.5}})", "volume_mesh.wedge_voxels = -0.5"},
       {R"({"volume_mesh": {"overlap_degrees": 90}})", "volume_mesh.overlap_degrees = 90"},
       {R"({"volume_mesh": {"lattice": 0.1}})", "volume_mesh.lattice = 0.1 must be 0 or in"},
       {R"({"surface": )", "not valid JSON"},

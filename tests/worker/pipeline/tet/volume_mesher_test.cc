@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <set>
 
 #include "tests/testing/status_matchers.h"
@@ -155,14 +157,18 @@ TriangleMesh PhantomJunction() {
 TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsStillTile) {
   const TriangleMesh sheets = PhantomJunction();
   const Dims dims{56, 56, 56};
-  VolumeMeshOptions whole;
+  // The PLC's wedge opening (tested on its own) would move the sheets here; kept still,
+  // the splits are what mends the sliver.
+  VolumeMeshOptions split;
+  split.plc.wedge_degrees = 0;
+  VolumeMeshOptions whole = split;
   whole.improve.split_sheets_below_degrees = 0;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult a, BuildVolumeMesh(sheets, dims, {}, whole));
   // Kept whole, each sheet triangle is one face and the sliver stays (2.88 degrees).
   EXPECT_EQ(a.mesh.num_sheet_faces(), a.conformity.sheet_triangles);
   EXPECT_EQ(a.improvement.sheet_face_splits + a.improvement.sheet_edge_splits, 0u);
   EXPECT_LT(a.quality.min_dihedral.min, 5.0);
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult b, BuildVolumeMesh(sheets, dims, {}, {}));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult b, BuildVolumeMesh(sheets, dims, {}, split));
   // By default a vertex on a sheet edge or face next to it mends it (10.6 degrees).
   EXPECT_GT(b.improvement.sheet_face_splits + b.improvement.sheet_edge_splits, 0u);
   EXPECT_GT(b.mesh.num_sheet_faces(), b.conformity.sheet_triangles);
@@ -585,6 +591,79 @@ TEST(PlcTest, SheetsMeetingAtAnAngleOrFarApartAreNotOverlaps) {
   SM_ASSERT_OK_AND_ASSIGN(Plc close, BuildPlc(parallel, {20, 20, 20}, {}, wide));
   EXPECT_GT(close.dropped_overlaps, 0u);
   EXPECT_EQ(close.sheet_triangles.size() + close.dropped_overlaps, 40u);
+}
+
+// Triangle A lies in the plane z = 12; triangle H, in the plane x = y, shares A's corner O
+// and its edge O-W runs over A 0.5 voxels below A's plane (3.4 degrees off it, its
+// projection inside A's angle at O).
+TriangleMesh NarrowWedge() {
+  TriangleMesh m;
+  m.vertices = {{5, 5, 12},
+                {14, 5, 12},
+                {5, 14, 12},  // A: O and two more
+                {11, 11, 11.5},
+                {8, 8, 4}};  // H: O, W, and a corner far below
+  m.faces = {{0, 1, 2}, {0, 3, 4}};
+  m.face_piece = {0, 0};
+  m.face_thickness = {1, 1};
+  return m;
+}
+
+// The vertex of `plc` nearest to p.
+Vec3 Nearest(const Plc& plc, const Vec3& p) {
+  return *std::min_element(
+      plc.vertices.begin(), plc.vertices.end(),
+      [&](const Vec3& a, const Vec3& b) { return Norm2(a - p) < Norm2(b - p); });
+}
+
+TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
+  const Dims dims{20, 20, 20};
+  const Vec3 w0(11, 11, 11.5);
+  const double in_plane = std::sqrt(72.0);  // |O-W| in A's plane
+  PlcOptions base;
+  base.lattice = 0;
+  // By default W moves 1 voxel (the most it may) straight down: 10.0 degrees.
+  SM_ASSERT_OK_AND_ASSIGN(const Plc a, BuildPlc(NarrowWedge(), dims, {}, base));
+  EXPECT_EQ(a.opened_wedges, 1u);
+  EXPECT_LT(Norm(Nearest(a, w0) - Vec3(11, 11, 10.5)), 1e-12);
+  EXPECT_EQ(PlcOptions().wedge_degrees, 12.0);
+  EXPECT_EQ(PlcOptions().wedge_voxels, 1.0);
+  // Allowed 2 voxels, it moves until the edge stands exactly 12 degrees off A's plane.
+  PlcOptions far = base;
+  far.wedge_voxels = 2;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc b, BuildPlc(NarrowWedge(), dims, {}, far));
+  const Vec3 w = Nearest(b, {11, 11, 10});
+  EXPECT_NEAR(w.z, 12 - in_plane * std::tan(12 * std::numbers::pi / 180), 1e-9);
+  EXPECT_EQ(w.x, 11);
+  EXPECT_EQ(w.y, 11);
+  EXPECT_NEAR(std::asin((12 - w.z) / Norm(w - Vec3(5, 5, 12))) * 180 / std::numbers::pi, 12, 1e-9);
+  // Switched off, nothing moves.
+  PlcOptions off = base;
+  off.wedge_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc c, BuildPlc(NarrowWedge(), dims, {}, off));
+  EXPECT_EQ(c.opened_wedges, 0u);
+  EXPECT_LT(Norm(Nearest(c, w0) - w0), 1e-12);
+  // Triangle G (in the plane z = 10) crosses the plane x = y just beyond H; W's move would
+  // swing H's edge W-(8, 8, 4) through it, so W stays.
+  TriangleMesh blocked = NarrowWedge();
+  blocked.vertices.insert(blocked.vertices.end(), {{11.6, 9.6, 10}, {9.6, 11.6, 10}, {13, 13, 10}});
+  blocked.faces.push_back({5, 6, 7});
+  blocked.face_piece.push_back(1);
+  blocked.face_thickness.push_back(1);
+  for (const PlcOptions& o : {base, far}) {
+    SM_ASSERT_OK_AND_ASSIGN(const Plc d, BuildPlc(blocked, dims, {}, o));
+    EXPECT_EQ(d.opened_wedges, 0u);
+    EXPECT_LT(Norm(Nearest(d, w0) - w0), 1e-12);
+  }
+  // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed).
+  VolumeMeshOptions opened, closed;
+  closed.plc.wedge_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(NarrowWedge(), dims, {}, opened));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(NarrowWedge(), dims, {}, closed));
+  EXPECT_EQ(r.opened_wedges, 1u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_GT(r.quality.min_dihedral.min, s.quality.min_dihedral.min);
 }
 
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {

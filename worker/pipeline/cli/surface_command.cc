@@ -146,6 +146,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   j["flipped_edges"] = r.flipped_edges;
   j["dropped_caps"] = r.dropped_caps;
   j["dropped_overlaps"] = r.dropped_overlaps;
+  j["closed_slits"] = r.closed_slits;
   j["opened_wedges"] = r.opened_wedges;
   j["box_points"] = r.box_points;
   j["seed_points"] = r.seed_points;

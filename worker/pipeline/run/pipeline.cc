@@ -160,6 +160,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     report.volume_flipped = volume.flipped_edges;
     report.volume_dropped_caps = volume.dropped_caps;
     report.volume_dropped_overlaps = volume.dropped_overlaps;
+    report.volume_closed_slits = volume.closed_slits;
     report.volume_opened_wedges = volume.opened_wedges;
     report.volume_box_points = volume.box_points;
     report.volume_seed_points = volume.seed_points;

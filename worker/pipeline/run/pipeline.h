@@ -113,6 +113,7 @@ struct PipelineReport {
   uint32_t volume_flipped = 0;
   uint32_t volume_dropped_caps = 0;
   uint32_t volume_dropped_overlaps = 0;
+  uint32_t volume_closed_slits = 0;
   uint32_t volume_opened_wedges = 0;
   uint32_t volume_box_points = 0;
   uint32_t volume_seed_points = 0;

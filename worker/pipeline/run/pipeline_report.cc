@@ -187,6 +187,7 @@ std::string PipelineReport::ToJson() const {
                         {"flipped_edges", volume_flipped},
                         {"dropped_caps", volume_dropped_caps},
                         {"dropped_overlaps", volume_dropped_overlaps},
+                        {"closed_slits", volume_closed_slits},
                         {"opened_wedges", volume_opened_wedges},
                         {"box_points", volume_box_points},
                         {"seed_points", volume_seed_points},

@@ -460,6 +460,67 @@ std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::
   return {0, 0};
 }
 
+// Closes the slits in the sheets: three rim edges a-b, a-c, c-b that frame no triangle,
+// with c nearly on a-b (its angle over min_degrees, as for a flat triangle). The face on
+// a-b is split in two at c, so the rim runs a-c-b on both sides and the slit is gone. Left
+// open, TetGen must fill the slit, flat as it is, with a sliver, and any point the
+// improvement puts beside it lands a fraction of a voxel from c. Where a round's splits
+// would make a clash, none of them is made. Returns the number of slits closed.
+uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_degrees) {
+  const double max_cos = std::cos(min_degrees * std::numbers::pi / 180.0);
+  uint32_t closed = 0;
+  for (int round = 0; round < 5; ++round) {
+    TriangleMesh faces_only;
+    faces_only.faces = s.faces;
+    const EdgeIndex edges(faces_only);
+    absl::flat_hash_map<uint32_t, std::vector<uint32_t>> rim;  // vertex -> rim neighbours
+    for (const EdgeIndex::Edge& e : edges.edges()) {
+      if (e.count != 1) continue;
+      rim[e.a].push_back(e.b);
+      rim[e.b].push_back(e.a);
+    }
+    SheetTriangles out = s;
+    std::vector<uint8_t> split(s.faces.size(), 0);
+    uint32_t count = 0;
+    for (const EdgeIndex::Edge& e : edges.edges()) {
+      if (e.count != 1) continue;
+      const uint32_t f = edges.faces(e)[0];
+      if (split[f]) continue;
+      const Face face = s.faces[f];
+      const auto& ra = rim[e.a];
+      for (uint32_t c : rim[e.b]) {
+        if (c == face[0] || c == face[1] || c == face[2]) continue;
+        if (std::find(ra.begin(), ra.end(), c) == ra.end()) continue;
+        const Vec3 ca = v[e.a] - v[c], cb = v[e.b] - v[c];
+        const double la = Norm(ca), lb = Norm(cb);
+        if (!(la > 0 && lb > 0) || !(Dot(ca, cb) < max_cos * la * lb)) continue;
+        // Face (a, b, x) in its own order becomes (a, c, x) and (c, b, x).
+        const int k = face[0] == e.a ? 0 : face[1] == e.a ? 1 : 2;
+        const bool forward = face[(k + 1) % 3] == e.b;
+        Face first = face, second = face;
+        first[forward ? (k + 1) % 3 : (k + 2) % 3] = c;  // b -> c
+        second[k] = c;                                   // a -> c
+        out.faces[f] = first;
+        out.faces.push_back(second);
+        out.source.push_back(s.source[f]);
+        out.piece.push_back(s.piece[f]);
+        out.thickness.push_back(s.thickness[f]);
+        split[f] = 1;
+        ++count;
+        break;
+      }
+    }
+    if (count == 0) break;
+    TriangleMesh check;
+    check.vertices = v;
+    check.faces = out.faces;
+    if (!FindSelfIntersections(check, 1, 1.0).empty()) break;
+    s = std::move(out);
+    closed += count;
+  }
+  return closed;
+}
+
 // Opens the narrow wedges between a sheet face and a sheet edge that leaves one of its
 // corners just off its plane, over the face (the edge's direction, projected onto the
 // plane, lies inside the face's angle at that corner). TetGen must fill such a wedge with
@@ -729,6 +790,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
           absl::StrCat("sheet triangles still intersect after removing ", plc.repaired_triangles,
                        " clashing ones; the intersections are not simple"));
     }
+  }
+  if (options.cap_degrees < 180) {
+    plc.closed_slits = CloseSlits(st, v, options.cap_degrees);
+    kept.faces = st.faces;
   }
   if (options.overlap_voxels > 0) {
     plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);

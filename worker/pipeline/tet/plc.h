@@ -41,6 +41,8 @@ struct Plc {
   uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;           // flat rim triangles dropped
   uint32_t dropped_overlaps = 0;       // rim triangles dropped for lying on another sheet
+  uint32_t closed_slits = 0;           // slits framed by three rim edges closed by
+                                       // splitting a face (PlcOptions::cap_degrees)
   uint32_t opened_wedges = 0;          // sheet vertices moved off a sheet face's plane
                                        // to open a narrow wedge (PlcOptions::wedge_degrees)
   uint32_t box_points = 0;             // points seeded on the box's edges and faces
@@ -71,6 +73,8 @@ struct PlcOptions {
   // cap_degrees, has no plane to speak of: its long edge is flipped whatever the fold, or,
   // where that cannot be and it lies on the rim (it covers almost nothing), it is dropped.
   double flip_fold_degrees = 15.0;
+  // A slit (three rim edges framing no triangle, one corner's angle over cap_degrees) is
+  // closed by splitting the face on its long edge at that corner.
   double cap_degrees = 160.0;
   // A sheet triangle that runs within overlap_voxels of another one's interior, their
   // planes within overlap_degrees of parallel, forces slivers in the thin wedge between

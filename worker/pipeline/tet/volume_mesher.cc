@@ -151,6 +151,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.flipped_edges = plc.flipped_edges;
   r.dropped_caps = plc.dropped_caps;
   r.dropped_overlaps = plc.dropped_overlaps;
+  r.closed_slits = plc.closed_slits;
   r.opened_wedges = plc.opened_wedges;
   r.box_points = plc.box_points;
   r.seed_points = plc.seed_points;

@@ -43,6 +43,7 @@ struct VolumeMeshResult {
   uint32_t flipped_edges = 0;     // sheet edges flipped for better triangles (PlcOptions)
   uint32_t dropped_caps = 0;      // flat rim triangles dropped
   uint32_t dropped_overlaps = 0;  // rim triangles dropped for lying on another sheet
+  uint32_t closed_slits = 0;      // PlcOptions::cap_degrees
   uint32_t opened_wedges = 0;     // PlcOptions::wedge_degrees
   uint32_t box_points = 0;        // points seeded on the box surface (for -Y)
   uint32_t seed_points = 0;       // lattice points seeded off the sheets (PlcOptions)

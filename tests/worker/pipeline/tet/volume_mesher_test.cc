@@ -666,6 +666,70 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   EXPECT_GT(r.quality.min_dihedral.min, s.quality.min_dihedral.min);
 }
 
+// A sheet in the plane z = 10 with a slit: triangle A's rim edge a-b, and the rim a-c-b of
+// the triangles below it, c 0.1 voxels off a-b (its angle 178 degrees) and 0.05 above the
+// plane.
+TriangleMesh Slit() {
+  TriangleMesh m;
+  m.vertices = {{5, 10, 10},     {15, 10, 10}, {10, 16, 10},  // a, b, x
+                {9, 9.9, 10.05}, {7, 4, 10},   {13, 4, 10}};  // c, y, z
+  m.faces = {{0, 1, 2}, {0, 4, 3}, {3, 5, 1}, {3, 4, 5}};
+  m.face_piece.assign(4, 0);
+  m.face_thickness.assign(4, 1);
+  return m;
+}
+
+TEST(PlcTest, ASlitFramedByThreeRimEdgesIsClosed) {
+  const Dims dims{20, 20, 20};
+  PlcOptions o;
+  o.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(Slit(), dims, {}, o));
+  EXPECT_EQ(plc.closed_slits, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 5u);
+  // A is now (a, c, x) and (c, b, x): a-c and c-b each bound two triangles, a-b none.
+  const Vec3 a(5, 10, 10), b(15, 10, 10), c(9, 9.9, 10.05);
+  auto count = [&](const Vec3& p, const Vec3& q) {
+    int n = 0;
+    for (const Face& f : plc.sheet_triangles) {
+      int hits = 0;
+      for (uint32_t i : f) hits += plc.vertices[i] == p || plc.vertices[i] == q;
+      n += hits == 2;
+    }
+    return n;
+  };
+  EXPECT_EQ(count(a, c), 2);
+  EXPECT_EQ(count(c, b), 2);
+  EXPECT_EQ(count(a, b), 0);
+  for (const Face& f : plc.sheet_triangles) {
+    const Vec3 n =
+        Cross(plc.vertices[f[1]] - plc.vertices[f[0]], plc.vertices[f[2]] - plc.vertices[f[0]]);
+    EXPECT_GT(n.z, 0) << "orientation kept";
+  }
+  // The sheet covers what it did, and the slit now too.
+  double before = 0, after = 0;
+  const TriangleMesh slit = Slit();
+  for (const auto& f : slit.faces)
+    before += Area({slit.vertices[f[0]], slit.vertices[f[1]], slit.vertices[f[2]]});
+  for (const Face& f : plc.sheet_triangles)
+    after += Area({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
+  EXPECT_NEAR(after, before + Area({a, b, c}), 0.1);  // c is tilted 0.05 off the plane
+  // With caps off (180 degrees) the slit stays, and the worst tetrahedron is worse (16.0
+  // degrees against 31.4).
+  PlcOptions open = o;
+  open.cap_degrees = 180;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc kept, BuildPlc(Slit(), dims, {}, open));
+  EXPECT_EQ(kept.closed_slits, 0u);
+  EXPECT_EQ(kept.sheet_triangles.size(), 4u);
+  VolumeMeshOptions closed_mesh, open_mesh;
+  open_mesh.plc.cap_degrees = 180;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Slit(), dims, {}, closed_mesh));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult q, BuildVolumeMesh(Slit(), dims, {}, open_mesh));
+  EXPECT_EQ(r.closed_slits, 1u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_GT(r.quality.min_dihedral.min, q.quality.min_dihedral.min);
+}
+
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
   // A vertical square piercing a horizontal one without sharing edges.
   TriangleMesh m = Append(Square(4, 15, 10, 2), Square(5, 14, 9.5, 2, 1, 3, /*axis=*/0));

@@ -462,9 +462,9 @@ std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::
 
 // Closes the slits in the sheets: three rim edges a-b, a-c, c-b that frame no triangle,
 // with c nearly on a-b (its angle over min_degrees, as for a flat triangle). The face on
-// a-b is split in two at c, so the rim runs a-c-b on both sides and the slit is gone. Left
-// open, TetGen must fill the slit, flat as it is, with a sliver, and any point the
-// improvement puts beside it lands a fraction of a voxel from c. Where a round's splits
+// a-b is split in two at c (unless a half would be flat too), so the rim runs a-c-b on both sides
+// and the slit is gone. Left open, TetGen must fill the slit, flat as it is, with a sliver, and any
+// point the improvement puts beside it lands a fraction of a voxel from c. Where a round's splits
 // would make a clash, none of them is made. Returns the number of slits closed.
 uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_degrees) {
   const double max_cos = std::cos(min_degrees * std::numbers::pi / 180.0);
@@ -500,6 +500,11 @@ uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_de
         Face first = face, second = face;
         first[forward ? (k + 1) % 3 : (k + 2) % 3] = c;  // b -> c
         second[k] = c;                                   // a -> c
+        // Neither half may be flat itself (c nearly on F's other edges too: F is a sliver).
+        auto flat = [&](const Face& t) {
+          return AngleRangeDegrees({v[t[0]], v[t[1]], v[t[2]]}).second > min_degrees;
+        };
+        if (flat(first) || flat(second)) continue;
         out.faces[f] = first;
         out.faces.push_back(second);
         out.source.push_back(s.source[f]);

@@ -198,6 +198,7 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
   if (!writer->Write(msg)) return grpc::Status::OK;
   std::string last = job->SerializeAsString();
   int stage_sent = job->state() == v1::RUNNING ? job->progress().stage_index() : 0;
+  bool first = true;
   while (!Terminal(job->state())) {
     const uint64_t now = ctx_->events->Wait(r->name(), seen, ctx_->heartbeat);
     if (context->IsCancelled()) return grpc::Status::OK;  // the watcher left; the job goes on
@@ -206,10 +207,16 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context, const v1::Wa
                           "the server is shutting down; watch again after it restarts");
     }
     const bool changed = now != seen;
-    const std::vector<v1::JobProgress> stages = ctx_->events->StagesSince(r->name(), seen);
-    seen = now;
+    // The job first, then the stage log: every stage before the job's current one is in
+    // the log by then (LocalJobHost records a stage before it shows it).
     job = Fresh(r->name());
     if (!job.ok()) return ToGrpcStatus(job.status());
+    // The first time, the whole log: a stage may have begun before the job's state said
+    // RUNNING in the first message.
+    const std::vector<v1::JobProgress> stages =
+        ctx_->events->StagesSince(r->name(), first ? 0 : seen);
+    first = false;
+    seen = now;
     // Stages that started and ended while this watcher slept are still told, in order.
     const int current = job->state() == v1::RUNNING ? job->progress().stage_index() : INT32_MAX;
     for (const v1::JobProgress& stage : stages) {

@@ -91,13 +91,12 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
       live.stored = now;
     }
     snapshot = live.progress;
+    // A stage's start is recorded before anyone can read it as the live progress (Progress
+    // takes mu_), so a watcher that sees stage k has every stage before k in its log too.
+    if (new_stage) events_->NotifyStage(job, snapshot);
   }
   if (store && !store_->SetProgress(job, worker, snapshot).ok()) return false;
-  if (new_stage) {
-    events_->NotifyStage(job, snapshot);
-  } else if (notify) {
-    events_->Notify(job);
-  }
+  if (!new_stage && notify) events_->Notify(job);
   return true;
 }
 

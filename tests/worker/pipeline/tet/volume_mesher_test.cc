@@ -616,6 +616,18 @@ Vec3 Nearest(const Plc& plc, const Vec3& p) {
       [&](const Vec3& a, const Vec3& b) { return Norm2(a - p) < Norm2(b - p); });
 }
 
+// Meshes `sheets` with the options `with` (a PLC step on) and `without` (off) into *r and
+// *off; the first must conform, fill the box and have the better worst tetrahedron.
+void MeshWithAndWithout(const TriangleMesh& sheets, const Dims& dims, const VolumeMeshOptions& with,
+                        const VolumeMeshOptions& without, VolumeMeshResult* r,
+                        VolumeMeshResult* off) {
+  SM_ASSERT_OK_AND_ASSIGN(*r, BuildVolumeMesh(sheets, dims, {}, with));
+  SM_ASSERT_OK_AND_ASSIGN(*off, BuildVolumeMesh(sheets, dims, {}, without));
+  EXPECT_EQ(r->conformity.conforming, r->conformity.sheet_triangles);
+  EXPECT_NEAR(r->quality.volume, r->box_volume, 1e-9 * r->box_volume);
+  EXPECT_GT(r->quality.min_dihedral.min, off->quality.min_dihedral.min);
+}
+
 TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   const Dims dims{20, 20, 20};
   const Vec3 w0(11, 11, 11.5);
@@ -658,12 +670,9 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed).
   VolumeMeshOptions opened, closed;
   closed.plc.wedge_degrees = 0;
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(NarrowWedge(), dims, {}, opened));
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(NarrowWedge(), dims, {}, closed));
+  VolumeMeshResult r, s;
+  MeshWithAndWithout(NarrowWedge(), dims, opened, closed, &r, &s);
   EXPECT_EQ(r.opened_wedges, 1u);
-  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
-  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
-  EXPECT_GT(r.quality.min_dihedral.min, s.quality.min_dihedral.min);
 }
 
 // A sheet in the plane z = 10 with a slit: triangle A's rim edge a-b, and the rim a-c-b of
@@ -722,12 +731,9 @@ TEST(PlcTest, ASlitFramedByThreeRimEdgesIsClosed) {
   EXPECT_EQ(kept.sheet_triangles.size(), 4u);
   VolumeMeshOptions closed_mesh, open_mesh;
   open_mesh.plc.cap_degrees = 180;
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Slit(), dims, {}, closed_mesh));
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult q, BuildVolumeMesh(Slit(), dims, {}, open_mesh));
+  VolumeMeshResult r, q;
+  MeshWithAndWithout(Slit(), dims, closed_mesh, open_mesh, &r, &q);
   EXPECT_EQ(r.closed_slits, 1u);
-  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
-  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
-  EXPECT_GT(r.quality.min_dihedral.min, q.quality.min_dihedral.min);
 }
 
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {

@@ -498,7 +498,8 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
     }
   }
   // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
-  // 5) reaches 0.6 * 5 + 2 * 5 = 13 from the sheet, level 1 (spacing 10) 33.
+  // 5) reaches 0.6 * 5 + 2.5 * 5 = 15.5 from the sheet, level 1 (spacing 10) fills the rest
+  // (level 2's spacing, 20, is over a quarter of the box's 60).
   std::vector<Vec3> near, far;
   for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
     const Vec3& p = plc.vertices[i];
@@ -508,7 +509,7 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
       EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
       EXPECT_LE(p[k], 59.5 - 3.0 + 1e-9);
     }
-    (d <= 13.0 ? near : far).push_back(p);
+    (d <= 15.5 ? near : far).push_back(p);
   }
   ASSERT_FALSE(near.empty());
   ASSERT_FALSE(far.empty());
@@ -521,6 +522,33 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, off));
   EXPECT_EQ(plain.seed_points, 0u);
   EXPECT_EQ(plain.vertices.size(), first_seed);
+}
+
+TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
+  // The same sheet at z = 10 in a box 80 x 80 x 20 ([-0.5, 19.5] in z): level 1's spacing,
+  // 10, is over a quarter of 20, so level 0 (spacing 5) fills the whole box, out to 27
+  // voxels from the sheet, where the box 40 thick below has level 1's spacing 10.
+  PlcOptions o;
+  o.lattice = 1.0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
+  ASSERT_GT(thin.seed_points, 0u);
+  std::vector<Vec3> far;
+  for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
+    const Vec3& p = thin.vertices[i];
+    EXPECT_GE(p.z, -0.5 + 3.0 - 1e-9);
+    EXPECT_LE(p.z, 19.5 - 3.0 + 1e-9);
+    if (DistanceToSheets(thin, p) > 15.5) far.push_back(p);
+  }
+  ASSERT_GE(far.size(), 2u);
+  EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, 1e-9);
+  // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
+  SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
+  far.clear();
+  for (size_t i = thick.vertices.size() - thick.seed_points; i < thick.vertices.size(); ++i) {
+    if (DistanceToSheets(thick, thick.vertices[i]) > 15.5) far.push_back(thick.vertices[i]);
+  }
+  ASSERT_GE(far.size(), 2u);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
 }
 
 TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {

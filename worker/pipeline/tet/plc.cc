@@ -250,11 +250,11 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
 // Each change of level leaves a layer of worse tetrahedra where the two spacings meet,
 // and so does each box face, where the face's points meet the lattice's rows. The band
 // is 2.5 spacings wide, not 2, so fewer levels meet within the box (radius aspect mean,
-// DPM: 0.832 -> 0.846 for 12% more tetrahedra; bench/RESULTS.md). A level whose spacing
-// is over a quarter of the box's thinnest side is not used (its finer neighbour fills
-// the rest): between the margins on both sides it would have room for a row or two
-// only, and the box's points and those rows, far apart, make poor tetrahedra across the
-// whole thin side (NETL, 42 voxels thick: 0.826 -> 0.843).
+// DPM, `volume` path: 0.832 -> 0.845 for 11% more tetrahedra; bench/RESULTS.md). A level
+// whose spacing is over a quarter of the box's thinnest side is not used (its finer
+// neighbour fills the rest): between the margins on both sides it would have room for a
+// row or two only, and the box's points and those rows, far apart, make poor tetrahedra
+// across the whole thin side (NETL, 42 voxels thick: 0.826 -> 0.843).
 constexpr double kLatticeKeep = 0.6;
 constexpr double kLatticeWidth = 2.5;
 constexpr int kLatticeLevels = 4;

@@ -92,9 +92,10 @@ struct PlcOptions {
   double wedge_degrees = 12.0;
   double wedge_voxels = 1.0;
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
-  // spacing this many times the sheets' median edge, doubling every two spacings outward.
-  // The lattice's tetrahedra are near-ideal (60° smallest dihedral angle), so the mean
-  // quality rises (bench/RESULTS.md). 0: none, TetGen places all points.
+  // spacing this many times the sheets' median edge, doubling every 2.5 spacings outward
+  // (up to 8 times; never past a quarter of the box's thinnest side). The lattice's tetrahedra are
+  // near-ideal (60° smallest dihedral angle), so the mean quality rises (bench/RESULTS.md). 0:
+  // none, TetGen places all points.
   double lattice = 0.85;
   // Seeds the box's edges and faces with points, graded like the lattice (its spacing, or
   // the median edge without one), embedded in the box facets. For a TetGen that may add

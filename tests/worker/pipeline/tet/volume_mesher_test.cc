@@ -530,23 +530,26 @@ TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
   // voxels from the sheet, where the box 40 thick below has level 1's spacing 10.
   PlcOptions o;
   o.lattice = 1.0;
+  // The seeds beyond level 0's band (15.5 from the sheet).
+  auto far_seeds = [](const Plc& plc) {
+    std::vector<Vec3> far;
+    for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
+      if (DistanceToSheets(plc, plc.vertices[i]) > 15.5) far.push_back(plc.vertices[i]);
+    }
+    return far;
+  };
   SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
   ASSERT_GT(thin.seed_points, 0u);
-  std::vector<Vec3> far;
   for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
-    const Vec3& p = thin.vertices[i];
-    EXPECT_GE(p.z, -0.5 + 3.0 - 1e-9);
-    EXPECT_LE(p.z, 19.5 - 3.0 + 1e-9);
-    if (DistanceToSheets(thin, p) > 15.5) far.push_back(p);
+    EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - 1e-9);
+    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + 1e-9);
   }
+  std::vector<Vec3> far = far_seeds(thin);
   ASSERT_GE(far.size(), 2u);
   EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, 1e-9);
   // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
   SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
-  far.clear();
-  for (size_t i = thick.vertices.size() - thick.seed_points; i < thick.vertices.size(); ++i) {
-    if (DistanceToSheets(thick, thick.vertices[i]) > 15.5) far.push_back(thick.vertices[i]);
-  }
+  far = far_seeds(thick);
   ASSERT_GE(far.size(), 2u);
   EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
 }

@@ -21,8 +21,8 @@ def run(cmd):
 
 
 def report(cli, command, vol, out, extra=()):
-    run([cli, command, vol, "-o", out, "--r=7", "--formats=ply", "--hausdorff=false",
-         "--grid_rates="] + list(extra))
+    run([cli, command, vol, "-o", out, "--r=7", "--output_formats=ply", "--similarity_hausdorff=false",
+         "--similarity_grid_rates="] + list(extra))
     return json.load(open(os.path.join(out, "report.json")))
 
 

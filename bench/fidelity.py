@@ -56,8 +56,8 @@ def volumes(cli, out_dir):
 
 def ours(cli, raw, value, r, out_dir):
     d = os.path.join(out_dir, "ours_r%g" % r)
-    run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--formats=ply",
-         "--hausdorff=false", "--grid_rates="])
+    run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--output_formats=ply",
+         "--similarity_hausdorff=false", "--similarity_grid_rates="])
     rep = json.load(open(os.path.join(d, "report.json")))
     return rep["surface"]["triangles"], rep["similarity"]["similarity"], rep["similarity"]["shell_similarity"]
 
@@ -86,7 +86,7 @@ def peer(cli, raw, dims, value, triangles, out_dir):
     w.SetInputData(dec.GetOutput())
     w.Write()
     s = json.loads(run([cli, "score", raw, path, "--labels=%g" % value, "--closed", "--json",
-                        "--hausdorff=false"]))
+                        "--similarity_hausdorff=false"]))
     return dec.GetOutput().GetNumberOfCells(), s["similarity"], len(faces)
 
 

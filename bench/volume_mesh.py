@@ -10,9 +10,9 @@ meshes it with the same quality bound (`-pzQq1.5/10O2/3`, free to refine its fac
 are scored by sheetmesh's scorer; the peer's tet quality is computed here with the same
 formulas (ALGORITHM §11).
 
-Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--flags "--lattice=0" --tag NAME]
+Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--flags "--plc_lattice=0" --tag NAME]
 Writes bench/out/volume_mesh.md and prints the table. With --flags (extra sheetmesh-pipeline
-flags, e.g. the 0.3 defaults "--lattice=0 --tet_steiner=true"), the peer (which does not
+flags, e.g. the 0.3 defaults "--plc_lattice=0 --tet_steiner_on_sheets=true"), the peer (which does not
 depend on them) is left out and the table goes to bench/out/volume_mesh_NAME.md.
 """
 import argparse
@@ -36,8 +36,8 @@ PEER_SWITCHES = "-pzQq1.5/10O2/3"
 def ours(cli, raw, value, r, out_dir, flags=(), tag=""):
     d = os.path.join(out_dir, "ours_vol_r%g%s" % (r, "_" + tag if tag else ""))
     t = time.perf_counter()
-    fidelity.run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--formats=ply",
-                  "--hausdorff=false", "--grid_rates=", "--volume_mesh", "--volume_formats=vtu"]
+    fidelity.run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--output_formats=ply",
+                  "--similarity_hausdorff=false", "--similarity_grid_rates=", "--volume_mesh", "--output_volume_formats=vtu"]
                  + list(flags))
     wall = time.perf_counter() - t
     rep = json.load(open(os.path.join(d, "report.json")))

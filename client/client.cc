@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/sha256.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/sha256.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh::client {
 namespace {

@@ -1,5 +1,5 @@
 // sheetmesh: the command-line client of the sheetmesh service.
-//   sheetmesh mesh VOLUME -o DIR [--reference] [--r R] [--extract] [--volume_mesh] ...
+//   sheetmesh mesh VOLUME -o DIR [--reference] [any pipeline parameter: --r R --extract ...]
 //   sheetmesh upload FILE
 //   sheetmesh jobs list|get|watch|cancel|delete [JOB]
 //   sheetmesh artifacts get JOB [-o DIR] [--name FILE]
@@ -14,15 +14,18 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "client/client.h"
+#include "client/parameter_flags.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 #include "google/protobuf/util/json_util.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "the server's host:port");
 ABSL_FLAG(std::string, token, "", "bearer token (or $SHEETMESH_TOKEN)");
@@ -32,14 +35,9 @@ ABSL_FLAG(std::string, o, "", "output folder");
 ABSL_FLAG(bool, reference, false,
           "mesh: name the volume by its path on the server instead of uploading it");
 ABSL_FLAG(std::string, config, "",
-          "mesh: the pipeline's JSON config file (as for sheetmesh-pipeline)");
-ABSL_FLAG(std::string, labels, "", "mesh: sheet-phase values, e.g. 255");
-ABSL_FLAG(std::string, dims, "", "mesh: raw volume dims NXxNYxNZ");
-ABSL_FLAG(std::string, dtype, "", "mesh: raw volume dtype");
-ABSL_FLAG(double, r, 0, "mesh: SCVD cell radius r (0: the server's default, 7)");
-ABSL_FLAG(bool, extract, false, "mesh: run the feature extraction first");
-ABSL_FLAG(bool, volume_mesh, false, "mesh: also make the TetGen volume mesh");
-ABSL_FLAG(std::string, method, "", "mesh: extended or paper");
+          "mesh: a JSON file of pipeline parameters (as for sheetmesh-pipeline); parameter "
+          "flags (--r=5, --extract, --separate_r=6, --labels=255, --dims=64x64x64, ...: "
+          "sheetmesh-pipeline params lists them) override it");
 ABSL_FLAG(bool, no_cache, false, "mesh: run even when identical work is done");
 ABSL_FLAG(std::string, state, "", "jobs list: only jobs in this state (QUEUED, RUNNING, ...)");
 ABSL_FLAG(int, page_size, 50, "jobs list: jobs per page");
@@ -52,7 +50,9 @@ namespace {
 
 constexpr char kUsage[] =
     "sheetmesh COMMAND [ARGS] [--server=host:port]\n\n"
-    "  mesh VOLUME -o DIR        upload (or --reference) a volume, run a job, download its files\n"
+    "  mesh VOLUME -o DIR        upload (or --reference) a volume, run a job, download its files;\n"
+    "                            every pipeline parameter is a flag: --r=5 --extract\n"
+    "                            --volume_mesh --labels=255 (sheetmesh-pipeline params)\n"
     "  upload FILE               upload a file, print its digest\n"
     "  jobs list|get|watch|cancel|delete [JOB]\n"
     "  artifacts get JOB -o DIR  download a job's files (--name FILE for one)\n"
@@ -143,7 +143,8 @@ absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::stri
   return absl::OkStatus();
 }
 
-absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
+absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
+                  const v1::PipelineParameters& parameters, const v1::VolumeFormat& format) {
   if (args.size() != 1) return absl::InvalidArgumentError("usage: sheetmesh mesh VOLUME -o DIR");
   const std::string out = absl::GetFlag(FLAGS_o);
   if (out.empty()) return absl::InvalidArgumentError("mesh needs -o DIR");
@@ -167,30 +168,12 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args) {
     *in.mutable_volume_digest() = d;
   }
   v1::PipelineParameters& p = *req.mutable_parameters();
+  p = parameters;
+  *in.mutable_format() = format;
   if (!absl::GetFlag(FLAGS_config).empty()) {
     SM_ASSIGN_OR_RETURN(std::string cfg, ReadFileToString(absl::GetFlag(FLAGS_config)));
     p.set_config_json(cfg);
   }
-  for (absl::string_view l : absl::StrSplit(absl::GetFlag(FLAGS_labels), ',', absl::SkipEmpty())) {
-    double v = 0;
-    if (!absl::SimpleAtod(l, &v))
-      return absl::InvalidArgumentError(absl::StrCat("--labels: '", l, "' is not a number"));
-    p.add_labels(v);
-  }
-  if (!absl::GetFlag(FLAGS_dims).empty()) {
-    for (absl::string_view d : absl::StrSplit(absl::GetFlag(FLAGS_dims), 'x')) {
-      int64_t v = 0;
-      if (!absl::SimpleAtoi(d, &v))
-        return absl::InvalidArgumentError(absl::StrCat("--dims: '", d, "' is not an integer"));
-      in.mutable_format()->add_dims(v);
-    }
-  }
-  if (!absl::GetFlag(FLAGS_dtype).empty())
-    in.mutable_format()->set_dtype(absl::GetFlag(FLAGS_dtype));
-  if (absl::GetFlag(FLAGS_r) != 0) p.set_r(absl::GetFlag(FLAGS_r));  // the server checks it
-  if (absl::GetFlag(FLAGS_extract)) p.set_extract(true);
-  if (absl::GetFlag(FLAGS_volume_mesh)) p.set_volume_mesh(true);
-  if (!absl::GetFlag(FLAGS_method).empty()) p.set_method(absl::GetFlag(FLAGS_method));
   SM_ASSIGN_OR_RETURN(v1::Job job, c.CreateJob(req));
   std::cout << "job " << job.name()
             << (job.cached_from().empty()
@@ -260,7 +243,22 @@ absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
 
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
-  std::vector<char*> rest = absl::ParseCommandLine(argc, argv);
+  absl::FlagsUsageConfig usage;
+  usage.contains_help_flags = [](absl::string_view file) {
+    return absl::EndsWith(file, "client/main.cc");
+  };
+  usage.contains_helpshort_flags = usage.contains_help_flags;
+  absl::SetFlagsUsageConfig(usage);
+  v1::PipelineParameters parameters;
+  v1::VolumeFormat format;
+  absl::StatusOr<std::vector<char*>> unparsed =
+      TakeParameterFlags(argc, argv, &parameters, &format);
+  if (!unparsed.ok()) {
+    std::cerr << "sheetmesh: " << unparsed.status().message() << "\n";
+    return 2;
+  }
+  std::vector<char*> rest =
+      absl::ParseCommandLine(static_cast<int>(unparsed->size()), unparsed->data());
   if (rest.size() < 2) {
     std::cerr << kUsage;
     return 2;
@@ -279,7 +277,7 @@ int Main(int argc, char** argv) {
   if (!client.ok()) {
     st = client.status();
   } else if (command == "mesh") {
-    st = Mesh(**client, args);
+    st = Mesh(**client, args, parameters, format);
   } else if (command == "upload") {
     if (args.size() != 1) {
       st = absl::InvalidArgumentError("usage: sheetmesh upload FILE");

@@ -4,7 +4,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "server/status_util.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 
 namespace sheetmesh::server {
 

@@ -14,9 +14,9 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/sha256.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/sha256.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh::server {
 namespace {

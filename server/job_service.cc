@@ -6,27 +6,15 @@
 #include <climits>
 
 #include "absl/strings/str_cat.h"
-#include "google/protobuf/io/coded_stream.h"
-#include "google/protobuf/io/zero_copy_stream_impl_lite.h"
 #include "server/references.h"
 #include "server/status_util.h"
-#include "worker/pipeline/core/sha256.h"
-#include "worker/pipeline/core/status_macros.h"
-#include "worker/pipeline/core/version.h"
+#include "common/sha256.h"
+#include "common/status_macros.h"
+#include "common/version.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::server {
 namespace {
-
-std::string Deterministic(const google::protobuf::Message& m) {
-  std::string out;
-  google::protobuf::io::StringOutputStream stream(&out);
-  google::protobuf::io::CodedOutputStream coded(&stream);
-  coded.SetSerializationDeterministic(true);
-  m.SerializeToCodedStream(&coded);
-  coded.Trim();
-  return out;
-}
 
 bool Terminal(v1::JobState s) {
   return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED;
@@ -34,7 +22,8 @@ bool Terminal(v1::JobState s) {
 
 }  // namespace
 
-absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& r, const std::string& resolved) {
+absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& r, const std::string& resolved,
+                                     const std::string& parameters) {
   std::string identity;
   if (r.input().has_volume_digest()) {
     identity = absl::StrCat("digest:", DigestString(r.input().volume_digest()));
@@ -45,11 +34,9 @@ absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& r, const std::s
     identity = absl::StrCat("path:", resolved, ":", st.st_size, ":", st.st_mtim.tv_sec, ".",
                             st.st_mtim.tv_nsec);
   }
-  v1::JobInput input = r.input();
-  input.clear_volume_digest();
-  input.clear_volume_path();
-  return Sha256Hex(absl::StrCat(SHEETMESH_VERSION, "\n", identity, "\n", Deterministic(input), "\n",
-                                Deterministic(r.parameters())));
+  // The file name tells the format of an upload; the parameters say the rest.
+  return Sha256Hex(absl::StrCat(SHEETMESH_VERSION, "\n", identity, "\n", r.input().file_name(),
+                                "\n", parameters));
 }
 
 absl::StatusOr<v1::Job> JobServiceImpl::Fresh(const std::string& name) {
@@ -95,17 +82,18 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                         "input needs volume_digest or volume_path");
   }
-  // Parameters are checked now, so that a mistake is the caller's error, not a failed job.
-  absl::StatusOr<PipelineOptions> options =
-      runtime::ToPipelineOptions(r->parameters(), in, resolved.empty() ? "upload" : resolved);
-  if (!options.ok()) return ToGrpcStatus(options.status());
+  // Parameters are resolved once, now: a mistake is the caller's error, not a failed job,
+  // and the worker runs what was resolved.
+  absl::StatusOr<std::string> parameters = runtime::ResolveJobParameters(r->parameters(), in);
+  if (!parameters.ok()) return ToGrpcStatus(parameters.status());
 
   v1::Job job;
   job.set_request_id(r->request_id());
   *job.mutable_input() = in;
   *job.mutable_parameters() = r->parameters();
   job.set_pipeline_version(SHEETMESH_VERSION);
-  absl::StatusOr<std::string> key = CacheKey(*r, resolved);
+  job.set_resolved_parameters(*parameters);
+  absl::StatusOr<std::string> key = CacheKey(*r, resolved, *parameters);
   if (!key.ok()) return ToGrpcStatus(key.status());
   if (ctx_->cache && !r->no_cache()) {
     absl::StatusOr<std::optional<v1::Job>> cached = ctx_->jobs->FindCached(*key);

@@ -10,11 +10,13 @@
 
 namespace sheetmesh::server {
 
-// The cache key of identical work: the pipeline version, the input's identity (its
-// digest; for a path, the resolved path, size and modification time) and the
-// parameters, serialized deterministically.
+// The cache key of identical work: sha256 of the pipeline version, the input's identity
+// (its digest; for a path, the resolved path, size and modification time), the file name
+// and the canonical parameters (runtime::ResolveJobParameters). kNotFound when a path
+// vanished.
 absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& request,
-                                     const std::string& resolved_path);
+                                     const std::string& resolved_path,
+                                     const std::string& canonical_parameters);
 
 class JobServiceImpl final : public v1::JobService::Service {
  public:

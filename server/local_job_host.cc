@@ -9,8 +9,8 @@
 #include "absl/time/clock.h"
 #include "google/protobuf/util/time_util.h"
 #include "server/references.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh::server {
 

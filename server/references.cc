@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 
 namespace sheetmesh::server {
 

@@ -11,8 +11,8 @@
 #include "server/blob_service.h"
 #include "server/job_service.h"
 #include "server/volume_service.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 #include "worker/runtime/worker_pool.h"
 
 namespace sheetmesh::server {

@@ -9,8 +9,8 @@
 #include "absl/time/clock.h"
 #include "google/protobuf/util/time_util.h"
 #include "server/job_store.h"
-#include "worker/pipeline/core/random.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/random.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh::server {
 namespace {

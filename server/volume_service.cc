@@ -16,7 +16,9 @@ grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
   if (!path.ok()) return ToGrpcStatus(path.status());
   v1::JobInput input;
   *input.mutable_format() = r->format();
-  absl::StatusOr<PipelineOptions> o = runtime::ToPipelineOptions({}, input, *path);
+  absl::StatusOr<std::string> parameters = runtime::ResolveJobParameters({}, input);
+  if (!parameters.ok()) return ToGrpcStatus(parameters.status());
+  absl::StatusOr<PipelineOptions> o = runtime::OptionsFromResolved(*parameters, *path);
   if (!o.ok()) return ToGrpcStatus(o.status());
   absl::StatusOr<std::unique_ptr<VolumeSource>> source = OpenVolume(*path, o->input.open);
   if (!source.ok()) return ToGrpcStatus(source.status());

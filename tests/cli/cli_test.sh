@@ -13,13 +13,13 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 "$cli" info "$tmp/s_128x112x96_u8.raw" --json > "$tmp/info.json"
 /usr/bin/python3 -c "import json,sys; j=json.load(open('$tmp/info.json')); sys.exit(0 if j['dims']==[128,112,96] and j['sheet_voxels']>0 else 1)" || fail "info json"
 "$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip | grep -q wrote || fail convert
-"$cli" surface "$tmp/s.nrrd" --r 7 -o "$tmp/surf" --hausdorff=false | grep -q "similarity" || fail surface
+"$cli" surface "$tmp/s.nrrd" --r 7 -o "$tmp/surf" --similarity_hausdorff=false | grep -q "similarity" || fail surface
 for f in surface.ply surface.vtp surface.obj report.json; do [ -f "$tmp/surf/$f" ] || fail "surface wrote no $f"; done
-"$cli" score "$tmp/s.nrrd" "$tmp/surf/surface.ply" --hausdorff=false | grep -q "similarity" || fail score
+"$cli" score "$tmp/s.nrrd" "$tmp/surf/surface.ply" --similarity_hausdorff=false | grep -q "similarity" || fail score
 cat > "$tmp/cfg.json" <<'JSON'
-{"separate": {"D_ang": 140}, "surface": {"r": 8}, "volume_mesh": {"enabled": true}}
+{"separate": {"D_ang": 140}, "r": 8, "volume_mesh": true}
 JSON
-"$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/cfg.json" --r 6 -o "$tmp/run" --hausdorff=false > "$tmp/run.txt"
+"$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/cfg.json" --r 6 -o "$tmp/run" --similarity_hausdorff=false > "$tmp/run.txt"
 grep -q "surface     r = 6" "$tmp/run.txt" || fail "the flag --r must override the config's r"
 grep -q "volume mesh" "$tmp/run.txt" || fail "the config's volume_mesh must apply"
 for f in model.vdb pieces.csv volume.vtu volume.msh volume.inp report.json; do [ -f "$tmp/run/$f" ] || fail "run wrote no $f"; done
@@ -27,9 +27,9 @@ for f in model.vdb pieces.csv volume.vtu volume.msh volume.inp report.json; do [
 [ -f "$tmp/vol/volume_report.json" ] || fail "volume report"
 # Two processes (each with its own hash seed) give the same volume mesh, byte for byte.
 "$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol2" \
-  --volume_formats=vtu,msh > /dev/null || fail "volume again"
+  --output_volume_formats=vtu,msh > /dev/null || fail "volume again"
 "$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol3" \
-  --volume_formats=vtu,msh > /dev/null || fail "volume a third time"
+  --output_volume_formats=vtu,msh > /dev/null || fail "volume a third time"
 cmp -s "$tmp/vol2/volume.vtu" "$tmp/vol3/volume.vtu" && cmp -s "$tmp/vol2/volume.msh" "$tmp/vol3/volume.msh" \
   || fail "the volume mesh differs between two runs"
 
@@ -43,8 +43,21 @@ expect_error() {
 head -c 1000 "$tmp/s_128x112x96_u8.raw" > "$tmp/cut_128x112x96_u8.raw"
 EXPECT="truncated" expect_error "$cli" info "$tmp/cut_128x112x96_u8.raw"
 EXPECT="matched no voxel" expect_error "$cli" info "$tmp/s_128x112x96_u8.raw" --labels=7
-EXPECT="r = -1" expect_error "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --r=-1
+EXPECT="--r = -1.0 must be a number in (0, 4096]" expect_error "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --r=-1
+EXPECT="--r_sep is now --separate_r" expect_error "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --r_sep=6
+EXPECT="--r (r) is not used by 'info'" expect_error "$cli" info "$tmp/s_128x112x96_u8.raw" --r=6
 echo '{"surface": {"radius": 7}}' > "$tmp/bad.json"
 EXPECT="unknown key 'surface.radius'" expect_error "$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/bad.json" -o "$tmp/x"
 EXPECT="unknown command" expect_error "$cli" mesh-it
+# --help lists the parameters and the commands' own flags, and exits 0.
+"$cli" --help > "$tmp/help.txt" || fail "--help exited non-zero"
+grep -q -- "--separate_r (separate.r)" "$tmp/help.txt" || fail "--help lists no parameters"
+grep -q -- "--out_format" "$tmp/help.txt" || fail "--help lists no command flags"
+# A volume path that is not UTF-8 is an error naming it, or a report with its name
+# escaped; never an abort.
+bad=$(printf '%s/s_\xff\xfe_128x112x96_u8.raw' "$tmp")
+cp "$tmp/s_128x112x96_u8.raw" "$bad"
+code=0; "$cli" surface "$bad" --r 9 -o "$tmp/nonutf8" --similarity_hausdorff=false > /dev/null 2>&1 || code=$?
+[ "$code" -eq 0 ] || [ "$code" -eq 2 ] || fail "a non-UTF-8 path gave exit $code"
+[ "$code" -ne 0 ] || /usr/bin/python3 -c "import json; json.load(open('$tmp/nonutf8/report.json'))" || fail "report.json of a non-UTF-8 path does not parse"
 echo "cli: all commands behaved"

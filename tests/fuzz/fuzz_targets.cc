@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 #include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/volume_open.h"
 #include "worker/pipeline/voxel/phase_selection.h"

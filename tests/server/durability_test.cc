@@ -14,7 +14,7 @@
 #include "client/client.h"
 #include "server/blob_store.h"
 #include "tests/server/service_fixture.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 
 namespace sheetmesh::testing {
 namespace {

@@ -17,7 +17,7 @@
 #include "nlohmann/json.hpp"
 #include "server/blob_store.h"
 #include "tests/server/service_fixture.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 
 namespace sheetmesh::testing {
 namespace {
@@ -547,14 +547,27 @@ TEST_F(ServiceTest, BadParametersAreInvalidArgumentNamingTheField) {
     std::string field;
   };
   const std::vector<Case> cases = {
-      {[](v1::PipelineParameters* p) { p->set_r(-3); }, "parameters.r = -3"},
-      {[](v1::PipelineParameters* p) { p->set_d_ang(200); }, "parameters.d_ang = 200"},
-      {[](v1::PipelineParameters* p) { p->set_method("magic"); }, "parameters.method = 'magic'"},
+      {[](v1::PipelineParameters* p) { p->set_r(-3); }, "parameters.r = -3.0 must be a number in"},
+      {[](v1::PipelineParameters* p) { p->set_separate_d_ang(200); },
+       "parameters.separate_D_ang = 200.0"},
+      {[](v1::PipelineParameters* p) { p->set_surface_method("magic"); },
+       "parameters.surface_method = \"magic\" must be one of extended, paper"},
       {[](v1::PipelineParameters* p) { p->set_tet_min_dihedral(80); },
-       "parameters.tet_min_dihedral = 80"},
-      {[](v1::PipelineParameters* p) { p->set_volume_lattice(0.1); },
-       "parameters.volume_lattice = 0.1"},
-      {[](v1::PipelineParameters* p) { p->set_config_json("{\"surface\": {\"rr\": 3}}"); }, "rr"},
+       "parameters.tet_min_dihedral = 80.0"},
+      {[](v1::PipelineParameters* p) { p->set_plc_lattice(0.1); },
+       "parameters.plc_lattice = 0.1"},
+      {[](v1::PipelineParameters* p) { p->set_config_json("{\"surface\": {\"rr\": 3}}"); },
+       "parameters.config_json: unknown key 'surface.rr'"},
+      {[](v1::PipelineParameters* p) {
+         p->set_config_json("{\"tet\": {\"program\": \"/bin/sh\"}}");
+       },
+       "a job may not set it"},
+      {[](v1::PipelineParameters* p) {
+         p->add_labels(255);
+         p->add_window(0);
+         p->add_window(1);
+       },
+       "parameters.labels and parameters.window exclude each other"},
       {[](v1::PipelineParameters* p) { p->set_config_json("{not json"); },
        "parameters.config_json"},
   };

@@ -13,8 +13,8 @@
 #include "server/job_store.h"
 #include "server/references.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/sha256.h"
+#include "common/file_util.h"
+#include "common/sha256.h"
 
 namespace sheetmesh::server {
 namespace {

@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh::testing {

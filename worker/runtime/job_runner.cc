@@ -6,8 +6,8 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
-#include "worker/pipeline/core/progress.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/progress.h"
+#include "common/status_macros.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::runtime {
@@ -53,8 +53,7 @@ std::string MediaTypeOf(const std::string& name) {
 absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::string& worker,
                                                  JobHost& host, const std::string& scratch_dir) {
   SM_ASSIGN_OR_RETURN(LocalVolume volume, host.ResolveInput(job));
-  SM_ASSIGN_OR_RETURN(PipelineOptions options,
-                      ToPipelineOptions(job.parameters(), job.input(), volume.path));
+  SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
   const std::string dir =
       (std::filesystem::path(scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}})).string();
   std::error_code ec;

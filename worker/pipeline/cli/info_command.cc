@@ -4,7 +4,8 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/json_text.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/voxel/thickness.h"
 
 namespace sheetmesh {
@@ -56,7 +57,7 @@ absl::Status RunInfo(const InfoOptions& options, std::ostream& out) {
     j["seconds"] = {{"read_and_select", phase.read_seconds},
                     {"thickness", thickness_s},
                     {"components", components_s}};
-    out << j.dump(2) << "\n";
+    out << JsonText(j, 2) << "\n";
     return absl::OkStatus();
   }
   out << absl::StrFormat("volume      %s (%s)\n", info.path, info.format);

@@ -2,8 +2,8 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 

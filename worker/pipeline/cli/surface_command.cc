@@ -3,8 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_format.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/json_text.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
@@ -156,7 +157,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   for (const auto& [name, value] : r.improvement.Fields()) j["improvement"][name] = value;
   files.push_back("volume_report.json");
   j["files"] = files;
-  SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", j.dump(2)));
+  SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", JsonText(j, 2)));
   out << absl::StrFormat(
       "volume mesh %d nodes, %d tetrahedra, %d sheet faces; %d of %d sheet triangles conform\n"
       "quality     min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
@@ -201,7 +202,7 @@ absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out) {
                         {"c_image", s.c_image},
                         {"dice", s.dice},
                         {"hausdorff_voxels", s.hausdorff}};
-    out << j.dump(2) << "\n";
+    out << JsonText(j, 2) << "\n";
     return absl::OkStatus();
   }
   out << absl::StrFormat(

@@ -9,10 +9,10 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/vertex_normals.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
-#include "worker/pipeline/scvd/rim_test.h"
+#include "worker/pipeline/scvd/rim_classifier.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
 
 namespace sheetmesh {
@@ -50,7 +50,7 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   // Cells on the rim (the outer edge or a hole's): the only ones whose cylinder can reach
   // beyond the patch in its plane.
   std::vector<uint8_t> rim_cell(scvd.num_generators(), 0);
-  const RimTest rim(sheet.set, 0.4);
+  const RimClassifier rim(sheet.set, 0.4);
   sheet.set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
     const uint32_t c = scvd.cell[v];
     if (!rim_cell[c] && Norm2(normal[c]) > 0 && rim.IsRim(x, y, z, normal[c])) rim_cell[c] = 1;

@@ -6,7 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/morphology.h"
@@ -29,6 +29,12 @@ void Count(const VoxelSet& before, const VoxelSet& after, ExtractionStep* s) {
   const uint64_t common = Intersection(before, after).size();
   s->added = after.size() - common;
   s->removed = before.size() - common;
+}
+
+// An extension's SCVD radius of 0 follows the separation's.
+ExtendOptions Following(ExtendOptions e, const SeparationOptions& separation) {
+  if (e.scvd_radius_voxels == 0) e.scvd_radius_voxels = separation.radius_voxels;
+  return e;
 }
 
 }  // namespace
@@ -92,7 +98,7 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
     if (o.detect) {
       s.ran = true;
       SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(objects, o.detect_extend, nullptr, progress.Stage("detect")));
+                          Extend(objects, Following(o.detect_extend, o.separation), nullptr, progress.Stage("detect")));
       SM_ASSIGN_OR_RETURN(Components merged, LabelComponents(ext.patch.set, Connectivity::k6));
       const std::vector<uint32_t> object_of = merged.VoxelLabels(ext.patch.set);
       std::map<uint32_t, uint64_t> original;
@@ -179,7 +185,7 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
     if (o.recover) {
       s.ran = true;
       SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(pieces, o.recover_extend, &refined, progress.Stage("recover")));
+                          Extend(pieces, Following(o.recover_extend, o.separation), &refined, progress.Stage("recover")));
       s.added = ext.added;
       pieces = std::move(ext.patch);
     }

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/extract/extend.h"
 #include "worker/pipeline/extract/separation.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
@@ -22,7 +22,8 @@ struct ExtractionOptions {
   int refine_open_radius = 0;   //    opening radius, voxels (0: none; it would erase
                                 //    sheets thinner than twice the radius)
   bool detect = true;           // 2. extend (detection mode); objects = components
-  ExtendOptions detect_extend = {1.5, 7.0, 1, 5.0, 1};  // t, R, rounds, r, seed
+  ExtendOptions detect_extend = {1.5, 7.0, 1, 0.0, 1};  // t, R, rounds, r, seed (r 0:
+                                                        // separation.radius_voxels)
   uint64_t min_object_voxels = 0;  // M: an object (detect) or piece (remove minor) with
                                    // fewer voxels goes; 0 = three cells of the separation
                                    // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
@@ -30,7 +31,7 @@ struct ExtractionOptions {
   SeparationOptions separation;    //    r = 5, D_ang = 150
   bool remove_minor = true;        // 4. pieces below M go
   bool recover = true;             // 5. extend (recovery mode) within the refined input
-  ExtendOptions recover_extend = {1.5, 7.0, 10, 5.0, 1};
+  ExtendOptions recover_extend = {1.5, 7.0, 10, 0.0, 1};  // r 0: separation.radius_voxels
 };
 
 // What one step changed.

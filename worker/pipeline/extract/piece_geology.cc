@@ -5,7 +5,7 @@
 #include <map>
 
 #include "absl/strings/str_format.h"
-#include "worker/pipeline/core/orientation.h"
+#include "common/orientation.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/surface/face_attributes.h"

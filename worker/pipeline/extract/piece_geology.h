@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
 

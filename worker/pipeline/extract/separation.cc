@@ -6,7 +6,7 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/surface/sheet_analysis.h"

@@ -11,10 +11,10 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
-#include "worker/pipeline/core/byte_order.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
-#include "worker/pipeline/core/version.h"
+#include "common/byte_order.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
+#include "common/version.h"
 
 namespace sheetmesh {
 namespace {

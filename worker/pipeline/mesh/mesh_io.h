@@ -8,7 +8,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 
 namespace sheetmesh {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 
 namespace sheetmesh {
 

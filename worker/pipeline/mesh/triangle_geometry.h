@@ -7,7 +7,7 @@
 #include <array>
 #include <utility>
 
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 
 namespace sheetmesh {
 

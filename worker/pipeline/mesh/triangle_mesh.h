@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 
 namespace sheetmesh {
 

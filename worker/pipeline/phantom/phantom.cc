@@ -2,15 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/orientation.h"
-#include "worker/pipeline/core/random.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/json_text.h"
+#include "common/orientation.h"
+#include "common/random.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 namespace {
@@ -79,8 +79,12 @@ SheetFields Tabulate(const PhantomSheet& s, const Waves& und, const Waves& ap, c
   SheetFields f;
   f.a0 = -s.half_extent_u - 2 * SheetFields::kStep;
   f.b0 = -s.half_extent_v - 2 * SheetFields::kStep;
-  f.na = static_cast<int>(std::ceil(2 * (s.half_extent_u + 4 * SheetFields::kStep) / SheetFields::kStep)) + 2;
-  f.nb = static_cast<int>(std::ceil(2 * (s.half_extent_v + 4 * SheetFields::kStep) / SheetFields::kStep)) + 2;
+  f.na = static_cast<int>(
+             std::ceil(2 * (s.half_extent_u + 4 * SheetFields::kStep) / SheetFields::kStep)) +
+         2;
+  f.nb = static_cast<int>(
+             std::ceil(2 * (s.half_extent_v + 4 * SheetFields::kStep) / SheetFields::kStep)) +
+         2;
   f.node.resize(static_cast<size_t>(f.na) * f.nb);
   *ap_min = 1e300;
   *ap_max = 0;
@@ -89,7 +93,8 @@ SheetFields Tabulate(const PhantomSheet& s, const Waves& und, const Waves& ap, c
       const double a = f.a0 + i * SheetFields::kStep, b = f.b0 + j * SheetFields::kStep;
       const double aperture = std::max(1.0, s.aperture_mean * (1 + variation * ap.Eval(a, b)));
       if ((a * a) / (s.half_extent_u * s.half_extent_u) +
-              (b * b) / (s.half_extent_v * s.half_extent_v) <= 1.0) {
+              (b * b) / (s.half_extent_v * s.half_extent_v) <=
+          1.0) {
         *ap_min = std::min(*ap_min, aperture);
         *ap_max = std::max(*ap_max, aperture);
       }
@@ -105,7 +110,8 @@ SheetFields Tabulate(const PhantomSheet& s, const Waves& und, const Waves& ap, c
 
 bool InsideOutline(const PhantomSheet& s, double a, double b) {
   if ((a * a) / (s.half_extent_u * s.half_extent_u) +
-          (b * b) / (s.half_extent_v * s.half_extent_v) > 1.0) {
+          (b * b) / (s.half_extent_v * s.half_extent_v) >
+      1.0) {
     return false;
   }
   for (const PhantomHole& h : s.holes) {
@@ -158,8 +164,8 @@ Plan MakePlan(PhantomTruth* truth) {
     const Waves bot = RandomWaves(rng, 3, 9);
     PlannedSheet p;
     p.sheet = &s;
-    p.fields = Tabulate(s, und, ap, top, bot, o.aperture_variation, &s.aperture_min,
-                        &s.aperture_max);
+    p.fields =
+        Tabulate(s, und, ap, top, bot, o.aperture_variation, &s.aperture_min, &s.aperture_max);
     p.bound = s.undulation + s.aperture_max / 2 + s.wall_roughness + 1.0;
     plan.sheets.push_back(std::move(p));
   }
@@ -243,17 +249,16 @@ absl::Status Generate(PhantomTruth* truth, VolumeSink& sink, const Progress& pro
     std::vector<std::thread> pool;
     for (unsigned t = 0; t < threads; ++t) {
       const int64_t zb = z0 + n * t / threads, ze = z0 + n * (t + 1) / threads;
-      pool.emplace_back([&, t, zb, ze] {
-        FillSlab<T>(*truth, plan, zb, ze, z0, buffer.data(), &part[t]);
-      });
+      pool.emplace_back(
+          [&, t, zb, ze] { FillSlab<T>(*truth, plan, zb, ze, z0, buffer.data(), &part[t]); });
     }
     for (std::thread& th : pool) th.join();
     for (const auto& p : part) {
       for (size_t k = 0; k < counts.size(); ++k) counts[k] += p[k];
     }
     for (int64_t i = 0; i < n * slice; ++i) {
-      truth->sheet_voxels += (buffer[i] == sheet_value || buffer[i] == speck_value) &&
-                             buffer[i] != background;
+      truth->sheet_voxels +=
+          (buffer[i] == sheet_value || buffer[i] == speck_value) && buffer[i] != background;
     }
     SM_RETURN_IF_ERROR(sink.WriteSlices(
         n, std::span<const std::byte>(reinterpret_cast<const std::byte*>(buffer.data()),
@@ -320,8 +325,8 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
     const double dip = rng.Uniform(options.min_dip_degrees, 90.0) * rad;
     // Spread the dip directions so that sheets cross rather than stack.
     const double az = (360.0 * k / std::max(1, options.num_sheets) + rng.Uniform(0, 40)) * rad;
-    s.normal = Normalized(Vec3(std::sin(dip) * std::sin(az), std::sin(dip) * std::cos(az),
-                               std::cos(dip)));
+    s.normal =
+        Normalized(Vec3(std::sin(dip) * std::sin(az), std::sin(dip) * std::cos(az), std::cos(dip)));
     s.center = centre + Vec3(rng.Uniform(-0.15, 0.15) * d.nx, rng.Uniform(-0.15, 0.15) * d.ny,
                              rng.Uniform(-0.15, 0.15) * d.nz);
     const Vec3 helper = std::abs(s.normal.z) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
@@ -419,7 +424,8 @@ std::string PhantomTruth::ToJson() const {
     js["wall_roughness"] = s.wall_roughness;
     js["voxels"] = s.voxels;
     nlohmann::json holes = nlohmann::json::array();
-    for (const PhantomHole& h : s.holes) holes.push_back({{"u", h.u}, {"v", h.v}, {"radius", h.radius}});
+    for (const PhantomHole& h : s.holes)
+      holes.push_back({{"u", h.u}, {"v", h.v}, {"radius", h.radius}});
     js["holes"] = holes;
     nlohmann::json gaps = nlohmann::json::array();
     for (const PhantomGap& g : s.gaps) {
@@ -434,7 +440,7 @@ std::string PhantomTruth::ToJson() const {
     specks_json.push_back({{"center", VecJson(sp.center)}, {"radius", sp.radius}});
   }
   j["specks"] = specks_json;
-  return j.dump(2);
+  return JsonText(j, 2);
 }
 
 }  // namespace sheetmesh

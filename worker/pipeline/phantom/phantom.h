@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
-#include "worker/pipeline/core/types.h"
+#include "common/progress.h"
+#include "common/types.h"
 #include "worker/pipeline/volume/volume_open.h"
 #include "worker/pipeline/volume/volume_sink.h"
 

@@ -4,13 +4,14 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
-#include "worker/pipeline/run/pipeline_config.h"
+#include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
-#include "worker/pipeline/volume/label_volume.h"
+#include "worker/pipeline/voxel/label_volume.h"
 #include "worker/pipeline/volume/vdb_io.h"
+#include "worker/pipeline/voxel/voxel_set_vdb.h"
 
 namespace sheetmesh {
 namespace {
@@ -52,7 +53,7 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
 
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress) {
-  SM_RETURN_IF_ERROR(ValidatePipelineOptions(options));
+  SM_RETURN_IF_ERROR(CheckParameters(options));
   PipelineReport report;
   report.options = options;
   SheetPhase phase;

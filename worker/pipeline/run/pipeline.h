@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/mesh/mesh_topology.h"

@@ -1,7 +1,8 @@
 // PipelineReport::ToJson: the report artifact.
 #include <nlohmann/json.hpp>
 
-#include "worker/pipeline/core/version.h"
+#include "common/json_text.h"
+#include "common/version.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/pipeline.h"
 
@@ -209,7 +210,7 @@ std::string PipelineReport::ToJson() const {
   for (const StageTime& t : timings) times[t.stage] = t.seconds;
   j["seconds"] = times;
   j["files"] = files;
-  return j.dump(2);
+  return JsonText(j, 2);
 }
 
 }  // namespace sheetmesh

@@ -14,11 +14,11 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/container/inlined_vector.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/mesh/vertex_normals.h"
-#include "worker/pipeline/scvd/rim_test.h"
+#include "worker/pipeline/scvd/rim_classifier.h"
 
 namespace sheetmesh {
 namespace {
@@ -319,7 +319,7 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
   const std::vector<Vec3> normal =
       VertexNormals(std::span<const Vec3>(pos->data(), num_gen), selector->faces());
   // Rim voxels of the boundary cells.
-  const RimTest rim(set, options.rim_normal_cos);
+  const RimClassifier rim(set, options.rim_normal_cos);
   auto is_rim = [&](int32_t x, int32_t y, int32_t z, uint32_t c) {
     return rim.IsRim(x, y, z, normal[c]);
   };

@@ -9,8 +9,8 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/random.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/random.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/scvd/column_graph.h"
 
 namespace sheetmesh {

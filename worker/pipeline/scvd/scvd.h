@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
-#include "worker/pipeline/core/types.h"
+#include "common/progress.h"
+#include "common/types.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/neighbor_table.h"
 #include "worker/pipeline/voxel/voxel_set.h"

@@ -8,7 +8,7 @@
 #include <span>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 

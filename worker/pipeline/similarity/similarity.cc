@@ -10,7 +10,7 @@
 #include <nanoflann.hpp>
 #include <vector>
 
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 

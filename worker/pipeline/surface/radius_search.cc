@@ -5,7 +5,7 @@
 #include <map>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/similarity/similarity.h"
 
 namespace sheetmesh {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
 #include "worker/pipeline/surface/surface_builder.h"

@@ -1,6 +1,6 @@
 #include "worker/pipeline/surface/sheet_analysis.h"
 
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 

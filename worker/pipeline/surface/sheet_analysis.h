@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/neighbor_table.h"
 #include "worker/pipeline/voxel/thickness.h"

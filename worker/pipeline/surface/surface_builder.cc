@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/surface/face_attributes.h"

@@ -13,7 +13,7 @@
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"

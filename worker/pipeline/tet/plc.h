@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 
 namespace sheetmesh {

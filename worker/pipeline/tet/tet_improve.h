@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {

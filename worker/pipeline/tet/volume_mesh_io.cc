@@ -7,8 +7,8 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/version.h"
+#include "common/file_util.h"
+#include "common/version.h"
 
 namespace sheetmesh {
 namespace {

@@ -8,7 +8,7 @@
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 
 namespace sheetmesh {

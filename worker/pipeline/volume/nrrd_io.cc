@@ -15,8 +15,8 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 namespace {

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 namespace {

@@ -8,58 +8,12 @@
 #include <openvdb/tools/Dense.h>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/file_util.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
+#include "worker/pipeline/volume/vdb_grids.h"
 
 namespace sheetmesh {
 namespace {
-
-void InitializeOpenVdb() {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
-}
-
-constexpr char kDimsMeta[] = "sheetmesh_dims";
-constexpr char kDTypeMeta[] = "sheetmesh_dtype";
-constexpr char kUnitMeta[] = "sheetmesh_unit";
-
-openvdb::math::Transform::Ptr MakeTransform(const Placement& p) {
-  openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
-  m.setToScale(openvdb::Vec3d(p.spacing.x, p.spacing.y, p.spacing.z));
-  m.setTranslation(openvdb::Vec3d(p.origin.x, p.origin.y, p.origin.z));
-  return openvdb::math::Transform::createLinearTransform(m);
-}
-
-void SetVolumeMeta(openvdb::GridBase& grid, const Dims& dims, DType dtype, const Placement& p) {
-  grid.insertMeta(kDimsMeta, openvdb::Vec3IMetadata(openvdb::Vec3i(
-                                 static_cast<int>(dims.nx), static_cast<int>(dims.ny),
-                                 static_cast<int>(dims.nz))));
-  grid.insertMeta(kDTypeMeta, openvdb::StringMetadata(std::string(DTypeName(dtype))));
-  if (!p.unit.empty()) grid.insertMeta(kUnitMeta, openvdb::StringMetadata(p.unit));
-  grid.setTransform(MakeTransform(p));
-}
-
-// Writes `grids` to `path` through a `.part` file and a rename.
-absl::Status WriteGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids) {
-  const std::string part = path + ".part";
-  try {
-    openvdb::io::File file(part);
-    file.write(grids);
-    file.close();
-  } catch (const openvdb::Exception& e) {
-    std::remove(part.c_str());
-    return absl::InternalError(absl::StrCat(path, ": OpenVDB could not write: ", e.what()));
-  } catch (const std::exception& e) {
-    std::remove(part.c_str());
-    return absl::InternalError(absl::StrCat(path, ": could not write: ", e.what()));
-  }
-  if (std::rename(part.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(part.c_str());
-    return ErrnoStatus(err, path);
-  }
-  return absl::OkStatus();
-}
 
 template <class GridT>
 class VdbSource : public VolumeSource {
@@ -273,44 +227,6 @@ absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVdbWriter(const std::string& p
   out.path = path;
   out.format = "vdb";
   return std::make_unique<VdbSink>(std::move(out));
-}
-
-absl::Status WriteVoxelSetVdb(const std::string& path, const VoxelSet& set,
-                              std::span<const int32_t> labels, const Placement& placement,
-                              const std::string& grid_name) {
-  InitializeOpenVdb();
-  if (!labels.empty() && labels.size() != set.size()) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": ", labels.size(),
-                                                   " labels for ", set.size(), " voxels"));
-  }
-  openvdb::GridPtrVec grids;
-  try {
-    auto mask = openvdb::MaskGrid::create();
-    openvdb::Int32Grid::Ptr label_grid;
-    if (!labels.empty()) label_grid = openvdb::Int32Grid::create(-1);
-    set.ForEachRun([&](int32_t y, int32_t z, const Run& run, uint64_t first) {
-      mask->tree().sparseFill(openvdb::CoordBBox(openvdb::Coord(run.x0, y, z),
-                                                 openvdb::Coord(run.x1 - 1, y, z)),
-                              true, true);
-      if (label_grid) {
-        auto lacc = label_grid->getAccessor();
-        for (int32_t x = run.x0; x < run.x1; ++x) {
-          lacc.setValue(openvdb::Coord(x, y, z), labels[first + (x - run.x0)]);
-        }
-      }
-    });
-    mask->setName(grid_name);
-    SetVolumeMeta(*mask, set.dims(), DType::kUInt8, placement);
-    grids.push_back(mask);
-    if (label_grid) {
-      label_grid->setName(grid_name + "_labels");
-      SetVolumeMeta(*label_grid, set.dims(), DType::kFloat32, placement);
-      grids.push_back(label_grid);
-    }
-  } catch (const openvdb::Exception& e) {
-    return absl::InternalError(absl::StrCat(path, ": OpenVDB: ", e.what()));
-  }
-  return WriteGridsAtomically(path, grids);
 }
 
 }  // namespace sheetmesh

@@ -7,7 +7,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 #include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/vdb_io.h"

@@ -8,7 +8,7 @@
 #include <span>
 
 #include "absl/status/status.h"
-#include "worker/pipeline/core/byte_order.h"
+#include "common/byte_order.h"
 #include "worker/pipeline/volume/volume_source.h"
 
 namespace sheetmesh {

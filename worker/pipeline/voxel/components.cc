@@ -4,7 +4,7 @@
 #include <numeric>
 
 #include "absl/strings/str_cat.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 namespace {

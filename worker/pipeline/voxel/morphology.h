@@ -4,7 +4,7 @@
 #define SHEETMESH_WORKER_PIPELINE_VOXEL_MORPHOLOGY_H_
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 

@@ -13,7 +13,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/volume/volume_source.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 

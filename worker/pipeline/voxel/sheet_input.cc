@@ -1,7 +1,7 @@
 #include "worker/pipeline/voxel/sheet_input.h"
 
 #include "absl/time/clock.h"
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/volume/volume_open.h"
 #include "worker/pipeline/voxel/phase_selection.h"
 #include "worker/pipeline/voxel/voxel_set.h"

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <climits>
 
-#include "worker/pipeline/core/status_macros.h"
+#include "common/status_macros.h"
 
 namespace sheetmesh {
 namespace {

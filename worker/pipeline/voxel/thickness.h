@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "worker/pipeline/core/progress.h"
+#include "common/progress.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {

@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-#include "worker/pipeline/core/types.h"
+#include "common/types.h"
 
 namespace sheetmesh {
 

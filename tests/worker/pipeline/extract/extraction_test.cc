@@ -8,7 +8,7 @@
 #include "tests/testing/shapes.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
-#include "worker/pipeline/core/orientation.h"
+#include "common/orientation.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/voxel/sheet_input.h"

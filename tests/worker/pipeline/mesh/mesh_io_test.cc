@@ -5,7 +5,7 @@
 
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 
 namespace sheetmesh {
 namespace {

@@ -9,7 +9,7 @@
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/volume/raw_io.h"

@@ -10,7 +10,7 @@
 #include "absl/strings/str_split.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {

@@ -11,7 +11,7 @@
 
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/tetgen_runner.h"
 

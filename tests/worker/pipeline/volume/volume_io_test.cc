@@ -9,11 +9,12 @@
 #include "absl/strings/str_cat.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "worker/pipeline/core/file_util.h"
+#include "common/file_util.h"
 #include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/raw_io.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
+#include "worker/pipeline/voxel/voxel_set_vdb.h"
 #include "worker/pipeline/volume/volume_open.h"
 
 namespace sheetmesh {

@@ -1,0 +1,150 @@
+#!/usr/bin/python3
+"""Same outputs: runs a fixed set of offline commands on the benchmark volumes and keeps
+every file they write, so that a change meant to keep behaviour can be checked against
+the build before it.
+
+  /usr/bin/python3 bench/same_outputs.py run BUILD_DIR OUT_DIR [--flags-of VERSION]
+  /usr/bin/python3 bench/same_outputs.py compare OLD_OUT NEW_OUT
+
+`run` writes OUT_DIR/<case>/... for every case; `compare` says, per case, which mesh files
+differ in bytes and which report values differ (the version string and timings aside;
+report values are matched by their key path, and paths only one side has are listed).
+`--flags-of 0.8` spells the flags as 0.8.x did (before the one parameter schema).
+"""
+import json
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SHARED = os.environ.get("SHEETMESH_SHARED_DATA", os.path.join(ROOT, "..", "shared", "data"))
+
+# Flags whose spelling changed with the parameter schema (0.9.0): new -> 0.8.x.
+OLD_SPELLING = {"--surface_method": "--method"}
+
+
+def run(cmd, keep=None):
+    """Runs `cmd`; with `keep` (a folder), a failure is kept as keep/status.txt (exit code
+    and the error's last line) instead of raised, so that failures are compared too."""
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode == 0:
+        return
+    if keep is None:
+        raise RuntimeError("%s failed: %s" % (" ".join(cmd), p.stderr))
+    os.makedirs(keep, exist_ok=True)
+    last = (p.stderr.strip().splitlines() or [""])[-1]
+    with open(os.path.join(keep, "status.txt"), "w") as f:
+        f.write("exit %d: %s\n" % (p.returncode, last))
+
+
+def volumes(cli, data):
+    vols = []
+    netl = os.path.join(SHARED, "netl_binary_fracture_small.tif")
+    if os.path.exists(netl):
+        vols.append(("netl", netl))
+    dpm = os.path.join(SHARED, "dpm_3fractures_100x100x100_u8.raw")
+    if os.path.exists(dpm):
+        vols.append(("dpm", dpm))
+    for name, args, dims in [("sample", ["--preset=sample"], "128x112x96"),
+                             ("p192", ["--dims=192x192x192", "--seed=3", "--sheets=4",
+                                       "--aperture=5", "--specks=0"], "192x192x192"),
+                             ("p128", ["--dims=128x128x128", "--seed=4", "--sheets=3",
+                                       "--specks=30"], "128x128x128")]:
+        raw = os.path.join(data, "%s_%s_u8.raw" % (name, dims))
+        if not os.path.exists(raw):
+            run([cli, "phantom", "-o", raw] + args)
+        vols.append((name, raw))
+    return vols
+
+
+def cases(vol):
+    return [("surface_r7", ["surface", vol, "--labels=255", "--r=7"]),
+            ("surface_r4_paper", ["surface", vol, "--labels=255", "--r=4", "--surface_method=paper"]),
+            ("run_r7_volume", ["run", vol, "--labels=255", "--r=7", "--volume_mesh"])]
+
+
+def do_run(build, out, old):
+    cli = os.path.join(build, "worker", "pipeline", "sheetmesh-pipeline")
+    data = os.path.join(out, "_volumes")
+    os.makedirs(data, exist_ok=True)
+    for name, vol in volumes(cli, data):
+        for case, cmd in cases(vol):
+            d = os.path.join(out, name + "_" + case)
+            if old:
+                cmd = [OLD_SPELLING.get(a.split("=")[0], a.split("=")[0]) + a[len(a.split("=")[0]):]
+                       for a in cmd]
+            run([cli] + cmd + ["-o", d], keep=d)
+            print("ran", name, case, flush=True)
+            if case == "run_r7_volume":
+                run([cli, "volume", os.path.join(d, "surface.ply"), "--volume", vol, "--labels=255",
+                     "-o", d + "_volume_command"], keep=d + "_volume_command")
+
+
+def leaves(j, path=""):
+    if isinstance(j, dict):
+        for k, v in j.items():
+            yield from leaves(v, path + "." + k if path else k)
+    elif isinstance(j, list) and j and all(isinstance(x, dict) for x in j):
+        for i, v in enumerate(j):
+            yield from leaves(v, "%s[%d]" % (path, i))
+    else:
+        yield path, j
+
+
+IGNORED = ("sheetmesh_version", "seconds", "tetgen_seconds", "improvement.seconds")
+
+
+def same_bytes(fa, fb):
+    a, b = open(fa, "rb").read(), open(fb, "rb").read()
+    if fa.endswith(".vdb"):
+        # OpenVDB writes a fresh UUID (36 characters from byte 21) into every file.
+        a, b = a[:21] + a[57:], b[:21] + b[57:]
+    return a == b
+
+
+def compare(a, b):
+    bad = 0
+    for case in sorted(os.listdir(a)):
+        if case.startswith("_") or not os.path.isdir(os.path.join(a, case)):
+            continue
+        da, db = os.path.join(a, case), os.path.join(b, case)
+        for f in sorted(os.listdir(da)):
+            fa, fb = os.path.join(da, f), os.path.join(db, f)
+            if not os.path.exists(fb):
+                print("%s: %s missing in the new outputs" % (case, f))
+                bad += 1
+            elif f.endswith(".json"):
+                # Paths name the output folders, which differ.
+                la = dict(leaves(json.loads(open(fa).read().replace(a.rstrip("/"), "OUT"))))
+                lb = dict(leaves(json.loads(open(fb).read().replace(b.rstrip("/"), "OUT"))))
+                for k in sorted(set(la) & set(lb)):
+                    if any(k == i or k.endswith("." + i) or k.startswith(i + ".") for i in IGNORED):
+                        continue
+                    if la[k] != lb[k]:
+                        print("%s: %s: %s = %r -> %r" % (case, f, k, la[k], lb[k]))
+                        bad += 1
+                only_a = sorted(set(la) - set(lb))
+                only_b = sorted(set(lb) - set(la))
+                if only_a:
+                    print("%s: %s: only before: %s" % (case, f, ", ".join(only_a)))
+                if only_b:
+                    print("%s: %s: only after: %s" % (case, f, ", ".join(only_b)))
+            elif not same_bytes(fa, fb):
+                print("%s: %s differs" % (case, f))
+                bad += 1
+        print("%s: compared %d files" % (case, len(os.listdir(da))), flush=True)
+    print("differences: %d" % bad)
+    return bad
+
+
+def main():
+    if len(sys.argv) >= 4 and sys.argv[1] == "run":
+        do_run(sys.argv[2], sys.argv[3], "--flags-of" in sys.argv)
+    elif len(sys.argv) == 4 and sys.argv[1] == "compare":
+        sys.exit(1 if compare(sys.argv[2], sys.argv[3]) else 0)
+    else:
+        sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main()

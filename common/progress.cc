@@ -1,0 +1,28 @@
+#include "common/progress.h"
+
+#include <algorithm>
+#include <cassert>
+
+#include "absl/strings/str_cat.h"
+
+namespace sheetmesh {
+
+Progress Progress::Sub(double begin, double end) const {
+  assert(0.0 <= begin && begin <= end && end <= 1.0);
+  Progress sub = *this;
+  const double width = end_ - begin_;
+  sub.begin_ = begin_ + width * begin;
+  sub.end_ = begin_ + width * end;
+  return sub;
+}
+
+absl::Status Progress::Update(double fraction, absl::string_view message) const {
+  if (observer_ == nullptr) return absl::OkStatus();
+  const double f = begin_ + (end_ - begin_) * std::clamp(fraction, 0.0, 1.0);
+  if (!observer_->OnProgress(stage_, f, message)) {
+    return absl::CancelledError(absl::StrCat("cancelled during stage '", stage_, "'"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,619 @@
+// The table of parameters: one row per setting of PipelineOptions. Adding a parameter is
+// one row here (and its proto field; the tests check that both exist and agree).
+#include <algorithm>
+#include <type_traits>
+#include <utility>
+
+#include "worker/pipeline/run/parameter_rows.h"
+
+namespace sheetmesh {
+namespace {
+
+// The member a row reads and writes: SM_MEMBER(extraction.separation.radius_voxels).
+#define SM_MEMBER(path) \
+  [](PipelineOptions & o) -> auto& { return o.path; }
+
+template <class Ref>
+using MemberOf = std::remove_reference_t<std::invoke_result_t<Ref, PipelineOptions&>>;
+
+template <class Ref>
+auto& Read(const Ref& ref, const PipelineOptions& o) {
+  return ref(const_cast<PipelineOptions&>(o));
+}
+
+ParamRow Row(std::string key, ParamType type, const char* range, std::string unit,
+             std::string doc) {
+  ParamRow r;
+  r.spec.key = std::move(key);
+  r.spec.type = type;
+  if (range != nullptr) r.spec.range = ParamRange::Parse(range);
+  r.spec.unit = std::move(unit);
+  r.spec.doc = std::move(doc);
+  return r;
+}
+
+template <class Ref>
+ParamRow Number(std::string key, Ref ref, const char* range, std::string unit, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kNumber, range, std::move(unit), std::move(doc));
+  r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
+    return ParamValue(static_cast<double>(Read(ref, o)));
+  };
+  r.set = [ref](const ParamValue& v, PipelineOptions& o) {
+    ref(o) = static_cast<MemberOf<Ref>>(std::get<double>(v));
+  };
+  return r;
+}
+
+template <class Ref>
+ParamRow Integer(std::string key, Ref ref, const char* range, std::string unit, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kInteger, range, std::move(unit), std::move(doc));
+  r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
+    return ParamValue(static_cast<int64_t>(Read(ref, o)));
+  };
+  r.set = [ref](const ParamValue& v, PipelineOptions& o) {
+    ref(o) = static_cast<MemberOf<Ref>>(std::get<int64_t>(v));
+  };
+  return r;
+}
+
+template <class Ref>
+ParamRow Bool(std::string key, Ref ref, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kBool, nullptr, "", std::move(doc));
+  r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
+    return ParamValue(static_cast<bool>(Read(ref, o)));
+  };
+  r.set = [ref](const ParamValue& v, PipelineOptions& o) { ref(o) = std::get<bool>(v); };
+  return r;
+}
+
+template <class Ref>
+ParamRow Text(std::string key, Ref ref, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kText, nullptr, "", std::move(doc));
+  r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
+    return ParamValue(Read(ref, o));
+  };
+  r.set = [ref](const ParamValue& v, PipelineOptions& o) { ref(o) = std::get<std::string>(v); };
+  return r;
+}
+
+// A member of enum (or string) type E, spelt by `choices`.
+template <class Ref, class E = MemberOf<Ref>>
+ParamRow Choice(std::string key, Ref ref, std::vector<std::pair<std::string, E>> choices,
+                std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kChoice, nullptr, "", std::move(doc));
+  for (const auto& [name, _] : choices) r.spec.choices.push_back(name);
+  r.get = [ref, choices](const PipelineOptions& o) -> std::optional<ParamValue> {
+    for (const auto& [name, value] : choices) {
+      if (Read(ref, o) == value) return ParamValue(name);
+    }
+    return std::nullopt;
+  };
+  r.set = [ref, choices](const ParamValue& v, PipelineOptions& o) {
+    for (const auto& [name, value] : choices) {
+      if (std::get<std::string>(v) == name) ref(o) = value;
+    }
+  };
+  return r;
+}
+
+// Output files: a list of names, each one a bool member.
+ParamRow Formats(std::string key, std::vector<std::pair<std::string, bool OutputOptions::*>> files,
+                 std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kChoices, nullptr, "", std::move(doc));
+  r.spec.allow_empty = true;
+  for (const auto& [name, _] : files) r.spec.choices.push_back(name);
+  r.get = [files](const PipelineOptions& o) -> std::optional<ParamValue> {
+    std::vector<std::string> on;
+    for (const auto& [name, member] : files) {
+      if (o.output.*member) on.push_back(name);
+    }
+    return ParamValue(on);
+  };
+  r.set = [files](const ParamValue& v, PipelineOptions& o) {
+    const auto& on = std::get<std::vector<std::string>>(v);
+    for (const auto& [name, member] : files) {
+      o.output.*member = std::find(on.begin(), on.end(), name) != on.end();
+    }
+  };
+  return r;
+}
+
+// An optional input override of three numbers (spacing, origin).
+ParamRow Triple(std::string key, std::optional<Vec3> OpenOptions::*member, const char* range,
+                std::string unit, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kNumbers, range, std::move(unit), std::move(doc));
+  r.spec.count = 3;
+  r.get = [member](const PipelineOptions& o) -> std::optional<ParamValue> {
+    const std::optional<Vec3>& v = o.input.open.*member;
+    if (!v) return std::nullopt;
+    return ParamValue(std::vector<double>{v->x, v->y, v->z});
+  };
+  r.set = [member](const ParamValue& v, PipelineOptions& o) {
+    const auto& x = std::get<std::vector<double>>(v);
+    o.input.open.*member = Vec3(x[0], x[1], x[2]);
+  };
+  return r;
+}
+
+// Sheet-phase values (input.labels, input.mask_labels).
+ParamRow Labels(std::string key, PhaseSelection SheetInput::*member, std::string doc) {
+  ParamRow r = Row(std::move(key), ParamType::kNumbers, "[-1e300, 1e300]", "", std::move(doc));
+  r.get = [member](const PipelineOptions& o) -> std::optional<ParamValue> {
+    const PhaseSelection& s = o.input.*member;
+    if (s.mode != PhaseSelection::Mode::kLabels) return std::nullopt;
+    return ParamValue(s.labels);
+  };
+  r.set = [member](const ParamValue& v, PipelineOptions& o) {
+    o.input.*member = PhaseSelection::Labels(std::get<std::vector<double>>(v));
+  };
+  return r;
+}
+
+ParamRow Local(ParamRow r) {
+  r.spec.scope = ParamScope::kLocal;
+  return r;
+}
+
+ParamRow Exclusive(ParamRow r, std::string group) {
+  r.spec.exclusive = std::move(group);
+  return r;
+}
+
+std::vector<ParamRow> InputRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(
+      Choice("input.format", SM_MEMBER(input.open.format),
+             {{"auto", ""}, {"raw", "raw"}, {"tiff", "tiff"}, {"nrrd", "nrrd"}, {"vdb", "vdb"}},
+             "volume format; auto: by the file's extension (a folder: TIFF slices)"));
+  {
+    ParamRow r = Row("input.dims", ParamType::kIntegers, "[1, 1048576]", "voxels",
+                     "raw volumes: NX, NY, NZ (default: from a name like a_64x64x32_u8.raw)");
+    r.spec.count = 3;
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      const std::optional<Dims>& d = o.input.open.raw_dims;
+      if (!d) return std::nullopt;
+      return ParamValue(std::vector<int64_t>{d->nx, d->ny, d->nz});
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const auto& d = std::get<std::vector<int64_t>>(v);
+      o.input.open.raw_dims = Dims{d[0], d[1], d[2]};
+    };
+    rows.push_back(std::move(r));
+  }
+  {
+    ParamRow r = Row("input.dtype", ParamType::kChoice, nullptr, "",
+                     "raw volumes: voxel type (default uint8, or the name's _u8/_u16/_f32)");
+    r.spec.choices = {"uint8", "uint16", "float32"};
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      if (!o.input.open.raw_dtype) return std::nullopt;
+      return ParamValue(std::string(DTypeName(*o.input.open.raw_dtype)));
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      o.input.open.raw_dtype = *ParseDType(std::get<std::string>(v));
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Choice("input.byte_order", SM_MEMBER(input.open.raw_byte_order),
+                        {{"little", ByteOrder::kLittle}, {"big", ByteOrder::kBig}},
+                        "raw volumes: byte order of 16- and 32-bit voxels"));
+  rows.push_back(Integer("input.header_bytes", SM_MEMBER(input.open.raw_header_bytes),
+                         "[0, 1099511627776]", "bytes", "raw volumes: bytes before the voxels"));
+  rows.push_back(Text("input.vdb_grid", SM_MEMBER(input.open.vdb_grid),
+                      "vdb volumes: the grid to read (empty: the first scalar grid)"));
+  rows.push_back(Triple("input.spacing", &OpenOptions::spacing, "(0, 1e9]", "unit",
+                        "voxel size x, y, z overriding the file's"));
+  rows.push_back(Triple("input.origin", &OpenOptions::origin, "[-1e15, 1e15]", "unit",
+                        "position of voxel (0, 0, 0) overriding the file's"));
+  rows.push_back(Text("input.unit", SM_MEMBER(input.open.unit),
+                      "length unit overriding the file's (mm, um, ...)"));
+  rows.push_back(
+      Local(Integer("input.max_voxels", SM_MEMBER(input.open.limits.max_voxels),
+                    "[1, 1099511627776]", "voxels", "volumes with more voxels are refused")));
+  rows.push_back(Exclusive(Labels("input.labels", &SheetInput::selection,
+                                  "sheet phase: these voxel values (default: every non-zero "
+                                  "voxel)"),
+                           "selection"));
+  {
+    ParamRow r = Row("input.window", ParamType::kNumbers, "[-1e300, 1e300]", "",
+                     "sheet phase: values in [LO, HI] (--window=LO:HI)");
+    r.spec.count = 2;
+    r.spec.exclusive = "selection";
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      const PhaseSelection& s = o.input.selection;
+      if (s.mode != PhaseSelection::Mode::kWindow) return std::nullopt;
+      return ParamValue(std::vector<double>{s.lo, s.hi});
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const auto& w = std::get<std::vector<double>>(v);
+      o.input.selection = PhaseSelection::Window(w[0], w[1]);
+    };
+    r.check = [](const ParamValue& v) -> std::string {
+      const auto& w = std::get<std::vector<double>>(v);
+      return w[0] <= w[1] ? "" : "must be [lo, hi] with lo <= hi";
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Local(Text("input.mask", SM_MEMBER(input.mask_path),
+                            "rock mask volume, same dims (non-zero = rock; empty: none)")));
+  rows.push_back(Labels("input.mask_labels", &SheetInput::mask_selection,
+                        "rock mask: the values that are rock (default: non-zero)"));
+  return rows;
+}
+
+// Formula 4 (§2.2.2) for one of the two modes.
+void AddExtendRows(const std::string& step, const std::string& what,
+                   ExtendOptions ExtractionOptions::*member, bool ExtractionOptions::*enabled,
+                   const char* max_rounds, std::vector<ParamRow>* rows) {
+  auto ref = [member](PipelineOptions& o) -> ExtendOptions& { return o.extraction.*member; };
+  rows->push_back(Bool(
+      step + ".enabled", [enabled](PipelineOptions& o) -> bool& { return o.extraction.*enabled; },
+      what));
+  rows->push_back(Number(
+      step + ".t", [ref](PipelineOptions& o) -> double& { return ref(o).half_thickness_voxels; },
+      "(0, 100]", "voxels", "t of formula 4: half-thickness of the extension's flat cylinder"));
+  rows->push_back(Number(
+      step + ".R", [ref](PipelineOptions& o) -> double& { return ref(o).radius_voxels; },
+      "(0, 1000]", "voxels", "R of formula 4: radius of the extension's flat cylinder"));
+  rows->push_back(Integer(
+      step + ".rounds", [ref](PipelineOptions& o) -> int& { return ref(o).max_rounds; }, max_rounds,
+      "", "rebuild-and-extend rounds at most"));
+  rows->push_back(Number(
+      step + ".scvd_r", [ref](PipelineOptions& o) -> double& { return ref(o).scvd_radius_voxels; },
+      "0 | (0, 1000]", "voxels",
+      "r of the SCVD whose triangles give the extension's normals (0: separate.r)"));
+}
+
+std::vector<ParamRow> ExtractionRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(
+      Bool("extract", SM_MEMBER(extract), "run the feature extraction of Fig. 3 before meshing"));
+  rows.push_back(Integer("M", SM_MEMBER(extraction.min_object_voxels), "[0, 1e15]", "voxels",
+                         "objects and pieces with fewer voxels are minor and go (0: three "
+                         "separation cells, 3 t(1 + 2 r (r - 1)))"));
+  rows.push_back(Bool("refine.enabled", SM_MEMBER(extraction.refine),
+                      "refine the phase by a closing and an opening (§2.2.1)"));
+  rows.push_back(Integer("refine.close_radius", SM_MEMBER(extraction.refine_close_radius),
+                         "[0, 50]", "voxels", "closing radius (0: none)"));
+  rows.push_back(Integer("refine.open_radius", SM_MEMBER(extraction.refine_open_radius), "[0, 50]",
+                         "voxels",
+                         "opening radius (0: none; it erases sheets thinner than twice it)"));
+  AddExtendRows("detect", "detect potential objects by extending into empty space (Fig. 6)",
+                &ExtractionOptions::detect_extend, &ExtractionOptions::detect, "[0, 100]", &rows);
+  rows.push_back(Bool("separate.enabled", SM_MEMBER(extraction.separate),
+                      "separate crossing sheets (Algorithm 2)"));
+  rows.push_back(Number("separate.r", SM_MEMBER(extraction.separation.radius_voxels), "(0, 1000]",
+                        "voxels", "r of the SCVD built for separation"));
+  rows.push_back(Number("separate.D_ang", SM_MEMBER(extraction.separation.dihedral_degrees),
+                        "(0, 180]", "degrees",
+                        "D_ang: two triangles meeting below this dihedral angle are not flat"));
+  rows.push_back(Bool("remove_minor.enabled", SM_MEMBER(extraction.remove_minor),
+                      "remove the pieces with fewer than M voxels"));
+  AddExtendRows("recover", "recover the gaps separation cut, extending within the image (Fig. 7)",
+                &ExtractionOptions::recover_extend, &ExtractionOptions::recover, "[0, 1000]",
+                &rows);
+  return rows;
+}
+
+std::vector<ParamRow> SurfaceRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(Number("r", SM_MEMBER(surface.scvd.radius_voxels), "(0, 4096]", "voxels",
+                        "SCVD cell radius r of formula 3: the one size parameter"));
+  {
+    ParamRow r = Row("target_similarity", ParamType::kNumber, "0 | (0, 1)", "",
+                     "search the largest r whose similarity reaches this (paper: 0.6; 0: no "
+                     "search)");
+    r.spec.exclusive = "radius search";
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      const bool on = o.search_radius && o.radius_search.goal == RadiusGoal::kTargetSimilarity;
+      return ParamValue(on ? o.radius_search.target_similarity : 0.0);
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const double target = std::get<double>(v);
+      if (target > 0) {
+        o.search_radius = true;
+        o.radius_search.goal = RadiusGoal::kTargetSimilarity;
+        o.radius_search.target_similarity = target;
+      } else if (o.radius_search.goal == RadiusGoal::kTargetSimilarity) {
+        o.search_radius = false;
+      }
+    };
+    rows.push_back(std::move(r));
+  }
+  {
+    ParamRow r =
+        Row("search_best", ParamType::kBool, nullptr, "", "search the r of the best similarity");
+    r.spec.exclusive = "radius search";
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      return ParamValue(o.search_radius && o.radius_search.goal == RadiusGoal::kBestSimilarity);
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      if (std::get<bool>(v)) {
+        o.search_radius = true;
+        o.radius_search.goal = RadiusGoal::kBestSimilarity;
+      } else if (o.radius_search.goal == RadiusGoal::kBestSimilarity) {
+        o.search_radius = false;
+      }
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Number("radius_search.r_min", SM_MEMBER(radius_search.min_radius_voxels),
+                        "(0, 4096]", "voxels", "smallest r a search tries"));
+  rows.push_back(Number("radius_search.r_max", SM_MEMBER(radius_search.max_radius_voxels),
+                        "0 | (0, 4096]", "voxels",
+                        "largest r a search tries (0: a quarter of the largest extent)"));
+  {
+    ParamRow r = Row("surface.method", ParamType::kChoice, nullptr, "",
+                     "a preset of the surface settings: extended (rim strip, centroid vertices, "
+                     "thickness along the normal) or paper (the plain reading)");
+    r.spec.choices = {"extended", "paper"};
+    r.spec.preset = true;
+    r.get = [](const PipelineOptions&) -> std::optional<ParamValue> { return std::nullopt; };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const SurfaceOptions p =
+          std::get<std::string>(v) == "paper" ? SurfaceOptions::Paper() : SurfaceOptions();
+      o.surface.placement = p.placement;
+      o.surface.thickness = p.thickness;
+      o.surface.triangles.rim = p.triangles.rim;
+      o.surface.triangles.close_cracks = p.triangles.close_cracks;
+      o.surface.scvd.domain = p.scvd.domain;
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Integer("surface.seed", SM_MEMBER(surface.scvd.seed), "[0, 9007199254740992]", "",
+                         "seed of the generators' random choice"));
+  rows.push_back(Integer("surface.generators", SM_MEMBER(surface.scvd.generator_count), "[0, 1e12]",
+                         "", "total generators instead of formula 3 (0: formula 3)"));
+  rows.push_back(Number("surface.thickness", SM_MEMBER(surface.scvd.mean_thickness_voxels),
+                        "[0, 10000]", "voxels", "mean thickness t of formula 3 (0: measured)"));
+  rows.push_back(Integer("surface.lloyd_max_iter", SM_MEMBER(surface.scvd.lloyd_max_iter),
+                         "[0, 1000]", "", "Lloyd steps at most"));
+  rows.push_back(Number("surface.lloyd_tol", SM_MEMBER(surface.scvd.lloyd_tol), "[0, 1]", "",
+                        "Lloyd stops when the energy changes by less (relative)"));
+  rows.push_back(Choice("surface.domain", SM_MEMBER(surface.scvd.domain),
+                        {{"voxels", ScvdDomain::kVoxels},
+                         {"columns", ScvdDomain::kColumns},
+                         {"auto", ScvdDomain::kAuto}},
+                        "what the SCVD grows over: voxels, columns across the thickness, or auto "
+                        "(columns where cells would stack)"));
+  rows.push_back(
+      Choice("surface.placement", SM_MEMBER(surface.placement),
+             {{"generator", VertexPlacement::kGenerator}, {"centroid", VertexPlacement::kCentroid}},
+             "mesh vertices at the generators' voxels or their cells' centroids"));
+  rows.push_back(
+      Choice("surface.thickness_measure", SM_MEMBER(surface.thickness),
+             {{"axis_runs", ThicknessMeasure::kAxisRuns}, {"normal", ThicknessMeasure::kNormal}},
+             "triangle thickness from the shortest axis run, or along the normal"));
+  rows.push_back(Bool("surface.rim", SM_MEMBER(surface.triangles.rim),
+                      "close the band along the rims with a strip of triangles"));
+  rows.push_back(Bool("surface.close_cracks", SM_MEMBER(surface.triangles.close_cracks),
+                      "close narrow notches the triangle selection leaves in the boundary"));
+  rows.push_back(Number(
+      "surface.fold_angle", SM_MEMBER(surface.triangles.fold_angle_degrees), "[0, 180)", "degrees",
+      "a candidate meeting a kept triangle below this dihedral angle is refused"));
+  return rows;
+}
+
+std::vector<ParamRow> SimilarityRows() {
+  std::vector<ParamRow> rows;
+  {
+    ParamRow r = Row("similarity.model", ParamType::kChoice, nullptr, "",
+                     "prisms of one thickness per triangle (face) or a linear shell (vertex)");
+    r.spec.choices = {"face", "vertex"};
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      return ParamValue(std::string(o.score.height == PrismHeight::kVertex ? "vertex" : "face"));
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      o.score.height =
+          std::get<std::string>(v) == "vertex" ? PrismHeight::kVertex : PrismHeight::kFace;
+      o.radius_search.height = o.score.height;  // a search scores with the same model
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Bool("similarity.hausdorff", SM_MEMBER(score.hausdorff),
+                      "also the symmetric Hausdorff distance"));
+  {
+    ParamRow r = Row("similarity.grid_rates", ParamType::kIntegers, "[1, 64]", "",
+                     "grid-model baselines of Table 2 to score (empty: none)");
+    r.spec.allow_empty = true;
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      return ParamValue(std::vector<int64_t>(o.score.grid_rates.begin(), o.score.grid_rates.end()));
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const auto& k = std::get<std::vector<int64_t>>(v);
+      o.score.grid_rates.assign(k.begin(), k.end());
+    };
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+std::vector<ParamRow> VolumeMeshRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(Bool("volume_mesh", SM_MEMBER(volume_mesh),
+                      "also tetrahedralize the box with the sheets as internal faces (TetGen)"));
+  rows.push_back(Number("tet.radius_edge_ratio", SM_MEMBER(volume.tetgen.max_radius_edge_ratio),
+                        "0 | [1, 10]", "", "TetGen's radius-edge ratio bound (-q; 0: none)"));
+  rows.push_back(Number("tet.min_dihedral", SM_MEMBER(volume.tetgen.min_dihedral_degrees),
+                        "[0, 70)", "degrees", "the smallest dihedral angle asked of TetGen"));
+  rows.push_back(Number("tet.max_volume", SM_MEMBER(volume.tetgen.max_volume), "[0, 1e30]",
+                        "unit^3", "largest tetrahedron volume (0: none)"));
+  rows.push_back(Bool("tet.steiner_on_sheets", SM_MEMBER(volume.tetgen.steiner_on_sheets),
+                      "let TetGen add points on the sheets and box (false: each sheet triangle "
+                      "stays one face, the box faces are seeded)"));
+  rows.push_back(Number("tet.time_limit_seconds", SM_MEMBER(volume.tetgen.time_limit_seconds),
+                        "(0, 86400]", "seconds", "TetGen is stopped beyond this"));
+  rows.push_back(Integer("tet.memory_limit_bytes", SM_MEMBER(volume.tetgen.memory_limit_bytes),
+                         "[67108864, 1099511627776]", "bytes", "TetGen's memory limit"));
+  rows.push_back(Local(Text("tet.program", SM_MEMBER(volume.tetgen.program),
+                            "the TetGen program (looked up on PATH)")));
+  rows.push_back(Bool("plc.repair", SM_MEMBER(volume.plc.repair),
+                      "drop the smaller of each pair of clashing sheet triangles (else fail)"));
+  rows.push_back(Number("plc.snap_voxels", SM_MEMBER(volume.plc.snap_voxels), "[0, 10]", "voxels",
+                        "sheet vertices this close to the box move onto it"));
+  rows.push_back(Number("plc.snap_clear_voxels", SM_MEMBER(volume.plc.snap_clear_voxels), "[0, 10]",
+                        "voxels", "so do vertices this close, unless that makes a clash"));
+  rows.push_back(Number("plc.flip_fold_degrees", SM_MEMBER(volume.plc.flip_fold_degrees), "[0, 90)",
+                        "degrees",
+                        "flip sheet edges between triangles this close to coplanar where that "
+                        "gives better triangles (0: none)"));
+  rows.push_back(Number("plc.cap_degrees", SM_MEMBER(volume.plc.cap_degrees), "(90, 180]",
+                        "degrees", "a sheet triangle with an angle over this is flat (a cap)"));
+  rows.push_back(Number("plc.overlap_voxels", SM_MEMBER(volume.plc.overlap_voxels), "[0, 10]",
+                        "voxels",
+                        "drop a rim triangle this close to another sheet, nearly parallel to it "
+                        "(0: keep all)"));
+  rows.push_back(Number("plc.overlap_degrees", SM_MEMBER(volume.plc.overlap_degrees), "[0, 90)",
+                        "degrees", "what nearly parallel means for plc.overlap_voxels"));
+  rows.push_back(Number("plc.wedge_degrees", SM_MEMBER(volume.plc.wedge_degrees), "[0, 30]",
+                        "degrees",
+                        "open wedges narrower than this between a sheet edge and a sheet face "
+                        "(0: never)"));
+  rows.push_back(Number("plc.wedge_voxels", SM_MEMBER(volume.plc.wedge_voxels), "[0, 5]", "voxels",
+                        "the farthest a vertex moves to open a wedge"));
+  rows.push_back(Number("plc.lattice", SM_MEMBER(volume.plc.lattice), "0 | [0.25, 8]", "",
+                        "seed a graded lattice off the sheets, spaced this many median sheet "
+                        "edges (0: none)"));
+  rows.push_back(Integer("improve.passes", SM_MEMBER(volume.improve.passes), "[0, 100]", "",
+                         "rounds of flips, smoothing and insertion on TetGen's output (0: none)"));
+  rows.push_back(Number("improve.target_degrees", SM_MEMBER(volume.improve.target_degrees),
+                        "[0, 70.6]", "degrees", "tetrahedra below this are improved"));
+  rows.push_back(Number("improve.insert_below_degrees",
+                        SM_MEMBER(volume.improve.insert_below_degrees), "[0, 70.6]", "degrees",
+                        "tetrahedra still below this after the flips get a new vertex beside them "
+                        "(at most improve.target_degrees; 0: none)"));
+  rows.push_back(Number("improve.floor_degrees", SM_MEMBER(volume.improve.smoothing_floor_degrees),
+                        "[0, 70.6]", "degrees",
+                        "smoothing for the mean never lowers a vertex's worst tetrahedron below "
+                        "this"));
+  rows.push_back(Number("improve.split_sheets_below_degrees",
+                        SM_MEMBER(volume.improve.split_sheets_below_degrees), "[0, 70.6]",
+                        "degrees",
+                        "a tetrahedron below this may get its new vertex on a sheet face or edge "
+                        "(0: every sheet triangle stays one face)"));
+  rows.push_back(Number("improve.radius_weight", SM_MEMBER(volume.improve.radius_weight), "[0, 1]",
+                        "",
+                        "smoothing raises the mean of (1 - w) min dihedral + w 70.53 degrees "
+                        "radius aspect"));
+  return rows;
+}
+
+std::vector<ParamRow> OutputRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(Formats(
+      "output.formats",
+      {{"ply", &OutputOptions::ply}, {"vtp", &OutputOptions::vtp}, {"obj", &OutputOptions::obj}},
+      "surface mesh files to write"));
+  rows.push_back(Bool("output.model", SM_MEMBER(output.model),
+                      "with extraction: the model (model.vdb, a label volume, pieces.csv)"));
+  rows.push_back(Formats(
+      "output.volume_formats",
+      {{"vtu", &OutputOptions::vtu}, {"msh", &OutputOptions::msh}, {"inp", &OutputOptions::inp}},
+      "volume mesh files to write"));
+  return rows;
+}
+
+#undef SM_MEMBER
+
+}  // namespace
+
+const std::vector<ParamRow>& ParamRows() {
+  static const std::vector<ParamRow>* rows = [] {
+    auto* all = new std::vector<ParamRow>;
+    for (auto part : {InputRows(), ExtractionRows(), SurfaceRows(), SimilarityRows(),
+                      VolumeMeshRows(), OutputRows()}) {
+      for (ParamRow& r : part) all->push_back(std::move(r));
+    }
+    return all;
+  }();
+  return *rows;
+}
+
+const std::vector<Renamed>& RenamedParameters() {
+  // Spellings of 0.8.x (flags, config keys and proto fields) that changed when every
+  // setting got one name.
+  static const std::vector<Renamed>* renamed = new std::vector<Renamed>{
+      {"surface.r", "r"},
+      {"detect.r", "detect.scvd_r"},
+      {"recover.r", "recover.scvd_r"},
+      {"radius_search.goal", "target_similarity or search_best"},
+      {"radius_search.target_similarity", "target_similarity"},
+      {"r_min", "radius_search.r_min"},
+      {"r_max", "radius_search.r_max"},
+      {"radius_goal", "target_similarity or search_best"},
+      {"refine", "refine.enabled"},
+      {"refine_close", "refine.close_radius"},
+      {"refine_open", "refine.open_radius"},
+      {"detect", "detect.enabled"},
+      {"detect_r_cylinder", "detect.R"},
+      {"recover", "recover.enabled"},
+      {"recover_r_cylinder", "recover.R"},
+      {"separate", "separate.enabled"},
+      {"r_sep", "separate.r"},
+      {"D_ang", "separate.D_ang"},
+      {"d_ang", "separate.D_ang"},
+      {"remove_minor", "remove_minor.enabled"},
+      {"skip_refine", "refine.enabled"},
+      {"skip_detect", "detect.enabled"},
+      {"skip_separate", "separate.enabled"},
+      {"skip_remove_minor", "remove_minor.enabled"},
+      {"skip_recover", "recover.enabled"},
+      {"seed", "surface.seed"},
+      {"generators", "surface.generators"},
+      {"generator_count", "surface.generators"},
+      {"thickness", "surface.thickness"},
+      {"lloyd_max_iter", "surface.lloyd_max_iter"},
+      {"lloyd_tol", "surface.lloyd_tol"},
+      {"fold_angle", "surface.fold_angle"},
+      {"method", "surface.method"},
+      {"placement", "surface.placement"},
+      {"thickness_measure", "surface.thickness_measure"},
+      {"rim", "surface.rim"},
+      {"hausdorff", "similarity.hausdorff"},
+      {"grid_rates", "similarity.grid_rates"},
+      {"formats", "output.formats"},
+      {"volume_formats", "output.volume_formats"},
+      {"volume_mesh.enabled", "volume_mesh"},
+      {"volume_mesh.radius_edge_ratio", "tet.radius_edge_ratio"},
+      {"tet_ratio", "tet.radius_edge_ratio"},
+      {"volume_mesh.min_dihedral", "tet.min_dihedral"},
+      {"volume_mesh.max_volume", "tet.max_volume"},
+      {"volume_mesh.steiner_on_sheets", "tet.steiner_on_sheets"},
+      {"tet_steiner", "tet.steiner_on_sheets"},
+      {"volume_mesh.time_limit_seconds", "tet.time_limit_seconds"},
+      {"tet_time_limit", "tet.time_limit_seconds"},
+      {"volume_mesh.memory_limit_bytes", "tet.memory_limit_bytes"},
+      {"tet_memory_gb", "tet.memory_limit_bytes"},
+      {"volume_mesh.tetgen", "tet.program"},
+      {"tetgen", "tet.program"},
+      {"volume_mesh.repair", "plc.repair"},
+      {"repair", "plc.repair"},
+      {"volume_mesh.snap_voxels", "plc.snap_voxels"},
+      {"volume_mesh.snap_clear_voxels", "plc.snap_clear_voxels"},
+      {"volume_mesh.flip_fold_degrees", "plc.flip_fold_degrees"},
+      {"flip_fold", "plc.flip_fold_degrees"},
+      {"volume_mesh.cap_degrees", "plc.cap_degrees"},
+      {"volume_mesh.overlap_voxels", "plc.overlap_voxels"},
+      {"overlap", "plc.overlap_voxels"},
+      {"volume_mesh.overlap_degrees", "plc.overlap_degrees"},
+      {"volume_mesh.wedge_degrees", "plc.wedge_degrees"},
+      {"wedge", "plc.wedge_degrees"},
+      {"volume_mesh.wedge_voxels", "plc.wedge_voxels"},
+      {"wedge_voxels", "plc.wedge_voxels"},
+      {"volume_mesh.lattice", "plc.lattice"},
+      {"volume_lattice", "plc.lattice"},
+      {"lattice", "plc.lattice"},
+      {"volume_mesh.improve_passes", "improve.passes"},
+      {"volume_mesh.improve_target_degrees", "improve.target_degrees"},
+      {"improve_target", "improve.target_degrees"},
+      {"volume_mesh.improve_insert_below_degrees", "improve.insert_below_degrees"},
+      {"improve_insert", "improve.insert_below_degrees"},
+      {"volume_mesh.improve_floor_degrees", "improve.floor_degrees"},
+      {"improve_floor", "improve.floor_degrees"},
+      {"volume_mesh.improve_split_sheets_below_degrees", "improve.split_sheets_below_degrees"},
+      {"improve_split", "improve.split_sheets_below_degrees"},
+      {"volume_mesh.improve_radius_weight", "improve.radius_weight"},
+  };
+  return *renamed;
+}
+
+}  // namespace sheetmesh

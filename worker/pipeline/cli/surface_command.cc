@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_format.h"
+#include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/json_text.h"
 #include "common/status_macros.h"
@@ -12,13 +13,30 @@
 #include "worker/pipeline/tet/volume_mesh_io.h"
 
 namespace sheetmesh {
+namespace {
+
+void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
+  const TetQuality& q = v.quality;
+  out << absl::StrFormat(
+      "volume mesh %d nodes, %d tetrahedra (1 : %.0f of the voxels), %d sheet faces; %d of %d "
+      "sheet triangles conform\n",
+      v.nodes, v.tetrahedra, v.voxels_per_tet, v.sheet_faces, v.conformity.conforming,
+      v.conformity.sheet_triangles);
+  out << absl::StrFormat(
+      "  quality   min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
+      "radius aspect %.2f/%.2f (min/mean)\n",
+      q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
+      q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+}
+
+}  // namespace
 
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   SM_ASSIGN_OR_RETURN(PipelineReport r, RunPipeline(options));
   out << absl::StrFormat("sheet       %d voxels of %s\n", r.sheet_voxels,
                          r.options.input.selection.ToString());
-  if (r.options.extract) {
-    for (const ExtractionStep& s : r.extraction_steps) {
+  if (r.extraction) {
+    for (const ExtractionStep& s : r.extraction->steps) {
       if (!s.ran) {
         out << absl::StrFormat("  %-13s skipped\n", s.name);
         continue;
@@ -27,41 +45,44 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
                              s.name, s.voxels_before, s.voxels_after, s.added, s.removed,
                              s.objects_before, s.objects_after, s.seconds);
     }
-    out << absl::StrFormat("model       %d pieces, %d voxels (M = %d)\n", r.pieces, r.model_voxels,
-                           r.min_object_voxels);
+    out << absl::StrFormat("model       %d pieces, %d voxels (M = %d)\n", r.extraction->pieces,
+                           r.extraction->model_voxels, r.extraction->min_object_voxels);
   }
   out << absl::StrFormat("meshed set  %d voxels, t̄ = %.2f, %d components\n",
-                         r.options.extract ? r.model_voxels : r.sheet_voxels, r.thickness.mean,
-                         r.components);
-  if (options.search_radius) {
+                         r.extraction ? r.extraction->model_voxels : r.sheet_voxels,
+                         r.thickness.mean, r.components);
+  if (r.radius_choice) {
     out << "r search   ";
-    for (const RadiusTrial& t : r.radius_choice.trials) {
+    for (const RadiusTrial& t : r.radius_choice->trials) {
       out << absl::StrFormat(" r=%g:%.3f(%d)", t.radius, t.similarity, t.triangles);
     }
-    out << absl::StrFormat("\n            chose r = %g%s\n", r.radius_choice.radius,
-                           r.radius_choice.target_reached ? "" : " (target not reached: best r)");
+    out << absl::StrFormat("\n            chose r = %g%s\n", r.radius_choice->radius,
+                           r.radius_choice->target_reached ? "" : " (target not reached: best r)");
   }
+  const SurfaceStats& m = *r.surface;
   out << absl::StrFormat(
       "surface     r = %g: %d generators (%d Lloyd steps), %d vertices, %d triangles, "
       "element size %.2f voxels\n",
-      r.options.surface.scvd.radius_voxels, r.generators, r.lloyd_iterations, r.vertices,
-      r.triangles, r.element_size_voxels);
+      r.options.surface.scvd.radius_voxels, m.generators, m.lloyd_iterations, m.vertices,
+      m.triangles, m.element_size_voxels);
   out << absl::StrFormat(
       "topology    %d boundary loops, %d non-manifold edges, %d pieces; %d components "
       "(%d voxels) too small for a triangle\n",
-      r.topology.boundary_loops, r.topology.nonmanifold_edges, r.topology.pieces,
-      r.skipped_components, r.skipped_voxels);
+      m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.pieces,
+      m.skipped_components, m.skipped_voxels);
+  const SimilarityReport& sim = *r.similarity;
   out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f",
-                         r.similarity.similarity, r.similarity.c_in, r.similarity.c_out,
-                         r.similarity.c_image, r.similarity.dice);
-  if (r.similarity.hausdorff >= 0)
-    out << absl::StrFormat(", Hausdorff %.2f voxels", r.similarity.hausdorff);
-  out << absl::StrFormat("; other prism model %.4f\n", r.shell_similarity);
-  if (r.options.extract) {
+                         sim.score.similarity, sim.score.c_in, sim.score.c_out,
+                         sim.score.c_image, sim.score.dice);
+  if (sim.score.hausdorff >= 0)
+    out << absl::StrFormat(", Hausdorff %.2f voxels", sim.score.hausdorff);
+  out << absl::StrFormat("; other prism model %.4f\n", sim.shell_similarity);
+  if (sim.raw) {
     out << absl::StrFormat(
         "            against the raw phase: %.4f (C_in %d, C_out %d, C_image %d)\n",
-        r.similarity_raw.similarity, r.similarity_raw.c_in, r.similarity_raw.c_out,
-        r.similarity_raw.c_image);
+        sim.raw->similarity, sim.raw->c_in, sim.raw->c_out, sim.raw->c_image);
+  }
+  if (r.extraction) {
     out << "pieces      (piece: voxels, dip/dip direction, mean aperture)\n";
     for (size_t i = 0; i < r.geology.size() && i < 10; ++i) {
       const PieceGeology& g = r.geology[i];
@@ -69,27 +90,14 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
                              g.dip_degrees, g.dip_direction_degrees, g.mean_aperture);
     }
   }
-  if (!r.grid.empty()) {
+  if (!sim.grid.empty()) {
     out << "grid models";
-    for (const GridFigure& g : r.grid) {
+    for (const GridFigure& g : sim.grid) {
       out << absl::StrFormat("  k=%d: %.4f (%d cells)", g.rate, g.similarity, g.grid_quantity);
     }
     out << "\n";
   }
-  if (r.has_volume_mesh) {
-    const TetQuality& q = r.volume_quality;
-    out << absl::StrFormat(
-        "volume mesh %d nodes, %d tetrahedra (1 : %.0f of the voxels), %d sheet faces; all %d "
-        "sheet "
-        "triangles conform\n",
-        r.volume_nodes, r.volume_tets, r.voxels_per_tet, r.volume_sheet_faces,
-        r.volume_conformity.conforming);
-    out << absl::StrFormat(
-        "  quality   min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
-        "radius aspect %.2f/%.2f (min/mean)\n",
-        q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
-        q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
-  }
+  if (r.volume_mesh) PrintVolumeMesh(*r.volume_mesh, out);
   out << "time       ";
   for (const StageTime& t : r.timings) out << absl::StrFormat(" %s %.2fs", t.stage, t.seconds);
   out << "\n";
@@ -101,71 +109,34 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
 
 absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
                        const PipelineOptions& options, std::ostream& out) {
+  PipelineReport report;
+  report.options = options;
+  report.volume = box;
+  report.volume.path = surface;
+  const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(TriangleMesh mesh, ReadMesh(surface, box.placement));
   SM_ASSIGN_OR_RETURN(VolumeMeshResult r,
                       BuildVolumeMesh(mesh, box.dims, box.placement, options.volume));
+  report.timings.push_back({"volume", absl::ToDoubleSeconds(absl::Now() - start)});
   SM_RETURN_IF_ERROR(MakeDirs(options.output.dir));
   const std::string dir = options.output.dir;
-  std::vector<std::string> files;
   if (options.output.vtu) {
     SM_RETURN_IF_ERROR(WriteVtu(dir + "/volume.vtu", r.mesh));
-    files.push_back("volume.vtu");
+    report.files.push_back("volume.vtu");
   }
   if (options.output.msh) {
     SM_RETURN_IF_ERROR(WriteGmsh(dir + "/volume.msh", r.mesh));
-    files.push_back("volume.msh");
+    report.files.push_back("volume.msh");
   }
   if (options.output.inp) {
     SM_RETURN_IF_ERROR(WriteAbaqus(dir + "/volume.inp", r.mesh));
-    files.push_back("volume.inp");
+    report.files.push_back("volume.inp");
   }
-  const TetQuality& q = r.quality;
-  nlohmann::json j;
-  auto stat = [](const QualityStat& s) {
-    return nlohmann::json{{"min", s.min},
-                          {"mean", s.mean},
-                          {"histogram_range", {s.lo, s.hi}},
-                          {"histogram", s.histogram}};
-  };
-  j["surface"] = surface;
-  j["box"] = {box.dims.nx, box.dims.ny, box.dims.nz};
-  j["tetgen_switches"] = TetgenSwitches(options.volume.tetgen);
-  j["nodes"] = r.mesh.nodes.size();
-  j["tetrahedra"] = r.mesh.tets.size();
-  j["sheet_faces"] = r.mesh.num_sheet_faces();
-  j["voxels_per_tetrahedron"] =
-      double(box.dims.num_voxels()) / std::max<size_t>(1, r.mesh.tets.size());
-  j["conformity"] = {{"sheet_triangles", r.conformity.sheet_triangles},
-                     {"conforming", r.conformity.conforming}};
-  j["quality"] = {{"min_dihedral_degrees", stat(q.min_dihedral)},
-                  {"gamma", stat(q.gamma)},
-                  {"edge_aspect", stat(q.edge_aspect)},
-                  {"radius_aspect", stat(q.radius_aspect)}};
-  j["snapped_vertices"] = r.snapped_vertices;
-  j["snap_held_vertices"] = r.snap_held_vertices;
-  j["repaired_triangles"] = r.repaired_triangles;
-  j["flipped_edges"] = r.flipped_edges;
-  j["dropped_caps"] = r.dropped_caps;
-  j["dropped_overlaps"] = r.dropped_overlaps;
-  j["closed_slits"] = r.closed_slits;
-  j["opened_wedges"] = r.opened_wedges;
-  j["box_points"] = r.box_points;
-  j["seed_points"] = r.seed_points;
-  j["lattice_spacing"] = r.lattice_spacing;
-  j["tetgen_seconds"] = r.tetgen_seconds;
-  j["rederived_facets"] = r.rederived_facets;
-  for (const auto& [name, value] : r.improvement.Fields()) j["improvement"][name] = value;
-  files.push_back("volume_report.json");
-  j["files"] = files;
-  SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", JsonText(j, 2)));
-  out << absl::StrFormat(
-      "volume mesh %d nodes, %d tetrahedra, %d sheet faces; %d of %d sheet triangles conform\n"
-      "quality     min dihedral min %.2f° mean %.2f°; gamma %.2f/%.2f; edge aspect %.2f/%.2f; "
-      "radius aspect %.2f/%.2f (min/mean)\nwrote       %s\n",
-      r.mesh.nodes.size(), r.mesh.tets.size(), r.mesh.num_sheet_faces(), r.conformity.conforming,
-      r.conformity.sheet_triangles, q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min,
-      q.gamma.mean, q.edge_aspect.min, q.edge_aspect.mean, q.radius_aspect.min,
-      q.radius_aspect.mean, dir);
+  report.volume_mesh = static_cast<const VolumeMeshStats&>(r);
+  report.files.push_back("volume_report.json");
+  SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", report.ToJson()));
+  PrintVolumeMesh(*report.volume_mesh, out);
+  out << "wrote       " << dir << "\n";
   return absl::OkStatus();
 }
 

@@ -1,5 +1,7 @@
 #include "worker/pipeline/extract/extraction.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -197,7 +199,30 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
   }
   pieces.RelabelBySize();
   out.model = std::move(pieces);
+  out.model_voxels = out.model.set.size();
+  out.pieces = out.model.CountLabels();
   return out;
+}
+
+nlohmann::json ExtractionStep::Fields() const {
+  return {{"step", name},
+          {"ran", ran},
+          {"voxels_before", voxels_before},
+          {"voxels_after", voxels_after},
+          {"added", added},
+          {"removed", removed},
+          {"objects_before", objects_before},
+          {"objects_after", objects_after},
+          {"seconds", seconds}};
+}
+
+nlohmann::json ExtractionSummary::Fields() const {
+  nlohmann::json s = nlohmann::json::array();
+  for (const ExtractionStep& step : steps) s.push_back(step.Fields());
+  return {{"steps", s},
+          {"min_object_voxels", min_object_voxels},
+          {"model_voxels", model_voxels},
+          {"pieces", pieces}};
 }
 
 }  // namespace sheetmesh

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/extract/extend.h"
@@ -45,12 +47,24 @@ struct ExtractionStep {
   uint32_t objects_before = 0;  // components (refine, detect) or labels
   uint32_t objects_after = 0;
   double seconds = 0;
+
+  // The step's figures by name, for the report.
+  nlohmann::json Fields() const;
 };
 
-struct ExtractionResult {
-  LabelledVoxels model;  // pieces labelled 0, 1, ... largest first
+// What the workflow did, for the report.
+struct ExtractionSummary {
   std::vector<ExtractionStep> steps;
   uint64_t min_object_voxels = 0;  // M as used
+  uint64_t model_voxels = 0;       // voxels of the model
+  uint32_t pieces = 0;             // its labels
+
+  // The steps and figures by name.
+  nlohmann::json Fields() const;
+};
+
+struct ExtractionResult : ExtractionSummary {
+  LabelledVoxels model;  // pieces labelled 0, 1, ... largest first
 };
 
 // Runs the workflow on the sheet phase `input`. kInvalidArgument for bad parameters or

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
@@ -27,6 +29,9 @@ struct PieceGeology {
   double dip_direction_degrees = 0;
   double planarity = 0;  // 1 - λ_min / λ_mid of the voxels' covariance
   Vec3 centroid;         // physical units
+
+  // The row of the pieces table, for the report.
+  nlohmann::json Fields() const;
 };
 
 // The geology of every label of `model`. `thickness` is τ per voxel of model.set; faces of

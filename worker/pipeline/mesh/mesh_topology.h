@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "worker/pipeline/mesh/triangle_mesh.h"
 
 namespace sheetmesh {
@@ -45,6 +47,9 @@ struct TopologyReport {
   size_t inconsistent_edges = 0;  // two-face edges walked in the same direction by both
   size_t unused_vertices = 0;
   std::vector<std::pair<uint32_t, uint32_t>> nonmanifold_edge_list;
+
+  // The counts by name (not the edge list), for the report.
+  nlohmann::json Fields() const;
 };
 
 TopologyReport AnalyzeTopology(const TriangleMesh& mesh);

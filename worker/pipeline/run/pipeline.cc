@@ -71,11 +71,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     StageTimer t(&report, "extract");
     SM_ASSIGN_OR_RETURN(ExtractionResult ex,
                         ExtractFeatures(phase.sheet, options.extraction, progress));
-    report.extraction_steps = ex.steps;
-    report.min_object_voxels = ex.min_object_voxels;
     model = std::move(ex.model);
-    report.model_voxels = model.set.size();
-    report.pieces = model.CountLabels();
+    report.extraction = std::move(static_cast<ExtractionSummary&>(ex));
     meshed = model.set;
     piece_of_voxel = model.label;
   }
@@ -93,8 +90,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     StageTimer t(&report, "search-r");
     SM_ASSIGN_OR_RETURN(report.radius_choice, SearchRadius(sheet, surface, options.radius_search,
                                                            progress.Stage("search-r")));
-    surface.scvd.radius_voxels = report.radius_choice.radius;
-    report.options.surface.scvd.radius_voxels = report.radius_choice.radius;
+    surface.scvd.radius_voxels = report.radius_choice->radius;
+    report.options.surface.scvd.radius_voxels = report.radius_choice->radius;
   }
   SurfaceResult result;
   {
@@ -103,43 +100,32 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                         BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   const TriangleMesh& mesh = result.mesh;
-  report.generators = result.scvd.num_generators();
-  report.lloyd_iterations = result.scvd.iterations;
-  report.lloyd_converged = result.scvd.converged;
-  report.energy = result.scvd.energy.empty() ? 0 : result.scvd.energy.back();
-  report.vertices = mesh.num_vertices();
-  report.triangles = mesh.num_faces();
-  report.element_size_voxels = MeanEdgeLength(mesh);
-  report.area_voxels = SurfaceArea(mesh);
-  report.triangle_stats = result.triangle_stats;
-  report.topology = AnalyzeTopology(mesh);
-  report.topology.nonmanifold_edge_list.clear();
-  report.skipped_components = result.skipped_components;
-  report.skipped_voxels = result.skipped_voxels;
+  report.surface = DescribeSurface(result, phase.info.placement);
 
   {
     StageTimer t(&report, "similarity");
     const Progress p = progress.Stage("similarity");
     const PrismHeight other =
         options.score.height == PrismHeight::kFace ? PrismHeight::kVertex : PrismHeight::kFace;
+    SimilarityReport& sim = report.similarity.emplace();
+    sim.against_model = options.extract;
     SM_ASSIGN_OR_RETURN(VoxelSet prisms,
                         VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
-    report.similarity = ScoreModel(prisms, sheet.set);
+    sim.score = ScoreModel(prisms, sheet.set);
     if (options.score.hausdorff) {
-      SM_ASSIGN_OR_RETURN(report.similarity.hausdorff,
+      SM_ASSIGN_OR_RETURN(sim.score.hausdorff,
                           HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
     }
     SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
-    report.shell_similarity = ScoreModel(shell, sheet.set).similarity;
+    sim.shell_similarity = ScoreModel(shell, sheet.set).similarity;
     if (options.extract) {
-      report.similarity_raw = ScoreModel(prisms, phase.sheet);
+      sim.raw = ScoreModel(prisms, phase.sheet);
       report.geology = ComputePieceGeology(LabelledVoxels{sheet.set, piece_of_voxel},
                                            sheet.thickness, mesh, phase.info.placement);
     }
     for (int k : options.score.grid_rates) {
-      if (k < 1) return absl::InvalidArgumentError(absl::StrCat("grid rate ", k, " must be >= 1"));
-      report.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
-                             GridQuantity(sheet.set.dims(), k)});
+      sim.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
+                          GridQuantity(sheet.set.dims(), k)});
     }
     SM_RETURN_IF_ERROR(p.Update(1.0));
   }
@@ -149,26 +135,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
     StageTimer t(&report, "volume");
     SM_ASSIGN_OR_RETURN(volume, BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement,
                                                 options.volume, progress.Stage("volume")));
-    report.has_volume_mesh = true;
-    report.volume_nodes = volume.mesh.nodes.size();
-    report.volume_tets = volume.mesh.tets.size();
-    report.volume_sheet_faces = volume.mesh.num_sheet_faces();
-    report.volume_quality = volume.quality;
-    report.volume_conformity = volume.conformity;
-    report.volume_snapped = volume.snapped_vertices;
-    report.volume_snap_held = volume.snap_held_vertices;
-    report.volume_repaired = volume.repaired_triangles;
-    report.volume_flipped = volume.flipped_edges;
-    report.volume_dropped_caps = volume.dropped_caps;
-    report.volume_dropped_overlaps = volume.dropped_overlaps;
-    report.volume_closed_slits = volume.closed_slits;
-    report.volume_opened_wedges = volume.opened_wedges;
-    report.volume_box_points = volume.box_points;
-    report.volume_seed_points = volume.seed_points;
-    report.volume_improvement = volume.improvement;
-    report.volume_rederived_facets = volume.rederived_facets;
-    report.voxels_per_tet =
-        report.volume_tets > 0 ? double(phase.info.dims.num_voxels()) / report.volume_tets : 0.0;
+    report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
   }
 
   if (!options.output.dir.empty()) {
@@ -199,7 +166,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
       SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report.geology)));
       report.files.push_back("pieces.csv");
     }
-    if (report.has_volume_mesh) {
+    if (report.volume_mesh) {
       if (options.output.vtu) {
         SM_RETURN_IF_ERROR(WriteVtu(path("volume.vtu"), volume.mesh));
         report.files.push_back("volume.vtu");

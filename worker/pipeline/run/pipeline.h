@@ -5,8 +5,11 @@
 #define SHEETMESH_WORKER_PIPELINE_RUN_PIPELINE_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -68,62 +71,37 @@ struct GridFigure {
   uint64_t grid_quantity = 0;
 };
 
+// How faithful the mesh is (formula 5), against the set it meshed and, with extraction,
+// against the input's raw phase; the other prism model and the grid baselines of Table 2.
+struct SimilarityReport {
+  bool against_model = false;                // the meshed set is the extracted model
+  SimilarityScore score;                     // of `score.height`'s prisms
+  std::optional<SimilarityScore> raw;        // against the input's phase (with extraction)
+  double shell_similarity = 0;               // the other prism model
+  std::vector<GridFigure> grid;
+
+  nlohmann::json Fields() const;
+};
+
+// Everything a run says of itself: what it read, what each stage made, the options as
+// run, the time of each stage and the files written. Each stage's result lists its own
+// fields; ToJson nests them, for the CLI and the service alike.
 struct PipelineReport {
   PipelineOptions options;  // as run (r as chosen)
   VolumeInfo volume;
   uint64_t sheet_voxels = 0;
-  ThicknessStats thickness;
+  ThicknessStats thickness;  // of the meshed set
   uint32_t components = 0;
-  // SCVD and mesh
-  uint32_t generators = 0;
-  int lloyd_iterations = 0;
-  bool lloyd_converged = false;
-  double energy = 0;
-  uint64_t vertices = 0;
-  uint64_t triangles = 0;
-  double element_size_voxels = 0;  // mean edge length
-  double area_voxels = 0;
-  DualTriangleStats triangle_stats;
-  TopologyReport topology;
-  uint32_t skipped_components = 0;
-  uint64_t skipped_voxels = 0;
-  // extraction (when run)
-  std::vector<ExtractionStep> extraction_steps;
-  uint64_t min_object_voxels = 0;  // M as used
-  uint64_t model_voxels = 0;       // voxels of the extracted model
-  uint32_t pieces = 0;
-  std::vector<PieceGeology> geology;
-  // similarity
-  SimilarityScore similarity;      // against the meshed set (the extracted model, or the
-                                   // input's sheet phase), model of `score.height`
-  SimilarityScore similarity_raw;  // against the input's sheet phase (with extraction)
-  double shell_similarity = 0;     // the other prism model (per-vertex if height is face)
-  std::vector<GridFigure> grid;
-  RadiusChoice radius_choice;  // when r was searched
-  // volume mesh (when made)
-  bool has_volume_mesh = false;
-  uint64_t volume_nodes = 0;
-  uint64_t volume_tets = 0;
-  uint64_t volume_sheet_faces = 0;
-  TetQuality volume_quality;
-  Conformity volume_conformity;
-  uint32_t volume_snapped = 0;
-  uint32_t volume_snap_held = 0;
-  uint32_t volume_repaired = 0;
-  uint32_t volume_flipped = 0;
-  uint32_t volume_dropped_caps = 0;
-  uint32_t volume_dropped_overlaps = 0;
-  uint32_t volume_closed_slits = 0;
-  uint32_t volume_opened_wedges = 0;
-  uint32_t volume_box_points = 0;
-  uint32_t volume_seed_points = 0;
-  TetImproveReport volume_improvement;
-  uint32_t volume_rederived_facets = 0;
-  double voxels_per_tet = 0;  // the paper's 1 : 6704 is 6704 here
+  std::optional<ExtractionSummary> extraction;
+  std::vector<PieceGeology> geology;          // with extraction
+  std::optional<RadiusChoice> radius_choice;  // when r was searched
+  std::optional<SurfaceStats> surface;
+  std::optional<SimilarityReport> similarity;
+  std::optional<VolumeMeshStats> volume_mesh;
   std::vector<StageTime> timings;
   std::vector<std::string> files;  // written, relative to output.dir
 
-  // The report as JSON (the report.json artifact).
+  // The report as JSON (the report.json artifact): the sections this report has.
   std::string ToJson() const;
 };
 

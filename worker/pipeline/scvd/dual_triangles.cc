@@ -1,5 +1,7 @@
 #include "worker/pipeline/scvd/dual_triangles.h"
 
+#include <nlohmann/json.hpp>
+
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
@@ -560,6 +562,20 @@ absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
   result.faces = selector.faces();
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return result;
+}
+
+nlohmann::json DualTriangleStats::Fields() const {
+  return {{"candidates", candidates},
+          {"blocks_three_cells", blocks_three},
+          {"blocks_amended", blocks_amended},
+          {"blocks_unresolved", blocks_unresolved},
+          {"kept", kept},
+          {"rejected_fold", rejected_fold},
+          {"rejected_intersection", rejected_intersection},
+          {"rejected_degenerate", rejected_degenerate},
+          {"rim_vertices", rim_vertices},
+          {"rim_triangles", rim_faces},
+          {"crack_triangles", crack_faces}};
 }
 
 }  // namespace sheetmesh

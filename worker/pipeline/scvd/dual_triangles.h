@@ -12,6 +12,8 @@
 #include <span>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
@@ -52,6 +54,9 @@ struct DualTriangleStats {
   uint64_t rim_vertices = 0;  // rim vertices added
   uint64_t rim_faces = 0;     // of the kept faces, those on the rim strip
   uint64_t crack_faces = 0;   // of the kept faces, those closing cracks
+
+  // The counts by name, for the report.
+  nlohmann::json Fields() const;
 };
 
 struct DualTriangulation {

@@ -6,6 +6,8 @@
 
 #include <cstdint>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/voxel/voxel_set.h"
@@ -20,6 +22,9 @@ struct SimilarityScore {
   double similarity = 0;  // (c_in - c_out) / c_image, in (-inf, 1]
   double dice = 0;        // 2 c_in / (c_model + c_image)
   double hausdorff = -1;  // symmetric, voxels; -1 when not computed
+
+  // similarity, c_in, c_out, c_image, dice and, when computed, hausdorff_voxels.
+  nlohmann::json Fields() const;
 };
 
 // Formula 5 and Dice of `model` against `image`. REQUIRES: equal dims; image not empty.

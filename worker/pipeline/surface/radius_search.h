@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/similarity/mesh_model.h"
@@ -40,6 +42,9 @@ struct RadiusChoice {
   bool target_reached = true;       // kTargetSimilarity: false when no r reached the target (the
                                     // best r is chosen then)
   std::vector<RadiusTrial> trials;  // every r tried, in order of trial
+
+  // chosen_r, target_reached and the trials, for the report.
+  nlohmann::json Fields() const;
 };
 
 // Searches r on `sheet` with the other settings of `surface`. kInvalidArgument for a

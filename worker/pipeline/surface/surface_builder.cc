@@ -1,9 +1,12 @@
 #include "worker/pipeline/surface/surface_builder.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/surface/face_attributes.h"
@@ -111,6 +114,43 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
   out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return out;
+}
+
+SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& placement) {
+  const TriangleMesh& mesh = result.mesh;
+  SurfaceStats s;
+  s.generators = result.scvd.num_generators();
+  s.lloyd_iterations = result.scvd.iterations;
+  s.lloyd_converged = result.scvd.converged;
+  s.energy = result.scvd.energy.empty() ? 0 : result.scvd.energy.back();
+  s.vertices = mesh.num_vertices();
+  s.triangles = mesh.num_faces();
+  s.element_size_voxels = MeanEdgeLength(mesh);
+  s.element_size = PhysicalLength(s.element_size_voxels, placement);
+  s.area_voxels = SurfaceArea(mesh);
+  s.triangle_stats = result.triangle_stats;
+  s.topology = AnalyzeTopology(mesh);
+  s.topology.nonmanifold_edge_list.clear();
+  s.skipped_components = result.skipped_components;
+  s.skipped_voxels = result.skipped_voxels;
+  return s;
+}
+
+nlohmann::json SurfaceStats::Fields() const {
+  nlohmann::json j = triangle_stats.Fields();
+  j["vertices"] = vertices;
+  j["triangles"] = triangles;
+  j["element_size_voxels"] = element_size_voxels;
+  j["element_size"] = element_size;
+  j["area_voxels"] = area_voxels;
+  j["components_without_triangles"] = skipped_components;
+  j["voxels_without_triangles"] = skipped_voxels;
+  j["topology"] = topology.Fields();
+  j["scvd"] = {{"generators", generators},
+               {"lloyd_iterations", lloyd_iterations},
+               {"lloyd_converged", lloyd_converged},
+               {"energy", energy}};
+  return j;
 }
 
 }  // namespace sheetmesh

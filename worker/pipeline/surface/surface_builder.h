@@ -7,8 +7,11 @@
 #include <span>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/scvd/scvd.h"
@@ -53,6 +56,30 @@ struct SurfaceResult {
   double triangles_seconds = 0;
   double attributes_seconds = 0;
 };
+
+// What the surface is, for the report: the SCVD's figures, the mesh's counts and sizes,
+// how its triangles were chosen and its topology.
+struct SurfaceStats {
+  uint32_t generators = 0;
+  int lloyd_iterations = 0;
+  bool lloyd_converged = false;
+  double energy = 0;  // E of the last growth
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+  double element_size_voxels = 0;  // mean edge length
+  double element_size = 0;         // the same, physical units
+  double area_voxels = 0;
+  DualTriangleStats triangle_stats;
+  TopologyReport topology;          // without the edge list
+  uint32_t skipped_components = 0;  // components too small for a triangle
+  uint64_t skipped_voxels = 0;
+
+  // The figures by name, the SCVD's and the topology nested, for the report.
+  nlohmann::json Fields() const;
+};
+
+// The stats of `result`, its lengths made physical by `placement`.
+SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& placement);
 
 // Meshes `sheet`. `piece_of_voxel`, when not empty, labels each voxel with its object id
 // (faces take their vertices' majority); otherwise faces carry their component id.

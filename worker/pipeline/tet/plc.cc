@@ -1,5 +1,7 @@
 #include "worker/pipeline/tet/plc.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -655,6 +657,22 @@ uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_fac
 }
 
 }  // namespace
+
+nlohmann::json PlcStats::Fields() const {
+  return {{"snapped_vertices", snapped_vertices},
+          {"snap_held_vertices", snap_held_vertices},
+          {"merged_vertices", merged_vertices},
+          {"dropped_triangles", dropped_triangles},
+          {"repaired_triangles", repaired_triangles},
+          {"flipped_edges", flipped_edges},
+          {"dropped_caps", dropped_caps},
+          {"dropped_overlaps", dropped_overlaps},
+          {"closed_slits", closed_slits},
+          {"opened_wedges", opened_wedges},
+          {"box_points", box_points},
+          {"seed_points", seed_points},
+          {"lattice_spacing", lattice_spacing}};
+}
 
 std::string Plc::ToPoly() const {
   std::string out = absl::StrCat("# sheetmesh PLC: box + ", sheet_triangles.size(),

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
@@ -25,13 +27,8 @@ struct PlcFacet {
 inline constexpr int32_t kBoundaryMarker = 1;     // the box faces
 inline constexpr int32_t kFirstSheetMarker = 10;  // sheet triangle t has marker 10 + t
 
-struct Plc {
-  std::vector<Vec3> vertices;          // physical units
-  std::vector<PlcFacet> facets;        // the 6 box faces first, then one per sheet triangle
-  std::vector<Face> sheet_triangles;   // the sheet triangles as kept, in `vertices`
-  std::vector<int32_t> sheet_piece;    // per kept sheet triangle
-  std::vector<float> sheet_thickness;  // per kept sheet triangle, voxels
-  Vec3 box_lo, box_hi;                 // physical
+// What building the PLC changed, for the report.
+struct PlcStats {
   uint32_t snapped_vertices = 0;       // moved onto a box face
   uint32_t snap_held_vertices = 0;     // within snap_clear_voxels of a box face, left off
                                        // it since snapping them made a clash
@@ -50,6 +47,18 @@ struct Plc {
   uint32_t seed_points = 0;            // lattice points seeded off the sheets (the last
                                        // vertices, on no facet)
   double lattice_spacing = 0;          // physical units; 0 without seeding
+
+  // The figures by name (snapped_vertices, ..., lattice_spacing), for the report.
+  nlohmann::json Fields() const;
+};
+
+struct Plc : PlcStats {
+  std::vector<Vec3> vertices;          // physical units
+  std::vector<PlcFacet> facets;        // the 6 box faces first, then one per sheet triangle
+  std::vector<Face> sheet_triangles;   // the sheet triangles as kept, in `vertices`
+  std::vector<int32_t> sheet_piece;    // per kept sheet triangle
+  std::vector<float> sheet_thickness;  // per kept sheet triangle, voxels
+  Vec3 box_lo, box_hi;                 // physical
 
   // The PLC as a TetGen .poly file (0-based numbering).
   std::string ToPoly() const;

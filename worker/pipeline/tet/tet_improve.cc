@@ -1,5 +1,7 @@
 #include "worker/pipeline/tet/tet_improve.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -32,14 +34,14 @@ double MinDihedralDegrees(const Vec3& a, const Vec3& b, const Vec3& c, const Vec
   return std::acos(std::clamp(worst, -1.0, 1.0)) * (180.0 / std::numbers::pi);
 }
 
-std::vector<std::pair<std::string, double>> TetImproveReport::Fields() const {
+nlohmann::json TetImproveReport::Fields() const {
   return {{"passes", passes},
-          {"edge_removals", static_cast<double>(edge_removals)},
-          {"face_removals", static_cast<double>(face_removals)},
-          {"smoothing_moves", static_cast<double>(smoothing_moves)},
-          {"inserted_vertices", static_cast<double>(inserted_vertices)},
-          {"sheet_face_splits", static_cast<double>(sheet_face_splits)},
-          {"sheet_edge_splits", static_cast<double>(sheet_edge_splits)},
+          {"edge_removals", edge_removals},
+          {"face_removals", face_removals},
+          {"smoothing_moves", smoothing_moves},
+          {"inserted_vertices", inserted_vertices},
+          {"sheet_face_splits", sheet_face_splits},
+          {"sheet_edge_splits", sheet_edge_splits},
           {"movable_vertices", movable_vertices},
           {"sliding_vertices", sliding_vertices},
           {"min_dihedral_before", min_dihedral_before},

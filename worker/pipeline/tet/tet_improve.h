@@ -24,6 +24,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/status.h"
 #include "common/progress.h"
 #include "worker/pipeline/tet/tet_mesh.h"
@@ -79,8 +81,8 @@ struct TetImproveReport {
   double min_dihedral_after = 0, mean_dihedral_after = 0;
   double seconds = 0;
 
-  // The figures by name, for the JSON reports.
-  std::vector<std::pair<std::string, double>> Fields() const;
+  // The figures by name, for the report.
+  nlohmann::json Fields() const;
 };
 
 // Improves `mesh` in place. Nodes [0, input_nodes) are the PLC's vertices and never move

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {
@@ -31,6 +33,9 @@ struct QualityStat {
   double mean = 0;
   double lo = 0, hi = 1;            // histogram range
   std::vector<uint64_t> histogram;  // equal bins over [lo, hi]
+
+  // min, mean, histogram_range, histogram.
+  nlohmann::json Fields() const;
 };
 
 struct TetQuality {
@@ -42,6 +47,9 @@ struct TetQuality {
   uint64_t nodes = 0;
   double volume = 0;      // sum of tetrahedron volumes
   uint64_t inverted = 0;  // tetrahedra of non-positive volume
+
+  // The four measures by name (Table 3's rows), for the report.
+  nlohmann::json Fields() const;
 };
 
 TetQuality MeasureQuality(const TetMesh& mesh);

@@ -1,5 +1,7 @@
 #include "worker/pipeline/tet/volume_mesher.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -133,6 +135,28 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
 
 }  // namespace
 
+nlohmann::json Conformity::Fields() const {
+  return {{"sheet_triangles", sheet_triangles},
+          {"conforming", conforming},
+          {"worst_area_error", worst_area_error}};
+}
+
+nlohmann::json VolumeMeshStats::Fields() const {
+  nlohmann::json j = PlcStats::Fields();
+  j["nodes"] = nodes;
+  j["tetrahedra"] = tetrahedra;
+  j["sheet_faces"] = sheet_faces;
+  j["voxels_per_tetrahedron"] = voxels_per_tet;
+  j["volume"] = quality.volume;
+  j["tetgen_switches"] = tetgen_switches;
+  j["tetgen_seconds"] = tetgen_seconds;
+  j["rederived_facets"] = rederived_facets;
+  j["conformity"] = conformity.Fields();
+  j["quality"] = quality.Fields();
+  j["improvement"] = improvement.Fields();
+  return j;
+}
+
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
                                                  const Placement& placement,
                                                  const VolumeMeshOptions& options,
@@ -143,19 +167,8 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   PlcOptions plc_options = options.plc;
   plc_options.seed_box = plc_options.seed_box || !options.tetgen.steiner_on_sheets;
   SM_ASSIGN_OR_RETURN(Plc plc, BuildPlc(sheets, dims, placement, plc_options));
-  r.snapped_vertices = plc.snapped_vertices;
-  r.snap_held_vertices = plc.snap_held_vertices;
-  r.merged_vertices = plc.merged_vertices;
-  r.dropped_triangles = plc.dropped_triangles;
-  r.repaired_triangles = plc.repaired_triangles;
-  r.flipped_edges = plc.flipped_edges;
-  r.dropped_caps = plc.dropped_caps;
-  r.dropped_overlaps = plc.dropped_overlaps;
-  r.closed_slits = plc.closed_slits;
-  r.opened_wedges = plc.opened_wedges;
-  r.box_points = plc.box_points;
-  r.seed_points = plc.seed_points;
-  r.lattice_spacing = plc.lattice_spacing;
+  static_cast<PlcStats&>(r) = plc;
+  r.tetgen_switches = TetgenSwitches(options.tetgen);
   const Vec3 ext = plc.box_hi - plc.box_lo;
   r.box_volume = std::abs(ext.x * ext.y * ext.z);
   const absl::Time start = absl::Now();
@@ -180,6 +193,10 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
         ", area error ", r.conformity.worst_area_error, ")"));
   }
   r.quality = MeasureQuality(r.mesh);
+  r.nodes = r.mesh.nodes.size();
+  r.tetrahedra = r.mesh.tets.size();
+  r.sheet_faces = r.mesh.num_sheet_faces();
+  r.voxels_per_tet = r.tetrahedra > 0 ? double(dims.num_voxels()) / r.tetrahedra : 0.0;
   if (r.quality.inverted > 0) {
     return absl::InternalError(
         absl::StrCat("the volume mesh has ", r.quality.inverted, " inverted tetrahedra"));

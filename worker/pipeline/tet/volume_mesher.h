@@ -5,7 +5,10 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESHER_H_
 
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -29,30 +32,33 @@ struct Conformity {
   double worst_area_error = 0;    // relative, over all sheet triangles
   std::vector<uint32_t> missing;  // PLC sheet triangles not covered (first 20)
   uint64_t orphan_faces = 0;      // facet faces (box or sheet) that are no tetrahedron's face
+
+  // sheet_triangles, conforming, worst_area_error, for the report.
+  nlohmann::json Fields() const;
 };
 
-struct VolumeMeshResult {
-  TetMesh mesh;
+// What the volume mesh is and how it was made: everything the report says of it. The PLC's
+// own figures come first (PlcStats).
+struct VolumeMeshStats : PlcStats {
+  uint64_t nodes = 0;
+  uint64_t tetrahedra = 0;
+  uint64_t sheet_faces = 0;       // tetrahedron faces on the sheets
+  double voxels_per_tet = 0;      // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;
-  uint32_t snapped_vertices = 0;
-  uint32_t snap_held_vertices = 0;  // PlcOptions::snap_clear_voxels
-  uint32_t merged_vertices = 0;
-  uint32_t dropped_triangles = 0;
-  uint32_t repaired_triangles = 0;
-  uint32_t flipped_edges = 0;     // sheet edges flipped for better triangles (PlcOptions)
-  uint32_t dropped_caps = 0;      // flat rim triangles dropped
-  uint32_t dropped_overlaps = 0;  // rim triangles dropped for lying on another sheet
-  uint32_t closed_slits = 0;      // PlcOptions::cap_degrees
-  uint32_t opened_wedges = 0;     // PlcOptions::wedge_degrees
-  uint32_t box_points = 0;        // points seeded on the box surface (for -Y)
-  uint32_t seed_points = 0;       // lattice points seeded off the sheets (PlcOptions)
-  double lattice_spacing = 0;     // their spacing, physical units (0: none)
   double box_volume = 0;          // physical units^3
+  std::string tetgen_switches;    // as TetGen ran
   double tetgen_seconds = 0;
   uint32_t rederived_facets = 0;  // sheet facets whose faces TetGen listed wrongly (taken
                                   // again from the tetrahedra)
   TetImproveReport improvement;
+
+  // Every figure by name, the quality and conformity nested, for the report.
+  nlohmann::json Fields() const;
+};
+
+struct VolumeMeshResult : VolumeMeshStats {
+  TetMesh mesh;
 };
 
 // Meshes the box of `dims` (placed by `placement`) with `sheets` (voxel index coordinates)

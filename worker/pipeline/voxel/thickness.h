@@ -7,6 +7,8 @@
 #include <span>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/voxel/voxel_set.h"
@@ -25,6 +27,9 @@ struct ThicknessStats {
   uint32_t max = 0;
   double median = 0;
   std::vector<uint64_t> histogram;  // histogram[t] = voxels with τ == t (t = 0 unused)
+
+  // mean, median, min, max (not the histogram), for the report.
+  nlohmann::json Fields() const;
 };
 
 // Summary of per-voxel thickness values. All zero for an empty input.

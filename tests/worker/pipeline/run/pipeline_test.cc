@@ -54,21 +54,21 @@ TEST(PipelineTest, RunWritesMeshesAndAReport) {
   Stages stages;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
   EXPECT_EQ(stages.seen, PlannedStages(o));
-  EXPECT_GT(r.triangles, 50u);
-  EXPECT_GT(r.similarity.similarity, 0.5);
-  EXPECT_GE(r.similarity.hausdorff, 0);
-  ASSERT_EQ(r.grid.size(), 3u);
+  EXPECT_GT(r.surface->triangles, 50u);
+  EXPECT_GT(r.similarity->score.similarity, 0.5);
+  EXPECT_GE(r.similarity->score.hausdorff, 0);
+  ASSERT_EQ(r.similarity->grid.size(), 3u);
   for (const char* f : {"surface.ply", "surface.vtp", "surface.obj", "report.json"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
   SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("out/report.json")));
   const nlohmann::json j = nlohmann::json::parse(text);
-  EXPECT_EQ(j["surface"]["triangles"].get<uint64_t>(), r.triangles);
-  EXPECT_DOUBLE_EQ(j["similarity"]["similarity"].get<double>(), r.similarity.similarity);
+  EXPECT_EQ(j["surface"]["triangles"].get<uint64_t>(), r.surface->triangles);
+  EXPECT_DOUBLE_EQ(j["similarity"]["similarity"].get<double>(), r.similarity->score.similarity);
   EXPECT_EQ(j["parameters"]["r"].get<double>(), 6);
   EXPECT_TRUE(j["seconds"].contains("surface"));
   SM_ASSERT_OK_AND_ASSIGN(TriangleMesh back, ReadMesh(tmp.File("out/surface.ply")));
-  EXPECT_EQ(back.faces.size(), r.triangles);
+  EXPECT_EQ(back.faces.size(), r.surface->triangles);
 }
 
 TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
@@ -81,9 +81,9 @@ TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
   Stages stages;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
   EXPECT_EQ(stages.seen, PlannedStages(o));
-  EXPECT_GE(r.pieces, 2u);
-  EXPECT_EQ(r.geology.size(), r.pieces);
-  EXPECT_GT(r.similarity_raw.similarity, 0.4);
+  EXPECT_GE(r.extraction->pieces, 2u);
+  EXPECT_EQ(r.geology.size(), r.extraction->pieces);
+  EXPECT_GT(r.similarity->raw->similarity, 0.4);
   for (const char* f : {"model.vdb", "model_labels_64x56x48_u16.raw", "pieces.csv"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
@@ -91,7 +91,7 @@ TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
             64u * 56 * 48 * 2);
   const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
   EXPECT_EQ(j["extraction"]["steps"].size(), 5u);
-  EXPECT_EQ(j["pieces"].size(), r.pieces);
+  EXPECT_EQ(j["pieces"].size(), r.extraction->pieces);
   EXPECT_EQ(j["similarity"]["against"], "extracted model");
 }
 
@@ -106,14 +106,14 @@ TEST(PipelineTest, VolumeStageWritesTheFemFormats) {
   Stages stages;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
   EXPECT_EQ(stages.seen, PlannedStages(o));
-  EXPECT_GT(r.volume_tets, 100u);
-  EXPECT_EQ(r.volume_conformity.conforming, r.volume_conformity.sheet_triangles);
-  EXPECT_NEAR(r.volume_quality.volume, 64.0 * 56 * 48, 1e-6 * 64 * 56 * 48);
+  EXPECT_GT(r.volume_mesh->tetrahedra, 100u);
+  EXPECT_EQ(r.volume_mesh->conformity.conforming, r.volume_mesh->conformity.sheet_triangles);
+  EXPECT_NEAR(r.volume_mesh->quality.volume, 64.0 * 56 * 48, 1e-6 * 64 * 56 * 48);
   for (const char* f : {"volume.vtu", "volume.msh", "volume.inp"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
   const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
-  EXPECT_EQ(j["volume_mesh"]["tetrahedra"].get<uint64_t>(), r.volume_tets);
+  EXPECT_EQ(j["volume_mesh"]["tetrahedra"].get<uint64_t>(), r.volume_mesh->tetrahedra);
   EXPECT_TRUE(j["volume_mesh"]["quality"].contains("radius_aspect"));
 }
 
@@ -149,10 +149,10 @@ TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
   EXPECT_EQ(r.sheet_voxels, 84595u);
   EXPECT_EQ(r.components, 63u);
   // One sheet: the 62 small pieces are too small for a triangle at r = 7.
-  EXPECT_EQ(r.skipped_components, 62u);
-  EXPECT_GT(r.similarity.similarity, 0.7);
-  EXPECT_EQ(r.topology.duplicate_faces, 0u);
-  EXPECT_EQ(r.topology.inconsistent_edges, 0u);
+  EXPECT_EQ(r.surface->skipped_components, 62u);
+  EXPECT_GT(r.similarity->score.similarity, 0.7);
+  EXPECT_EQ(r.surface->topology.duplicate_faces, 0u);
+  EXPECT_EQ(r.surface->topology.inconsistent_edges, 0u);
 }
 
 TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
@@ -169,25 +169,25 @@ TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
   o.score.hausdorff = false;
   o.volume_mesh = true;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
-  EXPECT_GT(r.volume_conformity.sheet_triangles, 400u);
-  EXPECT_EQ(r.volume_conformity.conforming, r.volume_conformity.sheet_triangles);
-  EXPECT_EQ(r.volume_conformity.orphan_faces, 0u);
-  EXPECT_NEAR(r.volume_quality.volume, 200.0 * 42 * 100, 1e-9 * 200 * 42 * 100);
-  EXPECT_EQ(r.volume_quality.inverted, 0u);
-  EXPECT_GT(r.volume_dropped_overlaps, 0u);
-  EXPECT_GT(r.volume_quality.min_dihedral.min, 1.0);
-  EXPECT_GT(r.volume_quality.min_dihedral.mean, 45.0);
+  EXPECT_GT(r.volume_mesh->conformity.sheet_triangles, 400u);
+  EXPECT_EQ(r.volume_mesh->conformity.conforming, r.volume_mesh->conformity.sheet_triangles);
+  EXPECT_EQ(r.volume_mesh->conformity.orphan_faces, 0u);
+  EXPECT_NEAR(r.volume_mesh->quality.volume, 200.0 * 42 * 100, 1e-9 * 200 * 42 * 100);
+  EXPECT_EQ(r.volume_mesh->quality.inverted, 0u);
+  EXPECT_GT(r.volume_mesh->dropped_overlaps, 0u);
+  EXPECT_GT(r.volume_mesh->quality.min_dihedral.min, 1.0);
+  EXPECT_GT(r.volume_mesh->quality.min_dihedral.mean, 45.0);
   // By default TetGen adds no point on a facet: each sheet triangle is one tetrahedron
   // face, but for the few the improvement splits by a vertex on a sheet face (into 3) or
   // sheet edge (each face on it into 2); the box faces and the space off the sheets are
   // seeded.
-  const TetImproveReport& im = r.volume_improvement;
-  EXPECT_GE(r.volume_sheet_faces, r.volume_conformity.sheet_triangles);
-  EXPECT_LE(r.volume_sheet_faces - r.volume_conformity.sheet_triangles,
+  const TetImproveReport& im = r.volume_mesh->improvement;
+  EXPECT_GE(r.volume_mesh->sheet_faces, r.volume_mesh->conformity.sheet_triangles);
+  EXPECT_LE(r.volume_mesh->sheet_faces - r.volume_mesh->conformity.sheet_triangles,
             2 * im.sheet_face_splits + 4 * im.sheet_edge_splits);
   EXPECT_LT(im.sheet_face_splits + im.sheet_edge_splits, 20u);
-  EXPECT_GT(r.volume_box_points, 0u);
-  EXPECT_GT(r.volume_seed_points, 0u);
+  EXPECT_GT(r.volume_mesh->box_points, 0u);
+  EXPECT_GT(r.volume_mesh->seed_points, 0u);
 }
 
 }  // namespace

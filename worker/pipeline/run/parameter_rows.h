@@ -7,6 +7,8 @@
 #include <optional>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "worker/pipeline/run/parameters.h"
 
 namespace sheetmesh {
@@ -34,6 +36,24 @@ struct Renamed {
   const char* new_key;
 };
 const std::vector<Renamed>& RenamedParameters();
+
+// Shared by the parameter files (parameter_values.cc defines them).
+
+// The value as JSON text: 5, true, "paper", [2,3,4].
+std::string ShowValue(const ParamValue& v);
+// kInvalidArgument "DISPLAY = VALUE WHY".
+absl::Status BadValue(const std::string& display, const std::string& value,
+                      absl::string_view why);
+// What a value of `s` must be ("must be a number in (0, 1000]").
+std::string Expected(const ParamSpec& s);
+// The JSON value as `s`'s type, or nullopt when it is not of that type.
+std::optional<ParamValue> FromJson(const ParamSpec& s, const nlohmann::json& v);
+// Whether `v` holds `s`'s type.
+bool HasType(const ParamSpec& s, const ParamValue& v);
+// Integers where numbers are expected, taken as numbers.
+ParamValue Widen(const ParamSpec& s, ParamValue v);
+// "" when `v` (of the row's type) is allowed, else why not.
+std::string Violation(const ParamRow& row, const ParamValue& v);
 
 }  // namespace sheetmesh
 

@@ -23,199 +23,6 @@ namespace {
 
 using Json = nlohmann::json;
 
-const char* TypeName(ParamType t) {
-  switch (t) {
-    case ParamType::kBool:
-      return "bool";
-    case ParamType::kInteger:
-      return "integer";
-    case ParamType::kNumber:
-      return "number";
-    case ParamType::kChoice:
-      return "one of";
-    case ParamType::kText:
-      return "text";
-    case ParamType::kNumbers:
-      return "numbers";
-    case ParamType::kIntegers:
-      return "integers";
-    case ParamType::kChoices:
-      return "list of";
-  }
-  return "";
-}
-
-// "5", "true", "\"paper\"", "[2,3,4]".
-std::string Show(const ParamValue& v) { return JsonText(ToJson(v)); }
-
-absl::Status Bad(const std::string& display, const std::string& value, absl::string_view why) {
-  return absl::InvalidArgumentError(absl::StrCat(display, " = ", value, " ", why));
-}
-
-// What a value must be, for the message when it is not.
-std::string Expected(const ParamSpec& s) {
-  const bool list = s.type == ParamType::kNumbers || s.type == ParamType::kIntegers ||
-                    s.type == ParamType::kChoices;
-  std::string what;
-  switch (s.type) {
-    case ParamType::kBool:
-      return "must be true or false";
-    case ParamType::kChoice:
-      return absl::StrCat("must be one of ", absl::StrJoin(s.choices, ", "));
-    case ParamType::kText:
-      return "must be a string";
-    case ParamType::kChoices:
-      what = absl::StrCat("names from ", absl::StrJoin(s.choices, ", "));
-      break;
-    default:
-      what = absl::StrCat(
-          s.type == ParamType::kInteger || s.type == ParamType::kIntegers ? "integer" : "number",
-          list ? "s" : "", " in ", s.range.text);
-  }
-  if (!list) return absl::StrCat("must be ", what[0] == 'i' ? "an " : "a ", what);
-  if (s.count > 0) return absl::StrCat("must be ", s.count, " ", what);
-  return absl::StrCat("must be a ", s.allow_empty ? "" : "non-empty ", "list of ", what);
-}
-
-// The JSON value as the row's type, or nullopt when it is not of that type.
-std::optional<ParamValue> FromJson(const ParamSpec& s, const Json& v) {
-  auto integer = [](const Json& x) -> std::optional<int64_t> {
-    if (x.is_number_integer()) {
-      if (x.is_number_unsigned() && x.get<uint64_t>() > uint64_t{INT64_MAX}) return std::nullopt;
-      return x.get<int64_t>();
-    }
-    if (x.is_number_float()) {
-      const double d = x.get<double>();
-      if (std::isfinite(d) && d == std::floor(d) && std::abs(d) < 9.2e18) return int64_t(d);
-    }
-    return std::nullopt;
-  };
-  // A single value where a list is expected is a list of one ("labels": 255).
-  const Json list = v.is_array() ? v : Json::array({v});
-  switch (s.type) {
-    case ParamType::kBool:
-      if (v.is_boolean()) return ParamValue(v.get<bool>());
-      return std::nullopt;
-    case ParamType::kInteger:
-      if (auto i = integer(v)) return ParamValue(*i);
-      return std::nullopt;
-    case ParamType::kNumber:
-      if (v.is_number()) return ParamValue(v.get<double>());
-      return std::nullopt;
-    case ParamType::kChoice:
-    case ParamType::kText:
-      if (v.is_string()) return ParamValue(v.get<std::string>());
-      return std::nullopt;
-    case ParamType::kNumbers: {
-      std::vector<double> out;
-      for (const Json& x : list) {
-        if (!x.is_number()) return std::nullopt;
-        out.push_back(x.get<double>());
-      }
-      return ParamValue(out);
-    }
-    case ParamType::kIntegers: {
-      std::vector<int64_t> out;
-      for (const Json& x : list) {
-        auto i = integer(x);
-        if (!i) return std::nullopt;
-        out.push_back(*i);
-      }
-      return ParamValue(out);
-    }
-    case ParamType::kChoices: {
-      std::vector<std::string> out;
-      for (const Json& x : list) {
-        if (!x.is_string()) return std::nullopt;
-        out.push_back(x.get<std::string>());
-      }
-      return ParamValue(out);
-    }
-  }
-  return std::nullopt;
-}
-
-bool HasType(const ParamSpec& s, const ParamValue& v) {
-  switch (s.type) {
-    case ParamType::kBool:
-      return std::holds_alternative<bool>(v);
-    case ParamType::kInteger:
-      return std::holds_alternative<int64_t>(v);
-    case ParamType::kNumber:
-      return std::holds_alternative<double>(v);
-    case ParamType::kChoice:
-    case ParamType::kText:
-      return std::holds_alternative<std::string>(v);
-    case ParamType::kNumbers:
-      return std::holds_alternative<std::vector<double>>(v);
-    case ParamType::kIntegers:
-      return std::holds_alternative<std::vector<int64_t>>(v);
-    case ParamType::kChoices:
-      return std::holds_alternative<std::vector<std::string>>(v);
-  }
-  return false;
-}
-
-// Integers given where numbers are expected (a proto int64 into a number row, JSON 5 into
-// a list of numbers) are taken as they are.
-ParamValue Widen(const ParamSpec& s, ParamValue v) {
-  if (s.type == ParamType::kNumber && std::holds_alternative<int64_t>(v)) {
-    return static_cast<double>(std::get<int64_t>(v));
-  }
-  if (s.type == ParamType::kNumbers && std::holds_alternative<std::vector<int64_t>>(v)) {
-    const auto& i = std::get<std::vector<int64_t>>(v);
-    return std::vector<double>(i.begin(), i.end());
-  }
-  return v;
-}
-
-// "" when `v` (of the row's type) is allowed, else why not.
-std::string Violation(const ParamRow& row, const ParamValue& v) {
-  const ParamSpec& s = row.spec;
-  auto in_range = [&](double x) { return std::isfinite(x) && s.range.Contains(x); };
-  auto list_size_ok = [&](size_t n) {
-    if (s.count > 0) return n == static_cast<size_t>(s.count);
-    return n > 0 || s.allow_empty;
-  };
-  switch (s.type) {
-    case ParamType::kBool:
-    case ParamType::kText:
-      break;
-    case ParamType::kInteger:
-      if (!in_range(static_cast<double>(std::get<int64_t>(v)))) return Expected(s);
-      break;
-    case ParamType::kNumber:
-      if (!in_range(std::get<double>(v))) return Expected(s);
-      break;
-    case ParamType::kChoice:
-      if (std::find(s.choices.begin(), s.choices.end(), std::get<std::string>(v)) ==
-          s.choices.end())
-        return Expected(s);
-      break;
-    case ParamType::kNumbers: {
-      const auto& x = std::get<std::vector<double>>(v);
-      if (!list_size_ok(x.size()) || !std::all_of(x.begin(), x.end(), in_range)) return Expected(s);
-      break;
-    }
-    case ParamType::kIntegers: {
-      const auto& x = std::get<std::vector<int64_t>>(v);
-      if (!list_size_ok(x.size()) ||
-          !std::all_of(x.begin(), x.end(), [&](int64_t i) { return in_range(double(i)); }))
-        return Expected(s);
-      break;
-    }
-    case ParamType::kChoices: {
-      const auto& x = std::get<std::vector<std::string>>(v);
-      if (!list_size_ok(x.size())) return Expected(s);
-      for (const std::string& c : x) {
-        if (std::find(s.choices.begin(), s.choices.end(), c) == s.choices.end()) return Expected(s);
-      }
-      break;
-    }
-  }
-  return row.check ? row.check(v) : "";
-}
-
 // A setting that does something (not false, not 0): two of one exclusive group clash only
 // when both do.
 bool Active(const ParamValue& v) {
@@ -267,55 +74,10 @@ std::string Canonical(absl::string_view name) { return absl::StrReplaceAll(name,
 
 }  // namespace
 
-nlohmann::json ToJson(const ParamValue& value) {
-  return std::visit([](const auto& x) { return Json(x); }, value);
-}
-
-ParamRange ParamRange::Parse(absl::string_view text) {
-  ParamRange r;
-  r.text = std::string(text);
-  absl::string_view t = absl::StripAsciiWhitespace(text);
-  if (absl::ConsumePrefix(&t, "0 |")) {
-    r.zero_too = true;
-    t = absl::StripAsciiWhitespace(t);
-  }
-  assert(t.size() >= 5 && (t.front() == '(' || t.front() == '[') &&
-         (t.back() == ')' || t.back() == ']'));
-  r.lo_open = t.front() == '(';
-  r.hi_open = t.back() == ')';
-  const std::vector<std::string> parts =
-      absl::StrSplit(t.substr(1, t.size() - 2), ',', absl::SkipWhitespace());
-  assert(parts.size() == 2);
-  [[maybe_unused]] const bool ok = parts.size() == 2 &&
-                                   absl::SimpleAtod(absl::StripAsciiWhitespace(parts[0]), &r.lo) &&
-                                   absl::SimpleAtod(absl::StripAsciiWhitespace(parts[1]), &r.hi);
-  assert(ok && r.lo <= r.hi);
-  return r;
-}
-
-bool ParamRange::Contains(double v) const {
-  if (zero_too && v == 0) return true;
-  const bool above = lo_open ? v > lo : v >= lo;
-  const bool below = hi_open ? v < hi : v <= hi;
-  return above && below;
-}
-
 std::string ParamSpec::name() const {
   absl::string_view k = key;
   absl::ConsumePrefix(&k, "input.");
   return absl::StrReplaceAll(k, {{".", "_"}});
-}
-
-std::string ParamSpec::Describe() const {
-  std::string d = TypeName(type);
-  if (type == ParamType::kChoice || type == ParamType::kChoices) {
-    absl::StrAppend(&d, " ", absl::StrJoin(choices, ", "));
-  } else if (type != ParamType::kBool && type != ParamType::kText) {
-    if (count > 0) d = absl::StrCat(count, " ", d);
-    absl::StrAppend(&d, " in ", range.text);
-  }
-  if (!unit.empty()) absl::StrAppend(&d, ", ", unit);
-  return d;
 }
 
 const std::vector<ParamSpec>& Parameters() {
@@ -360,76 +122,6 @@ std::optional<ParamValue> GetParameter(const ParamSpec& spec, const PipelineOpti
   return RowOf(spec).get(options);
 }
 
-absl::StatusOr<ParamValue> ParseParameterText(const ParamSpec& s, absl::string_view text,
-                                              absl::string_view display) {
-  auto bad = [&]() {
-    return absl::InvalidArgumentError(absl::StrCat(display, "=", text, " ", Expected(s)));
-  };
-  auto number = [](absl::string_view t, double* out) {
-    return absl::SimpleAtod(absl::StripAsciiWhitespace(t), out);
-  };
-  auto integer = [&](absl::string_view t, int64_t* out) {
-    if (absl::SimpleAtoi(absl::StripAsciiWhitespace(t), out)) return true;
-    double d = 0;
-    if (!number(t, &d) || d != std::floor(d) || std::abs(d) > 9.2e18) return false;
-    *out = static_cast<int64_t>(d);
-    return true;
-  };
-  switch (s.type) {
-    case ParamType::kBool: {
-      const std::string t = absl::AsciiStrToLower(text);
-      if (t == "true" || t == "1" || t == "yes") return ParamValue(true);
-      if (t == "false" || t == "0" || t == "no") return ParamValue(false);
-      return bad();
-    }
-    case ParamType::kInteger: {
-      int64_t i = 0;
-      if (!integer(text, &i)) return bad();
-      return ParamValue(i);
-    }
-    case ParamType::kNumber: {
-      double d = 0;
-      if (!number(text, &d)) return bad();
-      return ParamValue(d);
-    }
-    case ParamType::kChoice:
-    case ParamType::kText:
-      return ParamValue(std::string(text));
-    case ParamType::kNumbers: {
-      // input.window is written LO:HI.
-      const char sep = s.count == 2 && absl::StrContains(text, ':') ? ':' : ',';
-      std::vector<double> out;
-      for (absl::string_view p : absl::StrSplit(text, sep, absl::SkipEmpty())) {
-        double d = 0;
-        if (!number(p, &d)) return bad();
-        out.push_back(d);
-      }
-      return ParamValue(out);
-    }
-    case ParamType::kIntegers: {
-      // input.dims is written NXxNYxNZ.
-      const char sep = absl::StrContains(text, 'x') ? 'x' : ',';
-      std::vector<int64_t> out;
-      for (absl::string_view p : absl::StrSplit(text, sep, absl::SkipEmpty())) {
-        int64_t i = 0;
-        if (!integer(p, &i)) return bad();
-        out.push_back(i);
-      }
-      return ParamValue(out);
-    }
-    case ParamType::kChoices: {
-      std::vector<std::string> out;
-      for (absl::string_view p : absl::StrSplit(text, ',', absl::SkipEmpty())) {
-        out.emplace_back(absl::StripAsciiWhitespace(p));
-      }
-      return ParamValue(out);
-    }
-  }
-  return bad();
-}
-
-std::string ParameterValueJson(const ParamValue& value) { return Show(value); }
-
 absl::Status ParameterBuilder::Check(const ParamSpec& spec, const ParamValue& value,
                                      const std::string& display) const {
   if (spec.scope == ParamScope::kLocal && scope_ == ParamScope::kJob) {
@@ -438,9 +130,9 @@ absl::Status ParameterBuilder::Check(const ParamSpec& spec, const ParamValue& va
         ") names a path or program of the machine that runs the pipeline; a job may not set "
         "it"));
   }
-  if (!HasType(spec, value)) return Bad(display, Show(value), Expected(spec));
+  if (!HasType(spec, value)) return BadValue(display, ShowValue(value), Expected(spec));
   const std::string why = Violation(RowOf(spec), value);
-  if (!why.empty()) return Bad(display, Show(value), why);
+  if (!why.empty()) return BadValue(display, ShowValue(value), why);
   return absl::OkStatus();
 }
 
@@ -478,7 +170,7 @@ absl::Status ParameterBuilder::AddJson(absl::string_view text, absl::string_view
       if (spec != nullptr && !(v.is_object() && spec->type != ParamType::kText)) {
         const std::string display = absl::StrCat(source, ": '", key, "'");
         std::optional<ParamValue> value = FromJson(*spec, v);
-        if (!value) return Bad(display, JsonText(v), Expected(*spec));
+        if (!value) return BadValue(display, JsonText(v), Expected(*spec));
         SM_RETURN_IF_ERROR(Check(*spec, *value, display));
         added.push_back({spec, std::move(*value), display, this_source});
         continue;
@@ -540,7 +232,7 @@ absl::StatusOr<PipelineOptions> ParameterBuilder::Build(PipelineOptions o) const
     for (const Entry& e : entries_) {
       if (e.spec->key == b->key) display = e.display;
     }
-    return Bad(display, b->value, b->why);
+    return BadValue(display, b->value, b->why);
   }
   return o;
 }
@@ -550,10 +242,10 @@ absl::Status CheckParameters(const PipelineOptions& options) {
     std::optional<ParamValue> v = row.get(options);
     if (!v) continue;
     const std::string why = Violation(row, *v);
-    if (!why.empty()) return Bad(absl::StrCat("parameter ", row.spec.key), Show(*v), why);
+    if (!why.empty()) return BadValue(absl::StrCat("parameter ", row.spec.key), ShowValue(*v), why);
   }
   if (std::optional<Broken> b = BrokenRelation(options)) {
-    return Bad(absl::StrCat("parameter ", b->key), b->value, b->why);
+    return BadValue(absl::StrCat("parameter ", b->key), b->value, b->why);
   }
   return absl::OkStatus();
 }
@@ -582,7 +274,7 @@ std::string ParametersMarkdown() {
       "|---|---|---|---|---|\n";
   for (const ParamSpec& s : Parameters()) {
     std::optional<ParamValue> d = GetParameter(s, defaults);
-    std::string shown = d ? Show(*d) : "unset";
+    std::string shown = d ? ShowValue(*d) : "unset";
     if (s.preset) shown = "\"extended\"";
     absl::StrAppend(&md, "| `", s.key, "` | `--", s.name(), "` | ", s.Describe(), " | `", shown,
                     "` | ", s.doc, s.scope == ParamScope::kLocal ? " (offline only)" : "", " |\n");

@@ -20,11 +20,10 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_TET_IMPROVE_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/status.h"
 #include "common/progress.h"

@@ -3,10 +3,9 @@
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_QUALITY_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_TET_QUALITY_H_
 
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "worker/pipeline/tet/tet_mesh.h"
 

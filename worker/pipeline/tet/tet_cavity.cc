@@ -1,0 +1,164 @@
+#include "worker/pipeline/tet/tet_cavity.h"
+
+#include <algorithm>
+
+namespace sheetmesh {
+namespace {
+
+// Whether `face` is a facet face the cavity may not cross (one the new vertex does not
+// split).
+bool Blocks(const TetMeshEditor& ed, const FaceKey& face,
+            const absl::flat_hash_set<FaceKey>& opened) {
+  return ed.IsFacetFace(face) && !opened.contains(face);
+}
+
+// Whether face f of cavity tetrahedron x bounds the cavity: its neighbour is outside, or
+// it is a facet's face (the cavity can reach both sides of a sheet around its rim; such
+// a face must stay, so it bounds the cavity on both sides and one side then fails to see
+// the new vertex). Facets in `opened` are the ones the new vertex splits: they do not
+// bound the cavity.
+bool OnCavityBoundary(const TetMeshEditor& ed, const absl::flat_hash_set<uint32_t>& in, uint32_t x,
+                      int f, const absl::flat_hash_set<FaceKey>& opened) {
+  const uint32_t y = ed.Neighbor(x, f);
+  if (y == UINT32_MAX || !in.contains(y)) return true;
+  return Blocks(ed, TetFace(ed.tet(x), f), opened);
+}
+
+bool InCircumsphere(const TetMeshEditor& ed, const Tet& t, const Vec3& p) {
+  Vec3 cc;
+  return Circumcentre(ed.P(t[0]), ed.P(t[1]), ed.P(t[2]), ed.P(t[3]), &cc) &&
+         Norm2(p - cc) < Norm2(ed.P(t[0]) - cc);
+}
+
+}  // namespace
+
+bool Cavity(const TetMeshEditor& ed, uint32_t t, const Vec3& p, std::vector<uint32_t>* cavity,
+            std::vector<Tet>* fill) {
+  constexpr int kMaxWalk = 64;
+  // Walk from t to the tetrahedron holding p.
+  uint32_t at = t;
+  for (int step = 0;; ++step) {
+    if (step == kMaxWalk) return false;
+    // Leave through the face p is farthest behind, but never through a facet.
+    int exit = -1;
+    bool behind_facet = false;
+    double most = 0;
+    for (int f = 0; f < 4; ++f) {
+      const auto face = ed.InwardFace(at, f);
+      const double side = TetVolume(ed.P(face[0]), ed.P(face[1]), ed.P(face[2]), p);
+      if (side >= 0) continue;
+      if (ed.IsFacetFace(SortedFace(face[0], face[1], face[2]))) {
+        behind_facet = true;
+      } else if (side < most) {
+        most = side;
+        exit = f;
+      }
+    }
+    if (exit < 0) {
+      if (behind_facet) return false;
+      break;
+    }
+    at = ed.Neighbor(at, exit);
+    if (at == UINT32_MAX) return false;
+  }
+  return GrowCavity(ed, p, {at, t}, {}, {}, cavity, fill);
+}
+
+bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32_t>& seeds,
+                const absl::flat_hash_set<FaceKey>& opened,
+                const std::vector<std::pair<uint32_t, uint32_t>>& keep,
+                std::vector<uint32_t>* cavity, std::vector<Tet>* fill) {
+  constexpr size_t kMaxCavity = 128;
+  absl::flat_hash_set<uint32_t> in(seeds.begin(), seeds.end());
+  std::vector<uint32_t> queue(seeds.begin(), seeds.end());
+  while (!queue.empty() && in.size() < kMaxCavity) {
+    const uint32_t x = queue.back();
+    queue.pop_back();
+    for (int f = 0; f < 4; ++f) {
+      if (Blocks(ed, TetFace(ed.tet(x), f), opened)) continue;
+      const uint32_t y = ed.Neighbor(x, f);
+      if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(ed, ed.tet(y), p)) continue;
+      in.insert(y);
+      queue.push_back(y);
+    }
+  }
+  // Make every boundary face see p, growing across it where allowed, else dropping its
+  // owner; then drop tetrahedra until no vertex is inside the cavity (it would be lost).
+  // A dropped tetrahedron never comes back, so this ends.
+  absl::flat_hash_set<uint32_t> dropped;
+  auto drop = [&](uint32_t x) {
+    if (std::find(seeds.begin(), seeds.end(), x) != seeds.end()) return false;
+    in.erase(x);
+    dropped.insert(x);
+    return true;
+  };
+  for (int round = 0;; ++round) {
+    if (round == 64 || in.size() > kMaxCavity) return false;
+    std::vector<std::pair<uint32_t, int>> hidden;
+    for (uint32_t x : Sorted(in)) {
+      for (int f = 0; f < 4; ++f) {
+        if (!OnCavityBoundary(ed, in, x, f, opened)) continue;
+        const auto face = ed.InwardFace(x, f);
+        if (!(TetVolume(ed.P(face[0]), ed.P(face[1]), ed.P(face[2]), p) > 0))
+          hidden.push_back({x, f});
+      }
+    }
+    for (const auto& [x, f] : hidden) {
+      if (!in.contains(x)) continue;
+      const uint32_t y = ed.Neighbor(x, f);
+      if (y != UINT32_MAX && !dropped.contains(y) && !Blocks(ed, TetFace(ed.tet(x), f), opened)) {
+        in.insert(y);
+      } else if (!drop(x)) {
+        return false;
+      }
+    }
+    if (!hidden.empty()) continue;
+    bool inside = false;
+    for (uint32_t x : Sorted(in)) {
+      for (uint32_t w : ed.tet(x)) {
+        if (!in.contains(x)) break;
+        const bool all_in = std::all_of(ed.star(w).begin(), ed.star(w).end(),
+                                        [&](uint32_t s) { return in.contains(s); });
+        if (!all_in) continue;
+        inside = true;
+        bool any = false;
+        for (uint32_t s : ed.star(w)) {
+          if (drop(s)) {
+            any = true;
+            break;
+          }
+        }
+        if (!any) return false;
+      }
+    }
+    for (const auto& [u, w] : keep) {
+      std::vector<uint32_t> around;
+      for (uint32_t s : ed.star(u)) {
+        if (Has(ed.tet(s), w)) around.push_back(s);
+      }
+      if (!std::all_of(around.begin(), around.end(), [&](uint32_t s) { return in.contains(s); })) {
+        continue;
+      }
+      inside = true;
+      if (std::none_of(around.begin(), around.end(), drop)) return false;
+    }
+    if (!inside) break;
+  }
+  // Fill: p joined to every boundary face; every vertex of the cavity must stay on it.
+  *cavity = Sorted(in);
+  fill->clear();
+  absl::flat_hash_set<uint32_t> on_boundary, all;
+  for (uint32_t x : *cavity) {
+    for (int f = 0; f < 4; ++f) {
+      all.insert(ed.tet(x)[f]);
+      if (!OnCavityBoundary(ed, in, x, f, opened)) continue;
+      const auto face = ed.InwardFace(x, f);
+      // Inward face (f0, f1, f2) with p on its positive side: (f0, f1, f2, p) is positive.
+      fill->push_back({face[0], face[1], face[2], UINT32_MAX});
+      on_boundary.insert(face.begin(), face.end());
+    }
+  }
+  return all.size() == on_boundary.size();
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,86 @@
+// Internal to the PLC (plc*.cc): the sheet triangles as the PLC keeps and mends them, and
+// the steps BuildPlc runs: snapping onto the box (plc_snap.cc), mending the sheets
+// (plc_repair.cc) and seeding points off them (plc_seeding.cc).
+#ifndef SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_
+#define SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/tet/plc.h"
+
+namespace sheetmesh {
+
+// Face k of the box: axis k / 2, low side when k is even. Bit k of an on_face mask.
+inline int Axis(int face) { return face / 2; }
+inline bool Low(int face) { return face % 2 == 0; }
+
+// The sheet triangles the PLC keeps, with where each came from.
+struct SheetTriangles {
+  std::vector<Face> faces;
+  std::vector<uint32_t> source;  // input face
+  std::vector<int32_t> piece;
+  std::vector<float> thickness;
+};
+
+// `s` without the triangles marked in `drop`.
+SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop);
+
+// The sheets on the box: vertices (index coordinates) moved onto the box faces they are
+// near, near-duplicates merged, the triangles still triangles and off the box faces,
+// flipped for better shapes (PlcOptions::flip_fold_degrees).
+struct SnappedSheets {
+  std::vector<Vec3> v;           // per input vertex
+  std::vector<uint8_t> on_face;  // per vertex, bit k: on box face k
+  std::vector<uint32_t> rep;     // per vertex: the vertex it merged into (itself if none)
+  SheetTriangles st;             // on the representatives
+  bool checked_clean = false;    // the last round's triangles were found not to clash
+};
+
+// Vertices within snap_voxels of a box face always snap onto it; those out to
+// snap_clear_voxels snap unless that makes their triangles cut another sheet's (then they
+// stay off it and the snapping is redone, up to five rounds). Sets stats' snapped, held,
+// merged, dropped, flipped and cap counts.
+SnappedSheets SnapToBox(const TriangleMesh& sheets, const Vec3& lo, const Vec3& hi,
+                        const PlcOptions& options, PlcStats* stats);
+
+// Sheet triangles that cut through each other: listed in `clashes` (when not null, in
+// physical units); kFailedPrecondition naming the first five unless options.repair, which
+// drops the smaller of each pair (stats->repaired_triangles) and fails only if clashes
+// remain. With `checked_clean` the check is skipped (the snapping just made it).
+absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
+                            const Placement& placement, const PlcOptions& options,
+                            SheetTriangles* st, PlcStats* stats, std::vector<Clash>* clashes);
+
+// Flips sheet edges where that gives better triangles and drops flat rim triangles,
+// keeping only what makes no clash. Returns (flips, drops).
+std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::vector<Vec3>& v,
+                                                 const std::vector<uint8_t>& on_face,
+                                                 double fold_degrees, double cap_degrees);
+// Closes slits framed by three rim edges. Returns the number closed.
+uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_degrees);
+// Drops rim triangles that lie on another sheet. Returns the number dropped.
+uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
+                      double max_degrees);
+// Opens narrow wedges between a sheet face and a sheet edge, moving vertices in `v`.
+// Returns the number of vertices moved.
+uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
+                    double min_degrees, double max_move, std::vector<Vec3>& v);
+
+// A point on the box's surface: on the faces whose bits are set (bit `face`, as on_face).
+struct BoxPoint {
+  Vec3 p;
+  uint8_t on_face = 0;
+};
+
+// Seed points off the sheets, a graded lattice (plc_seeding.cc).
+std::vector<Vec3> SeedLattice(const Plc& plc, double spacing);
+// Points on the box's edges and faces, graded like the lattice.
+std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_

@@ -8,6 +8,7 @@
 #include "common/json_text.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
@@ -72,8 +73,8 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
       m.skipped_components, m.skipped_voxels);
   const SimilarityReport& sim = *r.similarity;
   out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f",
-                         sim.score.similarity, sim.score.c_in, sim.score.c_out,
-                         sim.score.c_image, sim.score.dice);
+                         sim.score.similarity, sim.score.c_in, sim.score.c_out, sim.score.c_image,
+                         sim.score.dice);
   if (sim.score.hausdorff >= 0)
     out << absl::StrFormat(", Hausdorff %.2f voxels", sim.score.hausdorff);
   out << absl::StrFormat("; other prism model %.4f\n", sim.shell_similarity);
@@ -120,18 +121,7 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   report.timings.push_back({"volume", absl::ToDoubleSeconds(absl::Now() - start)});
   SM_RETURN_IF_ERROR(MakeDirs(options.output.dir));
   const std::string dir = options.output.dir;
-  if (options.output.vtu) {
-    SM_RETURN_IF_ERROR(WriteVtu(dir + "/volume.vtu", r.mesh));
-    report.files.push_back("volume.vtu");
-  }
-  if (options.output.msh) {
-    SM_RETURN_IF_ERROR(WriteGmsh(dir + "/volume.msh", r.mesh));
-    report.files.push_back("volume.msh");
-  }
-  if (options.output.inp) {
-    SM_RETURN_IF_ERROR(WriteAbaqus(dir + "/volume.inp", r.mesh));
-    report.files.push_back("volume.inp");
-  }
+  SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, r.mesh, options.output, &report.files));
   report.volume_mesh = static_cast<const VolumeMeshStats&>(r);
   report.files.push_back("volume_report.json");
   SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", report.ToJson()));

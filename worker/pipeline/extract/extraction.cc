@@ -1,10 +1,9 @@
 #include "worker/pipeline/extract/extraction.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -41,6 +40,169 @@ ExtendOptions Following(ExtendOptions e, const SeparationOptions& separation) {
 
 }  // namespace
 
+namespace {
+
+// The workflow of Fig. 3 on one input: each step reads what the one before made.
+class Workflow {
+ public:
+  Workflow(const VoxelSet& input, const ExtractionOptions& o, const Progress& progress, uint64_t m)
+      : input_(input), o_(o), progress_(progress), m_(m), refined_(input) {}
+
+  // Runs `body` as step `name` (when `ran`), timing it and recording it in out_.
+  template <class Body>
+  absl::Status Step(const char* name, bool ran, Body body) {
+    ExtractionStep s{name};
+    const absl::Time start = absl::Now();
+    s.ran = ran;
+    SM_RETURN_IF_ERROR(body(&s));
+    s.seconds = Since(start);
+    if (s.ran) SM_RETURN_IF_ERROR(progress_.Stage(s.name).Update(1.0));
+    out_.steps.push_back(s);
+    return absl::OkStatus();
+  }
+
+  // 1. refine: a closing, then an opening.
+  absl::Status Refine(ExtractionStep* s) {
+    if (!s->ran) return absl::OkStatus();
+    SM_ASSIGN_OR_RETURN(s->objects_before, CountComponents(input_));
+    if (o_.refine_close_radius > 0) {
+      SM_ASSIGN_OR_RETURN(refined_, Close(refined_, o_.refine_close_radius, Connectivity::k6,
+                                          progress_.Stage("refine")));
+    }
+    if (o_.refine_open_radius > 0) {
+      SM_ASSIGN_OR_RETURN(refined_, Open(refined_, o_.refine_open_radius, Connectivity::k6,
+                                         progress_.Stage("refine")));
+    }
+    SM_ASSIGN_OR_RETURN(s->objects_after, CountComponents(refined_));
+    Count(input_, refined_, s);
+    return absl::OkStatus();
+  }
+
+  // 2. detect: objects are the components after extending; a major object has at least M
+  // voxels of the image. Its fragments are kept, labelled as one object; the bridging
+  // voxels are not (the model keeps to the image).
+  absl::Status Detect(ExtractionStep* s) {
+    SM_ASSIGN_OR_RETURN(Components refined_components, LabelComponents(refined_, Connectivity::k6));
+    objects_ = LabelByComponents(refined_, refined_components);
+    s->objects_before = refined_components.count();
+    if (s->ran) {
+      SM_ASSIGN_OR_RETURN(ExtendResult ext,
+                          Extend(objects_, Following(o_.detect_extend, o_.separation), nullptr,
+                                 progress_.Stage("detect")));
+      SM_ASSIGN_OR_RETURN(Components merged, LabelComponents(ext.patch.set, Connectivity::k6));
+      const std::vector<uint32_t> object_of = merged.VoxelLabels(ext.patch.set);
+      std::map<uint32_t, uint64_t> original;
+      std::vector<int32_t> label(refined_.size());
+      uint64_t i = 0;
+      refined_.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+        const uint32_t obj = object_of[ext.patch.set.Find(x, y, z)];
+        label[i++] = static_cast<int32_t>(obj);
+        ++original[obj];
+      });
+      objects_.label = std::move(label);
+      objects_ = objects_.Select([&](int32_t l) { return original[l] >= m_; });
+      s->objects_after = objects_.CountLabels();
+      s->added = ext.added;
+    } else {
+      objects_ = objects_.Select([&](int32_t l) { return refined_components.sizes[l] >= m_; });
+      s->objects_after = objects_.CountLabels();
+    }
+    s->voxels_before = refined_.size();
+    s->voxels_after = objects_.set.size();
+    s->removed = refined_.size() - objects_.set.size();
+    return absl::OkStatus();
+  }
+
+  // 3. separate (Algorithm 2).
+  absl::Status Separate(ExtractionStep* s) {
+    pieces_ = objects_;
+    s->objects_before = objects_.CountLabels();
+    if (s->ran) {
+      SM_ASSIGN_OR_RETURN(SeparationResult sep, sheetmesh::Separate(objects_.set, o_.separation,
+                                                                    progress_.Stage("separate")));
+      pieces_ = std::move(sep.pieces);
+      Count(objects_.set, pieces_.set, s);
+    } else {
+      s->voxels_before = s->voxels_after = objects_.set.size();
+    }
+    s->objects_after = pieces_.CountLabels();
+    return absl::OkStatus();
+  }
+
+  // 4. remove the minor pieces.
+  absl::Status RemoveMinor(ExtractionStep* s) {
+    s->objects_before = pieces_.CountLabels();
+    s->voxels_before = pieces_.set.size();
+    if (s->ran) {
+      std::map<int32_t, uint64_t> size;
+      for (int32_t l : pieces_.label) ++size[l];
+      pieces_ = pieces_.Select([&](int32_t l) { return size[l] >= m_; });
+    }
+    s->voxels_after = pieces_.set.size();
+    s->removed = s->voxels_before - s->voxels_after;
+    s->objects_after = pieces_.CountLabels();
+    return absl::OkStatus();
+  }
+
+  // 5. recover, within the refined image.
+  absl::Status Recover(ExtractionStep* s) {
+    s->objects_before = pieces_.CountLabels();
+    s->voxels_before = pieces_.set.size();
+    if (s->ran) {
+      SM_ASSIGN_OR_RETURN(ExtendResult ext,
+                          Extend(pieces_, Following(o_.recover_extend, o_.separation), &refined_,
+                                 progress_.Stage("recover")));
+      s->added = ext.added;
+      pieces_ = std::move(ext.patch);
+    }
+    s->voxels_after = pieces_.set.size();
+    s->objects_after = pieces_.CountLabels();
+    return absl::OkStatus();
+  }
+
+  absl::StatusOr<ExtractionResult> Run() {
+    out_.min_object_voxels = m_;
+    SM_RETURN_IF_ERROR(Step("refine", o_.refine, [&](ExtractionStep* s) { return Refine(s); }));
+    if (refined_.empty()) {
+      return absl::InvalidArgumentError(
+          "refinement erased the whole sheet phase; lower refine_open_radius");
+    }
+    SM_RETURN_IF_ERROR(Step("detect", o_.detect, [&](ExtractionStep* s) { return Detect(s); }));
+    if (objects_.set.empty()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("no object has M = ", m_, " voxels or more; lower min_object_voxels"));
+    }
+    SM_RETURN_IF_ERROR(
+        Step("separate", o_.separate, [&](ExtractionStep* s) { return Separate(s); }));
+    SM_RETURN_IF_ERROR(
+        Step("remove_minor", o_.remove_minor, [&](ExtractionStep* s) { return RemoveMinor(s); }));
+    if (pieces_.set.empty()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("no piece has M = ", m_,
+                       " voxels or more after separation; lower min_object_voxels or "
+                       "raise D_ang"));
+    }
+    SM_RETURN_IF_ERROR(Step("recover", o_.recover, [&](ExtractionStep* s) { return Recover(s); }));
+    pieces_.RelabelBySize();
+    out_.model = std::move(pieces_);
+    out_.model_voxels = out_.model.set.size();
+    out_.pieces = out_.model.CountLabels();
+    return std::move(out_);
+  }
+
+ private:
+  const VoxelSet& input_;
+  const ExtractionOptions& o_;
+  const Progress& progress_;
+  const uint64_t m_;
+  VoxelSet refined_;
+  LabelledVoxels objects_;
+  LabelledVoxels pieces_;
+  ExtractionResult out_;
+};
+
+}  // namespace
+
 absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const ExtractionOptions& o,
                                                  const Progress& progress) {
   if (input.empty())
@@ -49,7 +211,6 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
     return absl::InvalidArgumentError(absl::StrCat("refine radii ", o.refine_close_radius, " and ",
                                                    o.refine_open_radius, " must not be negative"));
   }
-  ExtractionResult out;
   // M defaults to three cells of the separation SCVD: a piece smaller than that cannot
   // give a triangle.
   uint64_t m = o.min_object_voxels;
@@ -58,150 +219,7 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
     m = static_cast<uint64_t>(
         std::ceil(3 * CellVolume(SummarizeThickness(tau).mean, o.separation.radius_voxels)));
   }
-  out.min_object_voxels = m;
-
-  // 1. refine
-  VoxelSet refined = input;
-  {
-    ExtractionStep s{"refine"};
-    const absl::Time start = absl::Now();
-    if (o.refine) {
-      s.ran = true;
-      SM_ASSIGN_OR_RETURN(s.objects_before, CountComponents(input));
-      if (o.refine_close_radius > 0) {
-        SM_ASSIGN_OR_RETURN(refined, Close(refined, o.refine_close_radius, Connectivity::k6,
-                                           progress.Stage("refine")));
-      }
-      if (o.refine_open_radius > 0) {
-        SM_ASSIGN_OR_RETURN(refined, Open(refined, o.refine_open_radius, Connectivity::k6,
-                                          progress.Stage("refine")));
-      }
-      SM_ASSIGN_OR_RETURN(s.objects_after, CountComponents(refined));
-      Count(input, refined, &s);
-    }
-    s.seconds = Since(start);
-    if (s.ran) SM_RETURN_IF_ERROR(progress.Stage(s.name).Update(1.0));
-    out.steps.push_back(s);
-  }
-  if (refined.empty()) {
-    return absl::InvalidArgumentError(
-        "refinement erased the whole sheet phase; lower refine_open_radius");
-  }
-  SM_ASSIGN_OR_RETURN(Components refined_components, LabelComponents(refined, Connectivity::k6));
-
-  // 2. detect: objects are the components after extending; a major object has at least M
-  // voxels of the image. Its fragments are kept, labelled as one object; the bridging
-  // voxels are not (the model keeps to the image).
-  LabelledVoxels objects = LabelByComponents(refined, refined_components);
-  {
-    ExtractionStep s{"detect"};
-    const absl::Time start = absl::Now();
-    s.objects_before = refined_components.count();
-    if (o.detect) {
-      s.ran = true;
-      SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(objects, Following(o.detect_extend, o.separation), nullptr, progress.Stage("detect")));
-      SM_ASSIGN_OR_RETURN(Components merged, LabelComponents(ext.patch.set, Connectivity::k6));
-      const std::vector<uint32_t> object_of = merged.VoxelLabels(ext.patch.set);
-      std::map<uint32_t, uint64_t> original;
-      std::vector<int32_t> label(refined.size());
-      uint64_t i = 0;
-      refined.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
-        const uint32_t obj = object_of[ext.patch.set.Find(x, y, z)];
-        label[i++] = static_cast<int32_t>(obj);
-        ++original[obj];
-      });
-      objects.label = std::move(label);
-      objects = objects.Select([&](int32_t l) { return original[l] >= m; });
-      s.objects_after = objects.CountLabels();
-      s.added = ext.added;
-    } else {
-      objects = objects.Select([&](int32_t l) { return refined_components.sizes[l] >= m; });
-      s.objects_after = objects.CountLabels();
-    }
-    s.voxels_before = refined.size();
-    s.voxels_after = objects.set.size();
-    s.removed = refined.size() - objects.set.size();
-    s.seconds = Since(start);
-    if (s.ran) SM_RETURN_IF_ERROR(progress.Stage(s.name).Update(1.0));
-    out.steps.push_back(s);
-  }
-  if (objects.set.empty()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("no object has M = ", m, " voxels or more; lower min_object_voxels"));
-  }
-
-  // 3. separate
-  LabelledVoxels pieces = objects;
-  {
-    ExtractionStep s{"separate"};
-    const absl::Time start = absl::Now();
-    s.objects_before = objects.CountLabels();
-    if (o.separate) {
-      s.ran = true;
-      SM_ASSIGN_OR_RETURN(SeparationResult sep,
-                          Separate(objects.set, o.separation, progress.Stage("separate")));
-      pieces = std::move(sep.pieces);
-      Count(objects.set, pieces.set, &s);
-    } else {
-      s.voxels_before = s.voxels_after = objects.set.size();
-    }
-    s.objects_after = pieces.CountLabels();
-    s.seconds = Since(start);
-    if (s.ran) SM_RETURN_IF_ERROR(progress.Stage(s.name).Update(1.0));
-    out.steps.push_back(s);
-  }
-
-  // 4. remove minor
-  {
-    ExtractionStep s{"remove_minor"};
-    const absl::Time start = absl::Now();
-    s.objects_before = pieces.CountLabels();
-    s.voxels_before = pieces.set.size();
-    if (o.remove_minor) {
-      s.ran = true;
-      std::map<int32_t, uint64_t> size;
-      for (int32_t l : pieces.label) ++size[l];
-      pieces = pieces.Select([&](int32_t l) { return size[l] >= m; });
-    }
-    s.voxels_after = pieces.set.size();
-    s.removed = s.voxels_before - s.voxels_after;
-    s.objects_after = pieces.CountLabels();
-    s.seconds = Since(start);
-    if (s.ran) SM_RETURN_IF_ERROR(progress.Stage(s.name).Update(1.0));
-    out.steps.push_back(s);
-  }
-  if (pieces.set.empty()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("no piece has M = ", m,
-                     " voxels or more after separation; lower min_object_voxels or "
-                     "raise D_ang"));
-  }
-
-  // 5. recover, within the refined image.
-  {
-    ExtractionStep s{"recover"};
-    const absl::Time start = absl::Now();
-    s.objects_before = pieces.CountLabels();
-    s.voxels_before = pieces.set.size();
-    if (o.recover) {
-      s.ran = true;
-      SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(pieces, Following(o.recover_extend, o.separation), &refined, progress.Stage("recover")));
-      s.added = ext.added;
-      pieces = std::move(ext.patch);
-    }
-    s.voxels_after = pieces.set.size();
-    s.objects_after = pieces.CountLabels();
-    s.seconds = Since(start);
-    if (s.ran) SM_RETURN_IF_ERROR(progress.Stage(s.name).Update(1.0));
-    out.steps.push_back(s);
-  }
-  pieces.RelabelBySize();
-  out.model = std::move(pieces);
-  out.model_voxels = out.model.set.size();
-  out.pieces = out.model.CountLabels();
-  return out;
+  return Workflow(input, o, progress, m).Run();
 }
 
 nlohmann::json ExtractionStep::Fields() const {

@@ -8,9 +8,10 @@
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
-#include "worker/pipeline/voxel/label_volume.h"
 #include "worker/pipeline/volume/vdb_io.h"
+#include "worker/pipeline/voxel/label_volume.h"
 #include "worker/pipeline/voxel/voxel_set_vdb.h"
 
 namespace sheetmesh {
@@ -30,6 +31,58 @@ class StageTimer {
   std::string stage_;
   absl::Time start_;
 };
+
+// Formula 5 for the mesh's prisms against the meshed set (and the raw phase, with
+// extraction), the other prism model and the grid baselines.
+absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnalysis& sheet,
+                                       const SheetPhase& phase, const PipelineOptions& options,
+                                       const Progress& p) {
+  const PrismHeight other =
+      options.score.height == PrismHeight::kFace ? PrismHeight::kVertex : PrismHeight::kFace;
+  SimilarityReport sim;
+  sim.against_model = options.extract;
+  SM_ASSIGN_OR_RETURN(VoxelSet prisms,
+                      VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
+  sim.score = ScoreModel(prisms, sheet.set);
+  if (options.score.hausdorff) {
+    SM_ASSIGN_OR_RETURN(sim.score.hausdorff, HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
+  }
+  SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
+  sim.shell_similarity = ScoreModel(shell, sheet.set).similarity;
+  if (options.extract) sim.raw = ScoreModel(prisms, phase.sheet);
+  for (int k : options.score.grid_rates) {
+    sim.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
+                        GridQuantity(sheet.set.dims(), k)});
+  }
+  SM_RETURN_IF_ERROR(p.Update(1.0));
+  return sim;
+}
+
+// The files of options.output into options.output.dir, listed in report->files, the report
+// last. `volume` is null without a volume mesh.
+absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
+                          const TriangleMesh& mesh, const LabelledVoxels& model,
+                          const TetMesh* volume, PipelineReport* report) {
+  const std::string& dir = options.output.dir;
+  SM_RETURN_IF_ERROR(MakeDirs(dir));
+  auto path = [&](const std::string& name) { return (std::filesystem::path(dir) / name).string(); };
+  SM_RETURN_IF_ERROR(WriteSurfaceFiles(dir, mesh, pl, options.output, &report->files));
+  if (options.extract && options.output.model) {
+    SM_RETURN_IF_ERROR(WriteVoxelSetVdb(path("model.vdb"), model.set, model.label, pl, "model"));
+    report->files.push_back("model.vdb");
+    const std::string labels =
+        absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
+    SM_RETURN_IF_ERROR(WriteLabelVolume(model, path(labels), VolumeFormat::kRaw, pl));
+    report->files.push_back(labels);
+    SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report->geology)));
+    report->files.push_back("pieces.csv");
+  }
+  if (volume != nullptr) {
+    SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files));
+  }
+  report->files.push_back("report.json");
+  return WriteFileAtomically(path("report.json"), report->ToJson());
+}
 
 }  // namespace
 
@@ -104,30 +157,12 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
 
   {
     StageTimer t(&report, "similarity");
-    const Progress p = progress.Stage("similarity");
-    const PrismHeight other =
-        options.score.height == PrismHeight::kFace ? PrismHeight::kVertex : PrismHeight::kFace;
-    SimilarityReport& sim = report.similarity.emplace();
-    sim.against_model = options.extract;
-    SM_ASSIGN_OR_RETURN(VoxelSet prisms,
-                        VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
-    sim.score = ScoreModel(prisms, sheet.set);
-    if (options.score.hausdorff) {
-      SM_ASSIGN_OR_RETURN(sim.score.hausdorff,
-                          HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
-    }
-    SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
-    sim.shell_similarity = ScoreModel(shell, sheet.set).similarity;
+    SM_ASSIGN_OR_RETURN(report.similarity,
+                        Score(mesh, sheet, phase, options, progress.Stage("similarity")));
     if (options.extract) {
-      sim.raw = ScoreModel(prisms, phase.sheet);
       report.geology = ComputePieceGeology(LabelledVoxels{sheet.set, piece_of_voxel},
                                            sheet.thickness, mesh, phase.info.placement);
     }
-    for (int k : options.score.grid_rates) {
-      sim.grid.push_back({k, ScoreModel(GridModel(sheet.set, k), sheet.set).similarity,
-                          GridQuantity(sheet.set.dims(), k)});
-    }
-    SM_RETURN_IF_ERROR(p.Update(1.0));
   }
 
   VolumeMeshResult volume;
@@ -140,48 +175,8 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
 
   if (!options.output.dir.empty()) {
     StageTimer t(&report, "write");
-    const std::string& dir = options.output.dir;
-    SM_RETURN_IF_ERROR(MakeDirs(dir));
-    const Placement& pl = phase.info.placement;
-    auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
-    if (options.output.ply) {
-      SM_RETURN_IF_ERROR(WritePly(path("surface.ply"), mesh, pl));
-      report.files.push_back("surface.ply");
-    }
-    if (options.output.vtp) {
-      SM_RETURN_IF_ERROR(WriteVtp(path("surface.vtp"), mesh, pl));
-      report.files.push_back("surface.vtp");
-    }
-    if (options.output.obj) {
-      SM_RETURN_IF_ERROR(WriteObj(path("surface.obj"), mesh, pl));
-      report.files.push_back("surface.obj");
-    }
-    if (options.extract && options.output.model) {
-      SM_RETURN_IF_ERROR(WriteVoxelSetVdb(path("model.vdb"), model.set, model.label, pl, "model"));
-      report.files.push_back("model.vdb");
-      const std::string labels =
-          absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
-      SM_RETURN_IF_ERROR(WriteLabelVolume(model, path(labels.c_str()), VolumeFormat::kRaw, pl));
-      report.files.push_back(labels);
-      SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report.geology)));
-      report.files.push_back("pieces.csv");
-    }
-    if (report.volume_mesh) {
-      if (options.output.vtu) {
-        SM_RETURN_IF_ERROR(WriteVtu(path("volume.vtu"), volume.mesh));
-        report.files.push_back("volume.vtu");
-      }
-      if (options.output.msh) {
-        SM_RETURN_IF_ERROR(WriteGmsh(path("volume.msh"), volume.mesh));
-        report.files.push_back("volume.msh");
-      }
-      if (options.output.inp) {
-        SM_RETURN_IF_ERROR(WriteAbaqus(path("volume.inp"), volume.mesh));
-        report.files.push_back("volume.inp");
-      }
-    }
-    report.files.push_back("report.json");
-    SM_RETURN_IF_ERROR(WriteFileAtomically(path("report.json"), report.ToJson()));
+    SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, mesh, model,
+                                    report.volume_mesh ? &volume.mesh : nullptr, &report));
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
   }
   return report;

@@ -171,6 +171,74 @@ CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>
   return s;
 }
 
+// Seeds: n_c distinct nodes per component (formula 3 on its voxel count), drawn by a
+// partial Fisher-Yates shuffle over the component's nodes (grouped by a counting sort of
+// the labels). Records each generator's component in scvd. kResourceExhausted when there
+// would be too many.
+template <class VoxelOf>
+absl::StatusOr<std::vector<uint32_t>> SeedGenerators(const VoxelSet& set,
+                                                     const Components& components,
+                                                     uint32_t num_nodes, const VoxelOf& voxel_of,
+                                                     const ScvdOptions& options, Scvd* scvd) {
+  const uint32_t num_components = components.count();
+  const std::vector<uint32_t> label = components.VoxelLabels(set);
+  std::vector<uint32_t> node_label(num_nodes);
+  for (uint32_t n = 0; n < num_nodes; ++n) node_label[n] = label[voxel_of(n)];
+  std::vector<uint64_t> start(num_components + 1, 0);
+  for (uint32_t l : node_label) ++start[l + 1];
+  for (uint32_t c = 0; c < num_components; ++c) start[c + 1] += start[c];
+  std::vector<uint32_t> members(num_nodes);
+  {
+    std::vector<uint64_t> fill(start.begin(), start.end() - 1);
+    for (uint32_t n = 0; n < num_nodes; ++n) members[fill[node_label[n]]++] = n;
+  }
+  Rng rng(options.seed);
+  std::vector<uint32_t> seeds;
+  for (uint32_t c = 0; c < num_components; ++c) {
+    const uint64_t size = components.sizes[c];
+    const uint64_t nodes = start[c + 1] - start[c];
+    int64_t n = options.generator_count > 0
+                    ? std::max<int64_t>(1, std::llround(double(options.generator_count) * size /
+                                                        double(set.size())))
+                    : GeneratorsForComponent(size, scvd->cell_volume);
+    n = std::min<int64_t>(n, static_cast<int64_t>(nodes));
+    uint32_t* m = members.data() + start[c];
+    for (int64_t k = 0; k < n; ++k) {
+      const uint64_t j = k + rng.Below(nodes - k);
+      std::swap(m[k], m[j]);
+      seeds.push_back(m[k]);
+      scvd->generator_component.push_back(c);
+    }
+  }
+  if (seeds.size() >= kNoCell) {
+    return absl::ResourceExhaustedError(absl::StrCat(seeds.size(), " generators are too many"));
+  }
+  return seeds;
+}
+
+// Each cell's node nearest to its centroid (ties to the lower node, so the result does not
+// depend on visiting order); `seeds` where a cell is empty.
+template <class VoxelOf>
+std::vector<uint32_t> NearestToCentroids(const std::vector<Index3>& xyz,
+                                         const std::vector<uint32_t>& cell, const CellStats& stats,
+                                         uint32_t num_nodes, const VoxelOf& voxel_of,
+                                         const std::vector<uint32_t>& seeds) {
+  std::vector<double> best(seeds.size(), std::numeric_limits<double>::max());
+  std::vector<uint32_t> moved(seeds);
+  for (uint32_t n = 0; n < num_nodes; ++n) {
+    const uint32_t v = voxel_of(n);
+    const uint32_t c = cell[v];
+    if (c == kNoCell) continue;
+    const Vec3 centroid = stats.sum[c] / stats.count[c];
+    const double d2 = Norm2(Vec3(xyz[v].x, xyz[v].y, xyz[v].z) - centroid);
+    if (d2 < best[c]) {
+      best[c] = d2;
+      moved[c] = n;
+    }
+  }
+  return moved;
+}
+
 }  // namespace
 
 absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbors,
@@ -203,44 +271,8 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   const uint32_t num_nodes = columns ? cg.num_nodes() : static_cast<uint32_t>(set.size());
   auto voxel_of = [&](uint32_t n) { return columns ? cg.node_voxel[n] : n; };
 
-  // Nodes of each component, grouped by a counting sort of the labels.
-  const std::vector<uint32_t> label = components.VoxelLabels(set);
-  std::vector<uint32_t> node_label(num_nodes);
-  for (uint32_t n = 0; n < num_nodes; ++n) node_label[n] = label[voxel_of(n)];
-  std::vector<uint64_t> start(num_components + 1, 0);
-  for (uint32_t l : node_label) ++start[l + 1];
-  for (uint32_t c = 0; c < num_components; ++c) start[c + 1] += start[c];
-  std::vector<uint32_t> members(num_nodes);
-  {
-    std::vector<uint64_t> fill(start.begin(), start.end() - 1);
-    for (uint32_t n = 0; n < num_nodes; ++n) members[fill[node_label[n]]++] = n;
-  }
-
-  // Seeds: n_c distinct nodes per component (formula 3 on its voxel count), drawn by a
-  // partial Fisher-Yates shuffle.
-  Rng rng(options.seed);
-  std::vector<uint32_t> seeds;
-  for (uint32_t c = 0; c < num_components; ++c) {
-    const uint64_t size = components.sizes[c];
-    const uint64_t nodes = start[c + 1] - start[c];
-    int64_t n = options.generator_count > 0
-                    ? std::max<int64_t>(1, std::llround(double(options.generator_count) * size /
-                                                        double(set.size())))
-                    : GeneratorsForComponent(size, scvd.cell_volume);
-    n = std::min<int64_t>(n, static_cast<int64_t>(nodes));
-    uint32_t* m = members.data() + start[c];
-    for (int64_t k = 0; k < n; ++k) {
-      const uint64_t j = k + rng.Below(nodes - k);
-      std::swap(m[k], m[j]);
-      seeds.push_back(m[k]);
-      scvd.generator_component.push_back(c);
-    }
-  }
-  if (seeds.size() >= kNoCell) {
-    return absl::ResourceExhaustedError(absl::StrCat(seeds.size(), " generators are too many"));
-  }
-  members = {};
-  node_label = {};
+  SM_ASSIGN_OR_RETURN(std::vector<uint32_t> seeds,
+                      SeedGenerators(set, components, num_nodes, voxel_of, options, &scvd));
 
   const std::vector<Index3> xyz = Coordinates(set);
   std::vector<Index3> gen(seeds.size());
@@ -271,20 +303,7 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
     if (it + 1 == max_growths) break;
     // Formula 2 with ρ = 1: the centroid; the generator moves to the node of its cell
     // nearest to it, since the centroid of a curved sheet can fall off the sheet.
-    std::vector<double> best(gen.size(), std::numeric_limits<double>::max());
-    std::vector<uint32_t> moved(seeds);
-    for (uint32_t n = 0; n < num_nodes; ++n) {
-      const uint32_t v = voxel_of(n);
-      const uint32_t c = cell[v];
-      if (c == kNoCell) continue;
-      const Vec3 centroid = stats.sum[c] / stats.count[c];
-      const double d2 = Norm2(Vec3(xyz[v].x, xyz[v].y, xyz[v].z) - centroid);
-      // Ties go to the lower node, so the result does not depend on visiting order.
-      if (d2 < best[c]) {
-        best[c] = d2;
-        moved[c] = n;
-      }
-    }
+    std::vector<uint32_t> moved = NearestToCentroids(xyz, cell, stats, num_nodes, voxel_of, seeds);
     if (moved == seeds) {
       scvd.converged = true;
       break;

@@ -107,38 +107,38 @@ bool VertexInserter::InsertNear(uint32_t t) {
   return true;
 }
 
-VertexInserter::Candidate VertexInserter::BestSheetSplit(uint32_t t) {
+void VertexInserter::ConsiderSplit(Candidate c, const std::vector<uint32_t>& seeds,
+                                   const absl::flat_hash_set<FaceKey>& opened,
+                                   Candidate* best) const {
+  std::vector<std::pair<uint32_t, uint32_t>> keep;
+  for (uint32_t f : c.split) {
+    const auto& face = ed_.mesh().faces[f];
+    for (int i = 0; i < 3; ++i) {
+      const auto e = std::minmax(face[i], face[(i + 1) % 3]);
+      if (e != std::minmax(c.edge[0], c.edge[1])) keep.push_back(e);
+    }
+  }
+  if (!GrowCavity(ed_, c.p, seeds, opened, keep, &c.cavity, &c.fill)) return;
+  // Every split face's new pieces must be faces of the fill: each edge of a piece that
+  // does not end at p must be an edge of the cavity's boundary.
+  absl::flat_hash_set<std::pair<uint32_t, uint32_t>> rim;
+  for (const Tet& x : c.fill) {
+    for (int i = 0; i < 3; ++i) {
+      rim.insert(std::minmax(x[i], x[(i + 1) % 3]));
+    }
+  }
+  for (const auto& e : keep) {
+    if (!rim.contains(e)) return;
+  }
+  c.quality = 1e300;
+  for (const Tet& x : c.fill) {
+    c.quality = std::min(c.quality, MinDihedralDegrees(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), c.p));
+  }
+  if (c.quality > best->quality) *best = std::move(c);
+}
+
+void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
   const Tet tet = ed_.tet(t);
-  Candidate best;
-  auto consider = [&](Candidate c, const std::vector<uint32_t>& seeds,
-                      const absl::flat_hash_set<FaceKey>& opened) {
-    std::vector<std::pair<uint32_t, uint32_t>> keep;
-    for (uint32_t f : c.split) {
-      const auto& face = ed_.mesh().faces[f];
-      for (int i = 0; i < 3; ++i) {
-        const auto e = std::minmax(face[i], face[(i + 1) % 3]);
-        if (e != std::minmax(c.edge[0], c.edge[1])) keep.push_back(e);
-      }
-    }
-    if (!GrowCavity(ed_, c.p, seeds, opened, keep, &c.cavity, &c.fill)) return;
-    // Every split face's new pieces must be faces of the fill: each edge of a piece that
-    // does not end at p must be an edge of the cavity's boundary.
-    absl::flat_hash_set<std::pair<uint32_t, uint32_t>> rim;
-    for (const Tet& x : c.fill) {
-      for (int i = 0; i < 3; ++i) {
-        rim.insert(std::minmax(x[i], x[(i + 1) % 3]));
-      }
-    }
-    for (const auto& e : keep) {
-      if (!rim.contains(e)) return;
-    }
-    c.quality = 1e300;
-    for (const Tet& x : c.fill) {
-      c.quality =
-          std::min(c.quality, MinDihedralDegrees(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), c.p));
-    }
-    if (c.quality > best.quality) best = std::move(c);
-  };
   // Sheet faces holding an edge of t.
   std::vector<uint32_t> faces;
   for (uint32_t v : tet) {
@@ -186,9 +186,13 @@ VertexInserter::Candidate VertexInserter::BestSheetSplit(uint32_t t) {
       Candidate cand;
       cand.p = p;
       cand.split = {f};
-      consider(std::move(cand), seeds, {key});
+      ConsiderSplit(std::move(cand), seeds, {key}, best);
     }
   }
+}
+
+void VertexInserter::SplitEdgeCandidates(uint32_t t, Candidate* best) const {
+  const Tet tet = ed_.tet(t);
   // Sheet edges of t.
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j) {
@@ -229,9 +233,15 @@ VertexInserter::Candidate VertexInserter::BestSheetSplit(uint32_t t) {
         cand.p = a + d * s;
         cand.split = split;
         cand.edge = {u, w};
-        consider(std::move(cand), ring, opened);
+        ConsiderSplit(std::move(cand), ring, opened, best);
       }
     }
+}
+
+VertexInserter::Candidate VertexInserter::BestSheetSplit(uint32_t t) const {
+  Candidate best;
+  SplitFaceCandidates(t, &best);
+  SplitEdgeCandidates(t, &best);
   return best;
 }
 

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_mesh_editor.h"
 #include "worker/pipeline/tet/tet_smoothing.h"
@@ -55,7 +56,16 @@ class VertexInserter {
   // two corners. The cavity must hold t.
   // Such a point splits the face (into three) or every face on the edge (each into two), so
   // the sheet faces still tile the input triangles.
-  Candidate BestSheetSplit(uint32_t t);
+  Candidate BestSheetSplit(uint32_t t) const;
+  // Candidates inside the sheet faces holding an edge of t, and on the sheet edges of t;
+  // each kept in *best when it beats it.
+  void SplitFaceCandidates(uint32_t t, Candidate* best) const;
+  void SplitEdgeCandidates(uint32_t t, Candidate* best) const;
+  // The cavity and fill of candidate c, grown from `seeds` across the `opened` facets; c
+  // replaces *best when its fill's worst tetrahedron is better and every split face's
+  // pieces are faces of the fill.
+  void ConsiderSplit(Candidate c, const std::vector<uint32_t>& seeds,
+                     const absl::flat_hash_set<FaceKey>& opened, Candidate* best) const;
   // Inserts the candidate's vertex: its cavity's tetrahedra replaced by the fill; on a
   // sheet, each split face replaced by its pieces (same input triangle, piece and
   // thickness, same orientation) and the vertex free to slide in that face or edge.

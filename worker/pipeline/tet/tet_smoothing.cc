@@ -15,176 +15,215 @@ double BlendedShape(const TetMeshEditor& ed, const Tet& t, double q, double radi
   return (1 - radius_weight) * q + radius_weight * kRegularDihedral * ra;
 }
 
-bool SmoothVertex(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v,
-                  const SmoothingOptions& options) {
-  auto Shape = [&](const Tet& t, double q) {
-    return BlendedShape(ed, t, q, options.radius_weight);
-  };
-  if (!fr.may_move(v)) return false;
-  const std::vector<uint32_t>& star = ed.star(v);
-  const Vec3 start = ed.node(v);
-  double cur_min = 1e300, cur_sum = 0, length = 0;
-  std::vector<uint32_t> ring;
-  for (uint32_t t : star) {
-    cur_min = std::min(cur_min, ed.quality(t));
-    cur_sum += Shape(ed.tet(t), ed.quality(t));
-    for (uint32_t w : ed.tet(t)) {
-      if (w != v) ring.push_back(w);
+namespace {
+
+// One vertex's smoothing: its star, where it started, the best position so far and that
+// position's worst quality and sum of shapes.
+class Smoother {
+ public:
+  Smoother(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v, const SmoothingOptions& o)
+      : ed_(ed), fr_(fr), v_(v), o_(o), star_(ed.star(v)), start_(ed.node(v)), best_(start_) {
+    std::vector<uint32_t> ring;
+    for (uint32_t t : star_) {
+      cur_min_ = std::min(cur_min_, ed_.quality(t));
+      cur_sum_ += Shape(ed_.tet(t), ed_.quality(t));
+      for (uint32_t w : ed_.tet(t)) {
+        if (w != v_) ring.push_back(w);
+      }
     }
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    for (uint32_t w : ring) {
+      centroid_ += ed_.node(w);
+      length_ += Norm(ed_.node(w) - start_);
+    }
+    centroid_ = centroid_ / static_cast<double>(ring.size());
+    length_ /= static_cast<double>(ring.size());
   }
-  std::sort(ring.begin(), ring.end());
-  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-  Vec3 centroid{0, 0, 0};
-  for (uint32_t w : ring) {
-    centroid += ed.node(w);
-    length += Norm(ed.node(w) - start);
+
+  // Tries the ring's centroid and the optimal-Delaunay point, then climbs: first the worst
+  // tetrahedra, then the mean. Leaves the vertex at the best position; true if it moved.
+  bool Run() {
+    TakeIfBetter(centroid_);
+    TakeOptimalDelaunay();
+    AscendWorst();
+    AscendMean();
+    ed_.node(v_) = best_;
+    if (moved_) {
+      for (uint32_t t : star_) ed_.Remeasure(t);
+    }
+    return moved_;
   }
-  centroid = centroid / static_cast<double>(ring.size());
-  length /= static_cast<double>(ring.size());
-  auto masked = [&](const Vec3& d) { return fr.Constrain(v, d); };
-  // The star's worst and mean at p.
-  auto eval = [&](const Vec3& p, double* mn, double* sum) {
-    ed.node(v) = p;
+
+ private:
+  double Shape(const Tet& t, double q) const { return BlendedShape(ed_, t, q, o_.radius_weight); }
+  Vec3 Masked(const Vec3& d) const { return fr_.Constrain(v_, d); }
+
+  // The star's worst and sum of shapes with the vertex at p.
+  void Eval(const Vec3& p, double* mn, double* sum) {
+    ed_.node(v_) = p;
     *mn = 1e300;
     *sum = 0;
-    for (uint32_t t : star) {
-      const double q = ed.Quality(ed.tet(t));
+    for (uint32_t t : star_) {
+      const double q = ed_.Quality(ed_.tet(t));
       *mn = std::min(*mn, q);
-      *sum += Shape(ed.tet(t), q);
+      *sum += Shape(ed_.tet(t), q);
       if (q < 0) break;
     }
-    ed.node(v) = start;
-  };
-  Vec3 best = start;
-  bool moved = false;
-  // Backtracking along dir from best: the first step (halving from max_step) whose star
-  // (worst, sum) `accept` takes becomes the new best.
-  auto search = [&](const Vec3& dir, double max_step, auto accept) {
-    for (double step = max_step; step > 1e-3 * length; step *= 0.5) {
-      const Vec3 p = fr.Place(v, best + dir * step);
+    ed_.node(v_) = start_;
+  }
+
+  void Take(const Vec3& p, double mn, double sum) {
+    best_ = p;
+    cur_min_ = mn;
+    cur_sum_ = sum;
+    moved_ = true;
+  }
+
+  // Backtracking along dir from the best: the first step (halving from max_step) whose
+  // star (worst, sum) `accept` takes becomes the new best.
+  template <class Accept>
+  bool Search(const Vec3& dir, double max_step, Accept accept) {
+    for (double step = max_step; step > 1e-3 * length_; step *= 0.5) {
+      const Vec3 p = fr_.Place(v_, best_ + dir * step);
       double mn, sum;
-      eval(p, &mn, &sum);
+      Eval(p, &mn, &sum);
       if (accept(mn, sum)) {
-        best = p;
-        cur_min = mn;
-        cur_sum = sum;
-        moved = true;
+        Take(p, mn, sum);
         return true;
       }
     }
     return false;
-  };
+  }
+
   // A candidate position is taken if it raises the star's worst, or its sum without
   // lowering the worst below the floor (or below where it already is).
-  auto take_if_better = [&](const Vec3& target) {
-    const Vec3 p = fr.Place(v, start + masked(target - start));
+  void TakeIfBetter(const Vec3& target) {
+    const Vec3 p = fr_.Place(v_, start_ + Masked(target - start_));
     double mn, sum;
-    eval(p, &mn, &sum);
-    if (mn > cur_min + kGain ||
-        (mn >= std::min(cur_min, options.floor_degrees) && sum > cur_sum + kGain)) {
-      best = p;
-      cur_min = mn;
-      cur_sum = sum;
-      moved = true;
+    Eval(p, &mn, &sum);
+    if (mn > cur_min_ + kGain ||
+        (mn >= std::min(cur_min_, o_.floor_degrees) && sum > cur_sum_ + kGain)) {
+      Take(p, mn, sum);
     }
-  };
-  take_if_better(centroid);
+  }
+
   // The optimal-Delaunay position: the volume-weighted mean of the star's circumcentres.
-  {
+  void TakeOptimalDelaunay() {
     Vec3 odt{0, 0, 0};
     double weight = 0;
-    for (uint32_t t : star) {
-      const Tet& x = ed.tet(t);
-      const double volume = TetVolume(ed.P(x[0]), ed.P(x[1]), ed.P(x[2]), ed.P(x[3]));
+    for (uint32_t t : star_) {
+      const Tet& x = ed_.tet(t);
+      const double volume = TetVolume(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), ed_.P(x[3]));
       Vec3 cc;
-      if (!(volume > 0) || !Circumcentre(ed.P(x[0]), ed.P(x[1]), ed.P(x[2]), ed.P(x[3]), &cc))
+      if (!(volume > 0) || !Circumcentre(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), ed_.P(x[3]), &cc))
         continue;
       odt += cc * volume;
       weight += volume;
     }
-    if (weight > 0) take_if_better(odt / weight);
+    if (weight > 0) TakeIfBetter(odt / weight);
   }
+
   // Ascent on the worst tetrahedra: the direction that raises the two worst together.
-  for (int iter = 0; iter < 8; ++iter) {
-    ed.node(v) = best;
-    uint32_t worst[2] = {UINT32_MAX, UINT32_MAX};
-    double wq[2] = {1e300, 1e300};
-    for (uint32_t t : star) {
-      const double q = ed.Quality(ed.tet(t));
-      if (q < wq[0]) {
-        worst[1] = worst[0];
-        wq[1] = wq[0];
-        worst[0] = t;
-        wq[0] = q;
-      } else if (q < wq[1]) {
-        worst[1] = t;
-        wq[1] = q;
+  void AscendWorst() {
+    for (int iter = 0; iter < 8; ++iter) {
+      ed_.node(v_) = best_;
+      uint32_t worst[2] = {UINT32_MAX, UINT32_MAX};
+      double wq[2] = {1e300, 1e300};
+      for (uint32_t t : star_) {
+        const double q = ed_.Quality(ed_.tet(t));
+        if (q < wq[0]) {
+          worst[1] = worst[0];
+          wq[1] = wq[0];
+          worst[0] = t;
+          wq[0] = q;
+        } else if (q < wq[1]) {
+          worst[1] = t;
+          wq[1] = q;
+        }
+      }
+      const double h = 1e-5 * length_;
+      Vec3 g[2];
+      for (int w = 0; w < 2; ++w) {
+        if (worst[w] == UINT32_MAX) continue;
+        for (int k = 0; k < 3; ++k) {
+          g[w][k] = 0;
+          if (!fr_.Varies(v_, k)) continue;
+          Vec3 p = best_;
+          p[k] += h;
+          ed_.node(v_) = p;
+          const double up = ed_.Quality(ed_.tet(worst[w]));
+          p[k] = best_[k] - h;
+          ed_.node(v_) = p;
+          const double down = ed_.Quality(ed_.tet(worst[w]));
+          g[w][k] = (up - down) / (2 * h);
+        }
+        g[w] = Masked(g[w]);
+      }
+      ed_.node(v_) = start_;
+      Vec3 dir = g[0];
+      if (worst[1] != UINT32_MAX && wq[1] < wq[0] + 1.0) {
+        // The point of the segment between the two gradients nearest the origin.
+        const Vec3 diff = g[0] - g[1];
+        const double d2 = Norm2(diff);
+        const double s = d2 > 0 ? std::clamp(Dot(g[0], diff) / d2, 0.0, 1.0) : 0.0;
+        // Opposite gradients cancel to rounding noise off the allowed moves: constrain the
+        // result again, and stop where it is no real direction.
+        dir = Masked(g[0] - diff * s);
+      }
+      const double dn = Norm(dir);
+      if (!(dn > 1e-9 * Norm(g[0]))) break;
+      dir = dir / dn;
+      if (!Search(dir, 0.2 * length_, [&](double mn, double) { return mn > cur_min_ + kGain; })) {
+        break;
       }
     }
-    const double h = 1e-5 * length;
-    Vec3 g[2];
-    for (int w = 0; w < 2; ++w) {
-      if (worst[w] == UINT32_MAX) continue;
+  }
+
+  // Ascent on the star's mean, never lowering its worst.
+  void AscendMean() {
+    for (int iter = 0; iter < 6; ++iter) {
+      const double h = 1e-5 * length_;
+      Vec3 g{0, 0, 0};
       for (int k = 0; k < 3; ++k) {
-        g[w][k] = 0;
-        if (!fr.Varies(v, k)) continue;
-        Vec3 p = best;
+        if (!fr_.Varies(v_, k)) continue;
+        Vec3 p = best_;
+        double mn, up, down;
         p[k] += h;
-        ed.node(v) = p;
-        const double up = ed.Quality(ed.tet(worst[w]));
-        p[k] = best[k] - h;
-        ed.node(v) = p;
-        const double down = ed.Quality(ed.tet(worst[w]));
-        g[w][k] = (up - down) / (2 * h);
+        Eval(p, &mn, &up);
+        p[k] = best_[k] - h;
+        Eval(p, &mn, &down);
+        g[k] = (up - down) / (2 * h);
       }
-      g[w] = masked(g[w]);
-    }
-    ed.node(v) = start;
-    Vec3 dir = g[0];
-    if (worst[1] != UINT32_MAX && wq[1] < wq[0] + 1.0) {
-      // The point of the segment between the two gradients nearest the origin.
-      const Vec3 diff = g[0] - g[1];
-      const double d2 = Norm2(diff);
-      const double s = d2 > 0 ? std::clamp(Dot(g[0], diff) / d2, 0.0, 1.0) : 0.0;
-      // Opposite gradients cancel to rounding noise off the allowed moves: constrain the
-      // result again, and stop where it is no real direction.
-      dir = masked(g[0] - diff * s);
-    }
-    const double dn = Norm(dir);
-    if (!(dn > 1e-9 * Norm(g[0]))) break;
-    dir = dir / dn;
-    if (!search(dir, 0.2 * length, [&](double mn, double) { return mn > cur_min + kGain; })) {
-      break;
+      g = Masked(g);
+      const double gn = Norm(g);
+      if (!(gn > 0)) break;
+      if (!Search(g / gn, 0.1 * length_, [&](double mn, double sum) {
+            return mn >= std::min(cur_min_, o_.floor_degrees) && sum > cur_sum_ + kGain;
+          })) {
+        break;
+      }
     }
   }
-  // Then ascent on the star's mean, never lowering its worst.
-  for (int iter = 0; iter < 6; ++iter) {
-    const double h = 1e-5 * length;
-    Vec3 g{0, 0, 0};
-    for (int k = 0; k < 3; ++k) {
-      if (!fr.Varies(v, k)) continue;
-      Vec3 p = best;
-      double mn, up, down;
-      p[k] += h;
-      eval(p, &mn, &up);
-      p[k] = best[k] - h;
-      eval(p, &mn, &down);
-      g[k] = (up - down) / (2 * h);
-    }
-    g = masked(g);
-    const double gn = Norm(g);
-    if (!(gn > 0)) break;
-    if (!search(g / gn, 0.1 * length, [&](double mn, double sum) {
-          return mn >= std::min(cur_min, options.floor_degrees) && sum > cur_sum + kGain;
-        })) {
-      break;
-    }
-  }
-  ed.node(v) = best;
-  if (moved) {
-    for (uint32_t t : star) ed.Remeasure(t);
-  }
-  return moved;
+
+  TetMeshEditor& ed_;
+  const VertexFreedom& fr_;
+  const uint32_t v_;
+  const SmoothingOptions o_;
+  const std::vector<uint32_t>& star_;
+  const Vec3 start_;
+  Vec3 best_;
+  Vec3 centroid_{0, 0, 0};
+  double cur_min_ = 1e300, cur_sum_ = 0, length_ = 0;
+  bool moved_ = false;
+};
+
+}  // namespace
+
+bool SmoothVertex(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v,
+                  const SmoothingOptions& options) {
+  if (!fr.may_move(v)) return false;
+  return Smoother(ed, fr, v, options).Run();
 }
 
 }  // namespace sheetmesh

@@ -1,0 +1,53 @@
+#include "worker/pipeline/run/pipeline_outputs.h"
+
+#include <filesystem>
+
+#include "common/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
+
+namespace sheetmesh {
+namespace {
+
+std::string In(const std::string& dir, const char* name) {
+  return (std::filesystem::path(dir) / name).string();
+}
+
+}  // namespace
+
+absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
+                               const Placement& placement, const OutputOptions& output,
+                               std::vector<std::string>* files) {
+  if (output.ply) {
+    SM_RETURN_IF_ERROR(WritePly(In(dir, "surface.ply"), mesh, placement));
+    files->push_back("surface.ply");
+  }
+  if (output.vtp) {
+    SM_RETURN_IF_ERROR(WriteVtp(In(dir, "surface.vtp"), mesh, placement));
+    files->push_back("surface.vtp");
+  }
+  if (output.obj) {
+    SM_RETURN_IF_ERROR(WriteObj(In(dir, "surface.obj"), mesh, placement));
+    files->push_back("surface.obj");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
+                              const OutputOptions& output, std::vector<std::string>* files) {
+  if (output.vtu) {
+    SM_RETURN_IF_ERROR(WriteVtu(In(dir, "volume.vtu"), mesh));
+    files->push_back("volume.vtu");
+  }
+  if (output.msh) {
+    SM_RETURN_IF_ERROR(WriteGmsh(In(dir, "volume.msh"), mesh));
+    files->push_back("volume.msh");
+  }
+  if (output.inp) {
+    SM_RETURN_IF_ERROR(WriteAbaqus(In(dir, "volume.inp"), mesh));
+    files->push_back("volume.inp");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace sheetmesh

@@ -1,4 +1,4 @@
-// The one place absl::Status becomes grpc::Status (and back), with long messages cut.
+// The one place absl::Status becomes grpc::Status, with long messages cut.
 #ifndef SHEETMESH_SERVER_STATUS_UTIL_H_
 #define SHEETMESH_SERVER_STATUS_UTIL_H_
 
@@ -10,7 +10,6 @@ namespace sheetmesh::server {
 
 // The same code and message; messages beyond 4 KiB are cut, saying so.
 grpc::Status ToGrpcStatus(const absl::Status& status);
-absl::Status FromGrpcStatus(const grpc::Status& status);
 
 }  // namespace sheetmesh::server
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages sheetmesh needs (only those missing), then configures and
-# builds the project in Release into ./build. Safe to run again: quick when all is in place.
+# builds the project into ./build (Release; $SHEETMESH_BUILD_DIR and $SHEETMESH_BUILD_TYPE
+# choose others). Safe to run again: quick when all is in place.
 # Usage: tools/setup.sh            (as root on Debian 12, or with sudo available)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -36,9 +37,11 @@ if ((${#missing[@]})); then
 fi
 
 build_dir=${SHEETMESH_BUILD_DIR:-build}
+build_type=${SHEETMESH_BUILD_TYPE:-Release}
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-if [ ! -f "$build_dir/build.ninja" ]; then
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" >/dev/null
+if [ ! -f "$build_dir/build.ninja" ] ||
+   ! grep -q "^CMAKE_BUILD_TYPE:STRING=$build_type\$" "$build_dir/CMakeCache.txt"; then
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "${launcher[@]}" >/dev/null
 fi
 cmake --build "$build_dir" -j "$(nproc)"

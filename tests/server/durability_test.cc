@@ -12,9 +12,9 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "client/client.h"
+#include "common/file_util.h"
 #include "server/blob_store.h"
 #include "tests/server/service_fixture.h"
-#include "common/file_util.h"
 
 namespace sheetmesh::testing {
 namespace {

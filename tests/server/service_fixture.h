@@ -4,12 +4,18 @@
 #define SHEETMESH_TESTS_SERVER_SERVICE_FIXTURE_H_
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <fstream>
 #include <memory>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
 #include "client/client.h"
+#include "common/file_util.h"
 #include "server/server.h"
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/phantom/phantom.h"
@@ -88,6 +94,55 @@ class ServiceTest : public ::testing::Test {
   std::unique_ptr<server::Server> server_;
   std::unique_ptr<client::SheetmeshClient> client_;
 };
+
+inline std::string WriteRandomFile(const std::string& path, int64_t size, uint32_t seed) {
+  std::mt19937 gen(seed);
+  std::string bytes(size, '\0');
+  for (auto& c : bytes) c = static_cast<char>(gen());
+  std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+  return bytes;
+}
+
+inline std::string Slurp(const std::string& path) {
+  auto s = ReadFileToString(path);
+  EXPECT_TRUE(s.ok()) << s.status();
+  return s.ok() ? *s : "";
+}
+
+inline std::vector<v1::Digest> Missing(client::SheetmeshClient& c, const v1::Digest& d) {
+  v1::FindMissingBlobsRequest req;
+  *req.add_digests() = d;
+  v1::FindMissingBlobsResponse resp;
+  grpc::Status st = c.blobs()->FindMissingBlobs(c.Context().get(), req, &resp);
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  return {resp.missing().begin(), resp.missing().end()};
+}
+
+inline int64_t ProcessRssBytes() {
+  std::ifstream f("/proc/self/statm");
+  int64_t pages = 0, resident = 0;
+  f >> pages >> resident;
+  return resident * ::sysconf(_SC_PAGESIZE);
+}
+
+// Polls until the job is RUNNING at stage `stage` or later (or finished); returns the job.
+inline v1::Job WaitRunning(client::SheetmeshClient& c, const std::string& name, int min_stage) {
+  const absl::Time deadline = absl::Now() + absl::Seconds(60);
+  for (;;) {
+    auto job = c.GetJob(name);
+    EXPECT_TRUE(job.ok()) << job.status();
+    if (!job.ok()) return {};
+    if (job->state() != v1::QUEUED &&
+        (job->state() != v1::RUNNING || job->progress().stage_index() >= min_stage)) {
+      return *job;
+    }
+    if (absl::Now() > deadline) {
+      ADD_FAILURE() << name << " did not start";
+      return *job;
+    }
+    absl::SleepFor(absl::Milliseconds(20));
+  }
+}
 
 }  // namespace sheetmesh::testing
 

@@ -8,13 +8,13 @@
 #include <thread>
 
 #include "absl/strings/str_cat.h"
+#include "common/file_util.h"
+#include "common/sha256.h"
 #include "server/blob_store.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
 #include "server/references.h"
 #include "tests/testing/temp_dir.h"
-#include "common/file_util.h"
-#include "common/sha256.h"
 
 namespace sheetmesh::server {
 namespace {

@@ -219,7 +219,7 @@ class GzipStream {
     if (open_) inflateEnd(&zs_);
   }
 
-  // Decodes exactly out.size() bytes. kDataLoss if the stream is corrupt or ends early.
+  // Decodes exactly out.size() bytes. kInvalidArgument if the stream is corrupt or ends early.
   absl::Status Read(std::span<std::byte> out) {
     if (!open_) SM_RETURN_IF_ERROR(Reset());
     zs_.next_out = reinterpret_cast<Bytef*>(out.data());
@@ -233,7 +233,7 @@ class GzipStream {
           const ssize_t n = ::pread(fd_, in_.data(), in_.size(), file_pos_);
           if (n < 0) return ErrnoStatus(errno, path_);
           if (n == 0) {
-            return absl::DataLossError(absl::StrCat(
+            return absl::InvalidArgumentError(absl::StrCat(
                 path_, ": gzip data ends after ", position_ + (chunk - zs_.avail_out),
                 " decoded bytes (truncated?)"));
           }
@@ -243,12 +243,12 @@ class GzipStream {
         }
         const int rc = inflate(&zs_, Z_NO_FLUSH);
         if (rc == Z_STREAM_END && zs_.avail_out > 0) {
-          return absl::DataLossError(absl::StrCat(path_, ": gzip stream ends after ",
+          return absl::InvalidArgumentError(absl::StrCat(path_, ": gzip stream ends after ",
                                                   position_ + (chunk - zs_.avail_out),
                                                   " decoded bytes, fewer than the header's sizes need"));
         }
         if (rc != Z_OK && rc != Z_STREAM_END) {
-          return absl::DataLossError(absl::StrCat(path_, ": corrupt gzip data (zlib: ",
+          return absl::InvalidArgumentError(absl::StrCat(path_, ": corrupt gzip data (zlib: ",
                                                   zs_.msg ? zs_.msg : "error", ")"));
         }
       }
@@ -313,7 +313,7 @@ class NrrdSource : public VolumeSource {
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
     }
     if (gzip_ == nullptr) {
-      SM_RETURN_IF_ERROR(ReadFullyAt(fd_.get(), data_start_ + z0 * slice_bytes, out, info_.path));
+      SM_RETURN_IF_ERROR(AsInputError(ReadFullyAt(fd_.get(), data_start_ + z0 * slice_bytes, out, info_.path)));
     } else {
       const int64_t want = header_.byte_skip + z0 * slice_bytes;
       if (want < gzip_->position()) SM_RETURN_IF_ERROR(gzip_->Reset());
@@ -338,7 +338,7 @@ absl::StatusOr<int64_t> SkipLines(int fd, int64_t start, int64_t lines, const st
   while (lines > 0) {
     const ssize_t n = ::pread(fd, buf, sizeof(buf), pos);
     if (n < 0) return ErrnoStatus(errno, path);
-    if (n == 0) return absl::DataLossError(absl::StrCat(path, ": file ends inside 'line skip'"));
+    if (n == 0) return absl::InvalidArgumentError(absl::StrCat(path, ": file ends inside 'line skip'"));
     for (ssize_t i = 0; i < n && lines > 0; ++i) {
       ++pos;
       if (buf[i] == '\n') --lines;
@@ -425,7 +425,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
   SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
   SM_ASSIGN_OR_RETURN(const int64_t file_size, FileSizeOf(fd.get(), path));
   std::string head(static_cast<size_t>(std::min<int64_t>(file_size, kMaxHeaderBytes)), '\0');
-  SM_RETURN_IF_ERROR(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path));
+  SM_RETURN_IF_ERROR(AsInputError(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
   SM_ASSIGN_OR_RETURN(NrrdHeader h, ParseNrrdHeader(head, path, limits));
 
   ScopedFd data_fd;

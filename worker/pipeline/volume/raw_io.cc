@@ -55,7 +55,7 @@ class RawSource : public VolumeSource {
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
     }
     SM_RETURN_IF_ERROR(
-        ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path));
+        AsInputError(ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path)));
     if (NeedsSwap(options_.byte_order)) SwapBytes(out, bpv);
     return absl::OkStatus();
   }

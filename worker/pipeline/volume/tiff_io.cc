@@ -135,7 +135,7 @@ absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte>
     }
     for (uint32_t row = 0; row < f.height; ++row) {
       if (TIFFReadScanline(tif, out.data() + row * row_bytes, row, 0) < 0) {
-        return absl::DataLossError(
+        return absl::InvalidArgumentError(
             absl::StrCat(where, ": row ", row, " is unreadable: ", LastTiffError()));
       }
     }
@@ -154,7 +154,7 @@ absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte>
   for (uint32_t ty = 0; ty < f.height; ty += th) {
     for (uint32_t tx = 0; tx < f.width; tx += tw) {
       if (TIFFReadTile(tif, tile.data(), tx, ty, 0, 0) < 0) {
-        return absl::DataLossError(absl::StrCat(where, ": tile at (", tx, ",", ty,
+        return absl::InvalidArgumentError(absl::StrCat(where, ": tile at (", tx, ",", ty,
                                                 ") is unreadable: ", LastTiffError()));
       }
       const uint32_t w = std::min(tw, f.width - tx);
@@ -224,7 +224,7 @@ class MultiPageSource : public VolumeSource {
       const bool ok = (z == current_ + 1) ? TIFFReadDirectory(tif_.get())
                                           : TIFFSetDirectory(tif_.get(), static_cast<tdir_t>(z));
       if (!ok) {
-        return absl::DataLossError(absl::StrCat(where, ": cannot open page: ", LastTiffError()));
+        return absl::InvalidArgumentError(absl::StrCat(where, ": cannot open page: ", LastTiffError()));
       }
       current_ = z;
       // Pages agree in size and type (checked at open) but may differ in strips vs tiles.
@@ -443,7 +443,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffVolume(const std::string& 
   info.dims = {first.width, first.height, pages};
   SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, path));
   if (!TIFFSetDirectory(tif.get(), 0)) {
-    return absl::DataLossError(absl::StrCat(path, ": cannot rewind: ", LastTiffError()));
+    return absl::InvalidArgumentError(absl::StrCat(path, ": cannot rewind: ", LastTiffError()));
   }
   return std::make_unique<MultiPageSource>(std::move(tif), first, std::move(info));
 }

@@ -47,7 +47,7 @@ class VdbSource : public VolumeSource {
           break;
       }
     } catch (const openvdb::Exception& e) {
-      return absl::DataLossError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
     }
     return absl::OkStatus();
   }

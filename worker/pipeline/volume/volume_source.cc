@@ -94,4 +94,9 @@ absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits
   return absl::OkStatus();
 }
 
+absl::Status AsInputError(absl::Status status) {
+  if (status.code() != absl::StatusCode::kDataLoss) return status;
+  return absl::InvalidArgumentError(status.message());
+}
+
 }  // namespace sheetmesh

@@ -44,6 +44,10 @@ struct VolumeLimits {
   int64_t max_extent = int64_t{1} << 20;  // any one axis beyond this is kInvalidArgument
 };
 
+// The status of a read of an input file, with kDataLoss (the file ended early: the user's
+// file is bad, not the system's storage) as kInvalidArgument.
+absl::Status AsInputError(absl::Status status);
+
 // Checks dims against `limits`: each extent positive, the product without overflow and
 // within max_voxels. `what` names the source in the message.
 absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
@@ -86,8 +90,8 @@ class VolumeSource {
   // Reads slices [z0, z0 + count) into `out`, x fastest, then y, then z, in native byte
   // order. Sequential reads in increasing z are fastest; readers of compressed streams may
   // restart to go back. REQUIRES: out.size() == count * nx * ny * BytesPerVoxel(dtype),
-  // 0 <= z0, z0 + count <= nz. kInvalidArgument / kDataLoss when the file is broken
-  // (truncated, corrupt), naming the file and the slice.
+  // 0 <= z0, z0 + count <= nz. kInvalidArgument when the file is broken (truncated,
+  // corrupt), naming the file and the slice.
   virtual absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) = 0;
 
  protected:

@@ -362,5 +362,13 @@ TEST(ParamRangeTest, ParsesIntervalsAsWritten) {
   EXPECT_FALSE(c.Contains(70));
 }
 
+TEST(ParamRangeTest, AMalformedRangeIsABugTheTestsBuildCatches) {
+#ifdef NDEBUG
+  GTEST_SKIP() << "assert() is off in this build; tools/test.sh builds RelWithAsserts";
+#else
+  EXPECT_DEATH(ParamRange::Parse("[1, "), "");
+#endif
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -71,6 +71,25 @@ TEST(PipelineTest, RunWritesMeshesAndAReport) {
   EXPECT_EQ(back.faces.size(), r.surface->triangles);
 }
 
+TEST(PipelineTest, AVolumePathThatIsNotUtf8GivesAReportWithTheNameEscaped) {
+  // The same writer makes a job's report in a worker thread of the server: it must never
+  // throw (nlohmann::json does on bytes that are not UTF-8, and that ended the process).
+  TempDir tmp;
+  const std::string plain = SmallPhantom(tmp);
+  const std::string odd = tmp.File("p_\xff\xfe_64x56x48_u8.raw");
+  std::filesystem::copy_file(plain, odd);
+  PipelineOptions o;
+  o.input.path = odd;
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = 9;
+  o.score.hausdorff = false;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("out/report.json")));
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_NE(j["input"]["path"].get<std::string>().find("\xef\xbf\xbd"), std::string::npos)
+      << "the bad bytes are written as U+FFFD";
+}
+
 TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
   TempDir tmp;
   PipelineOptions o;

@@ -8,9 +8,9 @@
 #include <memory>
 
 #include "absl/strings/str_split.h"
+#include "common/file_util.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "common/file_util.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {

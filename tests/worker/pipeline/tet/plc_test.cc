@@ -1,0 +1,472 @@
+#include "worker/pipeline/tet/plc.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <set>
+
+#include "common/file_util.h"
+#include "tests/testing/status_matchers.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/tetgen_runner.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::Append;
+using ::sheetmesh::testing::ClosestPair;
+using ::sheetmesh::testing::DistanceToSheets;
+using ::sheetmesh::testing::Square;
+using ::sheetmesh::testing::StatusIs;
+using ::sheetmesh::testing::TempDir;
+using ::testing::HasSubstr;
+
+// Two triangles of a flat quad split along its long diagonal a-b (a thin pair), with the
+// fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given. c lies
+// `bulge` off a-b: at 1.5 its angle is ~163 degrees (a flat triangle), at 2.5 ~152.
+TriangleMesh ThinPair(double lift, int32_t piece_f, int32_t piece_g, double bulge = 1.5) {
+  TriangleMesh m;
+  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10 + bulge, 20}, {20, 8.5, 20 + lift}};  // a b c d
+  m.faces = {{0, 1, 2}, {1, 0, 3}};
+  m.face_piece = {piece_f, piece_g};
+  m.face_thickness = {2, 4};
+  return m;
+}
+
+bool HasEdge(const Plc& plc, const Vec3& p, const Vec3& q) {
+  for (const Face& t : plc.sheet_triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = plc.vertices[t[k]], b = plc.vertices[t[(k + 1) % 3]];
+      if ((Norm(a - p) < 1e-9 && Norm(b - q) < 1e-9) || (Norm(a - q) < 1e-9 && Norm(b - p) < 1e-9))
+        return true;
+    }
+  }
+  return false;
+}
+
+// Triangle A lies in the plane z = 12; triangle H, in the plane x = y, shares A's corner O
+// and its edge O-W runs over A 0.5 voxels below A's plane (3.4 degrees off it, its
+// projection inside A's angle at O).
+TriangleMesh NarrowWedge() {
+  TriangleMesh m;
+  m.vertices = {{5, 5, 12},
+                {14, 5, 12},
+                {5, 14, 12},  // A: O and two more
+                {11, 11, 11.5},
+                {8, 8, 4}};  // H: O, W, and a corner far below
+  m.faces = {{0, 1, 2}, {0, 3, 4}};
+  m.face_piece = {0, 0};
+  m.face_thickness = {1, 1};
+  return m;
+}
+
+// The vertex of `plc` nearest to p.
+Vec3 Nearest(const Plc& plc, const Vec3& p) {
+  return *std::min_element(
+      plc.vertices.begin(), plc.vertices.end(),
+      [&](const Vec3& a, const Vec3& b) { return Norm2(a - p) < Norm2(b - p); });
+}
+
+// Meshes `sheets` with the options `with` (a PLC step on) and `without` (off) into *r and
+// *off; the first must conform, fill the box and have the better worst tetrahedron.
+void MeshWithAndWithout(const TriangleMesh& sheets, const Dims& dims, const VolumeMeshOptions& with,
+                        const VolumeMeshOptions& without, VolumeMeshResult* r,
+                        VolumeMeshResult* off) {
+  SM_ASSERT_OK_AND_ASSIGN(*r, BuildVolumeMesh(sheets, dims, {}, with));
+  SM_ASSERT_OK_AND_ASSIGN(*off, BuildVolumeMesh(sheets, dims, {}, without));
+  EXPECT_EQ(r->conformity.conforming, r->conformity.sheet_triangles);
+  EXPECT_NEAR(r->quality.volume, r->box_volume, 1e-9 * r->box_volume);
+  EXPECT_GT(r->quality.min_dihedral.min, off->quality.min_dihedral.min);
+}
+
+// A sheet in the plane z = 10 with a slit: triangle A's rim edge a-b, and the rim a-c-b of
+// the triangles below it, c 0.1 voxels off a-b (its angle 178 degrees) and 0.05 above the
+// plane.
+TriangleMesh Slit() {
+  TriangleMesh m;
+  m.vertices = {{5, 10, 10},     {15, 10, 10}, {10, 16, 10},  // a, b, x
+                {9, 9.9, 10.05}, {7, 4, 10},   {13, 4, 10}};  // c, y, z
+  m.faces = {{0, 1, 2}, {0, 4, 3}, {3, 5, 1}, {3, 4, 5}};
+  m.face_piece.assign(4, 0);
+  m.face_thickness.assign(4, 1);
+  return m;
+}
+
+TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
+  // The 40 x 40 sheet of the lattice test below in a 60^3 box [-0.5, 59.5]^3, spacing 5:
+  // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33.
+  const TriangleMesh sheet = Square(10, 50, 30, 8);
+  PlcOptions o;
+  o.lattice = 1.0;
+  o.seed_box = true;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  ASSERT_GT(plc.box_points, 0u);
+  const uint32_t first = 8 + 81, end = first + plc.box_points;
+  ASSERT_EQ(plc.vertices.size(), end + plc.seed_points);
+  auto faces_of = [](const Vec3& p) {
+    int bits = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(p[k] + 0.5) < 1e-12) bits |= 1 << (2 * k);
+      if (std::abs(p[k] - 59.5) < 1e-12) bits |= 1 << (2 * k + 1);
+    }
+    return bits;
+  };
+  // Each box point is on the box, in the facet of each face it lies on, and nowhere else:
+  // points inside a face as a point of its facet, points on an edge in both faces' outlines.
+  std::vector<int> seen(plc.vertices.size(), 0);
+  for (size_t f = 0; f < plc.facets.size(); ++f) {
+    for (const auto& poly : plc.facets[f].polygons) {
+      for (uint32_t v : poly) {
+        if (v < first || v >= end) continue;
+        ASSERT_LT(f, 6u) << "box point " << v << " on a sheet facet";
+        EXPECT_TRUE(faces_of(plc.vertices[v]) & (1 << f)) << "box point " << v << " facet " << f;
+        EXPECT_EQ(poly.size() == 1,
+                  std::popcount(static_cast<unsigned>(faces_of(plc.vertices[v]))) == 1);
+        seen[v] |= 1 << f;
+      }
+    }
+  }
+  std::vector<Vec3> near;
+  for (uint32_t v = first; v < end; ++v) {
+    const Vec3& p = plc.vertices[v];
+    const int bits = faces_of(p);
+    ASSERT_NE(bits, 0) << "box point " << v << " off the box";
+    EXPECT_EQ(seen[v], bits) << "box point " << v;
+    // 3 off the box's corners and edges of its own level, and off the sheet.
+    const double d = DistanceToSheets(plc, p);
+    EXPECT_GT(d, 3.0 - 1e-9);
+    if (d < 13.0) near.push_back(p);
+  }
+  // Each outline runs once round its face, in order: its length is the face's perimeter.
+  for (int f = 0; f < 6; ++f) {
+    const auto& outline = plc.facets[f].polygons[0];
+    double length = 0;
+    for (size_t i = 0; i < outline.size(); ++i) {
+      length += Norm(plc.vertices[outline[(i + 1) % outline.size()]] - plc.vertices[outline[i]]);
+    }
+    EXPECT_NEAR(length, 4 * 60.0, 1e-9) << "face " << f;
+  }
+  // Level 0 points are 5 apart along rows and edges.
+  ASSERT_GT(near.size(), 1u);
+  EXPECT_NEAR(ClosestPair(near), 5.0, 1e-9);
+  // Not seeded unless asked.
+  o.seed_box = false;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  EXPECT_EQ(plain.box_points, 0u);
+}
+
+TEST(PlcTest, AThinPairOfCoplanarTrianglesIsFlipped) {
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(ThinPair(0, 0, 0), {40, 20, 40}, {}));
+  EXPECT_EQ(plc.flipped_edges, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 2u);
+  EXPECT_FALSE(HasEdge(plc, {10, 10, 20}, {30, 10, 20}));
+  EXPECT_TRUE(HasEdge(plc, {20, 11.5, 20}, {20, 8.5, 20}));
+  // Both halves of the flipped quad carry the pair's area-weighted thickness (equal areas).
+  EXPECT_FLOAT_EQ(plc.sheet_thickness[0], 3.f);
+  EXPECT_FLOAT_EQ(plc.sheet_thickness[1], 3.f);
+  // Better triangles, and the same surface: the area is unchanged.
+  double area = 0, min_angle = 180;
+  for (const Face& t : plc.sheet_triangles) {
+    const Triangle c = {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]};
+    area += Area(c);
+    min_angle = std::min(min_angle, MinAngleDegrees(c));
+  }
+  EXPECT_NEAR(area, 30.0, 1e-9);
+  EXPECT_GT(min_angle, 16.0);
+}
+
+TEST(PlcTest, FlipsKeepPiecesFoldsAndCanBeTurnedOff) {
+  PlcOptions off;
+  off.flip_fold_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(ThinPair(0, 0, 0), {40, 20, 40}, {}, off));
+  EXPECT_EQ(kept.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(kept, {10, 10, 20}, {30, 10, 20}));
+  // Two pieces meeting along an edge keep it.
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(0, 0, 1, 2.5), {40, 20, 40}, {}));
+  EXPECT_EQ(pieces.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(pieces, {10, 10, 20}, {30, 10, 20}));
+  // A fold (d lifted 3 voxels: the normals are ~60 degrees apart) is a shape, not noise.
+  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0, 2.5), {40, 20, 40}, {}));
+  EXPECT_EQ(fold.flipped_edges, 0u);
+  EXPECT_TRUE(HasEdge(fold, {10, 10, 20}, {30, 10, 20}));
+  EXPECT_EQ(fold.sheet_triangles.size(), 2u);
+}
+
+TEST(PlcTest, AFlatTriangleIsFlippedAwayAcrossAFoldOrDroppedOnTheRim) {
+  // c lies 1.5 voxels off the 20-voxel edge a-b (a ~163 degree angle), and g = b a d is
+  // folded ~60 degrees away: f's plane says nothing about the sheet, and TetGen would
+  // have to follow it. The flip trades f and g for two halves of g.
+  SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}));
+  EXPECT_EQ(fold.flipped_edges, 1u);
+  EXPECT_EQ(fold.dropped_caps, 0u);
+  ASSERT_EQ(fold.sheet_triangles.size(), 2u);
+  EXPECT_TRUE(HasEdge(fold, {20, 11.5, 20}, {20, 8.5, 23}));
+  std::vector<Vec3> normals;
+  for (const Face& t : fold.sheet_triangles) {
+    const Triangle c = {fold.vertices[t[0]], fold.vertices[t[1]], fold.vertices[t[2]]};
+    EXPECT_LT(AngleRangeDegrees(c).second, 160.0);
+    normals.push_back(AreaVector(c));
+  }
+  EXPECT_LT(AngleDegrees(normals[0], normals[1]), 15.0);  // no new fold
+  // Where the two belong to different pieces no flip applies: f has edges on the rim, covers
+  // almost nothing and is dropped, its obtuse corner with it.
+  PlcOptions unseeded;
+  unseeded.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(3, 0, 1), {40, 20, 40}, {}, unseeded));
+  EXPECT_EQ(pieces.flipped_edges, 0u);
+  EXPECT_EQ(pieces.dropped_caps, 1u);
+  ASSERT_EQ(pieces.sheet_triangles.size(), 1u);
+  EXPECT_EQ(pieces.vertices.size(), 8u + 3u);  // box corners and g's corners
+  // With the flips off, the sheet triangles stay as given.
+  PlcOptions off;
+  off.flip_fold_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(ThinPair(3, 0, 0), {40, 20, 40}, {}, off));
+  EXPECT_EQ(kept.sheet_triangles.size(), 2u);
+  EXPECT_EQ(kept.flipped_edges + kept.dropped_caps, 0u);
+}
+
+TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
+  // A good triangle and, beside it on a short edge, a flat cap (largest angle ~170
+  // degrees) whose long edge is on the sheet's rim: no flip can mend it.
+  TriangleMesh m;
+  m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10.9, 20}, {12, 20, 20}};  // a b c e
+  m.faces = {{0, 2, 3}, {0, 1, 2}};
+  m.face_piece = {0, 0};
+  m.face_thickness = {3, 3};
+  PlcOptions o;
+  o.flip_fold_degrees = 15;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {40, 30, 40}, {}, o));
+  // The cap covers almost nothing and goes.
+  EXPECT_EQ(plc.dropped_caps, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 1u);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {40, 30, 40}, {}, {}));
+  EXPECT_EQ(r.dropped_caps, 1u);
+  EXPECT_EQ(r.conformity.conforming, 1u);
+}
+
+TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
+  // A 40 x 40 square sheet of 8 x 8 quads (edges 5 and 7.07 voxels: median 5) in a 60^3
+  // box; the lattice at 1 x the median edge has spacing 5 next to the sheet.
+  const TriangleMesh sheet = Square(10, 50, 30, 8);
+  PlcOptions o;
+  o.lattice = 1.0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  EXPECT_NEAR(plc.lattice_spacing, 5.0, 1e-9);
+  ASSERT_GT(plc.seed_points, 0u);
+  const size_t first_seed = plc.vertices.size() - plc.seed_points;
+  EXPECT_EQ(first_seed, 8u + 81u);  // box corners, sheet vertices, then the seeds
+  for (const PlcFacet& f : plc.facets) {
+    for (const auto& poly : f.polygons) {
+      for (uint32_t v : poly) EXPECT_LT(v, first_seed) << "a seed on a facet";
+    }
+  }
+  // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
+  // 5) reaches 0.6 * 5 + 2.5 * 5 = 15.5 from the sheet, level 1 (spacing 10) fills the rest
+  // (level 2's spacing, 20, is over a quarter of the box's 60).
+  std::vector<Vec3> near, far;
+  for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
+    const Vec3& p = plc.vertices[i];
+    const double d = DistanceToSheets(plc, p);
+    EXPECT_GT(d, 3.0 - 1e-9);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
+      EXPECT_LE(p[k], 59.5 - 3.0 + 1e-9);
+    }
+    (d <= 15.5 ? near : far).push_back(p);
+  }
+  ASSERT_FALSE(near.empty());
+  ASSERT_FALSE(far.empty());
+  // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
+  EXPECT_NEAR(ClosestPair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+  // None at 0.
+  PlcOptions off;
+  off.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, off));
+  EXPECT_EQ(plain.seed_points, 0u);
+  EXPECT_EQ(plain.vertices.size(), first_seed);
+}
+
+TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
+  // The same sheet at z = 10 in a box 80 x 80 x 20 ([-0.5, 19.5] in z): level 1's spacing,
+  // 10, is over a quarter of 20, so level 0 (spacing 5) fills the whole box, out to 27
+  // voxels from the sheet, where the box 40 thick below has level 1's spacing 10.
+  PlcOptions o;
+  o.lattice = 1.0;
+  // The seeds beyond level 0's band (15.5 from the sheet).
+  auto far_seeds = [](const Plc& plc) {
+    std::vector<Vec3> far;
+    for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
+      if (DistanceToSheets(plc, plc.vertices[i]) > 15.5) far.push_back(plc.vertices[i]);
+    }
+    return far;
+  };
+  SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
+  ASSERT_GT(thin.seed_points, 0u);
+  for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
+    EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - 1e-9);
+    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + 1e-9);
+  }
+  std::vector<Vec3> far = far_seeds(thin);
+  ASSERT_GE(far.size(), 2u);
+  EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, 1e-9);
+  // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
+  SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
+  far = far_seeds(thick);
+  ASSERT_GE(far.size(), 2u);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+}
+
+TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
+  // A 4 x 4 square sheet at z = 10 and a lone triangle 0.2 voxel above it, tilted by ~2
+  // degrees: TetGen would fill the 0.2-voxel wedge between them with slivers.
+  TriangleMesh fragment;
+  fragment.vertices = {{6, 6, 10.2}, {11, 6, 10.2}, {6, 11, 10.37}};
+  fragment.faces = {{0, 1, 2}};
+  fragment.face_piece = {1};
+  fragment.face_thickness = {2};
+  const TriangleMesh m = Append(Square(4, 16, 10, 4), fragment);
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
+  EXPECT_EQ(plc.dropped_overlaps, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 32u);
+  for (int32_t piece : plc.sheet_piece) EXPECT_EQ(piece, 0);
+  // Off: kept (and TetGen meshes the wedge).
+  PlcOptions keep;
+  keep.overlap_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(m, {20, 20, 20}, {}, keep));
+  EXPECT_EQ(kept.dropped_overlaps, 0u);
+  EXPECT_EQ(kept.sheet_triangles.size(), 33u);
+  // The volume mesh without the fragment has no sliver from it, and says what went.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
+  EXPECT_EQ(r.dropped_overlaps, 1u);
+  EXPECT_EQ(r.conformity.conforming, 32u);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult with, BuildVolumeMesh(m, {20, 20, 20}, {}, [] {
+                            VolumeMeshOptions o;
+                            o.plc.overlap_voxels = 0;
+                            return o;
+                          }()));
+  EXPECT_EQ(with.conformity.conforming, 33u);
+  EXPECT_GT(r.quality.min_dihedral.min, with.quality.min_dihedral.min);
+}
+
+TEST(PlcTest, SheetsMeetingAtAnAngleOrFarApartAreNotOverlaps) {
+  // A vertical sheet whose rim ends 0.2 voxel above a horizontal one (a T, not parallel),
+  // and a parallel sheet 2 voxels above it (beyond the gap): nothing is dropped.
+  const TriangleMesh t = Append(Square(4, 16, 10, 4), Square(10.2, 16, 10, 2, 1, 3, 0));
+  SM_ASSERT_OK_AND_ASSIGN(Plc tee, BuildPlc(t, {20, 20, 20}, {}));
+  EXPECT_EQ(tee.dropped_overlaps, 0u);
+  const TriangleMesh parallel = Append(Square(4, 16, 10, 4), Square(6, 12, 12, 2, 1));
+  SM_ASSERT_OK_AND_ASSIGN(Plc par, BuildPlc(parallel, {20, 20, 20}, {}));
+  EXPECT_EQ(par.dropped_overlaps, 0u);
+  // Within a wider gap the parallel sheets do overlap, and rim triangles go.
+  PlcOptions wide;
+  wide.overlap_voxels = 3;
+  SM_ASSERT_OK_AND_ASSIGN(Plc close, BuildPlc(parallel, {20, 20, 20}, {}, wide));
+  EXPECT_GT(close.dropped_overlaps, 0u);
+  EXPECT_EQ(close.sheet_triangles.size() + close.dropped_overlaps, 40u);
+}
+
+TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
+  const Dims dims{20, 20, 20};
+  const Vec3 w0(11, 11, 11.5);
+  const double in_plane = std::sqrt(72.0);  // |O-W| in A's plane
+  PlcOptions base;
+  base.lattice = 0;
+  // By default W moves 1 voxel (the most it may) straight down: 10.0 degrees.
+  SM_ASSERT_OK_AND_ASSIGN(const Plc a, BuildPlc(NarrowWedge(), dims, {}, base));
+  EXPECT_EQ(a.opened_wedges, 1u);
+  EXPECT_LT(Norm(Nearest(a, w0) - Vec3(11, 11, 10.5)), 1e-12);
+  EXPECT_EQ(PlcOptions().wedge_degrees, 12.0);
+  EXPECT_EQ(PlcOptions().wedge_voxels, 1.0);
+  // Allowed 2 voxels, it moves until the edge stands exactly 12 degrees off A's plane.
+  PlcOptions far = base;
+  far.wedge_voxels = 2;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc b, BuildPlc(NarrowWedge(), dims, {}, far));
+  const Vec3 w = Nearest(b, {11, 11, 10});
+  EXPECT_NEAR(w.z, 12 - in_plane * std::tan(12 * std::numbers::pi / 180), 1e-9);
+  EXPECT_EQ(w.x, 11);
+  EXPECT_EQ(w.y, 11);
+  EXPECT_NEAR(std::asin((12 - w.z) / Norm(w - Vec3(5, 5, 12))) * 180 / std::numbers::pi, 12, 1e-9);
+  // Switched off, nothing moves.
+  PlcOptions off = base;
+  off.wedge_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc c, BuildPlc(NarrowWedge(), dims, {}, off));
+  EXPECT_EQ(c.opened_wedges, 0u);
+  EXPECT_LT(Norm(Nearest(c, w0) - w0), 1e-12);
+  // Triangle G (in the plane z = 10) crosses the plane x = y just beyond H; W's move would
+  // swing H's edge W-(8, 8, 4) through it, so W stays.
+  TriangleMesh blocked = NarrowWedge();
+  blocked.vertices.insert(blocked.vertices.end(), {{11.6, 9.6, 10}, {9.6, 11.6, 10}, {13, 13, 10}});
+  blocked.faces.push_back({5, 6, 7});
+  blocked.face_piece.push_back(1);
+  blocked.face_thickness.push_back(1);
+  for (const PlcOptions& o : {base, far}) {
+    SM_ASSERT_OK_AND_ASSIGN(const Plc d, BuildPlc(blocked, dims, {}, o));
+    EXPECT_EQ(d.opened_wedges, 0u);
+    EXPECT_LT(Norm(Nearest(d, w0) - w0), 1e-12);
+  }
+  // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed).
+  VolumeMeshOptions opened, closed;
+  closed.plc.wedge_degrees = 0;
+  VolumeMeshResult r, s;
+  MeshWithAndWithout(NarrowWedge(), dims, opened, closed, &r, &s);
+  EXPECT_EQ(r.opened_wedges, 1u);
+}
+
+TEST(PlcTest, ASlitFramedByThreeRimEdgesIsClosed) {
+  const Dims dims{20, 20, 20};
+  PlcOptions o;
+  o.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(Slit(), dims, {}, o));
+  EXPECT_EQ(plc.closed_slits, 1u);
+  ASSERT_EQ(plc.sheet_triangles.size(), 5u);
+  // A is now (a, c, x) and (c, b, x): a-c and c-b each bound two triangles, a-b none.
+  const Vec3 a(5, 10, 10), b(15, 10, 10), c(9, 9.9, 10.05);
+  auto count = [&](const Vec3& p, const Vec3& q) {
+    int n = 0;
+    for (const Face& f : plc.sheet_triangles) {
+      int hits = 0;
+      for (uint32_t i : f) hits += plc.vertices[i] == p || plc.vertices[i] == q;
+      n += hits == 2;
+    }
+    return n;
+  };
+  EXPECT_EQ(count(a, c), 2);
+  EXPECT_EQ(count(c, b), 2);
+  EXPECT_EQ(count(a, b), 0);
+  for (const Face& f : plc.sheet_triangles) {
+    const Vec3 n =
+        Cross(plc.vertices[f[1]] - plc.vertices[f[0]], plc.vertices[f[2]] - plc.vertices[f[0]]);
+    EXPECT_GT(n.z, 0) << "orientation kept";
+  }
+  // The sheet covers what it did, and the slit now too.
+  double before = 0, after = 0;
+  const TriangleMesh slit = Slit();
+  for (const auto& f : slit.faces)
+    before += Area({slit.vertices[f[0]], slit.vertices[f[1]], slit.vertices[f[2]]});
+  for (const Face& f : plc.sheet_triangles)
+    after += Area({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
+  EXPECT_NEAR(after, before + Area({a, b, c}), 0.1);  // c is tilted 0.05 off the plane
+  // With caps off (180 degrees) the slit stays, and the worst tetrahedron is worse (16.0
+  // degrees against 31.4).
+  PlcOptions open = o;
+  open.cap_degrees = 180;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc kept, BuildPlc(Slit(), dims, {}, open));
+  EXPECT_EQ(kept.closed_slits, 0u);
+  EXPECT_EQ(kept.sheet_triangles.size(), 4u);
+  VolumeMeshOptions closed_mesh, open_mesh;
+  open_mesh.plc.cap_degrees = 180;
+  VolumeMeshResult r, q;
+  MeshWithAndWithout(Slit(), dims, closed_mesh, open_mesh, &r, &q);
+  EXPECT_EQ(r.closed_slits, 1u);
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,68 @@
+// Shapes and measures shared by the tests of the volume mesh (PLC, TetGen, mesher).
+#ifndef SHEETMESH_TESTS_WORKER_PIPELINE_TET_TET_TEST_SHAPES_H_
+#define SHEETMESH_TESTS_WORKER_PIPELINE_TET_TET_TEST_SHAPES_H_
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/tet/plc.h"
+
+namespace sheetmesh::testing {
+
+// A square sheet of n x n quads at height z, spanning [a, b] in x and y (voxel coordinates).
+inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 0, float thick = 3,
+                           int axis = 2) {
+  TriangleMesh m;
+  auto put = [&](double u, double v) {
+    Vec3 p;
+    p[axis] = z;
+    p[(axis + 1) % 3] = u;
+    p[(axis + 2) % 3] = v;
+    m.vertices.push_back(p);
+  };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) put(a + (b - a) * i / n, a + (b - a) * j / n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t v = j * (n + 1) + i;
+      m.faces.push_back({v, v + 1, v + n + 2});
+      m.faces.push_back({v, v + n + 2, v + n + 1});
+    }
+  m.face_piece.assign(m.faces.size(), piece);
+  m.face_thickness.assign(m.faces.size(), thick);
+  return m;
+}
+
+inline TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
+  const uint32_t off = static_cast<uint32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Face f : b.faces) a.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
+  a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
+  a.face_thickness.insert(a.face_thickness.end(), b.face_thickness.begin(), b.face_thickness.end());
+  return a;
+}
+
+// The distance from p to the PLC's nearest sheet triangle.
+inline double DistanceToSheets(const Plc& plc, const Vec3& p) {
+  double d2 = 1e300;
+  for (const Face& t : plc.sheet_triangles) {
+    d2 = std::min(d2, PointTriangleDistance2(
+                          p, {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]}));
+  }
+  return std::sqrt(d2);
+}
+
+// The smallest distance between two of `pts`.
+inline double ClosestPair(const std::vector<Vec3>& pts) {
+  double best = 1e300;
+  for (size_t i = 0; i < pts.size(); ++i)
+    for (size_t j = i + 1; j < pts.size(); ++j) best = std::min(best, Norm(pts[i] - pts[j]));
+  return best;
+}
+
+}  // namespace sheetmesh::testing
+
+#endif  // SHEETMESH_TESTS_WORKER_PIPELINE_TET_TET_TEST_SHAPES_H_

@@ -1,0 +1,88 @@
+#include "worker/pipeline/tet/tetgen_runner.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <set>
+
+#include "common/file_util.h"
+#include "tests/testing/status_matchers.h"
+#include "tests/testing/temp_dir.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/tetgen_runner.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::Append;
+using ::sheetmesh::testing::ClosestPair;
+using ::sheetmesh::testing::DistanceToSheets;
+using ::sheetmesh::testing::Square;
+using ::sheetmesh::testing::StatusIs;
+using ::sheetmesh::testing::TempDir;
+using ::testing::HasSubstr;
+
+// A stand-in TetGen: a script that behaves badly.
+std::string FakeTetgen(const TempDir& tmp, const std::string& body) {
+  const std::string path = tmp.File("fake-tetgen");
+  EXPECT_TRUE(WriteFileAtomically(path, "#!/bin/sh\n" + body + "\n").ok());
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+  return path;
+}
+
+TEST(TetgenRunnerTest, TetgenSwitchesLeaveOutTetgensOwnVertexInsertion) {
+  // -O2/3: TetGen's flips and smoothing only; its vertex insertion/deletion (operation 4)
+  // listed facet faces no tetrahedron had.
+  // -Y by default: TetGen adds no point on a facet.
+  EXPECT_EQ(TetgenSwitches({}), "-pzQq1.5/10O2/3Y");
+  TetgenOptions o;
+  o.max_radius_edge_ratio = 0;
+  o.max_volume = 5;
+  o.steiner_on_sheets = true;
+  EXPECT_EQ(TetgenSwitches(o), "-pzQa5O2/3");
+}
+
+TEST(TetgenRunnerTest, TetgenThatHangsIsKilledAtTheTimeLimit) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "sleep 30");
+  o.tetgen.time_limit_seconds = 0.5;
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kDeadlineExceeded, HasSubstr("time limit of 0.5 s")));
+}
+
+TEST(TetgenRunnerTest, TetgenThatIsKilledOrFailsGivesTheDocumentedErrors) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "echo dying; kill -9 $$");
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kInternal,
+                       ::testing::AllOf(HasSubstr("signal 9"), HasSubstr("dying"))));
+  o.tetgen.program = FakeTetgen(tmp, "echo 'Error: self-intersection'; exit 3");
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kInternal,
+                       ::testing::AllOf(HasSubstr("code 3"), HasSubstr("self-intersection"))));
+  o.tetgen.program = "no-such-tetgen-program";
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kNotFound));
+}
+
+TEST(TetgenRunnerTest, CancellationKillsTetgen) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.program = FakeTetgen(tmp, "sleep 30");
+  struct Stop : ProgressObserver {
+    bool OnProgress(absl::string_view, double, absl::string_view) override { return false; }
+  } stop;
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o, Progress(&stop, "volume")),
+              StatusIs(absl::StatusCode::kCancelled));
+}
+
+}  // namespace
+}  // namespace sheetmesh

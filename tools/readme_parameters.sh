@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Writes the parameter table (`sheetmesh-pipeline params --markdown`) into README.md
+# between its markers. Usage: tools/readme_parameters.sh [BUILD_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+table=$("$build/worker/pipeline/sheetmesh-pipeline" params --markdown)
+/usr/bin/python3 - "$table" <<'PY'
+import re, sys
+table = sys.argv[1]
+text = open("README.md").read()
+begin = "<!-- parameters: sheetmesh-pipeline params --markdown -->\n"
+end = "<!-- end of parameters -->"
+i, j = text.index(begin) + len(begin), text.index(end)
+open("README.md", "w").write(text[:i] + table + "\n" + text[j:])
+PY

@@ -134,6 +134,10 @@ std::vector<ParamRow> ExtractionRows() {
   rows.push_back(Number("separate.D_ang", SM_MEMBER(extraction.separation.dihedral_degrees),
                         "(0, 180]", "degrees",
                         "D_ang: two triangles meeting below this dihedral angle are not flat"));
+  rows.push_back(Integer("separate.widen_rings", SM_MEMBER(extraction.separation.widen_rings),
+                         "[0, 5]", "",
+                         "a piece that leaked through a missed cell is flooded again with the "
+                         "non-flat set widened by this many mesh edges (0: the paper)"));
   rows.push_back(Bool("remove_minor.enabled", SM_MEMBER(extraction.remove_minor),
                       "remove the pieces with fewer than M voxels"));
   AddExtendRows("recover", "recover the gaps separation cut, extending within the image (Fig. 7)",

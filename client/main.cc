@@ -14,7 +14,6 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
-#include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -24,6 +23,7 @@
 #include "client/client.h"
 #include "client/parameter_flags.h"
 #include "common/file_util.h"
+#include "common/flags_help.h"
 #include "common/status_macros.h"
 #include "google/protobuf/util/json_util.h"
 
@@ -243,12 +243,12 @@ absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
 
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
-  absl::FlagsUsageConfig usage;
-  usage.contains_help_flags = [](absl::string_view file) {
-    return absl::EndsWith(file, "client/main.cc");
-  };
-  usage.contains_helpshort_flags = usage.contains_help_flags;
-  absl::SetFlagsUsageConfig(usage);
+  if (WantsHelp(argc, argv)) {
+    std::cout << kUsage << "\nflags:\n";
+    PrintFlagsOf("client/main.cc", std::cout);
+    std::cout << "  and every pipeline parameter as a flag of its name (mesh only)\n";
+    return 0;
+  }
   v1::PipelineParameters parameters;
   v1::VolumeFormat format;
   absl::StatusOr<std::vector<char*>> unparsed =

@@ -1,14 +1,14 @@
 #include "common/progress.h"
 
 #include <algorithm>
-#include <cassert>
 
 #include "absl/strings/str_cat.h"
+#include "common/assert.h"
 
 namespace sheetmesh {
 
 Progress Progress::Sub(double begin, double end) const {
-  assert(0.0 <= begin && begin <= end && end <= 1.0);
+  SM_ASSERT(0.0 <= begin && begin <= end && end <= 1.0);
   Progress sub = *this;
   const double width = end_ - begin_;
   sub.begin_ = begin_ + width * begin;

@@ -4,9 +4,9 @@
 #define SHEETMESH_COMMON_PROGRESS_H_
 
 #include <string>
-#include "absl/strings/string_view.h"
 
 #include "absl/status/status.h"
+#include "absl/strings/string_view.h"
 
 namespace sheetmesh {
 

@@ -12,13 +12,12 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
-#include "absl/flags/usage_config.h"
-#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
-#include "server/server.h"
 #include "common/file_util.h"
+#include "common/flags_help.h"
 #include "common/huge_pages.h"
+#include "server/server.h"
 
 ABSL_FLAG(std::string, address, "127.0.0.1:50051",
           "host:port to listen on (port 0: any free port)");
@@ -45,14 +44,11 @@ int main(int argc, char** argv) {
   // bench/RESULTS.md, "Service").
   sheetmesh::UseTransparentHugePages(argc, argv, /*max_arenas=*/2);
   absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
-  // --help lists this file's flags (Abseil's default looks for a file named after the
-  // program and finds none).
-  absl::FlagsUsageConfig usage;
-  usage.contains_help_flags = [](absl::string_view file) {
-    return absl::EndsWith(file, "server/main.cc");
-  };
-  usage.contains_helpshort_flags = usage.contains_help_flags;
-  absl::SetFlagsUsageConfig(usage);
+  if (sheetmesh::WantsHelp(argc, argv)) {
+    std::cout << "sheetmesh-server --data_dir=DIR [flags]\n\n";
+    sheetmesh::PrintFlagsOf("server/main.cc", std::cout);
+    return 0;
+  }
   absl::ParseCommandLine(argc, argv);
   // Signals go to one thread that waits for them.
   sigset_t signals;

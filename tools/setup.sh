@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages sheetmesh needs (only those missing), then configures and
-# builds the project into ./build (Release; $SHEETMESH_BUILD_DIR and $SHEETMESH_BUILD_TYPE
-# choose others). Safe to run again: quick when all is in place.
+# builds the project in Release into ./build ($SHEETMESH_BUILD_DIR chooses another folder,
+# SHEETMESH_ASSERTS=ON turns the project's SM_ASSERT checks on). Safe to run again: quick
+# when all is in place.
 # Usage: tools/setup.sh            (as root on Debian 12, or with sudo available)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,11 +38,12 @@ if ((${#missing[@]})); then
 fi
 
 build_dir=${SHEETMESH_BUILD_DIR:-build}
-build_type=${SHEETMESH_BUILD_TYPE:-Release}
+asserts=${SHEETMESH_ASSERTS:-OFF}
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 if [ ! -f "$build_dir/build.ninja" ] ||
-   ! grep -q "^CMAKE_BUILD_TYPE:STRING=$build_type\$" "$build_dir/CMakeCache.txt"; then
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" "${launcher[@]}" >/dev/null
+   ! grep -q "^SHEETMESH_ASSERTS:BOOL=$asserts\$" "$build_dir/CMakeCache.txt"; then
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DSHEETMESH_ASSERTS="$asserts" \
+    "${launcher[@]}" >/dev/null
 fi
 cmake --build "$build_dir" -j "$(nproc)"

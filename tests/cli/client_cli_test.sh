@@ -31,8 +31,8 @@ s="--server=127.0.0.1:$(cat "$tmp/port")"
 
 outputs '^SERVING$' "$cli" health $s || fail health
 # --help lists each program's own flags.
-outputs -- '--data_dir' "$server_bin" --help || fail "sheetmesh-server --help lists no flags"
-outputs -- '--server' "$cli" --help || fail "sheetmesh --help lists no flags"
+outputs '--data_dir' "$server_bin" --help || fail "sheetmesh-server --help lists no flags"
+outputs '--server' "$cli" --help || fail "sheetmesh --help lists no flags"
 "$pipeline" phantom --dims=64x64x64 --seed=2 -o "$tmp/root/rock_64x64x64_u8.raw" > /dev/null
 
 # mesh by upload: plain progress lines (not a terminal), files downloaded.

@@ -45,7 +45,17 @@ TEST_F(ServiceTest, SameRequestIdGivesOneJob) {
 }
 
 TEST_F(ServiceTest, WatchSeesEveryStageInOrderAndTheResult) {
+  // One worker, held by a long job until the watch has begun on the queued job: then the
+  // watch sees the job from before its first stage, however busy the machine is.
+  options_.workers = 1;
   StartServer();
+  const std::string slow = WritePhantom(options_.allowed_roots[0], "slow", 160, 3);
+  v1::CreateJobRequest hold;
+  hold.set_request_id("hold-the-worker");
+  hold.mutable_input()->set_volume_path(slow);
+  hold.mutable_parameters()->set_extract(true);
+  auto blocker = client_->CreateJob(hold);
+  ASSERT_TRUE(blocker.ok()) << blocker.status();
   const std::string vol = WritePhantom(dir_.path(), "rock", 64, 2);
   auto d = client_->Upload(vol);
   ASSERT_TRUE(d.ok());
@@ -56,7 +66,12 @@ TEST_F(ServiceTest, WatchSeesEveryStageInOrderAndTheResult) {
   std::vector<int> stages;
   std::vector<std::string> names;
   int count = 0;
+  bool released = false;
   auto final_job = client_->Watch(job->name(), [&](const v1::WatchJobResponse& m) {
+    if (!released) {
+      EXPECT_EQ(m.job().state(), v1::QUEUED) << "the worker was not held";
+      released = client_->CancelJob(blocker->name()).ok();
+    }
     // Stage 0: leased, not begun.
     if (m.job().state() != v1::RUNNING || m.job().progress().stage_index() == 0) return;
     const int i = m.job().progress().stage_index();

@@ -9,14 +9,13 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
-#include "absl/flags/reflection.h"
 #include "absl/flags/usage.h"
-#include "absl/flags/usage_config.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
+#include "common/flags_help.h"
 #include "common/huge_pages.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/cli/info_command.h"
@@ -250,27 +249,15 @@ void PrintHelp(const std::string& command) {
               << params << "\n";
   }
   std::cout << "Other flags:\n";
-  std::vector<std::pair<std::string, std::string>> own;
-  for (const auto& [name, flag] : absl::GetAllFlags()) {
-    if (absl::EndsWith(flag->Filename(), "cli/main.cc")) {
-      own.emplace_back(std::string(name),
-                       absl::StrCat("  --", name, " (default '", flag->DefaultValue(), "')\n      ",
-                                    flag->Help(), "\n"));
-    }
-  }
-  std::sort(own.begin(), own.end());
-  for (const auto& [_, text] : own) std::cout << text;
+  PrintFlagsOf("cli/main.cc", std::cout);
 }
 
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
-  for (int i = 1; i < argc; ++i) {
-    const absl::string_view a = argv[i];
-    if (a == "--help" || a == "-help" || a == "-h" || a == "--helpfull") {
-      PrintHelp(command);
-      return 0;
-    }
+  if (WantsHelp(argc, argv)) {
+    PrintHelp(command);
+    return 0;
   }
   if (command.empty()) {
     std::cerr << kUsage << "\n";

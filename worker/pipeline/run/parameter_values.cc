@@ -1,5 +1,4 @@
 // The parameter values: their JSON and text forms, and the checks of type and range.
-#include <cassert>
 #include <cmath>
 
 #include "absl/strings/ascii.h"
@@ -9,6 +8,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "common/assert.h"
 #include "common/json_text.h"
 #include "worker/pipeline/run/parameter_rows.h"
 #include "worker/pipeline/run/parameters_json.h"
@@ -225,17 +225,17 @@ ParamRange ParamRange::Parse(absl::string_view text) {
     r.zero_too = true;
     t = absl::StripAsciiWhitespace(t);
   }
-  assert(t.size() >= 5 && (t.front() == '(' || t.front() == '[') &&
-         (t.back() == ')' || t.back() == ']'));
+  SM_ASSERT(t.size() >= 5 && (t.front() == '(' || t.front() == '[') &&
+            (t.back() == ')' || t.back() == ']'));
   r.lo_open = t.front() == '(';
   r.hi_open = t.back() == ')';
   const std::vector<std::string> parts =
       absl::StrSplit(t.substr(1, t.size() - 2), ',', absl::SkipWhitespace());
-  assert(parts.size() == 2);
+  SM_ASSERT(parts.size() == 2);
   [[maybe_unused]] const bool ok = parts.size() == 2 &&
                                    absl::SimpleAtod(absl::StripAsciiWhitespace(parts[0]), &r.lo) &&
                                    absl::SimpleAtod(absl::StripAsciiWhitespace(parts[1]), &r.hi);
-  assert(ok && r.lo <= r.hi);
+  SM_ASSERT(ok && r.lo <= r.hi);
   return r;
 }
 

@@ -1,6 +1,5 @@
 #include "worker/pipeline/run/parameters.h"
 
-#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -13,6 +12,7 @@
 #include "absl/strings/str_replace.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "common/assert.h"
 #include "common/json_text.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/run/parameter_rows.h"
@@ -91,7 +91,7 @@ const std::vector<ParamSpec>& Parameters() {
 
 const ParamRow& RowOf(const ParamSpec& spec) {
   const size_t i = static_cast<size_t>(&spec - Parameters().data());
-  assert(i < ParamRows().size());
+  SM_ASSERT(i < ParamRows().size());
   return ParamRows()[i];
 }
 

@@ -1,23 +1,22 @@
 #include "worker/pipeline/similarity/similarity.h"
 
-#include <nlohmann/json.hpp>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <limits>
 #include <nanoflann.hpp>
+#include <nlohmann/json.hpp>
 #include <vector>
 
+#include "common/assert.h"
 #include "common/status_macros.h"
 
 namespace sheetmesh {
 
 SimilarityScore ScoreModel(const VoxelSet& model, const VoxelSet& image) {
-  assert(model.dims() == image.dims());
+  SM_ASSERT(model.dims() == image.dims());
   SimilarityScore s;
   s.c_image = image.size();
   s.c_model = model.size();
@@ -106,7 +105,7 @@ absl::StatusOr<double> HausdorffDistance(const VoxelSet& a, const VoxelSet& b,
 }
 
 VoxelSet GridModel(const VoxelSet& image, int k) {
-  assert(k >= 1);
+  SM_ASSERT(k >= 1);
   if (k == 1) return image;
   const Dims& d = image.dims();
   VoxelSet::Builder b(d);

@@ -1,7 +1,8 @@
 #include "worker/pipeline/voxel/voxel_set.h"
 
 #include <algorithm>
-#include <cassert>
+
+#include "common/assert.h"
 
 namespace sheetmesh {
 
@@ -37,7 +38,7 @@ int64_t VoxelSet::Find(int64_t x, int64_t y, int64_t z) const {
 }
 
 Index3 VoxelSet::CoordOf(uint64_t index) const {
-  assert(index < size());
+  SM_ASSERT(index < size());
   // The run holding `index`: last run whose first index is <= index.
   const auto it = std::upper_bound(run_first_.begin(), run_first_.end() - 1, index);
   const int64_t run = (it - run_first_.begin()) - 1;
@@ -85,7 +86,7 @@ VoxelSet VoxelSet::FromIndices(const Dims& dims, std::vector<Index3> indices) {
 }
 
 VoxelSet VoxelSet::Filter(std::span<const uint8_t> keep) const {
-  assert(keep.size() == size());
+  SM_ASSERT(keep.size() == size());
   Builder builder(dims_);
   ForEachRun([&](int32_t y, int32_t z, const Run& run, uint64_t first) {
     int32_t start = -1;
@@ -128,14 +129,14 @@ void VoxelSet::Builder::AddRun(int64_t y, int64_t z, int64_t x0, int64_t x1) {
   x1 = std::min<int64_t>(x1, d.nx);
   if (x0 >= x1) return;
   const int64_t row = z * d.ny + y;
-  assert(row >= current_row_);
+  SM_ASSERT(row >= current_row_);
   CloseRowsUpTo(row);
   std::vector<Run>& runs = set_.runs_;
   const bool same_row = static_cast<int64_t>(runs.size()) > set_.row_begin_[row];
   if (same_row && runs.back().x1 >= x0) {
-    assert(x0 >= runs.back().x0);
-    const int32_t grow = static_cast<int32_t>(std::max<int64_t>(x1, runs.back().x1)) -
-                         runs.back().x1;
+    SM_ASSERT(x0 >= runs.back().x0);
+    const int32_t grow =
+        static_cast<int32_t>(std::max<int64_t>(x1, runs.back().x1)) - runs.back().x1;
     runs.back().x1 += grow;
     set_.run_first_.back() += grow;
     return;
@@ -206,7 +207,7 @@ void SubtractRuns(std::span<const Run> a, std::span<const Run> b, std::vector<Ru
 
 template <class Op>
 VoxelSet RowWise(const VoxelSet& a, const VoxelSet& b, Op op) {
-  assert(a.dims() == b.dims());
+  SM_ASSERT(a.dims() == b.dims());
   VoxelSet::Builder builder(a.dims());
   std::vector<Run> row;
   for (int64_t z = 0; z < a.dims().nz; ++z) {
@@ -222,9 +223,7 @@ VoxelSet RowWise(const VoxelSet& a, const VoxelSet& b, Op op) {
 }  // namespace
 
 VoxelSet Union(const VoxelSet& a, const VoxelSet& b) { return RowWise(a, b, UnionRuns); }
-VoxelSet Intersection(const VoxelSet& a, const VoxelSet& b) {
-  return RowWise(a, b, IntersectRuns);
-}
+VoxelSet Intersection(const VoxelSet& a, const VoxelSet& b) { return RowWise(a, b, IntersectRuns); }
 VoxelSet Difference(const VoxelSet& a, const VoxelSet& b) { return RowWise(a, b, SubtractRuns); }
 
 }  // namespace sheetmesh

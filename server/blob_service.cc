@@ -3,8 +3,8 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "server/status_util.h"
 #include "common/file_util.h"
+#include "server/status_util.h"
 
 namespace sheetmesh::server {
 

@@ -6,11 +6,11 @@
 #include <climits>
 
 #include "absl/strings/str_cat.h"
-#include "server/references.h"
-#include "server/status_util.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
 #include "common/version.h"
+#include "server/references.h"
+#include "server/status_util.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::server {

@@ -7,10 +7,10 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
 #include "absl/time/clock.h"
-#include "google/protobuf/util/time_util.h"
-#include "server/references.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
+#include "google/protobuf/util/time_util.h"
+#include "server/references.h"
 
 namespace sheetmesh::server {
 
@@ -128,6 +128,8 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
   if (!in.volume_path().empty()) {
     SM_ASSIGN_OR_RETURN(v.path, ResolveReference(in.volume_path(), options_.allowed_roots));
     v.display_name = in.volume_path();
+    v.data_files = true;
+    v.data_file_roots = options_.allowed_roots;
     return v;
   }
   return absl::InvalidArgumentError(absl::StrCat(job.name(), ": input names no volume"));

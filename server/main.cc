@@ -18,6 +18,7 @@
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
 #include "server/server.h"
+#include "worker/runtime/job_process.h"
 
 ABSL_FLAG(std::string, address, "127.0.0.1:50051",
           "host:port to listen on (port 0: any free port)");
@@ -37,8 +38,17 @@ ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
 ABSL_FLAG(bool, cache, true, "reuse results of identical work");
 ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish");
 ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
+ABSL_FLAG(bool, isolate_jobs, true,
+          "run each job's pipeline in a child process with the limits below (false: in a "
+          "worker thread)");
+ABSL_FLAG(double, job_memory_gb, 0,
+          "each job's memory limit, GiB (0: three quarters of the machine's memory)");
+ABSL_FLAG(int64_t, job_cpu_seconds, 0, "each job's CPU time limit, seconds (0: none)");
+ABSL_FLAG(int64_t, job_time_limit_seconds, 86400, "each job's wall-clock limit, seconds");
 
 int main(int argc, char** argv) {
+  // A job's child process (server.h, isolate_jobs) runs the pipeline and ends here.
+  if (const int code = sheetmesh::runtime::RunJobChildIfAsked(argc, argv); code >= 0) return code;
   // Two malloc arenas: upload buffers allocated by gRPC's threads and freed by the
   // handlers' stay in a bounded heap instead of one arena per thread (measured in
   // bench/RESULTS.md, "Service").
@@ -83,6 +93,14 @@ int main(int argc, char** argv) {
   o.max_attempts = absl::GetFlag(FLAGS_max_attempts);
   o.heartbeat = absl::Seconds(absl::GetFlag(FLAGS_heartbeat_seconds));
   o.cache = absl::GetFlag(FLAGS_cache);
+  o.isolate_jobs = absl::GetFlag(FLAGS_isolate_jobs);
+  const double gb = absl::GetFlag(FLAGS_job_memory_gb);
+  o.job_limits.memory_bytes = gb > 0 ? static_cast<uint64_t>(gb * double(uint64_t{1} << 30))
+                                     : sheetmesh::runtime::DefaultJobMemory();
+  o.job_limits.cpu_seconds =
+      static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_job_cpu_seconds)));
+  o.job_limits.wall =
+      absl::Seconds(std::max<int64_t>(1, absl::GetFlag(FLAGS_job_time_limit_seconds)));
   auto server = sheetmesh::server::Server::Start(o);
   if (!server.ok()) {
     std::cerr << "sheetmesh-server: " << server.status() << "\n";

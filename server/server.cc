@@ -8,11 +8,11 @@
 #include <condition_variable>
 
 #include "absl/strings/str_cat.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
 #include "server/blob_service.h"
 #include "server/job_service.h"
 #include "server/volume_service.h"
-#include "common/file_util.h"
-#include "common/status_macros.h"
 #include "worker/runtime/worker_pool.h"
 
 namespace sheetmesh::server {
@@ -122,7 +122,10 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   runtime::WorkerPoolOptions wo;
   wo.workers = o.workers;
   wo.name = absl::StrCat("local-", ::getpid());
-  wo.scratch_dir = o.data_dir + "/scratch";
+  wo.run.scratch_dir = o.data_dir + "/scratch";
+  wo.run.isolate = o.isolate_jobs;
+  wo.run.program = o.job_program;
+  wo.run.limits = o.job_limits;
   wo.renew_interval = o.lease / 3;
   s.pool = std::make_unique<runtime::WorkerPool>(s.host.get(), wo);
   s.pool->Start();

@@ -16,6 +16,8 @@ namespace grpc {
 class Server;
 }
 
+#include "worker/runtime/job_process.h"
+
 namespace sheetmesh::server {
 
 struct ServerOptions {
@@ -33,6 +35,11 @@ struct ServerOptions {
   absl::Duration heartbeat = absl::Seconds(5);  // WatchJob heartbeat
   bool cache = true;                            // reuse results of identical work
   int max_message_bytes = 4 << 20;              // gRPC message limit (pieces are 1 MiB)
+  // Each job runs in a child process of `job_program` (""; this program, which must call
+  // runtime::RunJobChildIfAsked in main) with these limits; false: in a worker thread.
+  bool isolate_jobs = true;
+  std::string job_program;
+  runtime::JobLimits job_limits;
 };
 
 // Thread-safe.

@@ -7,10 +7,10 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
-#include "google/protobuf/util/time_util.h"
-#include "server/job_store.h"
 #include "common/random.h"
 #include "common/status_macros.h"
+#include "google/protobuf/util/time_util.h"
+#include "server/job_store.h"
 
 namespace sheetmesh::server {
 namespace {

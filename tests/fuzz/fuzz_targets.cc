@@ -62,7 +62,7 @@ void FuzzVolumeFile(const uint8_t* data, size_t size) {
 void FuzzTextParsers(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   (void)ParsePhaseSelection(text);
-  (void)DimsFromFileName(text);
+  (void)DimsFromFileName(text).ok();
   (void)ParseDType(text);
   (void)ParseByteOrder(text);
 }

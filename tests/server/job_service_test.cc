@@ -89,7 +89,7 @@ TEST_F(ServiceTest, WatchSeesEveryStageInOrderAndTheResult) {
   for (int i = 0; i < count; ++i) expected[i] = i + 1;
   EXPECT_EQ(stages, expected) << absl::StrJoin(names, ",");
   EXPECT_EQ(names.front(), "read");
-  EXPECT_EQ(names.back(), "write");
+  EXPECT_EQ(names.back(), "write") << absl::StrJoin(names, ",");
   // Artifacts with digests and media types, readable.
   std::map<std::string, v1::Artifact> by_name;
   for (const auto& a : final_job->artifacts()) by_name[a.name()] = a;

@@ -65,6 +65,8 @@ class ServiceTest : public ::testing::Test {
     options_.data_dir = dir_.File("data");
     options_.workers = 2;
     options_.heartbeat = absl::Milliseconds(500);
+    // Jobs run in children of the real server program (this test binary cannot be one).
+    options_.job_program = SHEETMESH_SERVER_BIN;
     std::filesystem::create_directories(dir_.File("root"));
     options_.allowed_roots = {dir_.File("root")};
   }

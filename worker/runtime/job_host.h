@@ -26,6 +26,10 @@ struct ProgressUpdate {
 struct LocalVolume {
   std::string path;
   std::string display_name;  // for messages: the name the client gave
+  // Files the volume names itself (a detached NRRD's data file) may be read when
+  // `data_files`, under these roots only; an upload may name none.
+  bool data_files = false;
+  std::vector<std::string> data_file_roots;
 };
 
 // Implementations must be thread-safe: every worker thread calls them.

@@ -6,6 +6,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
+#include "common/file_util.h"
 #include "common/progress.h"
 #include "common/status_macros.h"
 #include "worker/runtime/job_parameters.h"
@@ -51,16 +52,14 @@ std::string MediaTypeOf(const std::string& name) {
 }
 
 absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::string& worker,
-                                                 JobHost& host, const std::string& scratch_dir) {
+                                                 JobHost& host, const JobRunOptions& run) {
   SM_ASSIGN_OR_RETURN(LocalVolume volume, host.ResolveInput(job));
   SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
   const std::string dir =
-      (std::filesystem::path(scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}})).string();
+      (std::filesystem::path(run.scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}}))
+          .string();
   std::error_code ec;
   std::filesystem::remove_all(dir, ec);
-  options.output.dir = dir;
-  HostObserver observer(host, job.name(), worker, PlannedStages(options));
-  absl::StatusOr<PipelineReport> report = RunPipeline(options, Progress(&observer, "read"));
   struct Cleanup {
     std::string dir;
     ~Cleanup() {
@@ -68,17 +67,51 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
       std::filesystem::remove_all(dir, e);
     }
   } cleanup{dir};
-  if (!report.ok()) {
-    // Name the volume the client knows, not the server's path for it.
-    if (!volume.display_name.empty() && volume.display_name != volume.path) {
-      return absl::Status(
-          report.status().code(),
-          absl::StrReplaceAll(report.status().message(), {{volume.path, volume.display_name}}));
+  options.output.dir = dir;
+  HostObserver observer(host, job.name(), worker, PlannedStages(options));
+  std::vector<std::string> files;
+  if (run.isolate) {
+    SM_RETURN_IF_ERROR(MakeDirs(dir));
+    JobSpec spec;
+    spec.volume_path = volume.path;
+    spec.display_name = volume.display_name;
+    spec.output_dir = dir;
+    spec.parameters = job.resolved_parameters();
+    if (spec.parameters.empty()) {  // a job stored before parameters were resolved
+      SM_ASSIGN_OR_RETURN(spec.parameters, ResolveJobParameters(job.parameters(), job.input()));
     }
-    return report.status();
+    spec.data_files = volume.data_files;
+    spec.allowed_roots = volume.data_file_roots;
+    std::string program = run.program;
+    if (program.empty()) {
+      SM_ASSIGN_OR_RETURN(program, SelfPath());
+    }
+    SM_ASSIGN_OR_RETURN(files, RunJobInChild(program, spec, run.limits,
+                                             [&](const std::string& stage, double fraction,
+                                                 const std::string& message) {
+                                               return observer.OnProgress(stage, fraction, message);
+                                             }));
+  } else {
+    options.input.open.limits.confine_named_files = true;
+    options.input.open.limits.named_file_roots =
+        volume.data_files ? volume.data_file_roots : std::vector<std::string>{};
+    absl::StatusOr<PipelineReport> report = RunPipeline(options, Progress(&observer, "read"));
+    if (!report.ok()) {
+      // Name the volume the client knows, not the server's path for it.
+      if (!volume.display_name.empty() && volume.display_name != volume.path) {
+        return absl::Status(
+            report.status().code(),
+            absl::StrReplaceAll(report.status().message(), {{volume.path, volume.display_name}}));
+      }
+      return report.status();
+    }
+    files = report->files;
   }
   std::vector<v1::Artifact> artifacts;
-  for (const std::string& name : report->files) {
+  for (const std::string& name : files) {
+    if (name.find('/') != std::string::npos || name == ".." || name.empty()) {
+      return absl::InternalError(absl::StrCat("the job named an output '", name, "'"));
+    }
     SM_ASSIGN_OR_RETURN(v1::Artifact a,
                         host.PutArtifact(job.name(), dir + "/" + name, MediaTypeOf(name)));
     a.set_name(name);

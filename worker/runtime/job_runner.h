@@ -8,17 +8,27 @@
 
 #include "absl/status/statusor.h"
 #include "worker/runtime/job_host.h"
+#include "worker/runtime/job_process.h"
 
 namespace sheetmesh::runtime {
 
 // Media type of an output file, by its extension.
 std::string MediaTypeOf(const std::string& file_name);
 
-// Runs `job` for `worker`, writing outputs under `scratch_dir` (removed afterwards).
+// How jobs run: in a child process (the default; see job_process.h) or in this one.
+struct JobRunOptions {
+  std::string scratch_dir = "/tmp";  // each job writes into a folder of its own here
+  bool isolate = true;               // run the pipeline in a child process
+  std::string program;               // the child's program ("": this one, /proc/self/exe)
+  JobLimits limits;                  // the child's limits (memory, CPU, wall)
+};
+
+// Runs `job` for `worker`, writing outputs under options.scratch_dir (removed afterwards).
 // Returns the stored artifacts; errors of the pipeline pass through with their codes
-// (kCancelled when the host asked to stop).
+// (kCancelled when the host asked to stop), and an isolated run that crashes or passes a
+// limit fails naming why (job_process.h).
 absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::string& worker,
-                                                 JobHost& host, const std::string& scratch_dir);
+                                                 JobHost& host, const JobRunOptions& options);
 
 }  // namespace sheetmesh::runtime
 

@@ -78,8 +78,7 @@ void WorkerPool::Work(int index) {
       lost_[job.name()] = false;
     }
     ++busy_;
-    absl::StatusOr<std::vector<v1::Artifact>> result =
-        RunJob(job, worker, host, options_.scratch_dir);
+    absl::StatusOr<std::vector<v1::Artifact>> result = RunJob(job, worker, host, options_.run);
     bool lost;
     {
       std::lock_guard<std::mutex> lock(mu_);

@@ -13,13 +13,14 @@
 
 #include "absl/time/time.h"
 #include "worker/runtime/job_host.h"
+#include "worker/runtime/job_runner.h"
 
 namespace sheetmesh::runtime {
 
 struct WorkerPoolOptions {
   int workers = 0;                                      // threads (0: the number of cores)
   std::string name = "worker";                          // prefix of the workers' lease names
-  std::string scratch_dir = "/tmp";                     // where jobs write before upload
+  JobRunOptions run;                                    // where and how each job runs
   absl::Duration renew_interval = absl::Seconds(5);     // lease renewal period
   absl::Duration lease_poll = absl::Milliseconds(500);  // Lease() wait per attempt
 };

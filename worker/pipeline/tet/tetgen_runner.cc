@@ -20,25 +20,10 @@
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
+#include "common/subprocess.h"
 
 namespace sheetmesh {
 namespace {
-
-// The absolute path of `program` (searched on PATH when it has no slash).
-absl::StatusOr<std::string> Resolve(const std::string& program) {
-  if (program.find('/') != std::string::npos) {
-    if (::access(program.c_str(), X_OK) == 0) return program;
-    return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' is not executable"));
-  }
-  const char* path = getenv("PATH");
-  for (absl::string_view dir :
-       absl::StrSplit(path ? path : "/usr/bin:/bin", ':', absl::SkipEmpty())) {
-    const std::string candidate = absl::StrCat(dir, "/", program);
-    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-  }
-  return absl::NotFoundError(
-      absl::StrCat("TetGen program '", program, "' was not found on PATH (Debian package tetgen)"));
-}
 
 std::string Tail(const std::string& path, size_t bytes = 600) {
   auto text = ReadFileToString(path);
@@ -192,57 +177,40 @@ std::string TetgenSwitches(const TetgenOptions& o) {
 
 absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
                                   const Progress& progress) {
-  SM_ASSIGN_OR_RETURN(const std::string program, Resolve(options.program));
+  absl::StatusOr<std::string> program = FindProgram(options.program);
+  if (!program.ok()) {
+    return absl::NotFoundError(
+        absl::StrCat("TetGen ", program.status().message(), " (Debian package tetgen)"));
+  }
   SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
   const std::string poly = scratch.dir() + "/plc.poly";
   SM_RETURN_IF_ERROR(WriteFileAtomically(poly, plc.ToPoly()));
   const std::string log = scratch.dir() + "/tetgen.log";
   const std::string switches = TetgenSwitches(options);
 
-  // Everything the child needs is prepared before fork: after it, only async-signal-safe
-  // calls until exec.
-  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (out < 0) return ErrnoStatus(errno, log);
-  std::vector<std::string> args = {program, switches, poly};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  struct rlimit mem;
-  mem.rlim_cur = mem.rlim_max = options.memory_limit_bytes;
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(out);
-    return ErrnoStatus(errno, "fork for TetGen");
-  }
-  if (pid == 0) {
-    ::dup2(out, 1);
-    ::dup2(out, 2);
-    ::setrlimit(RLIMIT_AS, &mem);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  ::close(out);
+  SubprocessOptions spawn;
+  spawn.argv = {*program, switches, poly};
+  spawn.output_path = log;
+  spawn.memory_limit_bytes = options.memory_limit_bytes;
+  SM_ASSIGN_OR_RETURN(Subprocess child, Subprocess::Start(spawn));
   const auto start = std::chrono::steady_clock::now();
-  int status = 0;
-  for (;;) {
-    const pid_t r = ::waitpid(pid, &status, WNOHANG);
-    if (r == pid) break;
-    if (r < 0 && errno != EINTR) return ErrnoStatus(errno, "waiting for TetGen");
+  std::optional<ChildExit> exit;
+  while (!(exit = child.Poll())) {
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     absl::Status cancel =
         progress.Update(std::min(0.99, elapsed / options.time_limit_seconds), "TetGen running");
     if (elapsed > options.time_limit_seconds || !cancel.ok()) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
+      child.Kill();
+      child.Wait();
       if (!cancel.ok()) return cancel;
       return absl::DeadlineExceededError(absl::StrCat(
           "TetGen exceeded the time limit of ", options.time_limit_seconds, " s and was killed"));
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  if (WIFSIGNALED(status)) {
-    const int sig = WTERMSIG(status);
+  if (exit->signaled) {
+    const int sig = exit->code;
     const std::string tail = Tail(log);
     if (tail.find("bad_alloc") != std::string::npos || tail.find("memory") != std::string::npos) {
       return absl::ResourceExhaustedError(absl::StrCat(
@@ -251,9 +219,10 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     return absl::InternalError(absl::StrCat("TetGen crashed with signal ", sig, " (",
                                             strsignal(sig), "); its last output: ", tail));
   }
-  const int code = WEXITSTATUS(status);
+  const int code = exit->code;
   if (code == 127 && Tail(log).empty()) {
-    return absl::NotFoundError(absl::StrCat("TetGen program '", program, "' could not be started"));
+    return absl::NotFoundError(
+        absl::StrCat("TetGen program '", *program, "' could not be started"));
   }
   if (code != 0) {
     return absl::InternalError(

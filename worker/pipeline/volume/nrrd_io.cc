@@ -1,13 +1,12 @@
 #include "worker/pipeline/volume/nrrd_io.h"
 
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <vector>
-
-#include <unistd.h>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
@@ -16,6 +15,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "common/file_util.h"
+#include "common/paths.h"
 #include "common/status_macros.h"
 
 namespace sheetmesh {
@@ -103,8 +103,7 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
       SM_ASSIGN_OR_RETURN(h.dtype, ParseNrrdType(value, path));
       have_type = true;
     } else if (key == "sizes") {
-      std::vector<absl::string_view> parts =
-          absl::StrSplit(value, ' ', absl::SkipEmpty());
+      std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
       int64_t n[3] = {0, 0, 0};
       if (parts.size() != 3 || !absl::SimpleAtoi(parts[0], &n[0]) ||
           !absl::SimpleAtoi(parts[1], &n[1]) || !absl::SimpleAtoi(parts[2], &n[2])) {
@@ -151,7 +150,8 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
         const double len = Norm(v);
         if (!(len > 0)) return FieldError(path, key, value, "has a zero-length direction");
         if (std::abs(v[k]) < len * (1 - 1e-6)) {
-          return FieldError(path, key, value, "is not axis-aligned; oblique grids are not supported");
+          return FieldError(path, key, value,
+                            "is not axis-aligned; oblique grids are not supported");
         }
         h.placement.spacing[k] = len;
       }
@@ -161,8 +161,8 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
       }
     } else if (key == "space units") {
       std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
-      if (!parts.empty()) h.placement.unit = std::string(absl::StripPrefix(
-          absl::StripSuffix(parts[0], "\""), "\""));
+      if (!parts.empty())
+        h.placement.unit = std::string(absl::StripPrefix(absl::StripSuffix(parts[0], "\""), "\""));
     } else if (key == "data file" || key == "datafile") {
       if (absl::StartsWith(value, "LIST") || value.find('%') != absl::string_view::npos) {
         return FieldError(path, key, value, "lists several files; only one data file is supported");
@@ -192,14 +192,17 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
       return absl::InvalidArgumentError(
           absl::StrCat(path, ": NRRD header is longer than ", kMaxHeaderBytes, " bytes"));
     }
-    return absl::OutOfRangeError(
-        absl::StrCat(path, ": NRRD header has no closing blank line in its first ", text.size(),
-                     " bytes"));
+    return absl::OutOfRangeError(absl::StrCat(
+        path, ": NRRD header has no closing blank line in its first ", text.size(), " bytes"));
   }
-  if (!have_dimension) return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'dimension'"));
-  if (!have_type) return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'type'"));
-  if (!have_sizes) return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'sizes'"));
-  if (!have_encoding) return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'encoding'"));
+  if (!have_dimension)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'dimension'"));
+  if (!have_type)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'type'"));
+  if (!have_sizes)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'sizes'"));
+  if (!have_encoding)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'encoding'"));
   if (h.byte_skip == -1 && h.encoding != NrrdEncoding::kRaw) {
     return FieldError(path, "byte skip", "-1", "is only valid with raw encoding");
   }
@@ -233,9 +236,9 @@ class GzipStream {
           const ssize_t n = ::pread(fd_, in_.data(), in_.size(), file_pos_);
           if (n < 0) return ErrnoStatus(errno, path_);
           if (n == 0) {
-            return absl::InvalidArgumentError(absl::StrCat(
-                path_, ": gzip data ends after ", position_ + (chunk - zs_.avail_out),
-                " decoded bytes (truncated?)"));
+            return absl::InvalidArgumentError(absl::StrCat(path_, ": gzip data ends after ",
+                                                           position_ + (chunk - zs_.avail_out),
+                                                           " decoded bytes (truncated?)"));
           }
           file_pos_ += n;
           zs_.next_in = reinterpret_cast<Bytef*>(in_.data());
@@ -243,13 +246,13 @@ class GzipStream {
         }
         const int rc = inflate(&zs_, Z_NO_FLUSH);
         if (rc == Z_STREAM_END && zs_.avail_out > 0) {
-          return absl::InvalidArgumentError(absl::StrCat(path_, ": gzip stream ends after ",
-                                                  position_ + (chunk - zs_.avail_out),
-                                                  " decoded bytes, fewer than the header's sizes need"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(path_, ": gzip stream ends after ", position_ + (chunk - zs_.avail_out),
+                           " decoded bytes, fewer than the header's sizes need"));
         }
         if (rc != Z_OK && rc != Z_STREAM_END) {
-          return absl::InvalidArgumentError(absl::StrCat(path_, ": corrupt gzip data (zlib: ",
-                                                  zs_.msg ? zs_.msg : "error", ")"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(path_, ": corrupt gzip data (zlib: ", zs_.msg ? zs_.msg : "error", ")"));
         }
       }
       position_ += chunk;
@@ -313,7 +316,8 @@ class NrrdSource : public VolumeSource {
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
     }
     if (gzip_ == nullptr) {
-      SM_RETURN_IF_ERROR(AsInputError(ReadFullyAt(fd_.get(), data_start_ + z0 * slice_bytes, out, info_.path)));
+      SM_RETURN_IF_ERROR(
+          AsInputError(ReadFullyAt(fd_.get(), data_start_ + z0 * slice_bytes, out, info_.path)));
     } else {
       const int64_t want = header_.byte_skip + z0 * slice_bytes;
       if (want < gzip_->position()) SM_RETURN_IF_ERROR(gzip_->Reset());
@@ -338,7 +342,8 @@ absl::StatusOr<int64_t> SkipLines(int fd, int64_t start, int64_t lines, const st
   while (lines > 0) {
     const ssize_t n = ::pread(fd, buf, sizeof(buf), pos);
     if (n < 0) return ErrnoStatus(errno, path);
-    if (n == 0) return absl::InvalidArgumentError(absl::StrCat(path, ": file ends inside 'line skip'"));
+    if (n == 0)
+      return absl::InvalidArgumentError(absl::StrCat(path, ": file ends inside 'line skip'"));
     for (ssize_t i = 0; i < n && lines > 0; ++i) {
       ++pos;
       if (buf[i] == '\n') --lines;
@@ -361,12 +366,13 @@ class NrrdSink : public VolumeSink {
     const Placement& p = info_.placement;
     std::string header = absl::StrCat(
         "NRRD0004\n# written by sheetmesh\ntype: ",
-        info_.dtype == DType::kUInt8 ? "uchar" : (info_.dtype == DType::kUInt16 ? "ushort" : "float"),
+        info_.dtype == DType::kUInt8 ? "uchar"
+                                     : (info_.dtype == DType::kUInt16 ? "ushort" : "float"),
         "\ndimension: 3\nspace: right-anterior-superior\nsizes: ", info_.dims.nx, " ",
         info_.dims.ny, " ", info_.dims.nz, "\nspace directions: (", p.spacing.x, ",0,0) (0,",
         p.spacing.y, ",0) (0,0,", p.spacing.z, ")\nspace origin: (", p.origin.x, ",", p.origin.y,
-        ",", p.origin.z, ")\nkinds: domain domain domain\nendian: ",
-        NativeIsLittleEndian() ? "little" : "big",
+        ",", p.origin.z,
+        ")\nkinds: domain domain domain\nendian: ", NativeIsLittleEndian() ? "little" : "big",
         "\nencoding: ", encoding_ == NrrdEncoding::kGzip ? "gzip" : "raw", "\n");
     if (!p.unit.empty()) {
       absl::StrAppend(&header, "space units: \"", p.unit, "\" \"", p.unit, "\" \"", p.unit, "\"\n");
@@ -406,8 +412,8 @@ class NrrdSink : public VolumeSink {
       zs_.avail_out = static_cast<uInt>(out.size());
       rc = deflate(&zs_, flush);
       if (rc == Z_STREAM_ERROR) return absl::InternalError("deflate failed");
-      SM_RETURN_IF_ERROR(writer_.Append(std::span<const std::byte>(
-          out.data(), out.size() - zs_.avail_out)));
+      SM_RETURN_IF_ERROR(
+          writer_.Append(std::span<const std::byte>(out.data(), out.size() - zs_.avail_out)));
     } while (zs_.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
     return absl::OkStatus();
   }
@@ -425,7 +431,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
   SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
   SM_ASSIGN_OR_RETURN(const int64_t file_size, FileSizeOf(fd.get(), path));
   std::string head(static_cast<size_t>(std::min<int64_t>(file_size, kMaxHeaderBytes)), '\0');
-  SM_RETURN_IF_ERROR(AsInputError(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
+  SM_RETURN_IF_ERROR(
+      AsInputError(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
   SM_ASSIGN_OR_RETURN(NrrdHeader h, ParseNrrdHeader(head, path, limits));
 
   ScopedFd data_fd;
@@ -433,8 +440,19 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
   int64_t start = h.header_bytes;
   if (!h.data_file.empty()) {
     std::filesystem::path p(h.data_file);
-    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+    if (p.is_relative()) p = std::filesystem::absolute(path).parent_path() / p;
     data_path = p.string();
+    if (limits.confine_named_files) {
+      // A header may name any file; the file must be one the caller may read.
+      if (limits.named_file_roots.empty()) {
+        return absl::PermissionDeniedError(absl::StrCat(
+            path, ": the header's 'data file' names '", h.data_file,
+            "'; a volume sent to the server may not name a file (send the data attached, or "
+            "as a volume of several blobs)"));
+      }
+      SM_ASSIGN_OR_RETURN(data_path, ResolveUnderRoots(data_path, limits.named_file_roots,
+                                                       absl::StrCat(path, ": data file")));
+    }
     SM_ASSIGN_OR_RETURN(data_fd, OpenForRead(data_path));
     start = 0;
   } else {
@@ -450,10 +468,10 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
       start += h.byte_skip;
     }
     if (start < 0 || data_size - start < need) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          data_path, ": sizes ", h.dims.ToString(), " need ", need, " bytes of ",
-          DTypeName(h.dtype), " but the file holds ", std::max<int64_t>(0, data_size - start),
-          " after the header (truncated?)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(data_path, ": sizes ", h.dims.ToString(), " need ", need, " bytes of ",
+                       DTypeName(h.dtype), " but the file holds ",
+                       std::max<int64_t>(0, data_size - start), " after the header (truncated?)"));
     }
   }
   VolumeInfo info;

@@ -5,9 +5,9 @@
 
 #include <memory>
 #include <string>
-#include "absl/strings/string_view.h"
 
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "worker/pipeline/volume/volume_sink.h"
 #include "worker/pipeline/volume/volume_source.h"
 
@@ -22,10 +22,10 @@ struct NrrdHeader {
   ByteOrder byte_order = ByteOrder::kLittle;
   NrrdEncoding encoding = NrrdEncoding::kRaw;
   Placement placement;
-  std::string data_file;      // empty: data follows the header in the same file
-  int64_t byte_skip = 0;      // bytes skipped before the data (-1: data ends the file)
-  int64_t line_skip = 0;      // lines skipped before the data (detached files)
-  int64_t header_bytes = 0;   // size of the header including the blank line
+  std::string data_file;     // empty: data follows the header in the same file
+  int64_t byte_skip = 0;     // bytes skipped before the data (-1: data ends the file)
+  int64_t line_skip = 0;     // lines skipped before the data (detached files)
+  int64_t header_bytes = 0;  // size of the header including the blank line
 };
 
 // Parses a NRRD header from the start of `text` (which may continue with data). `path`

@@ -21,29 +21,8 @@ class RawSource : public VolumeSource {
     info_ = std::move(info);
   }
 
-  bool CanMap() const override { return !NeedsSwap(options_.byte_order); }
-
-  absl::StatusOr<MappedSlices> MapSlices(int64_t z0, int64_t count) override {
-    const Dims& d = info_.dims;
-    if (!CanMap() || z0 < 0 || count <= 0 || z0 + count > d.nz) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": cannot map slices z0=", z0, " count=", count));
-    }
-    const int64_t slice_bytes = d.nx * d.ny * BytesPerVoxel(info_.dtype);
-    const int64_t offset = options_.header_bytes + z0 * slice_bytes;
-    const int64_t page = ::sysconf(_SC_PAGESIZE);
-    const int64_t aligned = offset / page * page;
-    const size_t length = static_cast<size_t>(offset - aligned + count * slice_bytes);
-    // MAP_POPULATE faults the slab in one go: page faults one by one cost more than the
-    // scan on virtual machines.
-    void* base = ::mmap(nullptr, length, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd_.get(), aligned);
-    if (base == MAP_FAILED) return ErrnoStatus(errno, info_.path);
-    ::madvise(base, length, MADV_SEQUENTIAL | MADV_WILLNEED);
-    return MappedSlices(
-        base, length,
-        std::span<const std::byte>(static_cast<const std::byte*>(base) + (offset - aligned),
-                                   static_cast<size_t>(count * slice_bytes)));
-  }
+  // No MapSlices: a mapped file that shrinks while it is read kills the process with SIGBUS;
+  // read() says "the file ends at byte N" instead.
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     const Dims& d = info_.dims;
@@ -54,8 +33,8 @@ class RawSource : public VolumeSource {
       return absl::InvalidArgumentError(
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
     }
-    SM_RETURN_IF_ERROR(
-        AsInputError(ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path)));
+    SM_RETURN_IF_ERROR(AsInputError(
+        ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path)));
     if (NeedsSwap(options_.byte_order)) SwapBytes(out, bpv);
     return absl::OkStatus();
   }

@@ -12,11 +12,11 @@
 namespace sheetmesh {
 
 struct RawOptions {
-  Dims dims;                                 // required: the file holds no dims
-  DType dtype = DType::kUInt8;               // voxel type
-  ByteOrder byte_order = ByteOrder::kLittle; // of multi-byte voxels in the file
-  int64_t header_bytes = 0;                  // bytes to skip before the first voxel
-  Placement placement;                       // spacing and origin (the file holds none)
+  Dims dims;                                  // required: the file holds no dims
+  DType dtype = DType::kUInt8;                // voxel type
+  ByteOrder byte_order = ByteOrder::kLittle;  // of multi-byte voxels in the file
+  int64_t header_bytes = 0;                   // bytes to skip before the first voxel
+  Placement placement;                        // spacing and origin (the file holds none)
 };
 
 // Opens a raw volume. kInvalidArgument when dims are not positive or the file size is not
@@ -28,8 +28,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenRawVolume(const std::string& p
 
 // Writes a raw volume of `info` (dims, dtype) to `path` in `byte_order`, no header.
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateRawWriter(
-    const std::string& path, const VolumeInfo& info,
-    ByteOrder byte_order = ByteOrder::kLittle);
+    const std::string& path, const VolumeInfo& info, ByteOrder byte_order = ByteOrder::kLittle);
 
 }  // namespace sheetmesh
 

@@ -1,6 +1,7 @@
 #include "worker/pipeline/volume/tiff_io.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <tiffio.h>
 #include <unistd.h>
 
@@ -124,14 +125,13 @@ absl::Status ReadPage(TIFF* tif, const PageFormat& f, std::span<std::byte> out,
 }
 
 absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte> out,
-                      const std::string& where) {
+                            const std::string& where) {
   const int bpv = BytesPerVoxel(f.dtype);
   const size_t row_bytes = static_cast<size_t>(f.width) * bpv;
   if (!f.tiled) {
     if (static_cast<size_t>(TIFFScanlineSize64(tif)) != row_bytes) {
-      return absl::InvalidArgumentError(absl::StrCat(where, ": scanline of ",
-                                                     TIFFScanlineSize64(tif), " bytes, expected ",
-                                                     row_bytes));
+      return absl::InvalidArgumentError(absl::StrCat(
+          where, ": scanline of ", TIFFScanlineSize64(tif), " bytes, expected ", row_bytes));
     }
     for (uint32_t row = 0; row < f.height; ++row) {
       if (TIFFReadScanline(tif, out.data() + row * row_bytes, row, 0) < 0) {
@@ -147,15 +147,23 @@ absl::Status ReadPageStored(TIFF* tif, const PageFormat& f, std::span<std::byte>
   if (tw == 0 || th == 0) {
     return absl::InvalidArgumentError(absl::StrCat(where, ": tile size ", tw, "x", th));
   }
-  std::vector<std::byte> tile(static_cast<size_t>(TIFFTileSize64(tif)));
+  // Checked against the page at open: a tile holds at most what the page does plus padding.
+  const uint64_t tile_bytes = TIFFTileSize64(tif);
+  const uint64_t page = uint64_t{f.width} * f.height * bpv;
+  if (tile_bytes == 0 || tile_bytes > uint64_t{4} * tw * th * bpv + 4096 ||
+      tile_bytes > 4 * page + (uint64_t{1} << 20)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": tile of ", tw, "x", th, " takes ", tile_bytes, " bytes"));
+  }
+  std::vector<std::byte> tile(static_cast<size_t>(tile_bytes));
   if (tile.size() < static_cast<size_t>(tw) * th * bpv) {
     return absl::InvalidArgumentError(absl::StrCat(where, ": tile buffer too small"));
   }
   for (uint32_t ty = 0; ty < f.height; ty += th) {
     for (uint32_t tx = 0; tx < f.width; tx += tw) {
       if (TIFFReadTile(tif, tile.data(), tx, ty, 0, 0) < 0) {
-        return absl::InvalidArgumentError(absl::StrCat(where, ": tile at (", tx, ",", ty,
-                                                ") is unreadable: ", LastTiffError()));
+        return absl::InvalidArgumentError(
+            absl::StrCat(where, ": tile at (", tx, ",", ty, ") is unreadable: ", LastTiffError()));
       }
       const uint32_t w = std::min(tw, f.width - tx);
       const uint32_t h = std::min(th, f.height - ty);
@@ -188,6 +196,12 @@ void ReadPlacement(TIFF* tif, Placement* p) {
   if (TIFFGetField(tif, TIFFTAG_YRESOLUTION, &yr) && yr > 0) p->spacing.y = 1.0 / yr;
 }
 
+absl::StatusOr<int64_t> FileSize(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) return ErrnoStatus(errno, path);
+  return static_cast<int64_t>(st.st_size);
+}
+
 absl::StatusOr<TiffPtr> OpenTiff(const std::string& path) {
   InstallHandlersOnce();
   if (::access(path.c_str(), R_OK) != 0) return ErrnoStatus(errno, path);
@@ -203,6 +217,64 @@ std::string FormatName(const PageFormat& f) {
   return absl::StrCat(f.width, "x", f.height, " ", DTypeName(f.dtype));
 }
 
+// The most a TIFF compression scheme inflates its data (a bound, for refusing pages that
+// claim more voxels than their bytes can hold). Deflate's format tops at 1032:1, LZW near
+// 1300:1 and PackBits 128:1; for the rest the memory budget alone guards.
+double MaxExpansion(uint16_t compression) {
+  switch (compression) {
+    case COMPRESSION_NONE:
+      return 1;
+    case COMPRESSION_PACKBITS:
+      return 130;
+    case COMPRESSION_LZW:
+      return 1400;
+    case COMPRESSION_DEFLATE:
+    case COMPRESSION_ADOBE_DEFLATE:
+      return 1100;
+    default:
+      return 1e9;
+  }
+}
+
+// Before any voxel of the current page is read: the page must fit the memory budget, and
+// its strips (or tiles) must lie within the file and hold enough bytes for its voxels.
+absl::Status CheckPageData(TIFF* tif, const PageFormat& f, int64_t file_size,
+                           const VolumeLimits& limits, const std::string& where) {
+  const int64_t page_bytes = int64_t{f.width} * f.height * BytesPerVoxel(f.dtype);
+  SM_RETURN_IF_ERROR(
+      CheckAllocation(page_bytes, limits, absl::StrCat(where, " (", FormatName(f), ")")));
+  const bool tiled = TIFFIsTiled(tif) != 0;
+  const uint32_t n = tiled ? TIFFNumberOfTiles(tif) : TIFFNumberOfStrips(tif);
+  uint64_t* offsets = nullptr;
+  uint64_t* counts = nullptr;
+  if (!TIFFGetField(tif, tiled ? TIFFTAG_TILEOFFSETS : TIFFTAG_STRIPOFFSETS, &offsets) ||
+      !TIFFGetField(tif, tiled ? TIFFTAG_TILEBYTECOUNTS : TIFFTAG_STRIPBYTECOUNTS, &counts) ||
+      offsets == nullptr || counts == nullptr || n == 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": has no ", tiled ? "tile" : "strip", " offsets or byte counts"));
+  }
+  uint64_t held = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (offsets[i] > static_cast<uint64_t>(file_size) ||
+        counts[i] > static_cast<uint64_t>(file_size) - offsets[i]) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          where, ": ", tiled ? "tile " : "strip ", i, " lies at bytes ", offsets[i], " to ",
+          offsets[i] + counts[i], " but the file has ", file_size, " (cut short?)"));
+    }
+    held += counts[i];
+  }
+  uint16_t compression = COMPRESSION_NONE;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &compression);
+  if (static_cast<double>(page_bytes) > static_cast<double>(held) * MaxExpansion(compression)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        where, ": ", FormatName(f), " needs ", page_bytes, " bytes but its ", n,
+        tiled ? " tiles" : " strips", " hold ", held,
+        compression == COMPRESSION_NONE ? " (cut short?)"
+                                        : ", more than its compression can give (corrupt?)"));
+  }
+  return absl::OkStatus();
+}
+
 class MultiPageSource : public VolumeSource {
  public:
   MultiPageSource(TiffPtr tif, PageFormat format, VolumeInfo info)
@@ -211,8 +283,8 @@ class MultiPageSource : public VolumeSource {
   }
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
-    const size_t page_bytes = static_cast<size_t>(format_.width) * format_.height *
-                              BytesPerVoxel(format_.dtype);
+    const size_t page_bytes =
+        static_cast<size_t>(format_.width) * format_.height * BytesPerVoxel(format_.dtype);
     if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
       return absl::InvalidArgumentError(
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
@@ -224,7 +296,8 @@ class MultiPageSource : public VolumeSource {
       const bool ok = (z == current_ + 1) ? TIFFReadDirectory(tif_.get())
                                           : TIFFSetDirectory(tif_.get(), static_cast<tdir_t>(z));
       if (!ok) {
-        return absl::InvalidArgumentError(absl::StrCat(where, ": cannot open page: ", LastTiffError()));
+        return absl::InvalidArgumentError(
+            absl::StrCat(where, ": cannot open page: ", LastTiffError()));
       }
       current_ = z;
       // Pages agree in size and type (checked at open) but may differ in strips vs tiles.
@@ -248,8 +321,8 @@ class FolderSource : public VolumeSource {
   }
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
-    const size_t page_bytes = static_cast<size_t>(format_.width) * format_.height *
-                              BytesPerVoxel(format_.dtype);
+    const size_t page_bytes =
+        static_cast<size_t>(format_.width) * format_.height * BytesPerVoxel(format_.dtype);
     if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
       return absl::InvalidArgumentError(
           absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
@@ -259,9 +332,8 @@ class FolderSource : public VolumeSource {
       SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));
       SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), file));
       if (!(f == format_)) {
-        return absl::InvalidArgumentError(absl::StrCat(file, ": slice is ", FormatName(f),
-                                                       " but the first slice is ",
-                                                       FormatName(format_)));
+        return absl::InvalidArgumentError(absl::StrCat(
+            file, ": slice is ", FormatName(f), " but the first slice is ", FormatName(format_)));
       }
       SM_RETURN_IF_ERROR(ReadPage(tif.get(), f, out.subspan(k * page_bytes, page_bytes), file));
     }
@@ -312,11 +384,11 @@ class TiffSink : public VolumeSink {
 
   absl::Status WriteSlices(int64_t count, std::span<const std::byte> data) override {
     SM_RETURN_IF_ERROR(Advance(count, data.size()));
-    const size_t page = static_cast<size_t>(info_.dims.nx) * info_.dims.ny *
-                        BytesPerVoxel(info_.dtype);
+    const size_t page =
+        static_cast<size_t>(info_.dims.nx) * info_.dims.ny * BytesPerVoxel(info_.dtype);
     for (int64_t k = 0; k < count; ++k) {
-      SM_RETURN_IF_ERROR(WritePage(tif_.get(), info_, data.subspan(k * page, page), deflate_,
-                                   part_path_));
+      SM_RETURN_IF_ERROR(
+          WritePage(tif_.get(), info_, data.subspan(k * page, page), deflate_, part_path_));
     }
     return absl::OkStatus();
   }
@@ -335,9 +407,8 @@ class TiffSink : public VolumeSink {
     return absl::OkStatus();
   }
 
-  static absl::Status WritePage(TIFF* tif, const VolumeInfo& info,
-                                std::span<const std::byte> data, bool deflate,
-                                const std::string& where) {
+  static absl::Status WritePage(TIFF* tif, const VolumeInfo& info, std::span<const std::byte> data,
+                                bool deflate, const std::string& where) {
     const uint32_t w = static_cast<uint32_t>(info.dims.nx);
     const uint32_t h = static_cast<uint32_t>(info.dims.ny);
     const int bpv = BytesPerVoxel(info.dtype);
@@ -345,9 +416,9 @@ class TiffSink : public VolumeSink {
     TIFFSetField(tif, TIFFTAG_IMAGELENGTH, h);
     TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, static_cast<uint16_t>(bpv * 8));
     TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, static_cast<uint16_t>(1));
-    TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, static_cast<uint16_t>(
-                                                info.dtype == DType::kFloat32 ? SAMPLEFORMAT_IEEEFP
-                                                                              : SAMPLEFORMAT_UINT));
+    TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT,
+                 static_cast<uint16_t>(info.dtype == DType::kFloat32 ? SAMPLEFORMAT_IEEEFP
+                                                                     : SAMPLEFORMAT_UINT));
     TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, static_cast<uint16_t>(PHOTOMETRIC_MINISBLACK));
     TIFFSetField(tif, TIFFTAG_PLANARCONFIG, static_cast<uint16_t>(PLANARCONFIG_CONTIG));
     TIFFSetField(tif, TIFFTAG_COMPRESSION,
@@ -390,8 +461,8 @@ class TiffFolderSink : public VolumeSink {
   absl::Status WriteSlices(int64_t count, std::span<const std::byte> data) override {
     const int64_t first = slices_written_;
     SM_RETURN_IF_ERROR(Advance(count, data.size()));
-    const size_t page = static_cast<size_t>(info_.dims.nx) * info_.dims.ny *
-                        BytesPerVoxel(info_.dtype);
+    const size_t page =
+        static_cast<size_t>(info_.dims.nx) * info_.dims.ny * BytesPerVoxel(info_.dtype);
     for (int64_t k = 0; k < count; ++k) {
       char name[32];
       std::snprintf(name, sizeof(name), "slice_%05lld.tif", static_cast<long long>(first + k));
@@ -403,8 +474,8 @@ class TiffFolderSink : public VolumeSink {
       }
       VolumeInfo one = info_;
       one.dims.nz = 1;
-      absl::Status st = TiffSink::WritePage(tif.get(), one, data.subspan(k * page, page), false,
-                                            part);
+      absl::Status st =
+          TiffSink::WritePage(tif.get(), one, data.subspan(k * page, page), false, part);
       tif.reset();
       if (!st.ok() || std::rename(part.c_str(), path.c_str()) != 0) {
         ::unlink(part.c_str());
@@ -428,17 +499,29 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffVolume(const std::string& 
   info.format = "tiff";
   info.dtype = first.dtype;
   ReadPlacement(tif.get(), &info.placement);
-  // Every page must agree with the first before any voxel is read.
+  SM_ASSIGN_OR_RETURN(const int64_t file_size, FileSize(path));
+  SM_RETURN_IF_ERROR(
+      CheckPageData(tif.get(), first, file_size, limits, absl::StrCat(path, " page 0")));
+  // Every page must agree with the first, and its data lie in the file, before any voxel is
+  // read.
   int64_t pages = 1;
-  while (TIFFReadDirectory(tif.get())) {
+  while (!TIFFLastDirectory(tif.get())) {
     const std::string where = absl::StrCat(path, " page ", pages);
+    if (!TIFFReadDirectory(tif.get())) {
+      return absl::InvalidArgumentError(absl::StrCat(where, " cannot be read (", LastTiffError(),
+                                                     "): the file is cut short or corrupt"));
+    }
     SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), where));
     if (!(f.width == first.width && f.height == first.height && f.dtype == first.dtype)) {
-      return absl::InvalidArgumentError(absl::StrCat(where, " is ", FormatName(f),
-                                                     " but page 0 is ", FormatName(first)));
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, " is ", FormatName(f), " but page 0 is ", FormatName(first)));
     }
+    SM_RETURN_IF_ERROR(CheckPageData(tif.get(), f, file_size, limits, where));
     ++pages;
-    if (pages > limits.max_extent) break;
+    if (pages > limits.max_extent) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(path, ": more than ", limits.max_extent, " pages"));
+    }
   }
   info.dims = {first.width, first.height, pages};
   SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, path));
@@ -472,6 +555,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffFolder(const std::string& 
   ReadPlacement(tif.get(), &info.placement);
   info.dims = {first.width, first.height, static_cast<int64_t>(files.size())};
   SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, folder));
+  SM_ASSIGN_OR_RETURN(const int64_t first_size, FileSize(files[0]));
+  SM_RETURN_IF_ERROR(CheckPageData(tif.get(), first, first_size, limits, files[0]));
   // Check every slice's header up front so that a mismatch fails before any work.
   for (size_t i = 1; i < files.size(); ++i) {
     SM_ASSIGN_OR_RETURN(TiffPtr t, OpenTiff(files[i]));
@@ -480,13 +565,14 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffFolder(const std::string& 
       return absl::InvalidArgumentError(absl::StrCat(files[i], " is ", FormatName(f), " but ",
                                                      files[0], " is ", FormatName(first)));
     }
+    SM_ASSIGN_OR_RETURN(const int64_t size, FileSize(files[i]));
+    SM_RETURN_IF_ERROR(CheckPageData(t.get(), f, size, limits, files[i]));
   }
   return std::make_unique<FolderSource>(std::move(files), first, std::move(info));
 }
 
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateTiffWriter(const std::string& path,
-                                                             const VolumeInfo& info,
-                                                             bool deflate) {
+                                                             const VolumeInfo& info, bool deflate) {
   InstallHandlersOnce();
   const std::string part = path + ".part";
   const int64_t bytes = info.dims.num_voxels() * BytesPerVoxel(info.dtype);

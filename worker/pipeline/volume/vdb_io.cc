@@ -1,19 +1,66 @@
 #include "worker/pipeline/volume/vdb_io.h"
 
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Dense.h>
+
 #include <cstdio>
 #include <mutex>
 #include <vector>
 
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/Dense.h>
-
 #include "absl/strings/str_cat.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
-#include "worker/pipeline/volume/vdb_grids.h"
 
 namespace sheetmesh {
 namespace {
+
+constexpr char kDimsMeta[] = "sheetmesh_dims";
+constexpr char kDTypeMeta[] = "sheetmesh_dtype";
+constexpr char kUnitMeta[] = "sheetmesh_unit";
+
+// openvdb::initialize(), once per process.
+void InitializeOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::math::Transform::Ptr MakeTransform(const Placement& p) {
+  openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
+  m.setToScale(openvdb::Vec3d(p.spacing.x, p.spacing.y, p.spacing.z));
+  m.setTranslation(openvdb::Vec3d(p.origin.x, p.origin.y, p.origin.z));
+  return openvdb::math::Transform::createLinearTransform(m);
+}
+
+void SetVolumeMeta(openvdb::GridBase& grid, const Dims& dims, DType dtype, const Placement& p) {
+  grid.insertMeta(kDimsMeta, openvdb::Vec3IMetadata(openvdb::Vec3i(static_cast<int>(dims.nx),
+                                                                   static_cast<int>(dims.ny),
+                                                                   static_cast<int>(dims.nz))));
+  grid.insertMeta(kDTypeMeta, openvdb::StringMetadata(std::string(DTypeName(dtype))));
+  if (!p.unit.empty()) grid.insertMeta(kUnitMeta, openvdb::StringMetadata(p.unit));
+  grid.setTransform(MakeTransform(p));
+}
+
+// Writes `grids` to `path` through a `.part` file and a rename.
+absl::Status WriteGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids) {
+  const std::string part = path + ".part";
+  try {
+    openvdb::io::File file(part);
+    file.write(grids);
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    std::remove(part.c_str());
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB could not write: ", e.what()));
+  } catch (const std::exception& e) {
+    std::remove(part.c_str());
+    return absl::InternalError(absl::StrCat(path, ": could not write: ", e.what()));
+  }
+  if (std::rename(part.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(part.c_str());
+    return ErrnoStatus(err, path);
+  }
+  return absl::OkStatus();
+}
 
 template <class GridT>
 class VdbSource : public VolumeSource {
@@ -48,6 +95,8 @@ class VdbSource : public VolumeSource {
       }
     } catch (const openvdb::Exception& e) {
       return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+    } catch (const std::exception& e) {
+      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB failed: ", e.what()));
     }
     return absl::OkStatus();
   }
@@ -55,8 +104,8 @@ class VdbSource : public VolumeSource {
  private:
   template <class T>
   void Copy(const openvdb::CoordBBox& bbox, std::span<std::byte> out) {
-    openvdb::tools::Dense<T, openvdb::tools::LayoutXYZ> dense(
-        bbox, reinterpret_cast<T*>(out.data()));
+    openvdb::tools::Dense<T, openvdb::tools::LayoutXYZ> dense(bbox,
+                                                              reinterpret_cast<T*>(out.data()));
     dense.fill(static_cast<T>(grid_->background()));
     openvdb::tools::copyToDense(*grid_, dense);
   }
@@ -75,8 +124,8 @@ openvdb::BoolGrid::ConstPtr ActiveAsTrue(const GridT& grid) {
 }
 
 template <class GridT>
-std::unique_ptr<VolumeSource> MakeSource(openvdb::GridBase::ConstPtr base,
-                                         openvdb::Coord origin, VolumeInfo info) {
+std::unique_ptr<VolumeSource> MakeSource(openvdb::GridBase::ConstPtr base, openvdb::Coord origin,
+                                         VolumeInfo info) {
   return std::make_unique<VdbSource<GridT>>(openvdb::gridConstPtrCast<GridT>(base), origin,
                                             std::move(info));
 }
@@ -114,6 +163,8 @@ class VdbSink : public VolumeSink {
       }
     } catch (const openvdb::Exception& e) {
       return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+    } catch (const std::exception& e) {
+      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB failed: ", e.what()));
     }
     return absl::OkStatus();
   }
@@ -172,6 +223,14 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
     file.close();
   } catch (const openvdb::Exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": not a readable .vdb: ", e.what()));
+  } catch (const std::bad_alloc&) {
+    // A cut or corrupt file gives OpenVDB sizes from random bytes.
+    return absl::InvalidArgumentError(
+        absl::StrCat(path,
+                     ": not a readable .vdb: it claims more data than memory holds (cut "
+                     "short or corrupt?)"));
+  } catch (const std::exception& e) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": not a readable .vdb: ", e.what()));
   }
 
   VolumeInfo info;
@@ -205,7 +264,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
     info.placement.unit = unit->value();
   }
   if (base->isType<openvdb::FloatGrid>()) return MakeSource<openvdb::FloatGrid>(base, origin, info);
-  if (base->isType<openvdb::DoubleGrid>()) return MakeSource<openvdb::DoubleGrid>(base, origin, info);
+  if (base->isType<openvdb::DoubleGrid>())
+    return MakeSource<openvdb::DoubleGrid>(base, origin, info);
   if (base->isType<openvdb::Int32Grid>()) return MakeSource<openvdb::Int32Grid>(base, origin, info);
   if (base->isType<openvdb::Int64Grid>()) return MakeSource<openvdb::Int64Grid>(base, origin, info);
   if (base->isType<openvdb::BoolGrid>()) {
@@ -227,6 +287,50 @@ absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVdbWriter(const std::string& p
   out.path = path;
   out.format = "vdb";
   return std::make_unique<VdbSink>(std::move(out));
+}
+
+absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,
+                            std::span<const SparseRun> runs, std::span<const int32_t> labels,
+                            const Placement& placement, const std::string& grid_name) {
+  InitializeOpenVdb();
+  uint64_t voxels = 0;
+  for (const SparseRun& r : runs) voxels += static_cast<uint64_t>(r.x1 - r.x0);
+  if (!labels.empty() && labels.size() != voxels) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": ", labels.size(), " labels for ", voxels, " voxels"));
+  }
+  openvdb::GridPtrVec grids;
+  try {
+    auto mask = openvdb::MaskGrid::create();
+    openvdb::Int32Grid::Ptr label_grid;
+    if (!labels.empty()) label_grid = openvdb::Int32Grid::create(-1);
+    uint64_t first = 0;
+    for (const SparseRun& run : runs) {
+      mask->tree().sparseFill(openvdb::CoordBBox(openvdb::Coord(run.x0, run.y, run.z),
+                                                 openvdb::Coord(run.x1 - 1, run.y, run.z)),
+                              true, true);
+      if (label_grid) {
+        auto lacc = label_grid->getAccessor();
+        for (int32_t x = run.x0; x < run.x1; ++x) {
+          lacc.setValue(openvdb::Coord(x, run.y, run.z), labels[first + (x - run.x0)]);
+        }
+      }
+      first += static_cast<uint64_t>(run.x1 - run.x0);
+    }
+    mask->setName(grid_name);
+    SetVolumeMeta(*mask, dims, DType::kUInt8, placement);
+    grids.push_back(mask);
+    if (label_grid) {
+      label_grid->setName(grid_name + "_labels");
+      SetVolumeMeta(*label_grid, dims, DType::kFloat32, placement);
+      grids.push_back(label_grid);
+    }
+  } catch (const openvdb::Exception& e) {
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB: ", e.what()));
+  } catch (const std::exception& e) {
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB failed: ", e.what()));
+  }
+  return WriteGridsAtomically(path, grids);
 }
 
 }  // namespace sheetmesh

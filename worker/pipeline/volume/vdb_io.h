@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -26,6 +27,19 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
 // float32; voxels equal to 0 stay inactive background. The file appears atomically.
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVdbWriter(const std::string& path,
                                                             const VolumeInfo& info);
+
+// A row of voxels [x0, x1) at (y, z) of a sparse volume.
+struct SparseRun {
+  int32_t x0 = 0, x1 = 0, y = 0, z = 0;
+};
+
+// Writes the voxels of `runs` (a box of `dims`) as a mask grid named `grid_name`, and,
+// when `labels` is not empty (one per voxel, in run order), an Int32 grid
+// "<grid_name>_labels". kInvalidArgument when the label count differs from the voxel count;
+// kInternal when OpenVDB fails. Atomic.
+absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,
+                            std::span<const SparseRun> runs, std::span<const int32_t> labels,
+                            const Placement& placement, const std::string& grid_name);
 
 }  // namespace sheetmesh
 

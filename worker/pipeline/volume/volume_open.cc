@@ -39,8 +39,9 @@ class PlacedSource : public VolumeSource {
 
 }  // namespace
 
-std::optional<std::pair<Dims, DType>> DimsFromFileName(const std::string& path) {
-  static const std::regex kPattern(R"((\d+)x(\d+)x(\d+)(?:_(u8|u16|f32|uint8|uint16|float32))?)",
+absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std::string& path) {
+  // The dims, then maybe a type token: a letter or two and a bit count ("_u8", "_i7").
+  static const std::regex kPattern(R"((\d+)x(\d+)x(\d+)(?:_([a-z]+\d+)(?![a-z0-9]))?)",
                                    std::regex::icase);
   const std::string name = std::filesystem::path(path).filename().string();
   std::smatch m;
@@ -51,7 +52,19 @@ std::optional<std::pair<Dims, DType>> DimsFromFileName(const std::string& path) 
     return std::nullopt;
   }
   DType t = DType::kUInt8;
-  if (m[4].matched) t = *ParseDType(m[4].str());
+  if (m[4].matched) {
+    const std::string token = absl::AsciiStrToLower(m[4].str());
+    absl::StatusOr<DType> parsed = ParseDType(token);
+    if (!parsed.ok() && token == "u8") parsed = DType::kUInt8;
+    if (!parsed.ok() && token == "u16") parsed = DType::kUInt16;
+    if (!parsed.ok() && token == "f32") parsed = DType::kFloat32;
+    if (!parsed.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(path, ": the name gives the voxel type '", m[4].str(),
+                       "', which is not u8, u16 or f32 (give the type: --dtype, input.dtype)"));
+    }
+    t = *parsed;
+  }
   return std::make_pair(d, t);
 }
 
@@ -83,7 +96,10 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   std::unique_ptr<VolumeSource> source;
   if (format == "raw") {
     RawOptions raw;
-    const auto from_name = DimsFromFileName(path);
+    absl::StatusOr<std::optional<std::pair<Dims, DType>>> named = DimsFromFileName(path);
+    // A type the name gives wrongly matters only when the type is not given otherwise.
+    if (!named.ok() && !options.raw_dtype) return named.status();
+    const std::optional<std::pair<Dims, DType>> from_name = named.ok() ? *named : std::nullopt;
     if (options.raw_dims) {
       raw.dims = *options.raw_dims;
     } else if (from_name) {
@@ -121,6 +137,11 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
       }
     }
   }
+  // Readers take a slice (or a slab of slices) at once: one slice must fit the budget.
+  const VolumeInfo& got = source->info();
+  SM_RETURN_IF_ERROR(CheckAllocation(got.dims.nx * got.dims.ny * BytesPerVoxel(got.dtype),
+                                     options.limits,
+                                     absl::StrCat(path, ": one slice of ", got.dims.ToString())));
   if (!options.spacing && !options.origin && options.unit.empty()) return source;
   return std::make_unique<PlacedSource>(std::move(source), options);
 }

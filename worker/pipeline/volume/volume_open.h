@@ -17,15 +17,15 @@
 namespace sheetmesh {
 
 struct OpenOptions {
-  std::string format;                        // "", "raw", "tiff", "nrrd", "vdb" ("" = by name)
-  std::optional<Dims> raw_dims;              // raw: required unless the name says "_NxNxN_u8"
-  std::optional<DType> raw_dtype;            // raw: default uint8 or the name's "_u8/_u16/_f32"
+  std::string format;              // "", "raw", "tiff", "nrrd", "vdb" ("" = by name)
+  std::optional<Dims> raw_dims;    // raw: required unless the name says "_NxNxN_u8"
+  std::optional<DType> raw_dtype;  // raw: default uint8 or the name's "_u8/_u16/_f32"
   ByteOrder raw_byte_order = ByteOrder::kLittle;
   int64_t raw_header_bytes = 0;
-  std::string vdb_grid;                      // vdb: grid name ("" = first scalar grid)
-  std::optional<Vec3> spacing;               // overrides the file's spacing
-  std::optional<Vec3> origin;                // overrides the file's origin
-  std::string unit;                          // overrides the file's length unit when set
+  std::string vdb_grid;         // vdb: grid name ("" = first scalar grid)
+  std::optional<Vec3> spacing;  // overrides the file's spacing
+  std::optional<Vec3> origin;   // overrides the file's origin
+  std::string unit;             // overrides the file's length unit when set
   VolumeLimits limits;
 };
 
@@ -37,7 +37,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
                                                          const OpenOptions& options = {});
 
 // Dims and dtype encoded in a file name like "rock_100x100x100_u8.raw"; nullopt if none.
-std::optional<std::pair<Dims, DType>> DimsFromFileName(const std::string& path);
+// kInvalidArgument when the name gives a type that is not u8, u16 or f32 ("_i7").
+absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std::string& path);
 
 // A whole volume in memory: for small volumes, tests and the phantom's sample.
 struct DenseVolume {
@@ -46,17 +47,20 @@ struct DenseVolume {
 
   static DenseVolume Zeros(const Dims& dims, DType dtype);
   template <class T>
-  T* as() { return reinterpret_cast<T*>(data.data()); }
+  T* as() {
+    return reinterpret_cast<T*>(data.data());
+  }
   template <class T>
-  const T* as() const { return reinterpret_cast<const T*>(data.data()); }
+  const T* as() const {
+    return reinterpret_cast<const T*>(data.data());
+  }
   // The value at (x, y, z) as a double.
   double At(int64_t x, int64_t y, int64_t z) const;
   void Set(int64_t x, int64_t y, int64_t z, double value);
 };
 
 // Reads all of `source`. kResourceExhausted above `max_bytes`.
-absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source,
-                                      int64_t max_bytes = int64_t{4} << 30);
+absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source, int64_t max_bytes = int64_t{4} << 30);
 // Writes all of `volume` through `sink` and finishes it.
 absl::Status WriteDense(const DenseVolume& volume, VolumeSink& sink);
 

@@ -1,6 +1,7 @@
 #include "worker/pipeline/volume/volume_source.h"
 
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <limits>
 
@@ -97,6 +98,25 @@ absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits
 absl::Status AsInputError(absl::Status status) {
   if (status.code() != absl::StatusCode::kDataLoss) return status;
   return absl::InvalidArgumentError(status.message());
+}
+
+int64_t MemoryBudget(const VolumeLimits& limits) {
+  if (limits.memory_bytes > 0) return limits.memory_bytes;
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || page <= 0) return int64_t{4} << 30;
+  return static_cast<int64_t>(pages) * page / 4;
+}
+
+absl::Status CheckAllocation(int64_t bytes, const VolumeLimits& limits, absl::string_view what) {
+  if (bytes < 0) {
+    return absl::InvalidArgumentError(absl::StrCat(what, " would need a size that overflows"));
+  }
+  const int64_t budget = MemoryBudget(limits);
+  if (bytes > budget) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        what, " needs ", bytes, " bytes at once, over the memory budget of ", budget, " bytes"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh

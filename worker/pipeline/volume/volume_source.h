@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -39,10 +40,27 @@ struct VolumeInfo {
 };
 
 // Limits that protect readers from impossible requests.
+// What a reader may do: how big a volume may be, how much memory reading it may take, and
+// which other files it may open.
 struct VolumeLimits {
   int64_t max_voxels = int64_t{1} << 37;  // dims beyond this are kResourceExhausted
   int64_t max_extent = int64_t{1} << 20;  // any one axis beyond this is kInvalidArgument
+  // The memory a reader may allocate at once (a slice, a strip, a tile): a header declaring
+  // more is kResourceExhausted before anything is allocated. 0: a quarter of the machine's
+  // memory.
+  int64_t memory_bytes = 0;
+  // Files a volume names itself (a detached NRRD's data file): with confine_named_files,
+  // only under named_file_roots (after following links), and none when that is empty.
+  bool confine_named_files = false;
+  std::vector<std::string> named_file_roots;
 };
+
+// limits.memory_bytes, or a quarter of the machine's memory when it is 0.
+int64_t MemoryBudget(const VolumeLimits& limits);
+
+// kResourceExhausted when `bytes` (what `what` needs at once) exceed the budget, naming both;
+// kInvalidArgument when `bytes` is negative or overflowed.
+absl::Status CheckAllocation(int64_t bytes, const VolumeLimits& limits, absl::string_view what);
 
 // The status of a read of an input file, with kDataLoss (the file ended early: the user's
 // file is bad, not the system's storage) as kInvalidArgument.

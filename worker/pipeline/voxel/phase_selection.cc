@@ -80,6 +80,7 @@ absl::StatusOr<PhaseSelection> ParsePhaseSelection(absl::string_view text) {
 namespace {
 
 bool Matches(const PhaseSelection& s, double v) {
+  if (std::isnan(v)) return false;  // no value: never the sheet phase
   switch (s.mode) {
     case PhaseSelection::Mode::kNonZero:
       return v != 0;

@@ -7,15 +7,15 @@
 #include <fstream>
 
 #include "absl/strings/str_cat.h"
+#include "common/file_util.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "common/file_util.h"
 #include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/raw_io.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
-#include "worker/pipeline/voxel/voxel_set_vdb.h"
 #include "worker/pipeline/volume/volume_open.h"
+#include "worker/pipeline/voxel/voxel_set_vdb.h"
 
 namespace sheetmesh {
 namespace {
@@ -219,12 +219,28 @@ TEST(VolumeOpenTest, DimsFromFileNames) {
       {"volume.raw", false, {}, DType::kUInt8},
   };
   for (const Case& c : cases) {
-    const auto r = DimsFromFileName(c.name);
+    const auto named = DimsFromFileName(c.name);
+    ASSERT_THAT(named, IsOk()) << c.name;
+    const auto& r = *named;
     ASSERT_EQ(r.has_value(), c.found) << c.name;
     if (!c.found) continue;
     EXPECT_EQ(r->first, c.dims) << c.name;
     EXPECT_EQ(r->second, c.dtype) << c.name;
   }
+}
+
+TEST(VolumeOpenTest, ATypeTheNameGivesWronglyIsInvalidArgument) {
+  EXPECT_THAT(DimsFromFileName("rock_64x64x64_i7.raw"),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("'i7'")));
+  EXPECT_THAT(DimsFromFileName("rock_64x64x64_s16.raw"),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("'s16'")));
+  TempDir tmp;
+  const std::string path = tmp.File("v_4x4x4_i7.raw");
+  ASSERT_THAT(WriteFileAtomically(path, std::string(64, '\0')), IsOk());
+  EXPECT_THAT(OpenVolume(path), StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("i7")));
+  OpenOptions typed;
+  typed.raw_dtype = DType::kUInt8;
+  EXPECT_THAT(OpenVolume(path, typed), IsOk()) << "a type given beats the name's";
 }
 
 TEST(VolumeOpenTest, UnknownExtensionAndBadSpacingAreInvalidArgument) {

@@ -1,0 +1,49 @@
+#include "common/paths.h"
+
+#include <limits.h>
+#include <stdlib.h>
+
+#include <cerrno>
+#include <filesystem>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "common/file_util.h"
+
+namespace sheetmesh {
+
+absl::StatusOr<std::string> ResolveUnderRoots(const std::string& path,
+                                              const std::vector<std::string>& roots,
+                                              absl::string_view what) {
+  if (path.find('\0') != std::string::npos) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(what, " holds a NUL byte (after '", path.c_str(), "')"));
+  }
+  if (roots.empty()) {
+    return absl::PermissionDeniedError(
+        absl::StrCat(what, " '", path, "': no folder may be read here (no allowed root)"));
+  }
+  if (path.empty() || path[0] != '/') {
+    return absl::InvalidArgumentError(absl::StrCat(what, " '", path, "' must be absolute"));
+  }
+  for (const auto& part : std::filesystem::path(path)) {
+    if (part == "..") {
+      return absl::PermissionDeniedError(absl::StrCat(what, " '", path, "' may not contain '..'"));
+    }
+  }
+  char real[PATH_MAX];
+  if (::realpath(path.c_str(), real) == nullptr) return ErrnoStatus(errno, path);
+  const std::string resolved = real;
+  for (const std::string& root : roots) {
+    char rr[PATH_MAX];
+    if (::realpath(root.c_str(), rr) == nullptr) continue;
+    std::string r = rr;
+    if (r.back() != '/') r += '/';
+    if (resolved.rfind(r, 0) == 0 || resolved + "/" == r) return resolved;
+  }
+  return absl::PermissionDeniedError(absl::StrCat(what, " '", path, "' resolves to '", resolved,
+                                                  "', outside the allowed roots (",
+                                                  absl::StrJoin(roots, ", "), ")"));
+}
+
+}  // namespace sheetmesh

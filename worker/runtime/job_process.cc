@@ -1,0 +1,275 @@
+#include "worker/runtime/job_process.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_replace.h"
+#include "common/file_util.h"
+#include "common/json_text.h"
+#include "common/status_macros.h"
+#include "common/subprocess.h"
+#include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/run/pipeline.h"
+#include "worker/runtime/sandbox.h"
+
+namespace sheetmesh::runtime {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr char kChildFlag[] = "--sheetmesh-job-child";
+constexpr int kReportFd = 3;
+
+std::string Bytes(uint64_t b) {
+  if (b >= (uint64_t{1} << 30)) return absl::StrFormat("%.3g GiB", double(b) / (1 << 30));
+  return absl::StrFormat("%.3g MiB", double(b) / (1 << 20));
+}
+
+// --- The child ---------------------------------------------------------------------------
+
+// Writes one JSON line to the parent. A parent that is gone (EPIPE) ends the child.
+void Tell(const Json& j) {
+  const std::string line = JsonText(j) + "\n";
+  size_t done = 0;
+  while (done < line.size()) {
+    const ssize_t n = ::write(kReportFd, line.data() + done, line.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) ::_exit(3);
+    done += static_cast<size_t>(n);
+  }
+}
+
+class ChildObserver : public ProgressObserver {
+ public:
+  bool OnProgress(absl::string_view stage, double fraction, absl::string_view message) override {
+    stage_ = std::string(stage);
+    Tell({{"progress", {{"stage", stage_}, {"fraction", fraction}, {"message", message}}}});
+    return true;  // the parent stops the child by killing it
+  }
+  const std::string& stage() const { return stage_; }
+
+ private:
+  std::string stage_ = "start";
+};
+
+int ChildMain(const std::string& spec_path) {
+  ChildObserver observer;
+  uint64_t memory = 0;
+  auto fail = [&](absl::StatusCode code, const std::string& message) {
+    Tell({{"result", {{"code", static_cast<int>(code)}, {"message", message}}}});
+    return 1;
+  };
+  try {
+    absl::StatusOr<std::string> text = ReadFileToString(spec_path);
+    if (!text.ok()) return fail(text.status().code(), std::string(text.status().message()));
+    const Json spec = Json::parse(*text);
+    memory = spec.value("memory_limit_bytes", uint64_t{0});
+    const std::string volume = spec.at("volume_path").get<std::string>();
+    const std::string display = spec.value("display_name", volume);
+    const std::string out = spec.at("output_dir").get<std::string>();
+    const bool data_files = spec.value("data_files", false);
+    std::vector<std::string> roots = spec.value("allowed_roots", std::vector<std::string>{});
+    SandboxPaths fence;
+    fence.read.push_back(volume);
+    if (data_files) fence.read.insert(fence.read.end(), roots.begin(), roots.end());
+    fence.read_write.push_back(out);
+    const absl::Status fenced = RestrictFilesystem(fence);
+    if (!fenced.ok())
+      std::fprintf(stderr, "sheetmesh job: %s\n", std::string(fenced.message()).c_str());
+    ParameterBuilder builder(ParamScope::kJob);
+    absl::Status st =
+        builder.AddJson(spec.at("parameters").get<std::string>(), "the job's resolved parameters");
+    if (!st.ok()) return fail(st.code(), std::string(st.message()));
+    absl::StatusOr<PipelineOptions> options = builder.Build();
+    if (!options.ok())
+      return fail(options.status().code(), std::string(options.status().message()));
+    options->input.path = volume;
+    VolumeLimits& limits = options->input.open.limits;
+    limits.confine_named_files = true;
+    limits.named_file_roots = data_files ? roots : std::vector<std::string>{};
+    // Readers refuse what would not fit: half the job's address space, at once.
+    if (memory > 0) limits.memory_bytes = static_cast<int64_t>(memory / 2);
+    options->output.dir = out;
+    absl::StatusOr<PipelineReport> report = RunPipeline(*options, Progress(&observer, "read"));
+    if (!report.ok()) {
+      // Name the volume the client knows, not this machine's path for it.
+      std::string message(report.status().message());
+      if (display != volume) message = absl::StrReplaceAll(message, {{volume, display}});
+      return fail(report.status().code(), message);
+    }
+    Tell({{"result", {{"code", 0}, {"files", report->files}}}});
+    return 0;
+  } catch (const std::bad_alloc&) {
+    return fail(absl::StatusCode::kResourceExhausted,
+                absl::StrCat("the job ran out of its memory limit",
+                             memory ? absl::StrCat(" of ", Bytes(memory)) : "", " in stage ",
+                             observer.stage()));
+  } catch (const std::exception& e) {
+    return fail(absl::StatusCode::kInternal,
+                absl::StrCat("the job failed in stage ", observer.stage(), ": ", e.what()));
+  }
+}
+
+// --- The parent --------------------------------------------------------------------------
+
+// The last `bytes` of a file, for messages.
+std::string Tail(const std::string& path, size_t bytes = 400) {
+  absl::StatusOr<std::string> text = ReadFileToString(path);
+  if (!text.ok()) return "";
+  std::string s = *text;
+  if (s.size() > bytes) s = "..." + s.substr(s.size() - bytes);
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  return s;
+}
+
+// Reads what the child wrote so far; calls `line` per complete line.
+template <class Line>
+void Drain(int fd, std::string* buffer, Line line) {
+  char chunk[4096];
+  for (;;) {
+    const ssize_t n = ::read(fd, chunk, sizeof(chunk));
+    if (n > 0) {
+      buffer->append(chunk, static_cast<size_t>(n));
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    break;  // EAGAIN or end of file
+  }
+  size_t start = 0;
+  for (size_t nl; (nl = buffer->find('\n', start)) != std::string::npos; start = nl + 1) {
+    line(absl::string_view(*buffer).substr(start, nl - start));
+  }
+  buffer->erase(0, start);
+}
+
+// The status of a child that ended without a result.
+absl::Status Died(const ChildExit& exit, const std::string& stage, const JobLimits& limits,
+                  const std::string& log) {
+  const std::string tail = Tail(log);
+  if (exit.signaled && exit.code == SIGXCPU) {
+    return absl::DeadlineExceededError(absl::StrCat("the job used up its CPU limit of ",
+                                                    limits.cpu_seconds, " s in stage ", stage));
+  }
+  if (tail.find("bad_alloc") != std::string::npos) {
+    return absl::ResourceExhaustedError(absl::StrCat("the job ran out of its memory limit of ",
+                                                     Bytes(limits.memory_bytes), " in stage ",
+                                                     stage));
+  }
+  std::string what = absl::StrCat("the job was ", exit.signaled ? "" : "ended: ", exit.ToString(),
+                                  " in stage ", stage);
+  if (exit.signaled && exit.code == SIGBUS) {
+    absl::StrAppend(&what, " (a file it read shrank or changed while it read it)");
+  }
+  if (!tail.empty()) absl::StrAppend(&what, "; its last output: ", tail);
+  return absl::InternalError(what);
+}
+
+}  // namespace
+
+uint64_t DefaultJobMemory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || page <= 0) return uint64_t{8} << 30;
+  return static_cast<uint64_t>(pages) * static_cast<uint64_t>(page) / 4 * 3;
+}
+
+absl::StatusOr<std::string> SelfPath() {
+  std::error_code ec;
+  const std::filesystem::path p = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return absl::InternalError(absl::StrCat("/proc/self/exe: ", ec.message()));
+  return p.string();
+}
+
+int RunJobChildIfAsked(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], kChildFlag) != 0) return -1;
+  if (argc != 3) return 2;
+  ::signal(SIGPIPE, SIG_DFL);
+  return ChildMain(argv[2]);
+}
+
+absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, const JobSpec& spec,
+                                                       const JobLimits& limits,
+                                                       const JobProgressFn& progress) {
+  const std::string spec_path = spec.output_dir + ".spec.json";
+  const std::string log = spec.output_dir + ".log";
+  struct Cleanup {
+    std::vector<std::string> files;
+    ~Cleanup() {
+      for (const std::string& f : files) ::unlink(f.c_str());
+    }
+  } cleanup{{spec_path, log}};
+  const Json j = {{"volume_path", spec.volume_path},
+                  {"display_name", spec.display_name},
+                  {"output_dir", spec.output_dir},
+                  {"parameters", spec.parameters},
+                  {"allowed_roots", spec.allowed_roots},
+                  {"data_files", spec.data_files},
+                  {"memory_limit_bytes", limits.memory_bytes}};
+  SM_RETURN_IF_ERROR(WriteFileAtomically(spec_path, JsonText(j)));
+  SubprocessOptions o;
+  o.argv = {self, kChildFlag, spec_path};
+  o.output_path = log;
+  o.memory_limit_bytes = limits.memory_bytes;
+  o.cpu_limit_seconds = limits.cpu_seconds;
+  o.report_pipe = true;
+  o.env = {{"TMPDIR", spec.output_dir}};
+  SM_ASSIGN_OR_RETURN(Subprocess child, Subprocess::Start(o));
+  ::fcntl(child.report_fd(), F_SETFL, O_NONBLOCK);
+  const auto deadline = std::chrono::steady_clock::now() + absl::ToChronoMilliseconds(limits.wall);
+  std::string buffer, stage = "start";
+  std::optional<Json> result;
+  bool stop = false;
+  auto on_line = [&](absl::string_view line) {
+    const Json m = Json::parse(line.begin(), line.end(), nullptr, /*allow_exceptions=*/false);
+    if (m.is_discarded()) return;
+    if (m.contains("progress")) {
+      const Json& p = m["progress"];
+      stage = p.value("stage", stage);
+      if (!stop && !progress(stage, p.value("fraction", 0.0), p.value("message", ""))) stop = true;
+    } else if (m.contains("result")) {
+      result = m["result"];
+    }
+  };
+  std::optional<ChildExit> exit;
+  for (;;) {
+    struct pollfd pfd = {child.report_fd(), POLLIN, 0};
+    ::poll(&pfd, 1, 100);
+    Drain(child.report_fd(), &buffer, on_line);
+    if ((exit = child.Poll())) {
+      Drain(child.report_fd(), &buffer, on_line);
+      break;
+    }
+    if (stop) {
+      child.Kill();
+      child.Wait();
+      return absl::CancelledError(absl::StrCat("the job was stopped in stage ", stage));
+    }
+    if (std::chrono::steady_clock::now() > deadline) {
+      child.Kill();
+      child.Wait();
+      return absl::DeadlineExceededError(absl::StrCat("the job ran past its time limit of ",
+                                                      absl::FormatDuration(limits.wall),
+                                                      " in stage ", stage));
+    }
+  }
+  if (!result) return Died(*exit, stage, limits, log);
+  const int code = result->value("code", static_cast<int>(absl::StatusCode::kInternal));
+  if (code != 0) {
+    return absl::Status(static_cast<absl::StatusCode>(code), result->value("message", ""));
+  }
+  return result->value("files", std::vector<std::string>{});
+}
+
+}  // namespace sheetmesh::runtime

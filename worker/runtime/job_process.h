@@ -1,0 +1,65 @@
+// A job's pipeline in a child process: the server (or sheetmesh-worker) starts itself again
+// as a job child, which runs the pipeline on one input into one scratch folder, with a
+// memory limit, a CPU limit and a wall-clock limit, and with the filesystem closed to it but
+// for its input, its scratch folder and the system's libraries (Landlock, where the kernel
+// has it). A crash, an abort, a signal or a limit ends that child alone; the parent names
+// the cause and carries on. Progress comes back as JSON lines on a pipe.
+#ifndef SHEETMESH_WORKER_RUNTIME_JOB_PROCESS_H_
+#define SHEETMESH_WORKER_RUNTIME_JOB_PROCESS_H_
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+
+namespace sheetmesh::runtime {
+
+// What the child runs.
+struct JobSpec {
+  std::string volume_path;   // readable on this machine
+  std::string display_name;  // the volume's name for messages (the client's)
+  std::string output_dir;    // the child's scratch folder (made by the parent)
+  std::string parameters;    // the job's canonical parameter JSON
+  // Where a file the volume names (a detached NRRD's data file) may lie; empty with
+  // `data_files` false: the volume may name none (an upload).
+  std::vector<std::string> allowed_roots;
+  bool data_files = false;
+};
+
+// The limits of one child.
+struct JobLimits {
+  uint64_t memory_bytes = uint64_t{8} << 30;  // its address space (RLIMIT_AS)
+  uint64_t cpu_seconds = 0;                   // its CPU time (0: none)
+  absl::Duration wall = absl::Hours(24);      // it is killed after this
+};
+
+// One progress report of the child; return false to stop it (it is killed).
+using JobProgressFn =
+    std::function<bool(const std::string& stage, double fraction, const std::string& message)>;
+
+// Runs `spec` in a child of this program (`self`, usually /proc/self/exe), which must call
+// RunJobChildIfAsked first thing in main(). Returns the files the child wrote (names within
+// output_dir). The pipeline's own errors come back with their codes; kCancelled when
+// `progress` asked to stop; kResourceExhausted when the child ran out of its memory limit;
+// kDeadlineExceeded past the CPU or wall limit; kInternal when it was killed by a signal or
+// died without a word (naming the signal and the stage it was in).
+absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, const JobSpec& spec,
+                                                       const JobLimits& limits,
+                                                       const JobProgressFn& progress);
+
+// When argv says this process is a job child (argv[1] == "--sheetmesh-job-child"), runs the
+// job and returns its exit code; otherwise -1, and main() carries on.
+int RunJobChildIfAsked(int argc, char** argv);
+
+// Three quarters of the machine's memory: the default memory limit of a job.
+uint64_t DefaultJobMemory();
+
+// This program's own path (for `self`). kInternal when /proc/self/exe cannot be read.
+absl::StatusOr<std::string> SelfPath();
+
+}  // namespace sheetmesh::runtime
+
+#endif  // SHEETMESH_WORKER_RUNTIME_JOB_PROCESS_H_

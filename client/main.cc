@@ -14,6 +14,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/cord.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -57,6 +58,27 @@ constexpr char kUsage[] =
     "  jobs list|get|watch|cancel|delete [JOB]\n"
     "  artifacts get JOB -o DIR  download a job's files (--name FILE for one)\n"
     "  health                    the server's health\n";
+
+// The payload that marks a status as the end of a job (not a refused call).
+constexpr char kJobFailed[] = "sheetmesh/job-failed";
+
+// 2 for bad input the user can mend: refused parameters, and a job that failed on its
+// volume (bad, cut, too big for the server's budget, naming a file it may not); 1 for the
+// rest (the server, the network, a job or file that does not exist).
+int ExitCodeOf(const absl::Status& st) {
+  switch (st.code()) {
+    case absl::StatusCode::kInvalidArgument:
+    case absl::StatusCode::kOutOfRange:
+    case absl::StatusCode::kDataLoss:
+      return 2;
+    case absl::StatusCode::kResourceExhausted:
+    case absl::StatusCode::kFailedPrecondition:
+    case absl::StatusCode::kPermissionDenied:
+      return st.GetPayload(kJobFailed).has_value() ? 2 : 1;
+    default:
+      return 1;
+  }
+}
 
 std::string NewRequestId() {
   std::random_device rd;
@@ -186,9 +208,11 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
   }));
   reporter.Done();
   if (done.state() != v1::SUCCEEDED) {
-    return absl::Status(
+    absl::Status failed(
         static_cast<absl::StatusCode>(done.error().code() ? done.error().code() : 2),
         absl::StrCat(done.name(), " ", StateName(done.state()), ": ", done.error().message()));
+    failed.SetPayload(kJobFailed, absl::Cord(done.name()));
+    return failed;
   }
   std::cout << "downloading " << done.artifacts_size() << " files to " << out << "\n";
   SM_RETURN_IF_ERROR(DownloadAll(c, done, out, ""));
@@ -314,7 +338,7 @@ int Main(int argc, char** argv) {
   if (!st.ok()) {
     std::cerr << "sheetmesh " << command << ": " << absl::StatusCodeToString(st.code()) << ": "
               << st.message() << "\n";
-    return st.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+    return ExitCodeOf(st);
   }
   return 0;
 }

@@ -63,6 +63,14 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     return grpc::Status::OK;
   }
   const v1::JobInput& in = r->input();
+  if (!in.file_name().empty()) {
+    const std::string& n = in.file_name();
+    if (n == "." || n == ".." || n.find('/') != std::string::npos ||
+        n.find('\0') != std::string::npos) {
+      return ToGrpcStatus(absl::InvalidArgumentError(absl::StrCat(
+          "input.file_name '", n, "' must be a plain file name (like rock.tif), without '/'")));
+    }
+  }
   std::string resolved;
   if (in.has_volume_digest()) {
     if (absl::Status st = CheckDigest(in.volume_digest()); !st.ok()) {

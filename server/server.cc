@@ -1,5 +1,7 @@
 #include "server/server.h"
 
+#include <filesystem>
+
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -68,6 +70,10 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   Impl& s = *server->impl_;
   s.options = o;
   SM_RETURN_IF_ERROR(MakeDirs(o.data_dir));
+  // Nothing runs yet: what the scratch folder holds is left from a previous process (the
+  // inputs and outputs of jobs it was running, failed or requeued since).
+  std::error_code ec;
+  std::filesystem::remove_all(o.data_dir + "/scratch", ec);
   SM_RETURN_IF_ERROR(MakeDirs(o.data_dir + "/scratch"));
   SM_ASSIGN_OR_RETURN(s.jobs, OpenSqliteJobStore(o.data_dir + "/jobs.db"));
   SM_ASSIGN_OR_RETURN(s.blobs, BlobStore::Open(o.data_dir + "/blobs"));

@@ -109,6 +109,24 @@ absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool extrac
   return flags.given.Build(o);
 }
 
+// 2: the input or the parameters are wrong, and the user can mend them (a bad or cut file,
+// one too big for the memory budget, a file that is missing or may not be read, sheets that
+// clash); 1: the rest (the machine, a bug).
+int ExitCodeOf(const absl::Status& status) {
+  switch (status.code()) {
+    case absl::StatusCode::kInvalidArgument:
+    case absl::StatusCode::kResourceExhausted:
+    case absl::StatusCode::kNotFound:
+    case absl::StatusCode::kPermissionDenied:
+    case absl::StatusCode::kFailedPrecondition:
+    case absl::StatusCode::kOutOfRange:
+    case absl::StatusCode::kDataLoss:
+      return 2;
+    default:
+      return 1;
+  }
+}
+
 absl::Status Usage(absl::string_view what) {
   return absl::InvalidArgumentError(absl::StrCat("usage: sheetmesh-pipeline ", what));
 }
@@ -279,8 +297,7 @@ int Main(int argc, char** argv) {
   if (!status.ok()) {
     std::cerr << "sheetmesh-pipeline " << command << ": " << absl::StatusCodeToString(status.code())
               << ": " << status.message() << "\n";
-    // 2: the input or the parameters are wrong (the user can mend them); 1: the rest.
-    return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+    return ExitCodeOf(status);
   }
   return 0;
 }

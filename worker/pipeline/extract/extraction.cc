@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -220,27 +219,6 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
         std::ceil(3 * CellVolume(SummarizeThickness(tau).mean, o.separation.radius_voxels)));
   }
   return Workflow(input, o, progress, m).Run();
-}
-
-nlohmann::json ExtractionStep::Fields() const {
-  return {{"step", name},
-          {"ran", ran},
-          {"voxels_before", voxels_before},
-          {"voxels_after", voxels_after},
-          {"added", added},
-          {"removed", removed},
-          {"objects_before", objects_before},
-          {"objects_after", objects_after},
-          {"seconds", seconds}};
-}
-
-nlohmann::json ExtractionSummary::Fields() const {
-  nlohmann::json s = nlohmann::json::array();
-  for (const ExtractionStep& step : steps) s.push_back(step.Fields());
-  return {{"steps", s},
-          {"min_object_voxels", min_object_voxels},
-          {"model_voxels", model_voxels},
-          {"pieces", pieces}};
 }
 
 }  // namespace sheetmesh

@@ -1,7 +1,5 @@
 #include "worker/pipeline/extract/piece_geology.h"
 
-#include <nlohmann/json.hpp>
-
 #include <Eigen/Dense>
 #include <algorithm>
 #include <map>
@@ -88,20 +86,6 @@ std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces) {
         g.centroid.z);
   }
   return out;
-}
-
-nlohmann::json PieceGeology::Fields() const {
-  return {{"piece", piece},
-          {"voxels", voxels},
-          {"triangles", triangles},
-          {"area", area},
-          {"mean_aperture", mean_aperture},
-          {"max_aperture", max_aperture},
-          {"normal", {normal.x, normal.y, normal.z}},
-          {"dip_degrees", dip_degrees},
-          {"dip_direction_degrees", dip_direction_degrees},
-          {"planarity", planarity},
-          {"centroid", {centroid.x, centroid.y, centroid.z}}};
 }
 
 }  // namespace sheetmesh

@@ -1,7 +1,5 @@
 #include "worker/pipeline/mesh/mesh_topology.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <numeric>
 
@@ -214,18 +212,6 @@ std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleM
     });
   }
   return out;
-}
-
-nlohmann::json TopologyReport::Fields() const {
-  return {{"edges", edges},
-          {"boundary_edges", boundary_edges},
-          {"nonmanifold_edges", nonmanifold_edges},
-          {"boundary_loops", boundary_loops},
-          {"pieces", pieces},
-          {"inconsistent_edges", inconsistent_edges},
-          {"duplicate_faces", duplicate_faces},
-          {"degenerate_faces", degenerate_faces},
-          {"unused_vertices", unused_vertices}};
 }
 
 }  // namespace sheetmesh

@@ -6,7 +6,6 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
-#include <nlohmann/json.hpp>
 
 #include "common/status_macros.h"
 #include "worker/pipeline/scvd/dual_triangles_parts.h"
@@ -97,20 +96,6 @@ absl::StatusOr<DualTriangulation> TriangulateScvd(const VoxelSet& set,
   result.faces = selector.faces();
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return result;
-}
-
-nlohmann::json DualTriangleStats::Fields() const {
-  return {{"candidates", candidates},
-          {"blocks_three_cells", blocks_three},
-          {"blocks_amended", blocks_amended},
-          {"blocks_unresolved", blocks_unresolved},
-          {"kept", kept},
-          {"rejected_fold", rejected_fold},
-          {"rejected_intersection", rejected_intersection},
-          {"rejected_degenerate", rejected_degenerate},
-          {"rim_vertices", rim_vertices},
-          {"rim_triangles", rim_faces},
-          {"crack_triangles", crack_faces}};
 }
 
 }  // namespace sheetmesh

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 #include <nanoflann.hpp>
-#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "common/assert.h"
@@ -135,16 +134,6 @@ VoxelSet GridModel(const VoxelSet& image, int k) {
 uint64_t GridQuantity(const Dims& dims, int k) {
   auto up = [k](int64_t n) { return static_cast<uint64_t>((n + k - 1) / k); };
   return up(dims.nx) * up(dims.ny) * up(dims.nz);
-}
-
-nlohmann::json SimilarityScore::Fields() const {
-  nlohmann::json j = {{"similarity", similarity},
-                      {"c_in", c_in},
-                      {"c_out", c_out},
-                      {"c_image", c_image},
-                      {"dice", dice}};
-  if (hausdorff >= 0) j["hausdorff_voxels"] = hausdorff;
-  return j;
 }
 
 }  // namespace sheetmesh

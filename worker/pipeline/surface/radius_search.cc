@@ -1,7 +1,5 @@
 #include "worker/pipeline/surface/radius_search.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -146,14 +144,6 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
   choice.trials = eval.trials();
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return choice;
-}
-
-nlohmann::json RadiusChoice::Fields() const {
-  nlohmann::json t = nlohmann::json::array();
-  for (const RadiusTrial& x : trials) {
-    t.push_back({{"r", x.radius}, {"triangles", x.triangles}, {"similarity", x.similarity}});
-  }
-  return {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
 }
 
 }  // namespace sheetmesh

@@ -1,7 +1,5 @@
 #include "worker/pipeline/surface/surface_builder.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 
 #include "absl/time/clock.h"
@@ -134,23 +132,6 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   s.skipped_components = result.skipped_components;
   s.skipped_voxels = result.skipped_voxels;
   return s;
-}
-
-nlohmann::json SurfaceStats::Fields() const {
-  nlohmann::json j = triangle_stats.Fields();
-  j["vertices"] = vertices;
-  j["triangles"] = triangles;
-  j["element_size_voxels"] = element_size_voxels;
-  j["element_size"] = element_size;
-  j["area_voxels"] = area_voxels;
-  j["components_without_triangles"] = skipped_components;
-  j["voxels_without_triangles"] = skipped_voxels;
-  j["topology"] = topology.Fields();
-  j["scvd"] = {{"generators", generators},
-               {"lloyd_iterations", lloyd_iterations},
-               {"lloyd_converged", lloyd_converged},
-               {"energy", energy}};
-  return j;
 }
 
 }  // namespace sheetmesh

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <nlohmann/json.hpp>
 #include <set>
 
 #include "absl/strings/str_cat.h"
@@ -116,22 +115,6 @@ SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop
     keep.thickness.push_back(s.thickness[f]);
   }
   return keep;
-}
-
-nlohmann::json PlcStats::Fields() const {
-  return {{"snapped_vertices", snapped_vertices},
-          {"snap_held_vertices", snap_held_vertices},
-          {"merged_vertices", merged_vertices},
-          {"dropped_triangles", dropped_triangles},
-          {"repaired_triangles", repaired_triangles},
-          {"flipped_edges", flipped_edges},
-          {"dropped_caps", dropped_caps},
-          {"dropped_overlaps", dropped_overlaps},
-          {"closed_slits", closed_slits},
-          {"opened_wedges", opened_wedges},
-          {"box_points", box_points},
-          {"seed_points", seed_points},
-          {"lattice_spacing", lattice_spacing}};
 }
 
 std::string Plc::ToPoly() const {

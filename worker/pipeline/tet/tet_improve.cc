@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
 #include <numbers>
 #include <utility>
 
@@ -33,23 +32,6 @@ double MinDihedralDegrees(const Vec3& a, const Vec3& b, const Vec3& c, const Vec
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j) worst = std::max(worst, -Dot(n[i], n[j]));
   return std::acos(std::clamp(worst, -1.0, 1.0)) * (180.0 / std::numbers::pi);
-}
-
-nlohmann::json TetImproveReport::Fields() const {
-  return {{"passes", passes},
-          {"edge_removals", edge_removals},
-          {"face_removals", face_removals},
-          {"smoothing_moves", smoothing_moves},
-          {"inserted_vertices", inserted_vertices},
-          {"sheet_face_splits", sheet_face_splits},
-          {"sheet_edge_splits", sheet_edge_splits},
-          {"movable_vertices", movable_vertices},
-          {"sliding_vertices", sliding_vertices},
-          {"min_dihedral_before", min_dihedral_before},
-          {"mean_dihedral_before", mean_dihedral_before},
-          {"min_dihedral_after", min_dihedral_after},
-          {"mean_dihedral_after", mean_dihedral_after},
-          {"seconds", seconds}};
 }
 
 absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_hi,

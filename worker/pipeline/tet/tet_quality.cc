@@ -2,21 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
 #include <numbers>
 
 namespace sheetmesh {
-
-nlohmann::json QualityStat::Fields() const {
-  return {{"min", min}, {"mean", mean}, {"histogram_range", {lo, hi}}, {"histogram", histogram}};
-}
-
-nlohmann::json TetQuality::Fields() const {
-  return {{"min_dihedral_degrees", min_dihedral.Fields()},
-          {"gamma", gamma.Fields()},
-          {"edge_aspect", edge_aspect.Fields()},
-          {"radius_aspect", radius_aspect.Fields()}};
-}
 
 TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   TetShape s;

@@ -1,7 +1,5 @@
 #include "worker/pipeline/tet/volume_mesher.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -134,28 +132,6 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
 }
 
 }  // namespace
-
-nlohmann::json Conformity::Fields() const {
-  return {{"sheet_triangles", sheet_triangles},
-          {"conforming", conforming},
-          {"worst_area_error", worst_area_error}};
-}
-
-nlohmann::json VolumeMeshStats::Fields() const {
-  nlohmann::json j = PlcStats::Fields();
-  j["nodes"] = nodes;
-  j["tetrahedra"] = tetrahedra;
-  j["sheet_faces"] = sheet_faces;
-  j["voxels_per_tetrahedron"] = voxels_per_tet;
-  j["volume"] = quality.volume;
-  j["tetgen_switches"] = tetgen_switches;
-  j["tetgen_seconds"] = tetgen_seconds;
-  j["rederived_facets"] = rederived_facets;
-  j["conformity"] = conformity.Fields();
-  j["quality"] = quality.Fields();
-  j["improvement"] = improvement.Fields();
-  return j;
-}
 
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
                                                  const Placement& placement,

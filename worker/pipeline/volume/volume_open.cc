@@ -37,35 +37,48 @@ class PlacedSource : public VolumeSource {
   std::unique_ptr<VolumeSource> inner_;
 };
 
-}  // namespace
+// The dims a file name gives, and its type token if it has one ("_u8", "_i7").
+struct NamedDims {
+  Dims dims;
+  std::string type_token;
+};
 
-absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std::string& path) {
-  // The dims, then maybe a type token: a letter or two and a bit count ("_u8", "_i7").
+std::optional<NamedDims> ParseNamedDims(const std::string& path) {
+  // The dims, then maybe a type token: a letter or two and a bit count.
   static const std::regex kPattern(R"((\d+)x(\d+)x(\d+)(?:_([a-z]+\d+)(?![a-z0-9]))?)",
                                    std::regex::icase);
   const std::string name = std::filesystem::path(path).filename().string();
   std::smatch m;
   if (!std::regex_search(name, m, kPattern)) return std::nullopt;
-  Dims d;
-  if (!absl::SimpleAtoi(m[1].str(), &d.nx) || !absl::SimpleAtoi(m[2].str(), &d.ny) ||
-      !absl::SimpleAtoi(m[3].str(), &d.nz)) {
+  NamedDims n;
+  if (!absl::SimpleAtoi(m[1].str(), &n.dims.nx) || !absl::SimpleAtoi(m[2].str(), &n.dims.ny) ||
+      !absl::SimpleAtoi(m[3].str(), &n.dims.nz)) {
     return std::nullopt;
   }
-  DType t = DType::kUInt8;
-  if (m[4].matched) {
-    const std::string token = absl::AsciiStrToLower(m[4].str());
-    absl::StatusOr<DType> parsed = ParseDType(token);
-    if (!parsed.ok() && token == "u8") parsed = DType::kUInt8;
-    if (!parsed.ok() && token == "u16") parsed = DType::kUInt16;
-    if (!parsed.ok() && token == "f32") parsed = DType::kFloat32;
-    if (!parsed.ok()) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(path, ": the name gives the voxel type '", m[4].str(),
-                       "', which is not u8, u16 or f32 (give the type: --dtype, input.dtype)"));
-    }
-    t = *parsed;
-  }
-  return std::make_pair(d, t);
+  if (m[4].matched) n.type_token = m[4].str();
+  return n;
+}
+
+absl::StatusOr<DType> TypeOfToken(const std::string& path, const std::string& token) {
+  if (token.empty()) return DType::kUInt8;
+  const std::string t = absl::AsciiStrToLower(token);
+  absl::StatusOr<DType> parsed = ParseDType(t);
+  if (parsed.ok()) return parsed;
+  if (t == "u8") return DType::kUInt8;
+  if (t == "u16") return DType::kUInt16;
+  if (t == "f32") return DType::kFloat32;
+  return absl::InvalidArgumentError(
+      absl::StrCat(path, ": the name gives the voxel type '", token,
+                   "', which is not u8, u16 or f32 (give the type: --dtype, input.dtype)"));
+}
+
+}  // namespace
+
+absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std::string& path) {
+  const std::optional<NamedDims> named = ParseNamedDims(path);
+  if (!named) return std::nullopt;
+  SM_ASSIGN_OR_RETURN(const DType t, TypeOfToken(path, named->type_token));
+  return std::make_pair(named->dims, t);
 }
 
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
@@ -96,22 +109,23 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   std::unique_ptr<VolumeSource> source;
   if (format == "raw") {
     RawOptions raw;
-    absl::StatusOr<std::optional<std::pair<Dims, DType>>> named = DimsFromFileName(path);
-    // A type the name gives wrongly matters only when the type is not given otherwise.
-    if (!named.ok() && !options.raw_dtype) return named.status();
-    const std::optional<std::pair<Dims, DType>> from_name = named.ok() ? *named : std::nullopt;
+    const std::optional<NamedDims> named = ParseNamedDims(path);
     if (options.raw_dims) {
       raw.dims = *options.raw_dims;
-    } else if (from_name) {
-      raw.dims = from_name->first;
+    } else if (named) {
+      raw.dims = named->dims;
     } else {
       return absl::InvalidArgumentError(
           absl::StrCat(path,
                        ": a raw volume needs its dims (--dims NXxNYxNZ) or a name like "
                        "'rock_512x512x400_u8.raw'"));
     }
-    raw.dtype =
-        options.raw_dtype ? *options.raw_dtype : (from_name ? from_name->second : DType::kUInt8);
+    // A type the name gives wrongly matters only when the type is not given otherwise.
+    if (options.raw_dtype) {
+      raw.dtype = *options.raw_dtype;
+    } else {
+      SM_ASSIGN_OR_RETURN(raw.dtype, TypeOfToken(path, named ? named->type_token : ""));
+    }
     raw.byte_order = options.raw_byte_order;
     raw.header_bytes = options.raw_header_bytes;
     SM_ASSIGN_OR_RETURN(source, OpenRawVolume(path, raw, options.limits));

@@ -1,7 +1,5 @@
 #include "worker/pipeline/voxel/thickness.h"
 
-#include <nlohmann/json.hpp>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -141,10 +139,6 @@ ThicknessStats SummarizeThickness(std::span<const uint16_t> thickness) {
     }
   }
   return s;
-}
-
-nlohmann::json ThicknessStats::Fields() const {
-  return {{"mean", mean}, {"median", median}, {"min", min}, {"max", max}};
 }
 
 }  // namespace sheetmesh

@@ -1,0 +1,187 @@
+// Every stage's part of the report (the `Fields()` its result struct declares), in one
+// translation unit: one file knows the report's JSON names, and nlohmann's header, heavy to
+// compile, is compiled once for them all instead of once per stage.
+#include <nlohmann/json.hpp>
+
+#include "worker/pipeline/extract/extraction.h"
+#include "worker/pipeline/extract/piece_geology.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/surface/radius_search.h"
+#include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/tet_improve.h"
+#include "worker/pipeline/tet/tet_quality.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+#include "worker/pipeline/voxel/thickness.h"
+
+namespace sheetmesh {
+
+nlohmann::json TopologyReport::Fields() const {
+  return {{"edges", edges},
+          {"boundary_edges", boundary_edges},
+          {"nonmanifold_edges", nonmanifold_edges},
+          {"boundary_loops", boundary_loops},
+          {"pieces", pieces},
+          {"inconsistent_edges", inconsistent_edges},
+          {"duplicate_faces", duplicate_faces},
+          {"degenerate_faces", degenerate_faces},
+          {"unused_vertices", unused_vertices}};
+}
+
+nlohmann::json DualTriangleStats::Fields() const {
+  return {{"candidates", candidates},
+          {"blocks_three_cells", blocks_three},
+          {"blocks_amended", blocks_amended},
+          {"blocks_unresolved", blocks_unresolved},
+          {"kept", kept},
+          {"rejected_fold", rejected_fold},
+          {"rejected_intersection", rejected_intersection},
+          {"rejected_degenerate", rejected_degenerate},
+          {"rim_vertices", rim_vertices},
+          {"rim_triangles", rim_faces},
+          {"crack_triangles", crack_faces}};
+}
+
+nlohmann::json ThicknessStats::Fields() const {
+  return {{"mean", mean}, {"median", median}, {"min", min}, {"max", max}};
+}
+
+nlohmann::json ExtractionStep::Fields() const {
+  return {{"step", name},
+          {"ran", ran},
+          {"voxels_before", voxels_before},
+          {"voxels_after", voxels_after},
+          {"added", added},
+          {"removed", removed},
+          {"objects_before", objects_before},
+          {"objects_after", objects_after},
+          {"seconds", seconds}};
+}
+
+nlohmann::json ExtractionSummary::Fields() const {
+  nlohmann::json s = nlohmann::json::array();
+  for (const ExtractionStep& step : steps) s.push_back(step.Fields());
+  return {{"steps", s},
+          {"min_object_voxels", min_object_voxels},
+          {"model_voxels", model_voxels},
+          {"pieces", pieces}};
+}
+
+nlohmann::json PieceGeology::Fields() const {
+  return {{"piece", piece},
+          {"voxels", voxels},
+          {"triangles", triangles},
+          {"area", area},
+          {"mean_aperture", mean_aperture},
+          {"max_aperture", max_aperture},
+          {"normal", {normal.x, normal.y, normal.z}},
+          {"dip_degrees", dip_degrees},
+          {"dip_direction_degrees", dip_direction_degrees},
+          {"planarity", planarity},
+          {"centroid", {centroid.x, centroid.y, centroid.z}}};
+}
+
+nlohmann::json SimilarityScore::Fields() const {
+  nlohmann::json j = {{"similarity", similarity},
+                      {"c_in", c_in},
+                      {"c_out", c_out},
+                      {"c_image", c_image},
+                      {"dice", dice}};
+  if (hausdorff >= 0) j["hausdorff_voxels"] = hausdorff;
+  return j;
+}
+
+nlohmann::json QualityStat::Fields() const {
+  return {{"min", min}, {"mean", mean}, {"histogram_range", {lo, hi}}, {"histogram", histogram}};
+}
+
+nlohmann::json TetQuality::Fields() const {
+  return {{"min_dihedral_degrees", min_dihedral.Fields()},
+          {"gamma", gamma.Fields()},
+          {"edge_aspect", edge_aspect.Fields()},
+          {"radius_aspect", radius_aspect.Fields()}};
+}
+
+nlohmann::json TetImproveReport::Fields() const {
+  return {{"passes", passes},
+          {"edge_removals", edge_removals},
+          {"face_removals", face_removals},
+          {"smoothing_moves", smoothing_moves},
+          {"inserted_vertices", inserted_vertices},
+          {"sheet_face_splits", sheet_face_splits},
+          {"sheet_edge_splits", sheet_edge_splits},
+          {"movable_vertices", movable_vertices},
+          {"sliding_vertices", sliding_vertices},
+          {"min_dihedral_before", min_dihedral_before},
+          {"mean_dihedral_before", mean_dihedral_before},
+          {"min_dihedral_after", min_dihedral_after},
+          {"mean_dihedral_after", mean_dihedral_after},
+          {"seconds", seconds}};
+}
+
+nlohmann::json PlcStats::Fields() const {
+  return {{"snapped_vertices", snapped_vertices},
+          {"snap_held_vertices", snap_held_vertices},
+          {"merged_vertices", merged_vertices},
+          {"dropped_triangles", dropped_triangles},
+          {"repaired_triangles", repaired_triangles},
+          {"flipped_edges", flipped_edges},
+          {"dropped_caps", dropped_caps},
+          {"dropped_overlaps", dropped_overlaps},
+          {"closed_slits", closed_slits},
+          {"opened_wedges", opened_wedges},
+          {"box_points", box_points},
+          {"seed_points", seed_points},
+          {"lattice_spacing", lattice_spacing}};
+}
+
+nlohmann::json Conformity::Fields() const {
+  return {{"sheet_triangles", sheet_triangles},
+          {"conforming", conforming},
+          {"worst_area_error", worst_area_error}};
+}
+
+nlohmann::json VolumeMeshStats::Fields() const {
+  nlohmann::json j = PlcStats::Fields();
+  j["nodes"] = nodes;
+  j["tetrahedra"] = tetrahedra;
+  j["sheet_faces"] = sheet_faces;
+  j["voxels_per_tetrahedron"] = voxels_per_tet;
+  j["volume"] = quality.volume;
+  j["tetgen_switches"] = tetgen_switches;
+  j["tetgen_seconds"] = tetgen_seconds;
+  j["rederived_facets"] = rederived_facets;
+  j["conformity"] = conformity.Fields();
+  j["quality"] = quality.Fields();
+  j["improvement"] = improvement.Fields();
+  return j;
+}
+
+nlohmann::json SurfaceStats::Fields() const {
+  nlohmann::json j = triangle_stats.Fields();
+  j["vertices"] = vertices;
+  j["triangles"] = triangles;
+  j["element_size_voxels"] = element_size_voxels;
+  j["element_size"] = element_size;
+  j["area_voxels"] = area_voxels;
+  j["components_without_triangles"] = skipped_components;
+  j["voxels_without_triangles"] = skipped_voxels;
+  j["topology"] = topology.Fields();
+  j["scvd"] = {{"generators", generators},
+               {"lloyd_iterations", lloyd_iterations},
+               {"lloyd_converged", lloyd_converged},
+               {"energy", energy}};
+  return j;
+}
+
+nlohmann::json RadiusChoice::Fields() const {
+  nlohmann::json t = nlohmann::json::array();
+  for (const RadiusTrial& x : trials) {
+    t.push_back({{"r", x.radius}, {"triangles", x.triangles}, {"similarity", x.similarity}});
+  }
+  return {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
+}
+
+}  // namespace sheetmesh

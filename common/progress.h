@@ -50,6 +50,7 @@ class Progress {
   }
 
   bool enabled() const { return observer_ != nullptr; }
+  ProgressObserver* observer() const { return observer_; }
   const std::string& stage() const { return stage_; }
 
  private:

@@ -33,7 +33,11 @@ ChildExit FromStatus(int status) {
 }  // namespace
 
 std::string ChildExit::ToString() const {
-  if (signaled) return absl::StrCat("killed by signal ", code, " (", strsignal(code), ")");
+  if (signaled) {
+    const char* abbrev = sigabbrev_np(code);
+    return absl::StrCat("killed by ", abbrev ? absl::StrCat("SIG", abbrev) : "a signal",
+                        " (signal ", code, ", ", strsignal(code), ")");
+  }
   return absl::StrCat("exited with code ", code);
 }
 

@@ -28,7 +28,7 @@ struct SubprocessOptions {
 struct ChildExit {
   bool signaled = false;
   int code = 0;                  // exit code, or the signal
-  std::string ToString() const;  // "exited with code 3", "killed by signal 7 (Bus error)"
+  std::string ToString() const;  // "exited with code 3", "killed by SIGBUS (signal 7, Bus error)"
 };
 
 // Owns a running child: the destructor kills (its process group) and reaps it if it still

@@ -1,6 +1,13 @@
-// BlobService: uploads (resumable), find-missing and ranged reads over the BlobStore.
+// BlobService: uploads (resumable), find-missing and ranged reads over the BlobStore, each
+// within the caller's tenant. A helper thread closes Write streams that stall (past
+// upload_idle_timeout) and removes uploads nobody resumed (past upload_expiry).
 #ifndef SHEETMESH_SERVER_BLOB_SERVICE_H_
 #define SHEETMESH_SERVER_BLOB_SERVICE_H_
+
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <thread>
 
 #include "server/service_context.h"
 #include "sheetmesh/v1/blobs.grpc.pb.h"
@@ -9,7 +16,8 @@ namespace sheetmesh::server {
 
 class BlobServiceImpl final : public v1::BlobService::Service {
  public:
-  explicit BlobServiceImpl(const ServiceContext* ctx) : ctx_(ctx) {}
+  explicit BlobServiceImpl(const ServiceContext* ctx);
+  ~BlobServiceImpl() override;
 
   grpc::Status FindMissingBlobs(grpc::ServerContext* context,
                                 const v1::FindMissingBlobsRequest* request,
@@ -22,8 +30,23 @@ class BlobServiceImpl final : public v1::BlobService::Service {
   grpc::Status Read(grpc::ServerContext* context, const v1::ReadRequest* request,
                     grpc::ServerWriter<v1::ReadResponse>* writer) override;
 
+  // Write streams the idle timeout has closed, since the start.
+  int64_t idle_closed() const;
+
  private:
+  class ActiveWrite;
+  void Reap();
+  // Whether `tenant` may use the blob (it owns it); a server without tokens has one tenant,
+  // which owns everything stored.
+  absl::StatusOr<bool> Owns(const std::string& tenant, const v1::Digest& digest) const;
+
   const ServiceContext* ctx_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::map<grpc::ServerContext*, absl::Time> writes_;  // open Write streams, last progress
+  int64_t idle_closed_ = 0;
+  bool stopping_ = false;
+  std::thread reaper_;
 };
 
 }  // namespace sheetmesh::server

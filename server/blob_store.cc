@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <future>
+#include <set>
 #include <span>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
@@ -172,9 +174,11 @@ class PartFile {
   int64_t end_ = 0;  // bytes in the file and the buffers together
 };
 
-// An upload: its file, the hash of the bytes written, and the declared digest.
+// An upload: its file (open only while a stream writes it), the hash of the bytes written,
+// and the declared digest.
 struct BlobStore::Upload {
   std::mutex mu;
+  std::string key;  // in uploads_
   std::string part_path;
   v1::Digest expected;
   std::unique_ptr<PartFile> file;
@@ -182,6 +186,7 @@ struct BlobStore::Upload {
   int64_t written = 0;
   int64_t committed = 0;  // durable (the stream ended, or a restart found it on disk)
   bool complete = false;
+  absl::Time last_write = absl::Now();
 };
 
 std::string DigestString(const v1::Digest& d) {
@@ -251,13 +256,11 @@ absl::StatusOr<v1::Digest> BlobStore::PutFile(const std::string& path) {
   return d;
 }
 
-absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const std::string& resource,
-                                                                        bool create) {
-  // uploads/{uuid}/blobs/{hash}/{size}
+absl::StatusOr<v1::Digest> DigestOfResource(const std::string& resource) {
   std::vector<std::string> parts = absl::StrSplit(resource, '/');
   int64_t size = 0;
   if (parts.size() != 5 || parts[0] != "uploads" || parts[2] != "blobs" || parts[1].empty() ||
-      !absl::SimpleAtoi(parts[4], &size)) {
+      parts[1].size() > 128 || !absl::SimpleAtoi(parts[4], &size)) {
     return absl::InvalidArgumentError(absl::StrCat(
         "resource_name '", resource, "' must look like uploads/{uuid}/blobs/{hash}/{size}"));
   }
@@ -267,46 +270,80 @@ absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const st
           "resource_name '", resource, "': the upload id may hold letters, digits, - and _ only"));
     }
   }
-  v1::Digest expected;
-  expected.set_hash(parts[3]);
-  expected.set_size_bytes(size);
-  SM_RETURN_IF_ERROR(CheckDigest(expected));
-  std::lock_guard<std::mutex> lock(mu_);
-  auto it = uploads_.find(resource);
-  if (it != uploads_.end()) return it->second;
-  auto up = std::make_shared<Upload>();
-  up->expected = expected;
-  up->part_path = absl::StrCat(root_, "/uploads/", parts[1], "-", parts[3], ".part");
-  if (Contains(expected)) {
-    up->complete = true;
-    up->committed = up->written = size;
-  } else {
-    struct stat st;
-    const bool exists = ::stat(up->part_path.c_str(), &st) == 0;
-    if (!exists && !create) return up;
-    // An upload from before a restart resumes from its length on disk: hash that prefix.
-    up->file = std::make_unique<PartFile>();
-    int64_t have = 0;
-    SM_RETURN_IF_ERROR(up->file->Open(up->part_path, &have));
-    up->sha = std::make_unique<Sha256>();
-    SM_RETURN_IF_ERROR(HashFilePrefix(up->file->fd(), have, up->sha.get(), up->part_path));
-    up->written = up->committed = have;
-  }
-  uploads_[resource] = up;
-  return up;
+  v1::Digest d;
+  d.set_hash(parts[3]);
+  d.set_size_bytes(size);
+  SM_RETURN_IF_ERROR(CheckDigest(d));
+  return d;
 }
 
-absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& resource,
-                                                         int64_t offset, absl::string_view data,
-                                                         bool finish, int64_t max_bytes) {
-  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up, GetUpload(resource, true));
-  std::lock_guard<std::mutex> lock(up->mu);
-  if (up->expected.size_bytes() > max_bytes) {
-    return absl::ResourceExhaustedError(absl::StrCat("a blob of ", up->expected.size_bytes(),
+absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const std::string& tenant,
+                                                                        const std::string& resource,
+                                                                        bool create,
+                                                                        bool stored_counts,
+                                                                        int64_t max_bytes) {
+  SM_ASSIGN_OR_RETURN(const v1::Digest expected, DigestOfResource(resource));
+  const int64_t size = expected.size_bytes();
+  const std::vector<std::string> parts = absl::StrSplit(resource, '/');
+  // Refused before anything is created: a refused upload leaves no file and no entry.
+  if (size > max_bytes) {
+    return absl::ResourceExhaustedError(absl::StrCat("a blob of ", size,
                                                      " bytes exceeds the server's limit of ",
                                                      max_bytes, " bytes (max_blob_bytes)"));
   }
+  const std::string key = absl::StrCat(tenant, "\n", resource);
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = uploads_.find(key);
+  if (it != uploads_.end()) return it->second;
+  auto up = std::make_shared<Upload>();
+  up->key = key;
+  up->expected = expected;
+  up->part_path = absl::StrCat(root_, "/uploads/", tenant.empty() ? "_" : tenant, "/", parts[1],
+                               "-", parts[3], ".part");
+  if (stored_counts && Contains(expected)) {
+    up->complete = true;
+    up->committed = up->written = size;
+    return up;  // nothing to keep
+  }
+  struct stat st;
+  const bool exists = ::stat(up->part_path.c_str(), &st) == 0;
+  if (!exists && !create) return up;
+  SM_RETURN_IF_ERROR(MakeDirs(std::filesystem::path(up->part_path).parent_path().string()));
+  SM_RETURN_IF_ERROR(OpenPart(*up));
+  // Only a stream keeps the files open (a status query found this upload on disk).
+  if (!create) up->file.reset();
+  uploads_[key] = up;
+  return up;
+}
+
+// Opens the upload's .part file. An upload from before a restart (or whose file changed
+// under it) resumes from its length on disk: that prefix is hashed again.
+absl::Status BlobStore::OpenPart(Upload& up) {
+  up.file = std::make_unique<PartFile>();
+  int64_t have = 0;
+  SM_RETURN_IF_ERROR(up.file->Open(up.part_path, &have));
+  if (up.sha != nullptr && have == up.written) return absl::OkStatus();
+  if (have > up.expected.size_bytes()) {  // not this upload's bytes: start again
+    if (::ftruncate(up.file->fd(), 0) != 0) return ErrnoStatus(errno, up.part_path);
+    have = 0;
+  }
+  up.sha = std::make_unique<Sha256>();
+  SM_RETURN_IF_ERROR(HashFilePrefix(up.file->fd(), have, up.sha.get(), up.part_path));
+  up.written = up.committed = have;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& tenant,
+                                                         const std::string& resource,
+                                                         int64_t offset, absl::string_view data,
+                                                         bool finish, int64_t max_bytes,
+                                                         bool stored_counts) {
+  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up,
+                      GetUpload(tenant, resource, true, stored_counts, max_bytes));
+  std::lock_guard<std::mutex> lock(up->mu);
   if (up->complete) return UploadState{up->expected.size_bytes(), true};
+  up->last_write = absl::Now();
+  if (up->file == nullptr) SM_RETURN_IF_ERROR(OpenPart(*up));
   if (offset < 0 || offset > up->written) {
     return absl::InvalidArgumentError(absl::StrCat("write_offset ", offset, " for ", resource,
                                                    " must be at most the committed size ",
@@ -334,9 +371,10 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
         absl::StrCat("upload ", resource, " has ", up->written, " bytes of SHA-256 ", got,
                      ", not the declared ", DigestString(up->expected), "; it is discarded");
     up->file->Close();
+    up->file.reset();
     ::unlink(up->part_path.c_str());
     std::lock_guard<std::mutex> l(mu_);
-    uploads_.erase(resource);
+    uploads_.erase(up->key);
     return absl::InvalidArgumentError(why);
   }
   SM_RETURN_IF_ERROR(up->file->Flush());
@@ -344,6 +382,8 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
   up->file.reset();
   const std::string dest = CasPath(up->expected.hash());
   SM_RETURN_IF_ERROR(MakeDirs(std::filesystem::path(dest).parent_path().string()));
+  // The same bytes may be stored already (a tenant that did not own them sent them): the
+  // rename replaces them with themselves.
   if (::rename(up->part_path.c_str(), dest.c_str()) != 0) return ErrnoStatus(errno, dest);
   SyncDir(std::filesystem::path(dest).parent_path().string());
   up->complete = true;
@@ -352,24 +392,100 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& reso
   {
     // Done: later calls find the blob itself.
     std::lock_guard<std::mutex> l(mu_);
-    uploads_.erase(resource);
+    uploads_.erase(up->key);
   }
   return UploadState{up->committed, true};
 }
 
-absl::Status BlobStore::Sync(const std::string& resource) {
-  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up, GetUpload(resource, false));
+absl::Status BlobStore::EndStream(const std::string& tenant, const std::string& resource) {
+  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up,
+                      GetUpload(tenant, resource, false, false, INT64_MAX));
   std::lock_guard<std::mutex> lock(up->mu);
   if (up->complete || up->file == nullptr) return absl::OkStatus();
-  SM_RETURN_IF_ERROR(up->file->Flush());
-  up->committed = up->written;
-  return absl::OkStatus();
+  absl::Status st = up->file->Flush();
+  if (st.ok()) up->committed = up->written;
+  // Closed even when the flush failed: a stream that ended holds no descriptor.
+  up->file->Close();
+  up->file.reset();
+  up->last_write = absl::Now();
+  return st;
 }
 
-absl::StatusOr<BlobStore::UploadState> BlobStore::Status(const std::string& resource) {
-  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up, GetUpload(resource, false));
+absl::StatusOr<BlobStore::UploadState> BlobStore::Status(const std::string& tenant,
+                                                         const std::string& resource,
+                                                         bool stored_counts) {
+  SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up,
+                      GetUpload(tenant, resource, false, stored_counts, INT64_MAX));
   std::lock_guard<std::mutex> lock(up->mu);
   return UploadState{up->complete ? up->expected.size_bytes() : up->committed, up->complete};
+}
+
+int BlobStore::ExpireUploads(absl::Duration max_age) {
+  const absl::Time cutoff = absl::Now() - max_age;
+  int removed = 0;
+  std::lock_guard<std::mutex> lock(mu_);
+  for (auto it = uploads_.begin(); it != uploads_.end();) {
+    Upload& up = *it->second;
+    std::unique_lock<std::mutex> l(up.mu, std::try_to_lock);
+    if (l.owns_lock() && up.file == nullptr && up.last_write < cutoff) {
+      ::unlink(up.part_path.c_str());
+      it = uploads_.erase(it);
+      ++removed;
+    } else {
+      ++it;
+    }
+  }
+  // .part files no entry knows: a previous process's, or an older layout's.
+  std::set<std::string> known;
+  for (const auto& [key, up] : uploads_) known.insert(up->part_path);
+  std::error_code ec;
+  for (auto e = std::filesystem::recursive_directory_iterator(root_ + "/uploads", ec);
+       !ec && e != std::filesystem::recursive_directory_iterator(); e.increment(ec)) {
+    const std::string path = e->path().string();
+    if (!e->is_regular_file(ec) || e->path().extension() != ".part" || known.count(path)) continue;
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) continue;
+    if (absl::FromUnixSeconds(st.st_mtim.tv_sec) < cutoff && ::unlink(path.c_str()) == 0) {
+      ++removed;
+    }
+  }
+  return removed;
+}
+
+int BlobStore::open_uploads() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  int n = 0;
+  for (const auto& [key, up] : uploads_) {
+    std::unique_lock<std::mutex> l(up->mu, std::try_to_lock);
+    n += !l.owns_lock() || up->file != nullptr;
+  }
+  return n;
+}
+
+void BlobStore::Touch(const v1::Digest& digest) {
+  if (!CheckDigest(digest).ok()) return;
+  ::utimensat(AT_FDCWD, CasPath(digest.hash()).c_str(), nullptr, 0);
+}
+
+std::vector<BlobStore::BlobFile> BlobStore::ListBlobs() const {
+  std::vector<BlobFile> out;
+  std::error_code ec;
+  for (auto e = std::filesystem::recursive_directory_iterator(root_ + "/cas", ec);
+       !ec && e != std::filesystem::recursive_directory_iterator(); e.increment(ec)) {
+    if (!e->is_regular_file(ec)) continue;
+    const std::string name = e->path().filename().string();
+    struct stat st;
+    if (name.size() != 64 || ::stat(e->path().c_str(), &st) != 0) continue;
+    out.push_back({name, st.st_size, absl::FromUnixSeconds(st.st_mtim.tv_sec)});
+  }
+  return out;
+}
+
+absl::Status BlobStore::Remove(const std::string& hash) {
+  if (hash.size() != 64) return absl::InvalidArgumentError(absl::StrCat("'", hash, "' is no hash"));
+  const std::string path = CasPath(hash);
+  if (::unlink(path.c_str()) != 0) return ErrnoStatus(errno, path);
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh::server

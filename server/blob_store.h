@@ -1,7 +1,9 @@
 // BlobStore: a filesystem content-addressed store (SHA-256). Blobs live at
-// <root>/cas/<hash[0:2]>/<hash>; an upload grows <root>/uploads/<uuid>.part and becomes a
-// blob only when its digest checks out (fsync, then rename), so a half-written blob is
-// never visible. Uploads resume from their durable committed size, even after a restart.
+// <root>/cas/<hash[0:2]>/<hash>; an upload of a tenant grows
+// <root>/uploads/<tenant>/<uuid>-<hash>.part and becomes a blob only when its digest checks
+// out (fsync, then rename), so a half-written blob is never visible. Uploads resume from
+// their durable committed size, even after a restart; an upload holds file descriptors only
+// while a stream writes it, and one left alone past an expiry is removed.
 #ifndef SHEETMESH_SERVER_BLOB_STORE_H_
 #define SHEETMESH_SERVER_BLOB_STORE_H_
 
@@ -10,9 +12,11 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "absl/time/time.h"
 #include "sheetmesh/v1/common.pb.h"
 
 namespace sheetmesh::server {
@@ -23,6 +27,10 @@ absl::StatusOr<v1::Digest> DigestOfFile(const std::string& path);
 std::string DigestString(const v1::Digest& d);
 // kInvalidArgument unless the hash is 64 lower-case hex digits and the size not negative.
 absl::Status CheckDigest(const v1::Digest& d);
+
+// The digest an upload's resource name declares (uploads/{uuid}/blobs/{hash}/{size});
+// kInvalidArgument naming the resource when it is malformed.
+absl::StatusOr<v1::Digest> DigestOfResource(const std::string& resource);
 
 // Thread-safe.
 class BlobStore {
@@ -38,21 +46,45 @@ class BlobStore {
   // Stores the file at `path` (copied) and returns its digest.
   absl::StatusOr<v1::Digest> PutFile(const std::string& path);
 
-  // An upload in progress, keyed by its resource name.
+  // Marks the blob used now: retention (CollectBlobs) counts a blob's age from its last use.
+  void Touch(const v1::Digest& digest);
+
+  // A stored blob, for retention.
+  struct BlobFile {
+    std::string hash;
+    int64_t size = 0;
+    absl::Time last_used;  // the file's modification time (Touch)
+  };
+  std::vector<BlobFile> ListBlobs() const;
+  // Removes a stored blob (retention). kNotFound when absent.
+  absl::Status Remove(const std::string& hash);
+
+  // An upload in progress, keyed by its tenant and resource name.
   struct UploadState {
     int64_t committed = 0;  // bytes durably written
     bool complete = false;  // the blob is stored
   };
-  // Appends `data` at `offset` to the upload `resource` (uploads/{uuid}/blobs/{hash}/{size}).
-  // Bytes before what the upload already holds are skipped (a resumed or concurrent writer
-  // of the same content). kInvalidArgument for a malformed name or an offset beyond what
-  // the upload holds; kResourceExhausted beyond `max_bytes` (naming the limit). With `finish`,
-  // checks the digest (kInvalidArgument on mismatch; the upload is discarded) and stores the blob.
-  absl::StatusOr<UploadState> Append(const std::string& resource, int64_t offset,
-                                     absl::string_view data, bool finish, int64_t max_bytes);
-  // Makes what was written durable (a stream ended or broke).
-  absl::Status Sync(const std::string& resource);
-  absl::StatusOr<UploadState> Status(const std::string& resource);
+  // Appends `data` at `offset` to `tenant`'s upload `resource`
+  // (uploads/{uuid}/blobs/{hash}/{size}). Bytes before what the upload already holds are
+  // skipped (a resumed or concurrent writer of the same content). kInvalidArgument for a
+  // malformed name or an offset beyond what the upload holds; kResourceExhausted beyond
+  // `max_bytes` (naming the limit), before anything is written. With `finish`, checks the
+  // digest (kInvalidArgument on mismatch; the upload is discarded) and stores the blob. A
+  // blob already stored completes the upload at once only when `stored_counts` (the tenant
+  // owns it); otherwise its bytes must come, so that nobody gains a blob by naming it.
+  absl::StatusOr<UploadState> Append(const std::string& tenant, const std::string& resource,
+                                     int64_t offset, absl::string_view data, bool finish,
+                                     int64_t max_bytes, bool stored_counts);
+  // A stream writing the upload ended or broke: what was written is made durable and the
+  // upload's files are closed (it keeps its place, and reopens when written again).
+  absl::Status EndStream(const std::string& tenant, const std::string& resource);
+  absl::StatusOr<UploadState> Status(const std::string& tenant, const std::string& resource,
+                                     bool stored_counts);
+  // Removes uploads nobody has written for `max_age` (their .part files too, also those a
+  // previous process left). Returns how many.
+  int ExpireUploads(absl::Duration max_age);
+  // Uploads with open files (a stream is writing them).
+  int open_uploads() const;
 
   const std::string& root() const { return root_; }
 
@@ -60,7 +92,10 @@ class BlobStore {
   struct Upload;
   explicit BlobStore(std::string root) : root_(std::move(root)) {}
   std::string CasPath(const std::string& hash) const;
-  absl::StatusOr<std::shared_ptr<Upload>> GetUpload(const std::string& resource, bool create);
+  absl::StatusOr<std::shared_ptr<Upload>> GetUpload(const std::string& tenant,
+                                                    const std::string& resource, bool create,
+                                                    bool stored_counts, int64_t max_bytes);
+  absl::Status OpenPart(Upload& up);
 
   std::string root_;
   mutable std::mutex mu_;

@@ -2,12 +2,27 @@
 
 namespace sheetmesh::server {
 
+void JobEvents::Changed() {
+  cv_.notify_all();
+  std::function<void()> listener;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    listener = listener_;
+  }
+  if (listener) listener();
+}
+
+void JobEvents::SetListener(std::function<void()> listener) {
+  std::lock_guard<std::mutex> lock(mu_);
+  listener_ = std::move(listener);
+}
+
 void JobEvents::Notify(const std::string& job) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     ++jobs_[job].version;
   }
-  cv_.notify_all();
+  Changed();
 }
 
 void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progress) {
@@ -18,7 +33,7 @@ void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progr
     e.stages.emplace_back(e.version, progress);
     if (e.stages.size() > kStagesKept) e.stages.pop_front();
   }
-  cv_.notify_all();
+  Changed();
 }
 
 void JobEvents::NotifyFinished(const std::string& job) {
@@ -32,7 +47,7 @@ void JobEvents::NotifyFinished(const std::string& job) {
       finished_.pop_front();
     }
   }
-  cv_.notify_all();
+  Changed();
 }
 
 uint64_t JobEvents::Version(const std::string& job) {
@@ -73,7 +88,7 @@ void JobEvents::Close() {
     std::lock_guard<std::mutex> lock(mu_);
     closed_ = true;
   }
-  cv_.notify_all();
+  Changed();
 }
 
 }  // namespace sheetmesh::server

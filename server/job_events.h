@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -38,6 +39,8 @@ class JobEvents {
   // Wakes every watcher for good (shutdown).
   void Close();
   bool closed();
+  // Called (outside the lock) after every change and at Close; one listener, or none.
+  void SetListener(std::function<void()> listener);
 
   static constexpr size_t kFinishedKept = 256;
   static constexpr size_t kStagesKept = 64;
@@ -52,6 +55,9 @@ class JobEvents {
   std::map<std::string, Entry> jobs_;
   std::deque<std::string> finished_;
   bool closed_ = false;
+  std::function<void()> listener_;
+
+  void Changed();
 };
 
 }  // namespace sheetmesh::server

@@ -1,8 +1,10 @@
 // JobService: create (idempotent, with the cache of identical work), get, list, cancel,
-// delete, and watch as a server stream.
+// delete, and watch as a server stream, each within the caller's tenant: another tenant's
+// job is, to this one, a job that does not exist.
 #ifndef SHEETMESH_SERVER_JOB_SERVICE_H_
 #define SHEETMESH_SERVER_JOB_SERVICE_H_
 
+#include <memory>
 #include <string>
 
 #include "server/service_context.h"
@@ -10,17 +12,30 @@
 
 namespace sheetmesh::server {
 
-// The cache key of identical work: sha256 of the pipeline version, the input's identity
-// (its digest; for a path, the resolved path, size and modification time), the file name
-// and the canonical parameters (runtime::ResolveJobParameters). kNotFound when a path
-// vanished.
-absl::StatusOr<std::string> CacheKey(const v1::CreateJobRequest& request,
+class WatchHub;
+
+// The cache key of identical work: sha256 of the pipeline version, the tenant, the input's
+// identity (its digest; for a path, the resolved path, size and modification time), the
+// file name and the canonical parameters (runtime::ResolveJobParameters). kNotFound when a
+// path vanished.
+absl::StatusOr<std::string> CacheKey(const std::string& tenant, const v1::CreateJobRequest& request,
                                      const std::string& resolved_path,
                                      const std::string& canonical_parameters);
 
-class JobServiceImpl final : public v1::JobService::Service {
+// The stored job with the running job's live progress; kNotFound (as for a job that does
+// not exist) when it is not `tenant`'s.
+absl::StatusOr<v1::Job> FreshJob(const ServiceContext& ctx, const std::string& tenant,
+                                 const std::string& name);
+
+bool Terminal(v1::JobState state);
+
+// WatchJob runs on gRPC's callback API (a watch costs no thread while it waits); the rest
+// are synchronous handlers.
+class JobServiceImpl final
+    : public v1::JobService::WithCallbackMethod_WatchJob<v1::JobService::Service> {
  public:
-  explicit JobServiceImpl(const ServiceContext* ctx) : ctx_(ctx) {}
+  explicit JobServiceImpl(const ServiceContext* ctx);
+  ~JobServiceImpl() override;
 
   grpc::Status CreateJob(grpc::ServerContext* context, const v1::CreateJobRequest* request,
                          v1::Job* response) override;
@@ -32,14 +47,18 @@ class JobServiceImpl final : public v1::JobService::Service {
                          v1::Job* response) override;
   grpc::Status DeleteJob(grpc::ServerContext* context, const v1::DeleteJobRequest* request,
                          v1::DeleteJobResponse* response) override;
-  grpc::Status WatchJob(grpc::ServerContext* context, const v1::WatchJobRequest* request,
-                        grpc::ServerWriter<v1::WatchJobResponse>* writer) override;
+  grpc::ServerWriteReactor<v1::WatchJobResponse>* WatchJob(
+      grpc::CallbackServerContext* context, const v1::WatchJobRequest* request) override;
+
+  // Ends the watches (UNAVAILABLE: the server is stopping) and stops their helper thread.
+  void StopWatches();
 
  private:
-  // The stored job with the running job's live progress.
-  absl::StatusOr<v1::Job> Fresh(const std::string& name);
+  absl::Status CheckInput(const std::string& tenant, const v1::JobInput& in,
+                          std::string* resolved_path);
 
   const ServiceContext* ctx_;
+  std::unique_ptr<WatchHub> hub_;
 };
 
 }  // namespace sheetmesh::server

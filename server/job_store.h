@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -16,22 +17,29 @@
 
 namespace sheetmesh::server {
 
+// Jobs belong to tenants (Job.tenant): request ids are unique within a tenant, and List
+// lists one tenant's jobs. A tenant owns the blobs it uploaded and those its jobs name (as
+// input or artifact); GetJob and the blob service check ownership.
+//
 // Implementations are thread-safe.
 class JobStore {
  public:
   virtual ~JobStore() = default;
 
   // Stores a new QUEUED job (or, for a `job` already SUCCEEDED from a cache, that). When a
-  // job with the same request_id exists, returns it and sets *created to false.
+  // job of the same tenant with the same request_id exists, returns it and sets *created
+  // to false.
   virtual absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
                                          bool* created) = 0;
   // kNotFound naming the job.
   virtual absl::StatusOr<v1::Job> Get(const std::string& name) = 0;
-  // The job created with `request_id`, if any.
-  virtual absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& request_id) = 0;
-  // Newest first; page_token is opaque ("" = first page). Sets *next_token ("" = last).
-  virtual absl::StatusOr<std::vector<v1::Job>> List(v1::JobState state, int page_size,
-                                                    const std::string& page_token,
+  // The job of `tenant` created with `request_id`, if any.
+  virtual absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& tenant,
+                                                                 const std::string& request_id) = 0;
+  // The jobs of `tenant`, newest first; page_token is opaque ("" = first page). Sets
+  // *next_token ("" = last).
+  virtual absl::StatusOr<std::vector<v1::Job>> List(const std::string& tenant, v1::JobState state,
+                                                    int page_size, const std::string& page_token,
                                                     std::string* next_token) = 0;
   // The oldest QUEUED job, now RUNNING under `worker` until now + lease; attempts + 1.
   virtual absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker,
@@ -60,6 +68,15 @@ class JobStore {
   // A SUCCEEDED job with this cache key.
   virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
   virtual absl::StatusOr<int64_t> CountInState(v1::JobState state) = 0;
+
+  // Records that `tenant` uploaded the blob `hash`.
+  virtual absl::Status AddUploadedBlob(const std::string& tenant, const std::string& hash) = 0;
+  // Whether `tenant` uploaded the blob or has a job that names it.
+  virtual absl::StatusOr<bool> OwnsBlob(const std::string& tenant, const std::string& hash) = 0;
+  // The blobs some job names (input or artifact), whatever its tenant or state.
+  virtual absl::StatusOr<std::set<std::string>> ReferencedBlobs() = 0;
+  // The blob was collected: nobody owns it any more.
+  virtual absl::Status ForgetBlob(const std::string& hash) = 0;
 };
 
 // SQLite in WAL mode at `path`.

@@ -4,7 +4,6 @@
 // SIGTERM or SIGINT drain the workers (up to --drain_seconds) and stop.
 #include <signal.h>
 
-#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -26,12 +25,33 @@ ABSL_FLAG(std::string, data_dir, "", "folder of the job store, blobs and scratch
 ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
 ABSL_FLAG(std::string, allowed_root, "",
           "comma-separated folders whose volumes jobs may name by path");
-ABSL_FLAG(std::string, auth_token, "", "bearer token every call must carry ('' = none)");
-ABSL_FLAG(std::string, auth_token_file, "", "read the bearer token from this file");
+ABSL_FLAG(std::string, auth_token, "",
+          "bearer token every call must carry, of the tenant 'default' ('' = none)");
+ABSL_FLAG(std::string, auth_token_file, "",
+          "tokens and their tenants, one 'TOKEN [TENANT]' per line ('#' comments); a tenant "
+          "sees only its own jobs, uploads and artifacts");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(int64_t, max_blob_bytes, int64_t{64} << 30, "largest upload accepted, bytes");
 ABSL_FLAG(int64_t, max_queued_jobs, 1000, "jobs the queue may hold");
+ABSL_FLAG(int, max_upload_streams, 256, "open upload (Write) streams, in all");
+ABSL_FLAG(int, max_upload_streams_per_client, 64,
+          "open upload streams of one client (its tenant; on an open server, its address)");
+ABSL_FLAG(int, max_watch_streams, 2048, "open WatchJob streams, in all");
+ABSL_FLAG(int, max_watch_streams_per_client, 256, "open WatchJob streams of one client");
+ABSL_FLAG(int, upload_idle_seconds, 120,
+          "an upload stream that brings no byte for this long is closed (it can resume)");
+ABSL_FLAG(int, upload_expiry_hours, 24,
+          "an unfinished upload nobody has written for this long is removed");
+ABSL_FLAG(double, blob_retention_hours, 24 * 7,
+          "blobs no job names and nobody used for this long are removed (0: keep all)");
+ABSL_FLAG(double, gc_interval_hours, 1, "how often retention runs (also once at start)");
+ABSL_FLAG(bool, gc_dry_run, false, "retention lists what it would remove and removes nothing");
+ABSL_FLAG(bool, gc_once, false,
+          "run one retention pass over --data_dir, print what it removed (or, with "
+          "--gc_dry_run, would remove) and exit, without serving");
+ABSL_FLAG(int64_t, min_free_disk_mb, 256,
+          "health says NOT_SERVING while the data folder has less free space than this");
 ABSL_FLAG(int, lease_seconds, 30, "worker lease length");
 ABSL_FLAG(int, max_attempts, 3, "runs before a job whose worker keeps vanishing fails");
 ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
@@ -76,19 +96,22 @@ int main(int argc, char** argv) {
     o.allowed_roots.emplace_back(r);
   }
   o.auth_token = absl::GetFlag(FLAGS_auth_token);
-  if (!absl::GetFlag(FLAGS_auth_token_file).empty()) {
-    std::ifstream f(absl::GetFlag(FLAGS_auth_token_file));
-    std::getline(f, o.auth_token);
-    if (o.auth_token.empty()) {
-      std::cerr << "sheetmesh-server: " << absl::GetFlag(FLAGS_auth_token_file)
-                << " holds no token\n";
-      return 2;
-    }
-  }
+  o.auth_token_file = absl::GetFlag(FLAGS_auth_token_file);
   o.tls_cert = absl::GetFlag(FLAGS_tls_cert);
   o.tls_key = absl::GetFlag(FLAGS_tls_key);
   o.limits.max_blob_bytes = absl::GetFlag(FLAGS_max_blob_bytes);
   o.limits.max_queued_jobs = absl::GetFlag(FLAGS_max_queued_jobs);
+  o.limits.max_upload_streams = absl::GetFlag(FLAGS_max_upload_streams);
+  o.limits.max_upload_streams_per_client = absl::GetFlag(FLAGS_max_upload_streams_per_client);
+  o.limits.max_watch_streams = absl::GetFlag(FLAGS_max_watch_streams);
+  o.limits.max_watch_streams_per_client = absl::GetFlag(FLAGS_max_watch_streams_per_client);
+  o.limits.upload_idle_timeout =
+      absl::Seconds(std::max(1, absl::GetFlag(FLAGS_upload_idle_seconds)));
+  o.limits.upload_expiry = absl::Hours(std::max(1, absl::GetFlag(FLAGS_upload_expiry_hours)));
+  o.blob_retention = absl::Hours(std::max(0.0, absl::GetFlag(FLAGS_blob_retention_hours)));
+  o.gc_interval = absl::Hours(std::max(1.0 / 60, absl::GetFlag(FLAGS_gc_interval_hours)));
+  o.gc_dry_run = absl::GetFlag(FLAGS_gc_dry_run);
+  o.min_free_disk_bytes = std::max<int64_t>(0, absl::GetFlag(FLAGS_min_free_disk_mb)) << 20;
   o.lease = absl::Seconds(absl::GetFlag(FLAGS_lease_seconds));
   o.max_attempts = absl::GetFlag(FLAGS_max_attempts);
   o.heartbeat = absl::Seconds(absl::GetFlag(FLAGS_heartbeat_seconds));
@@ -101,6 +124,19 @@ int main(int argc, char** argv) {
       static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_job_cpu_seconds)));
   o.job_limits.wall =
       absl::Seconds(std::max<int64_t>(1, absl::GetFlag(FLAGS_job_time_limit_seconds)));
+  if (absl::GetFlag(FLAGS_gc_once)) {
+    if (o.data_dir.empty()) {
+      std::cerr << "sheetmesh-server: --gc_once needs --data_dir\n";
+      return 2;
+    }
+    absl::StatusOr<std::string> listing = sheetmesh::server::CollectOnce(o);
+    if (!listing.ok()) {
+      std::cerr << "sheetmesh-server: " << listing.status() << "\n";
+      return 1;
+    }
+    std::cout << *listing;
+    return 0;
+  }
   auto server = sheetmesh::server::Server::Start(o);
   if (!server.ok()) {
     std::cerr << "sheetmesh-server: " << server.status() << "\n";

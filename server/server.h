@@ -16,7 +16,7 @@ namespace grpc {
 class Server;
 }
 
-#include "worker/runtime/job_process.h"
+#include "worker/runtime/job_process.h"  // runtime::JobLimits
 
 namespace sheetmesh::server {
 
@@ -27,7 +27,10 @@ struct ServerOptions {
   std::vector<std::string> allowed_roots;   // paths jobs may name (none: only uploads)
   std::string tls_cert;                     // PEM files; both empty: no TLS
   std::string tls_key;
-  std::string auth_token;  // required bearer token ("" = none)
+  // Who may call: one bearer token (of the tenant "default"), or a token file with one
+  // "TOKEN [TENANT]" per line (server/auth.h). Neither: an open server.
+  std::string auth_token;
+  std::string auth_token_file;
   ServiceLimits limits;
   absl::Duration lease = absl::Seconds(30);     // worker lease; renewed every third
   int max_attempts = 3;                         // runs before a job whose workers keep
@@ -40,6 +43,14 @@ struct ServerOptions {
   bool isolate_jobs = true;
   std::string job_program;
   runtime::JobLimits job_limits;
+  // Retention (server/retention.h): unreferenced blobs unused this long are removed, in a
+  // pass at start and every gc_interval; zero keeps everything. A dry run only lists.
+  absl::Duration blob_retention = absl::Hours(24 * 7);
+  absl::Duration gc_interval = absl::Hours(1);
+  bool gc_dry_run = false;
+  // Health says NOT_SERVING while the data folder's file system has less free space than
+  // this, or the process holds more than nine tenths of its descriptor limit.
+  int64_t min_free_disk_bytes = int64_t{256} << 20;
 };
 
 // Thread-safe.
@@ -60,12 +71,21 @@ class Server {
   // Blocks until Shutdown() has completed.
   void Wait();
 
+  // Why health says NOT_SERVING ("" while serving), as of the last check.
+  std::string not_serving_reason() const;
+  // Runs one retention pass now (also what the periodic pass does).
+  absl::StatusOr<std::string> CollectNow();
+
  private:
   Server() = default;
   struct Impl;
   std::unique_ptr<Impl> impl_;
   int port_ = 0;
 };
+
+// One retention pass over the data folder of `options` without serving (sheetmesh-server
+// --gc_once): the listing of what was (or, dry run, would be) removed.
+absl::StatusOr<std::string> CollectOnce(const ServerOptions& options);
 
 }  // namespace sheetmesh::server
 

@@ -2,22 +2,32 @@
 #ifndef SHEETMESH_SERVER_SERVICE_CONTEXT_H_
 #define SHEETMESH_SERVER_SERVICE_CONTEXT_H_
 
-#include <grpcpp/server_context.h>
-
 #include <string>
 #include <vector>
 
 #include "absl/time/time.h"
+#include "server/auth.h"
 #include "server/blob_store.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
 #include "server/local_job_host.h"
+#include "server/stream_limits.h"
 
 namespace sheetmesh::server {
 
 struct ServiceLimits {
   int64_t max_blob_bytes = int64_t{64} << 30;  // an upload beyond this is refused
   int64_t max_queued_jobs = 1000;              // CreateJob beyond this is refused
+  // Open Write streams (each holds two descriptors and a thread while it lasts).
+  int max_upload_streams = 256;
+  int max_upload_streams_per_client = 64;
+  // Open WatchJob streams (cheap: no thread each, but memory and a timer).
+  int max_watch_streams = 2048;
+  int max_watch_streams_per_client = 256;
+  // A Write stream that brings no byte for this long is closed (its descriptors freed);
+  // its upload stays for resumption until nobody has written it for upload_expiry.
+  absl::Duration upload_idle_timeout = absl::Minutes(2);
+  absl::Duration upload_expiry = absl::Hours(24);
 };
 
 struct ServiceContext {
@@ -26,15 +36,13 @@ struct ServiceContext {
   JobEvents* events = nullptr;
   LocalJobHost* host = nullptr;
   std::vector<std::string> allowed_roots;
-  std::string auth_token;  // "" = no authentication
+  const Tenants* tenants = nullptr;  // who may call, and their tenants
   ServiceLimits limits;
+  StreamLimits* upload_streams = nullptr;
+  StreamLimits* watch_streams = nullptr;
   absl::Duration heartbeat = absl::Seconds(5);  // WatchJob sends at least this often
   bool cache = true;                            // reuse results of identical work
 };
-
-// UNAUTHENTICATED unless the call carries "authorization: Bearer <token>" (when a token
-// is configured).
-grpc::Status CheckAuth(const grpc::ServerContext* context, const std::string& token);
 
 }  // namespace sheetmesh::server
 

@@ -1,8 +1,11 @@
 // The SQLite JobStore: one connection behind a mutex, WAL journal, synchronous=FULL so
-// that an accepted job survives a crash.
+// that an accepted job survives a crash. Tables: jobs (the Job message, with the columns
+// queries need), job_blobs (the blobs each job names: input and artifacts), blob_owners
+// (who uploaded what).
 #include <sqlite3.h>
 
 #include <mutex>
+#include <set>
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -11,6 +14,7 @@
 #include "common/status_macros.h"
 #include "google/protobuf/util/time_util.h"
 #include "server/job_store.h"
+#include "server/sqlite_util.h"
 
 namespace sheetmesh::server {
 namespace {
@@ -21,54 +25,26 @@ int64_t NowMs() { return absl::ToUnixMillis(absl::Now()); }
 
 google::protobuf::Timestamp NowTs() { return TimeUtil::MillisecondsToTimestamp(NowMs()); }
 
-// A prepared statement, finalized on destruction.
-class Stmt {
- public:
-  Stmt(sqlite3* db, const char* sql) : db_(db) {
-    rc_ = sqlite3_prepare_v2(db, sql, -1, &s_, nullptr);
-  }
-  ~Stmt() { sqlite3_finalize(s_); }
-  absl::Status ok() const {
-    if (rc_ == SQLITE_OK) return absl::OkStatus();
-    return absl::InternalError(absl::StrCat("SQLite prepare: ", sqlite3_errmsg(db_)));
-  }
-  Stmt& Bind(int i, const std::string& v) {
-    sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  Stmt& Bind(int i, int64_t v) {
-    sqlite3_bind_int64(s_, i, v);
-    return *this;
-  }
-  Stmt& BindBlob(int i, const std::string& v) {
-    sqlite3_bind_blob(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-    return *this;
-  }
-  // SQLITE_ROW, SQLITE_DONE, or an error code.
-  int Step() { return sqlite3_step(s_); }
-  absl::Status Run() {
-    const int rc = Step();
-    if (rc == SQLITE_DONE || rc == SQLITE_ROW) return absl::OkStatus();
-    return absl::InternalError(absl::StrCat("SQLite: ", sqlite3_errmsg(db_)));
-  }
-  int64_t Int(int col) { return sqlite3_column_int64(s_, col); }
-  std::string Text(int col) {
-    const unsigned char* t = sqlite3_column_text(s_, col);
-    return t ? reinterpret_cast<const char*>(t) : "";
-  }
-  std::string Blob(int col) {
-    const void* b = sqlite3_column_blob(s_, col);
-    return std::string(static_cast<const char*>(b), sqlite3_column_bytes(s_, col));
-  }
-
- private:
-  sqlite3* db_;
-  sqlite3_stmt* s_ = nullptr;
-  int rc_;
-};
-
 std::string IdOf(const std::string& name) {
   return name.rfind("jobs/", 0) == 0 ? name.substr(5) : name;
+}
+
+constexpr const char* kDefaultTenant = "default";
+
+// The request_id column is unique: it holds the tenant and the client's request id, the
+// default tenant's bare (as stores before tenants held them). Request ids hold no control
+// characters (the service refuses them), so the keys of two tenants never meet.
+std::string ScopedRequestId(const std::string& tenant, const std::string& request_id) {
+  if (tenant.empty() || tenant == kDefaultTenant) return request_id;
+  return absl::StrCat("\x1f", tenant, "\x1f", request_id);
+}
+
+// The blobs a job names.
+std::set<std::string> BlobsOf(const v1::Job& job) {
+  std::set<std::string> out;
+  if (job.input().has_volume_digest()) out.insert(job.input().volume_digest().hash());
+  for (const v1::Artifact& a : job.artifacts()) out.insert(a.digest().hash());
+  return out;
 }
 
 class SqliteJobStore : public JobStore {
@@ -85,28 +61,70 @@ class SqliteJobStore : public JobStore {
              "CREATE TABLE IF NOT EXISTS jobs ("
              "  id TEXT PRIMARY KEY, seq INTEGER NOT NULL, request_id TEXT UNIQUE NOT NULL,"
              "  state INTEGER NOT NULL, lease_owner TEXT, lease_expires INTEGER,"
-             "  cancel_requested INTEGER NOT NULL DEFAULT 0, cache_key TEXT, job BLOB NOT NULL)",
+             "  cancel_requested INTEGER NOT NULL DEFAULT 0, cache_key TEXT, job BLOB NOT NULL,"
+             "  tenant TEXT NOT NULL DEFAULT 'default')",
              "CREATE INDEX IF NOT EXISTS jobs_state_seq ON jobs(state, seq)",
              "CREATE INDEX IF NOT EXISTS jobs_cache ON jobs(cache_key, state)",
+             "CREATE TABLE IF NOT EXISTS blob_owners ("
+             "  tenant TEXT NOT NULL, hash TEXT NOT NULL, PRIMARY KEY (tenant, hash))",
          }) {
-      char* err = nullptr;
-      if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-        const std::string msg = err ? err : "?";
-        sqlite3_free(err);
-        return absl::InternalError(absl::StrCat("SQLite '", sql, "': ", msg));
-      }
+      SM_RETURN_IF_ERROR(Exec(sql));
     }
-    return absl::OkStatus();
+    return Migrate();
+  }
+
+  // Stores written before tenants: add the tenant column (their jobs are the default
+  // tenant's) and fill job_blobs from the jobs.
+  absl::Status Migrate() {
+    bool has_tenant = false;
+    {
+      Stmt q(db_, "PRAGMA table_info(jobs)");
+      SM_RETURN_IF_ERROR(q.ok());
+      while (q.Step() == SQLITE_ROW) has_tenant |= q.Text(1) == "tenant";
+    }
+    if (!has_tenant) {
+      SM_RETURN_IF_ERROR(
+          Exec("ALTER TABLE jobs ADD COLUMN tenant TEXT NOT NULL DEFAULT 'default'"));
+    }
+    SM_RETURN_IF_ERROR(Exec("CREATE INDEX IF NOT EXISTS jobs_tenant_seq ON jobs(tenant, seq)"));
+    bool has_job_blobs = false;
+    {
+      Stmt q(db_, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'job_blobs'");
+      SM_RETURN_IF_ERROR(q.ok());
+      has_job_blobs = q.Step() == SQLITE_ROW;
+    }
+    if (has_job_blobs) return absl::OkStatus();
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    absl::Status st = [&]() -> absl::Status {
+      SM_RETURN_IF_ERROR(
+          Exec("CREATE TABLE job_blobs (job_id TEXT NOT NULL, hash TEXT NOT NULL,"
+               "  PRIMARY KEY (job_id, hash))"));
+      SM_RETURN_IF_ERROR(Exec("CREATE INDEX job_blobs_hash ON job_blobs(hash)"));
+      Stmt q(db_, "SELECT id, job FROM jobs");
+      SM_RETURN_IF_ERROR(q.ok());
+      while (q.Step() == SQLITE_ROW) {
+        SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(1)));
+        SM_RETURN_IF_ERROR(AddJobBlobsLocked(q.Text(0), j));
+      }
+      return absl::OkStatus();
+    }();
+    if (!st.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return st;
+    }
+    return Exec("COMMIT");
   }
 
   absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
                                  bool* created) override {
     std::lock_guard<std::mutex> lock(mu_);
     *created = false;
+    if (job.tenant().empty()) job.set_tenant(kDefaultTenant);
+    const std::string scoped = ScopedRequestId(job.tenant(), job.request_id());
     {
       Stmt q(db_, "SELECT job FROM jobs WHERE request_id = ?");
       SM_RETURN_IF_ERROR(q.ok());
-      q.Bind(1, job.request_id());
+      q.Bind(1, scoped);
       if (q.Step() == SQLITE_ROW) return Parse(q.Blob(0));
     }
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
@@ -122,17 +140,19 @@ class SqliteJobStore : public JobStore {
     job.set_name(absl::StrCat("jobs/", id));
     *job.mutable_create_time() = NowTs();
     if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
-    Stmt ins(
-        db_,
-        "INSERT INTO jobs (id, seq, request_id, state, cache_key, job) VALUES (?, ?, ?, ?, ?, ?)");
+    Stmt ins(db_,
+             "INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant) "
+             "VALUES (?, ?, ?, ?, ?, ?, ?)");
     SM_RETURN_IF_ERROR(ins.ok());
     ins.Bind(1, std::string(id))
         .Bind(2, seq)
-        .Bind(3, job.request_id())
+        .Bind(3, scoped)
         .Bind(4, int64_t{job.state()})
         .Bind(5, cache_key)
-        .BindBlob(6, job.SerializeAsString());
+        .BindBlob(6, job.SerializeAsString())
+        .Bind(7, job.tenant());
     absl::Status st = ins.Run();
+    if (st.ok()) st = AddJobBlobsLocked(id, job);
     if (!st.ok()) {
       Exec("ROLLBACK").IgnoreError();
       return st;
@@ -147,34 +167,37 @@ class SqliteJobStore : public JobStore {
     return GetLocked(IdOf(name));
   }
 
-  absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& request_id) override {
+  absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& tenant,
+                                                         const std::string& request_id) override {
     std::lock_guard<std::mutex> lock(mu_);
     Stmt q(db_, "SELECT job FROM jobs WHERE request_id = ?");
     SM_RETURN_IF_ERROR(q.ok());
-    q.Bind(1, request_id);
+    q.Bind(1, ScopedRequestId(tenant, request_id));
     if (q.Step() != SQLITE_ROW) return std::optional<v1::Job>();
     SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
     return std::optional<v1::Job>(std::move(j));
   }
 
-  absl::StatusOr<std::vector<v1::Job>> List(v1::JobState state, int page_size,
-                                            const std::string& token, std::string* next) override {
+  absl::StatusOr<std::vector<v1::Job>> List(const std::string& tenant, v1::JobState state,
+                                            int page_size, const std::string& token,
+                                            std::string* next) override {
     std::lock_guard<std::mutex> lock(mu_);
     int64_t before = INT64_MAX;
     if (!token.empty() && !absl::SimpleAtoi(token, &before)) {
       return absl::InvalidArgumentError(
           absl::StrCat("page_token '", token, "' is not one this server gave"));
     }
-    Stmt q(db_,
-           state == v1::JOB_STATE_UNSPECIFIED
-               ? "SELECT job, seq FROM jobs WHERE seq < ? ORDER BY seq DESC LIMIT ?"
-               : "SELECT job, seq FROM jobs WHERE seq < ? AND state = ? ORDER BY seq DESC LIMIT ?");
+    Stmt q(db_, state == v1::JOB_STATE_UNSPECIFIED
+                    ? "SELECT job, seq FROM jobs WHERE tenant = ? AND seq < ? "
+                      "ORDER BY seq DESC LIMIT ?"
+                    : "SELECT job, seq FROM jobs WHERE tenant = ? AND seq < ? AND state = ? "
+                      "ORDER BY seq DESC LIMIT ?");
     SM_RETURN_IF_ERROR(q.ok());
-    q.Bind(1, before);
+    q.Bind(1, tenant.empty() ? std::string(kDefaultTenant) : tenant).Bind(2, before);
     if (state == v1::JOB_STATE_UNSPECIFIED) {
-      q.Bind(2, int64_t{page_size} + 1);
+      q.Bind(3, int64_t{page_size} + 1);
     } else {
-      q.Bind(2, int64_t{state}).Bind(3, int64_t{page_size} + 1);
+      q.Bind(3, int64_t{state}).Bind(4, int64_t{page_size} + 1);
     }
     std::vector<v1::Job> out;
     int64_t last = 0;
@@ -275,7 +298,14 @@ class SqliteJobStore : public JobStore {
            "= ?");
     SM_RETURN_IF_ERROR(u.ok());
     u.Bind(1, int64_t{state}).BindBlob(2, job.SerializeAsString()).Bind(3, IdOf(name));
-    SM_RETURN_IF_ERROR(u.Run());
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    absl::Status st = u.Run();
+    if (st.ok()) st = AddJobBlobsLocked(IdOf(name), job);
+    if (!st.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return st;
+    }
+    SM_RETURN_IF_ERROR(Exec("COMMIT"));
     return job;
   }
 
@@ -324,10 +354,22 @@ class SqliteJobStore : public JobStore {
       return absl::FailedPreconditionError(absl::StrCat(
           name, " is ", v1::JobState_Name(row.job.state()), "; cancel it before deleting it"));
     }
-    Stmt d(db_, "DELETE FROM jobs WHERE id = ?");
-    SM_RETURN_IF_ERROR(d.ok());
-    d.Bind(1, IdOf(name));
-    return d.Run();
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    absl::Status st = [&]() -> absl::Status {
+      for (const char* sql :
+           {"DELETE FROM jobs WHERE id = ?", "DELETE FROM job_blobs WHERE job_id = ?"}) {
+        Stmt d(db_, sql);
+        SM_RETURN_IF_ERROR(d.ok());
+        d.Bind(1, IdOf(name));
+        SM_RETURN_IF_ERROR(d.Run());
+      }
+      return absl::OkStatus();
+    }();
+    if (!st.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return st;
+    }
+    return Exec("COMMIT");
   }
 
   absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) override {
@@ -391,18 +433,56 @@ class SqliteJobStore : public JobStore {
     return q.Step() == SQLITE_ROW ? q.Int(0) : 0;
   }
 
+  absl::Status AddUploadedBlob(const std::string& tenant, const std::string& hash) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "INSERT OR IGNORE INTO blob_owners (tenant, hash) VALUES (?, ?)");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, tenant).Bind(2, hash);
+    return q.Run();
+  }
+
+  absl::StatusOr<bool> OwnsBlob(const std::string& tenant, const std::string& hash) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_,
+           "SELECT 1 FROM blob_owners WHERE tenant = ?1 AND hash = ?2 UNION ALL "
+           "SELECT 1 FROM job_blobs b JOIN jobs j ON j.id = b.job_id "
+           "WHERE b.hash = ?2 AND j.tenant = ?1 LIMIT 1");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, tenant).Bind(2, hash);
+    return q.Step() == SQLITE_ROW;
+  }
+
+  absl::StatusOr<std::set<std::string>> ReferencedBlobs() override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT DISTINCT hash FROM job_blobs");
+    SM_RETURN_IF_ERROR(q.ok());
+    std::set<std::string> out;
+    while (q.Step() == SQLITE_ROW) out.insert(q.Text(0));
+    return out;
+  }
+
+  absl::Status ForgetBlob(const std::string& hash) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "DELETE FROM blob_owners WHERE hash = ?");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, hash);
+    return q.Run();
+  }
+
  private:
   struct Row {
     v1::Job job;
     std::string owner;
   };
 
-  absl::Status Exec(const char* sql) {
-    char* err = nullptr;
-    if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
-      const std::string msg = err ? err : "?";
-      sqlite3_free(err);
-      return absl::InternalError(absl::StrCat("SQLite '", sql, "': ", msg));
+  absl::Status Exec(const char* sql) { return server::Exec(db_, sql); }
+
+  absl::Status AddJobBlobsLocked(const std::string& id, const v1::Job& job) {
+    for (const std::string& hash : BlobsOf(job)) {
+      Stmt q(db_, "INSERT OR IGNORE INTO job_blobs (job_id, hash) VALUES (?, ?)");
+      SM_RETURN_IF_ERROR(q.ok());
+      q.Bind(1, id).Bind(2, hash);
+      SM_RETURN_IF_ERROR(q.Run());
     }
     return absl::OkStatus();
   }
@@ -410,6 +490,7 @@ class SqliteJobStore : public JobStore {
   static absl::StatusOr<v1::Job> Parse(const std::string& blob) {
     v1::Job j;
     if (!j.ParseFromString(blob)) return absl::DataLossError("a stored job record is corrupt");
+    if (j.tenant().empty()) j.set_tenant(kDefaultTenant);  // stored before tenants
     return j;
   }
 

@@ -11,7 +11,8 @@ namespace sheetmesh::server {
 grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
                                               const v1::InspectVolumeRequest* r,
                                               v1::InspectVolumeResponse* response) {
-  if (grpc::Status a = CheckAuth(context, ctx_->auth_token); !a.ok()) return a;
+  std::string tenant;
+  if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
   absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots);
   if (!path.ok()) return ToGrpcStatus(path.status());
   v1::JobInput input;
@@ -37,7 +38,8 @@ grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
 grpc::Status VolumeServiceImpl::ImportVolume(grpc::ServerContext* context,
                                              const v1::ImportVolumeRequest* r,
                                              v1::ImportVolumeResponse* response) {
-  if (grpc::Status a = CheckAuth(context, ctx_->auth_token); !a.ok()) return a;
+  std::string tenant;
+  if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
   absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots);
   if (!path.ok()) return ToGrpcStatus(path.status());
   struct stat st;
@@ -48,6 +50,9 @@ grpc::Status VolumeServiceImpl::ImportVolume(grpc::ServerContext* context,
   }
   absl::StatusOr<v1::Digest> d = ctx_->blobs->PutFile(*path);
   if (!d.ok()) return ToGrpcStatus(d.status());
+  if (absl::Status st = ctx_->jobs->AddUploadedBlob(tenant, d->hash()); !st.ok()) {
+    return ToGrpcStatus(st);
+  }
   *response->mutable_digest() = *d;
   return grpc::Status::OK;
 }

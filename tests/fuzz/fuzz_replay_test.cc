@@ -53,7 +53,10 @@ void Replay(const std::string& name, void (*target)(const uint8_t*, size_t), int
 }
 
 TEST(FuzzReplayTest, NrrdHeaderCorpusAndMutations) { Replay("nrrd_header", FuzzNrrdHeader, 300); }
-TEST(FuzzReplayTest, VolumeFileCorpusAndMutations) { Replay("volume_file", FuzzVolumeFile, 60); }
+TEST(FuzzReplayTest, TiffFileCorpusAndMutations) { Replay("tiff_file", FuzzTiffFile, 60); }
+TEST(FuzzReplayTest, NrrdFileCorpusAndMutations) { Replay("nrrd_file", FuzzNrrdFile, 60); }
+TEST(FuzzReplayTest, VdbFileCorpusAndMutations) { Replay("vdb_file", FuzzVdbFile, 6); }
+TEST(FuzzReplayTest, RawFileCorpusAndMutations) { Replay("raw_file", FuzzRawFile, 60); }
 TEST(FuzzReplayTest, TextParsersCorpusAndMutations) {
   Replay("text_parsers", FuzzTextParsers, 300);
 }

@@ -16,6 +16,7 @@ VolumeLimits SmallLimits() {
   VolumeLimits l;
   l.max_voxels = 1 << 20;
   l.max_extent = 1 << 12;
+  l.memory_bytes = int64_t{64} << 20;
   return l;
 }
 
@@ -30,22 +31,14 @@ void FuzzNrrdHeader(const uint8_t* data, size_t size) {
   (void)ParseNrrdHeader(text, "fuzz.nrrd", SmallLimits());
 }
 
-void FuzzVolumeFile(const uint8_t* data, size_t size) {
-  if (size < 4) return;
-  const int kind = data[0] % 3;
-  OpenOptions options;
+namespace {
+
+// Writes the bytes as a file with `ext`, opens it and reads every slice, then selects its
+// phase as the pipeline would.
+void OpenAndRead(absl::string_view bytes, const char* ext, OpenOptions options) {
   options.limits = SmallLimits();
-  const char* ext = kind == 0 ? ".raw" : (kind == 1 ? ".nrrd" : ".tif");
-  if (kind == 0) {
-    options.raw_dims = Dims{1 + data[1] % 64, 1 + data[2] % 64, 1 + data[3] % 64};
-    options.raw_dtype = static_cast<DType>(data[1] % 3);
-  }
   const std::string path = TempPath(ext);
-  if (!WriteFileAtomically(path,
-                           absl::string_view(reinterpret_cast<const char*>(data) + 4, size - 4))
-           .ok()) {
-    return;
-  }
+  if (!WriteFileAtomically(path, bytes).ok()) return;
   auto source = OpenVolume(path, options);
   if (source.ok()) {
     const Dims d = (*source)->info().dims;
@@ -57,6 +50,32 @@ void FuzzVolumeFile(const uint8_t* data, size_t size) {
     (void)SelectPhase(**source, PhaseSelection::NonZero());
   }
   ::unlink(path.c_str());
+}
+
+absl::string_view Bytes(const uint8_t* data, size_t size) {
+  return absl::string_view(reinterpret_cast<const char*>(data), size);
+}
+
+}  // namespace
+
+void FuzzTiffFile(const uint8_t* data, size_t size) {
+  OpenAndRead(Bytes(data, size), ".tif", {});
+}
+
+void FuzzNrrdFile(const uint8_t* data, size_t size) {
+  OpenAndRead(Bytes(data, size), ".nrrd", {});
+}
+
+void FuzzVdbFile(const uint8_t* data, size_t size) {
+  OpenAndRead(Bytes(data, size), ".vdb", {});
+}
+
+void FuzzRawFile(const uint8_t* data, size_t size) {
+  if (size < 3) return;
+  OpenOptions options;
+  options.raw_dims = Dims{1 + data[0] % 64, 1 + data[1] % 64, 1 + data[2] % 64};
+  options.raw_dtype = static_cast<DType>(data[0] % 3);
+  OpenAndRead(Bytes(data + 3, size - 3), ".raw", options);
 }
 
 void FuzzTextParsers(const uint8_t* data, size_t size) {

@@ -10,9 +10,13 @@ namespace sheetmesh::fuzz {
 
 // The NRRD header parser on `data` as header text.
 void FuzzNrrdHeader(const uint8_t* data, size_t size);
-// A whole volume file: the first byte picks raw / NRRD / TIFF, the rest is the file; raw
-// dims and dtype come from the next bytes. Opens and reads every slice under small limits.
-void FuzzVolumeFile(const uint8_t* data, size_t size);
+// A whole volume file of one format, opened and read slice by slice under small limits (a
+// 64 MiB memory budget): the bytes are a TIFF, an attached NRRD, an OpenVDB file; for raw,
+// the first three bytes give the dims (and the first the type) and the rest is the file.
+void FuzzTiffFile(const uint8_t* data, size_t size);
+void FuzzNrrdFile(const uint8_t* data, size_t size);
+void FuzzVdbFile(const uint8_t* data, size_t size);
+void FuzzRawFile(const uint8_t* data, size_t size);
 // Selection text, dims-in-file-name text and dtype names.
 void FuzzTextParsers(const uint8_t* data, size_t size);
 

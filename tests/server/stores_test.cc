@@ -10,6 +10,8 @@
 #include "absl/strings/str_cat.h"
 #include "common/file_util.h"
 #include "common/sha256.h"
+#include <sqlite3.h>
+
 #include "server/blob_store.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
@@ -33,6 +35,16 @@ std::string Resource(const std::string& id, const v1::Digest& d) {
   return absl::StrCat("uploads/", id, "/blobs/", d.hash(), "/", d.size_bytes());
 }
 
+// One tenant's uploads, the blob counted as its own when stored.
+absl::StatusOr<BlobStore::UploadState> Append(BlobStore& s, const std::string& r, int64_t offset,
+                                              absl::string_view data, bool finish,
+                                              int64_t max_bytes) {
+  return s.Append("t", r, offset, data, finish, max_bytes, true);
+}
+absl::StatusOr<BlobStore::UploadState> Status(BlobStore& s, const std::string& r) {
+  return s.Status("t", r, true);
+}
+
 // ---------------------------------------------------------------------------------------
 // BlobStore
 
@@ -44,10 +56,10 @@ TEST(BlobStoreTest, AppendInPiecesThenFinish) {
   const v1::Digest d = DigestOf(bytes);
   const std::string r = Resource("a1", d);
   EXPECT_FALSE((*store)->Contains(d));
-  auto s1 = (*store)->Append(r, 0, bytes.substr(0, 10), false, 1 << 20);
+  auto s1 = Append(**store, r, 0, bytes.substr(0, 10), false, 1 << 20);
   ASSERT_TRUE(s1.ok()) << s1.status();
   EXPECT_FALSE((*store)->Contains(d));  // nothing visible before the end
-  auto s2 = (*store)->Append(r, 10, bytes.substr(10), true, 1 << 20);
+  auto s2 = Append(**store, r, 10, bytes.substr(10), true, 1 << 20);
   ASSERT_TRUE(s2.ok()) << s2.status();
   EXPECT_TRUE(s2->complete);
   EXPECT_TRUE((*store)->Contains(d));
@@ -65,14 +77,14 @@ TEST(BlobStoreTest, OverlappingPiecesAreSkippedAndGapsRefused) {
   const std::string bytes(1000, 'x');
   const v1::Digest d = DigestOf(bytes + "yz");
   const std::string r = Resource("a2", d);
-  ASSERT_TRUE((*store)->Append(r, 0, bytes.substr(0, 600), false, 1 << 20).ok());
+  ASSERT_TRUE(Append(**store, r, 0, bytes.substr(0, 600), false, 1 << 20).ok());
   // A resumed writer starting earlier: the overlap is dropped.
-  ASSERT_TRUE((*store)->Append(r, 500, bytes.substr(500), false, 1 << 20).ok());
+  ASSERT_TRUE(Append(**store, r, 500, bytes.substr(500), false, 1 << 20).ok());
   // A gap is refused, naming the offset.
-  auto gap = (*store)->Append(r, 1500, "zz", false, 1 << 20);
+  auto gap = Append(**store, r, 1500, "zz", false, 1 << 20);
   EXPECT_EQ(gap.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(gap.status().message(), HasSubstr("write_offset 1500"));
-  auto done = (*store)->Append(r, 1000, "yz", true, 1 << 20);
+  auto done = Append(**store, r, 1000, "yz", true, 1 << 20);
   ASSERT_TRUE(done.ok()) << done.status();
   EXPECT_TRUE((*store)->Contains(d));
 }
@@ -83,11 +95,11 @@ TEST(BlobStoreTest, DigestMismatchDiscardsTheUpload) {
   ASSERT_TRUE(store.ok());
   const v1::Digest claimed = DigestOf("something else");
   const std::string r = Resource("a3", claimed);
-  auto st = (*store)->Append(r, 0, "something ELSE", true, 1 << 20);
+  auto st = Append(**store, r, 0, "something ELSE", true, 1 << 20);
   EXPECT_EQ(st.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(st.status().message(), HasSubstr(claimed.hash()));
   EXPECT_FALSE((*store)->Contains(claimed));
-  auto status = (*store)->Status(r);
+  auto status = Status(**store, r);
   ASSERT_TRUE(status.ok());
   EXPECT_EQ(status->committed, 0);
   for (const auto& e : std::filesystem::recursive_directory_iterator(dir.File("blobs"))) {
@@ -103,15 +115,53 @@ TEST(BlobStoreTest, UploadResumesAfterReopening) {
   {
     auto store = BlobStore::Open(dir.File("blobs"));
     ASSERT_TRUE(store.ok());
-    ASSERT_TRUE((*store)->Append(r, 0, bytes.substr(0, 2500), false, 1 << 20).ok());
-    ASSERT_TRUE((*store)->Sync(r).ok());
+    ASSERT_TRUE(Append(**store, r, 0, bytes.substr(0, 2500), false, 1 << 20).ok());
+    ASSERT_TRUE((*store)->EndStream("t", r).ok());
   }
   auto store = BlobStore::Open(dir.File("blobs"));
   ASSERT_TRUE(store.ok());
-  auto status = (*store)->Status(r);
+  auto status = Status(**store, r);
   ASSERT_TRUE(status.ok());
   EXPECT_EQ(status->committed, 2500);
-  ASSERT_TRUE((*store)->Append(r, 2500, bytes.substr(2500), true, 1 << 20).ok());
+  ASSERT_TRUE(Append(**store, r, 2500, bytes.substr(2500), true, 1 << 20).ok());
+  EXPECT_EQ(*ReadFileToString(*(*store)->PathOf(d)), bytes);
+}
+
+TEST(BlobStoreTest, AnEndedStreamClosesItsFilesAndExpiryRemovesTheUpload) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const std::string bytes(10000, 'e');
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("exp", d);
+  ASSERT_TRUE(Append(**store, r, 0, bytes.substr(0, 4000), false, 1 << 20).ok());
+  EXPECT_EQ((*store)->open_uploads(), 1);
+  ASSERT_TRUE((*store)->EndStream("t", r).ok());
+  EXPECT_EQ((*store)->open_uploads(), 0);
+  // Resumed: the files reopen, the hash goes on.
+  ASSERT_TRUE(Append(**store, r, 4000, bytes.substr(4000, 2000), false, 1 << 20).ok());
+  ASSERT_TRUE((*store)->EndStream("t", r).ok());
+  EXPECT_EQ((*store)->ExpireUploads(absl::Hours(1)), 0) << "written just now";
+  EXPECT_EQ((*store)->ExpireUploads(absl::ZeroDuration()), 1);
+  EXPECT_EQ(Status(**store, r)->committed, 0);
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir.File("blobs"))) {
+    EXPECT_FALSE(e.is_regular_file()) << e.path();
+  }
+}
+
+TEST(BlobStoreTest, ABlobStoredAlreadyCountsOnlyForItsOwner) {
+  TempDir dir;
+  auto store = BlobStore::Open(dir.File("blobs"));
+  ASSERT_TRUE(store.ok());
+  const std::string bytes = "owned content";
+  const v1::Digest d = DigestOf(bytes);
+  ASSERT_TRUE(Append(**store, Resource("o1", d), 0, bytes, true, 1 << 20).ok());
+  // A tenant that does not own it must send the bytes: naming the digest is not enough.
+  auto claim = (*store)->Append("other", Resource("o2", d), 0, "", true, 1 << 20, false);
+  EXPECT_EQ(claim.status().code(), absl::StatusCode::kInvalidArgument);
+  auto sent = (*store)->Append("other", Resource("o3", d), 0, bytes, true, 1 << 20, false);
+  ASSERT_TRUE(sent.ok()) << sent.status();
+  EXPECT_TRUE(sent->complete);
   EXPECT_EQ(*ReadFileToString(*(*store)->PathOf(d)), bytes);
 }
 
@@ -120,13 +170,13 @@ TEST(BlobStoreTest, LimitsAndMalformedNames) {
   auto store = BlobStore::Open(dir.File("blobs"));
   ASSERT_TRUE(store.ok());
   const v1::Digest d = DigestOf(std::string(100, 'q'));
-  auto big = (*store)->Append(Resource("a5", d), 0, "q", false, 50);
+  auto big = Append(**store, Resource("a5", d), 0, "q", false, 50);
   EXPECT_EQ(big.status().code(), absl::StatusCode::kResourceExhausted);
   EXPECT_THAT(big.status().message(), HasSubstr("max_blob_bytes"));
   for (const std::string& bad : {std::string("uploads/a/blobs/xyz/3"), std::string("blobs/abc"),
                                  absl::StrCat("uploads/a b/blobs/", d.hash(), "/100"),
                                  absl::StrCat("uploads/a/blobs/", d.hash(), "/-1")}) {
-    EXPECT_EQ((*store)->Append(bad, 0, "q", false, 1 << 20).status().code(),
+    EXPECT_EQ(Append(**store, bad, 0, "q", false, 1 << 20).status().code(),
               absl::StatusCode::kInvalidArgument)
         << bad;
   }
@@ -149,8 +199,8 @@ TEST(BlobStoreTest, PutFileAndConcurrentWritersOfTheSameContent) {
   for (int w = 0; w < 4; ++w) {
     writers.emplace_back([&] {
       for (int64_t off = 0; off < 4000; off += 100) {
-        auto st = (*store)->Append(r, off, absl::string_view(bytes).substr(off, 100),
-                                   off + 100 == 4000, 1 << 20);
+        auto st = Append(**store, r, off, absl::string_view(bytes).substr(off, 100),
+                         off + 100 == 4000, 1 << 20);
         if (!st.ok() || st->complete) return;
       }
     });
@@ -185,10 +235,78 @@ TEST(JobStoreTest, CreateIsIdempotentByRequestId) {
   ASSERT_TRUE(b.ok());
   EXPECT_FALSE(created);
   EXPECT_EQ(a->name(), b->name());
-  auto found = (*store)->FindByRequestId("r1");
+  auto found = (*store)->FindByRequestId("default", "r1");
   ASSERT_TRUE(found.ok() && found->has_value());
   EXPECT_EQ((*found)->name(), a->name());
   EXPECT_EQ((*store)->Get("jobs/none").status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST(JobStoreTest, TenantsHaveTheirOwnRequestIdsListsAndBlobs) {
+  TempDir dir;
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok());
+  bool created = false;
+  v1::Job a = NewJob("same");
+  a.set_tenant("alice");
+  a.mutable_input()->mutable_volume_digest()->set_hash(std::string(64, 'a'));
+  v1::Job b = NewJob("same");
+  b.set_tenant("bob");
+  auto ja = (*store)->Create(a, "k", &created);
+  ASSERT_TRUE(ja.ok() && created);
+  auto jb = (*store)->Create(b, "k", &created);
+  ASSERT_TRUE(jb.ok() && created) << "the same request id in another tenant is another job";
+  EXPECT_NE(ja->name(), jb->name());
+  std::string next;
+  auto alices = (*store)->List("alice", v1::JOB_STATE_UNSPECIFIED, 10, "", &next);
+  ASSERT_TRUE(alices.ok());
+  ASSERT_EQ(alices->size(), 1u);
+  EXPECT_EQ((*alices)[0].name(), ja->name());
+  EXPECT_TRUE(*(*store)->OwnsBlob("alice", std::string(64, 'a'))) << "her job's input";
+  EXPECT_FALSE(*(*store)->OwnsBlob("bob", std::string(64, 'a')));
+  ASSERT_TRUE((*store)->AddUploadedBlob("bob", std::string(64, 'b')).ok());
+  EXPECT_TRUE(*(*store)->OwnsBlob("bob", std::string(64, 'b')));
+  EXPECT_FALSE(*(*store)->OwnsBlob("alice", std::string(64, 'b')));
+  EXPECT_EQ(*(*store)->ReferencedBlobs(), std::set<std::string>{std::string(64, 'a')});
+  ASSERT_TRUE((*store)->ForgetBlob(std::string(64, 'b')).ok());
+  EXPECT_FALSE(*(*store)->OwnsBlob("bob", std::string(64, 'b')));
+}
+
+TEST(JobStoreTest, AStoreFromBeforeTenantsIsTheDefaultTenants) {
+  TempDir dir;
+  {
+    // The 0.8 schema, with one job naming an input blob.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(dir.File("jobs.db").c_str(), &db), SQLITE_OK);
+    v1::Job old = NewJob("old-request");
+    old.set_name("jobs/000000000001-0000abcd");
+    old.set_state(v1::SUCCEEDED);
+    old.mutable_input()->mutable_volume_digest()->set_hash(std::string(64, 'c'));
+    const std::string blob = old.SerializeAsString();
+    ASSERT_EQ(sqlite3_exec(db,
+                           "CREATE TABLE jobs (id TEXT PRIMARY KEY, seq INTEGER NOT NULL, "
+                           "request_id TEXT UNIQUE NOT NULL, state INTEGER NOT NULL, lease_owner "
+                           "TEXT, lease_expires INTEGER, cancel_requested INTEGER NOT NULL DEFAULT "
+                           "0, cache_key TEXT, job BLOB NOT NULL)",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    sqlite3_prepare_v2(db,
+                       "INSERT INTO jobs (id, seq, request_id, state, job) VALUES "
+                       "('000000000001-0000abcd', 1, 'old-request', 3, ?)",
+                       -1, &st, nullptr);
+    sqlite3_bind_blob(st, 1, blob.data(), static_cast<int>(blob.size()), SQLITE_TRANSIENT);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+  }
+  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
+  ASSERT_TRUE(store.ok()) << store.status();
+  auto found = (*store)->FindByRequestId("default", "old-request");
+  ASSERT_TRUE(found.ok() && found->has_value());
+  EXPECT_EQ((*found)->tenant(), "default");
+  std::string next;
+  EXPECT_EQ((*store)->List("default", v1::JOB_STATE_UNSPECIFIED, 10, "", &next)->size(), 1u);
+  EXPECT_TRUE(*(*store)->OwnsBlob("default", std::string(64, 'c')));
 }
 
 TEST(JobStoreTest, LeaseRenewFinishAndCache) {
@@ -304,16 +422,16 @@ TEST(JobStoreTest, ListPagesNewestFirstByState) {
   std::vector<std::string> seen;
   std::string token, next;
   do {
-    auto page = (*store)->List(v1::JOB_STATE_UNSPECIFIED, 3, token, &next);
+    auto page = (*store)->List("default", v1::JOB_STATE_UNSPECIFIED, 3, token, &next);
     ASSERT_TRUE(page.ok());
     for (const auto& j : *page) seen.push_back(j.name());
     token = next;
   } while (!token.empty());
   EXPECT_EQ(seen, std::vector<std::string>(names.rbegin(), names.rend()));
-  auto running = (*store)->List(v1::RUNNING, 10, "", &next);
+  auto running = (*store)->List("default", v1::RUNNING, 10, "", &next);
   ASSERT_TRUE(running.ok());
   EXPECT_TRUE(running->empty());
-  EXPECT_EQ((*store)->List(v1::QUEUED, 10, "garbage", &next).status().code(),
+  EXPECT_EQ((*store)->List("default", v1::QUEUED, 10, "garbage", &next).status().code(),
             absl::StatusCode::kInvalidArgument);
 }
 

@@ -86,7 +86,12 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
     if (program.empty()) {
       SM_ASSIGN_OR_RETURN(program, SelfPath());
     }
-    SM_ASSIGN_OR_RETURN(files, RunJobInChild(program, spec, run.limits,
+    // The job's own time limit, within the server's.
+    JobLimits limits = run.limits;
+    if (options.time_limit_seconds > 0) {
+      limits.wall = std::min(limits.wall, absl::Seconds(options.time_limit_seconds));
+    }
+    SM_ASSIGN_OR_RETURN(files, RunJobInChild(program, spec, limits,
                                              [&](const std::string& stage, double fraction,
                                                  const std::string& message) {
                                                return observer.OnProgress(stage, fraction, message);

@@ -361,6 +361,10 @@ std::vector<ParamRow> OutputRows() {
       "output.volume_formats",
       {{"vtu", &OutputOptions::vtu}, {"msh", &OutputOptions::msh}, {"inp", &OutputOptions::inp}},
       "volume mesh files to write"));
+  rows.push_back(Number("time_limit_seconds", SM_MEMBER(time_limit_seconds), "0 | (0, 2592000]",
+                        "seconds",
+                        "wall-clock limit of the run (0: none of its own; a server's "
+                        "--job_time_limit_seconds caps it)"));
   return rows;
 }
 

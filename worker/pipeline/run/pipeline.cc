@@ -1,6 +1,8 @@
 #include "worker/pipeline/run/pipeline.h"
 
 #include <filesystem>
+#include <mutex>
+#include <optional>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -104,8 +106,58 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
   return stages;
 }
 
+namespace {
+
+// Ends a run past its time limit: every progress report past the deadline asks to stop.
+class DeadlineObserver : public ProgressObserver {
+ public:
+  DeadlineObserver(ProgressObserver* inner, absl::Time deadline)
+      : inner_(inner), deadline_(deadline) {}
+  bool OnProgress(absl::string_view stage, double fraction, absl::string_view message) override {
+    if (absl::Now() > deadline_) {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (!expired_) stage_ = std::string(stage);
+      expired_ = true;
+      return false;
+    }
+    return inner_ == nullptr || inner_->OnProgress(stage, fraction, message);
+  }
+  std::optional<std::string> expired_in() {
+    std::lock_guard<std::mutex> lock(mu_);
+    return expired_ ? std::optional<std::string>(stage_) : std::nullopt;
+  }
+
+ private:
+  ProgressObserver* inner_;
+  const absl::Time deadline_;
+  std::mutex mu_;
+  bool expired_ = false;
+  std::string stage_;
+};
+
+absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress);
+
+}  // namespace
+
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress) {
+  if (options.time_limit_seconds <= 0) return RunStages(options, progress);
+  DeadlineObserver deadline(progress.observer(),
+                            absl::Now() + absl::Seconds(options.time_limit_seconds));
+  absl::StatusOr<PipelineReport> report = RunStages(options, Progress(&deadline, progress.stage()));
+  if (!report.ok() && report.status().code() == absl::StatusCode::kCancelled) {
+    if (std::optional<std::string> stage = deadline.expired_in()) {
+      return absl::DeadlineExceededError(absl::StrCat("the run went past its time limit of ",
+                                                      options.time_limit_seconds,
+                                                      " s (time_limit_seconds) in stage ", *stage));
+    }
+  }
+  return report;
+}
+
+namespace {
+
+absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress) {
   SM_RETURN_IF_ERROR(CheckParameters(options));
   PipelineReport report;
   report.options = options;
@@ -181,5 +233,7 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   }
   return report;
 }
+
+}  // namespace
 
 }  // namespace sheetmesh

@@ -55,6 +55,7 @@ struct PipelineOptions {
   bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
   VolumeMeshOptions volume;
   OutputOptions output;
+  double time_limit_seconds = 0;  // the run ends kDeadlineExceeded past this (0: none)
 };
 
 // Stage names in the order RunPipeline reports them through Progress::Stage.

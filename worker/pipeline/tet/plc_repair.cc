@@ -42,7 +42,9 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
     uint32_t changed = 0, dropped = 0;
     for (uint32_t f = 0; f < s.faces.size(); ++f) {
       if (touched[f]) continue;
-      const auto [lo, hi] = AngleRangeDegrees(corners(s.faces[f]));
+      // (Plain variables, not a structured binding: the lambdas below capture them.)
+      const std::pair<double, double> range = AngleRangeDegrees(corners(s.faces[f]));
+      const double lo = range.first, hi = range.second;
       // The edge opposite the largest angle: the one a flip or a drop would remove.
       int longest = 0;
       double best = -1;

@@ -131,6 +131,23 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
   return static_cast<uint32_t>(broken.size());
 }
 
+// A bound on tetrahedron volume so small that TetGen could never hold the mesh it asks for
+// is refused before TetGen starts (it would run until killed).
+absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dims& dims) {
+  if (o.max_volume <= 0) return absl::OkStatus();
+  // TetGen holds a tetrahedron, its share of the points and its neighbours in about this.
+  constexpr double kBytesPerTet = 320;
+  const double implied = box_volume / o.max_volume;
+  const double room = double(o.memory_limit_bytes) / kBytesPerTet;
+  if (implied <= room) return absl::OkStatus();
+  const double voxel_volume = box_volume / std::max<double>(1, double(dims.num_voxels()));
+  return absl::InvalidArgumentError(absl::StrCat(
+      "tet.max_volume ", o.max_volume, " asks for about ", std::llround(implied),
+      " tetrahedra in a box of volume ", box_volume, " (one voxel: ", voxel_volume,
+      "), more than TetGen's memory limit (tet.memory_limit_bytes ", o.memory_limit_bytes,
+      ") holds (about ", std::llround(room), "); raise it to at least ", box_volume / room));
+}
+
 }  // namespace
 
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
@@ -147,6 +164,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.tetgen_switches = TetgenSwitches(options.tetgen);
   const Vec3 ext = plc.box_hi - plc.box_lo;
   r.box_volume = std::abs(ext.x * ext.y * ext.z);
+  SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r.box_volume, dims));
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
   r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);

@@ -1,9 +1,35 @@
 #include "worker/pipeline/voxel/sheet_input.h"
 
+#include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
 
 namespace sheetmesh {
+namespace {
+
+// The default sheet phase (every non-zero voxel) suits a segmented volume. A float volume
+// read that way whose "sheet" is most of the box is a grayscale scan that needed its phase
+// given: refused, rather than meshed as one block.
+absl::Status CheckNotGrayscale(const SheetInput& input, const SheetPhase& phase) {
+  if (phase.info.dtype != DType::kFloat32 ||
+      input.selection.mode != PhaseSelection::Mode::kNonZero) {
+    return absl::OkStatus();
+  }
+  const int64_t voxels = phase.info.dims.num_voxels();
+  if (voxels <= 0 || 2 * static_cast<int64_t>(phase.stats.selected) <= voxels) {
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(absl::StrCat(
+      input.path,
+      ": a float32 volume read with the default sheet phase (every non-zero voxel) "
+      "makes ",
+      std::llround(100.0 * phase.stats.selected / voxels), "% of its ", voxels,
+      " voxels sheet (values ", phase.stats.min_value, " to ", phase.stats.max_value,
+      "); a grayscale volume needs its sheet phase given: input.labels or input.window "
+      "(--labels=V or --window=LO:HI)"));
+}
+
+}  // namespace
 
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress) {
   const absl::Time start = absl::Now();
@@ -13,17 +39,18 @@ absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progres
     const std::string& mpath = input.mask_from_volume ? input.path : input.mask_path;
     SM_ASSIGN_OR_RETURN(auto msource, OpenVolume(mpath, input.open));
     SelectionStats mstats;
-    SM_ASSIGN_OR_RETURN(VoxelSet mask, SelectPhase(*msource, input.mask_selection, nullptr,
-                                                   &mstats, progress.Sub(0, 0.5)));
+    SM_ASSIGN_OR_RETURN(VoxelSet mask, SelectPhase(*msource, input.mask_selection, nullptr, &mstats,
+                                                   progress.Sub(0, 0.5)));
     SM_RETURN_IF_ERROR(CheckNotEmpty(mask, msource->info(), input.mask_selection, mstats));
     out.mask = std::move(mask);
   }
   SM_ASSIGN_OR_RETURN(auto source, OpenVolume(input.path, input.open));
   out.info = source->info();
-  SM_ASSIGN_OR_RETURN(out.sheet,
-                      SelectPhase(*source, input.selection, out.mask ? &*out.mask : nullptr,
-                                  &out.stats, has_mask ? progress.Sub(0.5, 1) : progress));
+  SM_ASSIGN_OR_RETURN(
+      out.sheet, SelectPhase(*source, input.selection, out.mask ? &*out.mask : nullptr, &out.stats,
+                             has_mask ? progress.Sub(0.5, 1) : progress));
   SM_RETURN_IF_ERROR(CheckNotEmpty(out.sheet, out.info, input.selection, out.stats));
+  SM_RETURN_IF_ERROR(CheckNotGrayscale(input, out));
   out.read_seconds = absl::ToDoubleSeconds(absl::Now() - start);
   return out;
 }

@@ -1,10 +1,10 @@
-// libFuzzer entry for sheetmesh::fuzz::FuzzVolumeFile.
+// libFuzzer entry for sheetmesh::fuzz::FuzzTiffFile.
 #include <cstddef>
 #include <cstdint>
 
 #include "tests/fuzz/fuzz_targets.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  sheetmesh::fuzz::FuzzVolumeFile(data, size);
+  sheetmesh::fuzz::FuzzTiffFile(data, size);
   return 0;
 }

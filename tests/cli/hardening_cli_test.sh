@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The offline command line against the audit's bad files: each case exits with its code (2
+# for bad input, 1 past a time limit), a message naming the file or parameter, and never
+# dies by a signal (exit >= 128: abort, SIGBUS, SIGSEGV).
+# Usage: hardening_cli_test.sh PATH_TO_sheetmesh-pipeline
+set -euo pipefail
+cli=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+cases=0
+
+# case NAME WANT_EXIT WORDS -- COMMAND...
+case_() {
+  local name=$1 want=$2 words=$3
+  shift 4
+  local code=0 out
+  out=$("$@" 2>&1) || code=$?
+  cases=$((cases + 1))
+  [ "$code" -lt 128 ] || fail "$name: died with exit $code: $out"
+  [ "$code" -eq "$want" ] || fail "$name: exit $code, expected $want: $out"
+  local w
+  IFS='|' read -ra ws <<< "$words"
+  for w in "${ws[@]}"; do
+    echo "$out" | grep -qF -- "$w" || fail "$name: the message lacks '$w': $out"
+  done
+}
+
+"$cli" phantom --preset=sample -o "$tmp/s_128x112x96_u8.raw" > /dev/null
+"$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.vdb" --out_format=vdb > /dev/null
+"$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.tif" --out_format=tiff > /dev/null
+"$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip > /dev/null
+head -c 40000 "$tmp/s.vdb" > "$tmp/cut.vdb"
+head -c 400000 "$tmp/s.tif" > "$tmp/cut.tif"
+head -c $(($(stat -c %s "$tmp/s.nrrd") * 6 / 10)) "$tmp/s.nrrd" > "$tmp/cut.nrrd"
+head -c 1000 "$tmp/s_128x112x96_u8.raw" > "$tmp/short_128x112x96_u8.raw"
+cp "$tmp/s_128x112x96_u8.raw" "$tmp/v_128x112x96_i7.raw"
+/usr/bin/python3 - "$tmp" <<'PY'
+import struct, sys
+import numpy as np
+d = sys.argv[1]
+def tiff_claiming(side, path):
+    # One page of 8-bit samples, one strip of 17000 zeros, the header claiming side x side.
+    entries = [(256, 4, side), (257, 4, side), (258, 3, 8), (259, 3, 1), (262, 3, 1),
+               (273, 4, 8 + 2 + 9 * 12 + 4), (277, 3, 1), (278, 4, side), (279, 4, 17000)]
+    out = b"II" + struct.pack("<HI", 42, 8) + struct.pack("<H", len(entries))
+    for tag, typ, val in entries:
+        out += struct.pack("<HHI", tag, typ, 1)
+        out += struct.pack("<HH", val, 0) if typ == 3 else struct.pack("<I", val)
+    out += struct.pack("<I", 0) + bytes(17000)
+    open(path, "wb").write(out)
+tiff_claiming(60000, f"{d}/bomb60000.tif")
+tiff_claiming(200000, f"{d}/bomb200000.tif")
+open(f"{d}/huge.nrrd", "wb").write(
+    b"NRRD0004\ntype: float\ndimension: 3\nsizes: 100000 100000 100000\nencoding: raw\n\nxxxx")
+g = (10 + (np.arange(24 ** 3) * 7919 % 240)).astype(np.float32)
+g.tofile(f"{d}/gray_24x24x24_f32.raw")
+np.full(8 ** 3, np.nan, np.float32).tofile(f"{d}/nan_8x8x8_f32.raw")
+PY
+
+case_ cut_vdb 2 "cut.vdb" -- "$cli" info "$tmp/cut.vdb"
+case_ cut_multipage_tiff 2 "cut.tif|page" -- "$cli" info "$tmp/cut.tif"
+case_ cut_gzip_nrrd 2 "cut.nrrd" -- "$cli" info "$tmp/cut.nrrd"
+case_ tiff_claiming_60000 2 "bomb60000.tif|strip 0" -- "$cli" info "$tmp/bomb60000.tif"
+case_ tiff_claiming_200000 2 "bomb200000.tif|200000" -- "$cli" info "$tmp/bomb200000.tif"
+case_ nrrd_sizes_beyond_the_file 2 "huge.nrrd|100000" -- "$cli" info "$tmp/huge.nrrd"
+case_ raw_shorter_than_its_name 2 "short_128x112x96_u8.raw|truncated" -- "$cli" info "$tmp/short_128x112x96_u8.raw"
+case_ raw_type_i7 2 "'i7'" -- "$cli" info "$tmp/v_128x112x96_i7.raw"
+case_ grayscale_float_without_phase 2 "gray_24x24x24_f32.raw|input.window" -- "$cli" info "$tmp/gray_24x24x24_f32.raw"
+case_ nan_is_never_sheet 2 "nan_8x8x8_f32.raw|matched no voxel" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=-1e30:1e30
+case_ refine_close_radius_100000 2 "refine_close_radius|100000" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --refine_close_radius=100000
+case_ detect_rounds_2^31-1 2 "detect_rounds|2147483647" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --detect_rounds=2147483647
+case_ tet_max_volume_1e-12 2 "tet.max_volume" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --volume_mesh --tet_max_volume=1e-12 --similarity_hausdorff=false
+case_ time_limit 1 "time limit" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --time_limit_seconds=0.05
+echo "hardening CLI: $cases cases passed"

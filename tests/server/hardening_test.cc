@@ -51,267 +51,162 @@ std::string Write(const std::string& path, const std::string& bytes) {
   return path;
 }
 
+using Maker = std::function<std::string(const std::string& dir)>;
+using Edit = std::function<void(v1::CreateJobRequest&)>;
+
+// An upload (as `file_name`, "" for the file's own) that is accepted and FAILS with `code`.
+BadCase Fails(std::string name, Maker make, std::string file_name, absl::StatusCode code,
+              std::vector<std::string> words, Edit edit = nullptr) {
+  return {std::move(name), std::move(make), false, std::move(file_name), "",
+          std::move(edit), false,           code,  std::move(words)};
+}
+// The same for a file named by path under the allowed root.
+BadCase FailsByPath(std::string name, Maker make, absl::StatusCode code,
+                    std::vector<std::string> words) {
+  return {std::move(name), std::move(make), true, "", "", nullptr, false, code, std::move(words)};
+}
+// A request CreateJob refuses with `code`.
+BadCase Refused(std::string name, Maker make, absl::StatusCode code, std::vector<std::string> words,
+                Edit edit, std::string file_name = "") {
+  return {std::move(name),
+          std::move(make),
+          false,
+          std::move(file_name),
+          "",
+          std::move(edit),
+          true,
+          code,
+          std::move(words)};
+}
+// A volume_path CreateJob refuses with `code`.
+BadCase RefusedPath(std::string name, std::string path, absl::StatusCode code,
+                    std::vector<std::string> words) {
+  return {std::move(name), nullptr, true, "", std::move(path), nullptr, true, code,
+          std::move(words)};
+}
+
+std::string WriteCut(const std::string& path, const DenseVolume& v, double keep) {
+  EXPECT_TRUE(WriteVolume(path, v).ok()) << path;
+  CutFile(path, keep);
+  return path;
+}
+
 std::vector<BadCase> Cases() {
+  using absl::StatusCode;
+  const Maker phantom = [](const std::string& d) { return WritePhantom(d, "p", 32, 5); };
+  const Maker passwd = [](const std::string& d) {
+    return Write(d + "/x.nhdr", HeaderNaming("/etc/passwd"));
+  };
   std::vector<BadCase> c;
-  auto phantom = [](const std::string& d) { return WritePhantom(d, "p", 32, 5); };
-  c.push_back(
-      {"passwd_header_uploaded",
-       [](const std::string& d) { return Write(d + "/x.nhdr", HeaderNaming("/etc/passwd")); },
-       false,
-       "x.nhdr",
-       "",
-       nullptr,
-       false,
-       absl::StatusCode::kPermissionDenied,
-       {"data file", "/etc/passwd"}});
-  c.push_back(
-      {"passwd_header_referenced",
-       [](const std::string& d) { return Write(d + "/x.nhdr", HeaderNaming("/etc/passwd")); },
-       true,
-       "",
-       "",
-       nullptr,
-       false,
-       absl::StatusCode::kPermissionDenied,
-       {"/etc/passwd"}});
-  c.push_back({"header_naming_a_link_out",
-               [](const std::string& d) {
-                 std::filesystem::create_symlink("/etc/passwd", d + "/out.raw");
-                 return Write(d + "/l.nhdr", HeaderNaming("out.raw"));
-               },
-               true,
-               "",
-               "",
-               nullptr,
-               false,
-               absl::StatusCode::kPermissionDenied,
-               {"out.raw"}});
-  c.push_back({"cut_vdb",
-               [](const std::string& d) {
-                 const std::string p = d + "/t.vdb";
-                 EXPECT_TRUE(WriteVolume(p, SheetVolume({48, 40, 32})).ok());
-                 CutFile(p, 0.4);
-                 return p;
-               },
-               false,
-               "t.vdb",
-               "",
-               nullptr,
-               false,
-               absl::StatusCode::kInvalidArgument,
-               {"t.vdb"}});
+  c.push_back(Fails("passwd_header_uploaded", passwd, "x.nhdr", StatusCode::kPermissionDenied,
+                    {"data file", "/etc/passwd"}));
+  c.push_back(FailsByPath("passwd_header_referenced", passwd, StatusCode::kPermissionDenied,
+                          {"/etc/passwd"}));
+  c.push_back(FailsByPath("header_naming_a_link_out",
+                          [](const std::string& d) {
+                            std::filesystem::create_symlink("/etc/passwd", d + "/out.raw");
+                            return Write(d + "/l.nhdr", HeaderNaming("out.raw"));
+                          },
+                          StatusCode::kPermissionDenied, {"out.raw"}));
+  c.push_back(Fails("cut_vdb",
+                    [](const std::string& d) {
+                      return WriteCut(d + "/t.vdb", SheetVolume({48, 40, 32}), 0.4);
+                    },
+                    "t.vdb", StatusCode::kInvalidArgument, {"t.vdb"}));
   // 60000^2 fits the job's memory: the strip the header promises is not in the file.
   // 200000^2 does not: refused before anything is allocated.
-  for (const auto& [side, code, word] :
-       std::vector<std::tuple<uint32_t, absl::StatusCode, std::string>>{
-           {60000u, absl::StatusCode::kInvalidArgument, "strip 0"},
-           {200000u, absl::StatusCode::kResourceExhausted, "200000"}}) {
-    c.push_back({absl::StrCat("tiff_claiming_", side),
-                 [side = side](const std::string& d) {
-                   return Write(absl::StrCat(d, "/bomb", side, ".tif"), TiffClaiming(side, side));
-                 },
-                 false,
-                 absl::StrCat("bomb", side, ".tif"),
-                 "",
-                 nullptr,
-                 false,
-                 code,
-                 {absl::StrCat("bomb", side, ".tif"), word}});
-  }
-  c.push_back({"cut_multipage_tiff",
-               [](const std::string& d) {
-                 const std::string p = d + "/stack.tif";
-                 EXPECT_TRUE(WriteVolume(p, SheetVolume({40, 30, 20})).ok());
-                 CutFile(p, 0.5);
-                 return p;
-               },
-               false,
-               "stack.tif",
-               "",
-               nullptr,
-               false,
-               absl::StatusCode::kInvalidArgument,
-               {"stack.tif", "page"}});
+  c.push_back(Fails(
+      "tiff_claiming_60000",
+      [](const std::string& d) { return Write(d + "/bomb60000.tif", TiffClaiming(60000, 60000)); },
+      "", StatusCode::kInvalidArgument, {"bomb60000.tif", "strip 0"}));
+  c.push_back(Fails("tiff_claiming_200000",
+                    [](const std::string& d) {
+                      return Write(d + "/bomb200000.tif", TiffClaiming(200000, 200000));
+                    },
+                    "", StatusCode::kResourceExhausted, {"bomb200000.tif", "200000"}));
+  c.push_back(Fails("cut_multipage_tiff",
+                    [](const std::string& d) {
+                      return WriteCut(d + "/stack.tif", SheetVolume({40, 30, 20}), 0.5);
+                    },
+                    "", StatusCode::kInvalidArgument, {"stack.tif", "page"}));
+  c.push_back(Fails(
+      "raw_shorter_than_its_name",
+      [](const std::string& d) { return Write(d + "/s_32x32x32_u8.raw", std::string(100, 1)); }, "",
+      StatusCode::kInvalidArgument, {"32768", "100"}));
   c.push_back(
-      {"raw_shorter_than_its_name",
-       [](const std::string& d) { return Write(d + "/s_32x32x32_u8.raw", std::string(100, 1)); },
-       false,
-       "s_32x32x32_u8.raw",
-       "",
-       nullptr,
-       false,
-       absl::StatusCode::kInvalidArgument,
-       {"32768", "100"}});
+      Fails("raw_type_i7",
+            [](const std::string& d) { return Write(d + "/v_4x4x4_i7.raw", std::string(64, 1)); },
+            "", StatusCode::kInvalidArgument, {"i7"}));
   c.push_back(
-      {"raw_type_i7",
-       [](const std::string& d) { return Write(d + "/v_4x4x4_i7.raw", std::string(64, 1)); },
-       false,
-       "v_4x4x4_i7.raw",
-       "",
-       nullptr,
-       false,
-       absl::StatusCode::kInvalidArgument,
-       {"i7"}});
-  c.push_back(
-      {"nrrd_gzip_cut",
-       [](const std::string& d) {
-         const std::string p = d + "/g.nrrd";
-         auto sink = CreateNrrdWriter(p, SheetVolume({32, 32, 16}).info, NrrdEncoding::kGzip);
-         EXPECT_TRUE(sink.ok());
-         EXPECT_TRUE(WriteDense(SheetVolume({32, 32, 16}), **sink).ok());
-         CutFile(p, 0.6);
-         return p;
-       },
-       false,
-       "g.nrrd",
-       "",
-       nullptr,
-       false,
-       absl::StatusCode::kInvalidArgument,
-       {"g.nrrd"}});
-  c.push_back({"nrrd_sizes_beyond_the_file",
-               [](const std::string& d) {
-                 return Write(d + "/h.nrrd",
-                              "NRRD0004\ntype: float\ndimension: 3\nsizes: 100000 100000 100000\n"
-                              "encoding: raw\n\nxxxx");
-               },
-               false,
-               "h.nrrd",
-               "",
-               nullptr,
-               false,
-               absl::StatusCode::kResourceExhausted,
-               {"100000"}});
-  c.push_back({"grayscale_float_without_phase",
-               [](const std::string& d) { return WriteGrayscale(d, 24); },
-               false,
-               "",
-               "",
-               nullptr,
-               false,
-               absl::StatusCode::kInvalidArgument,
-               {"input.labels", "input.window"}});
-  c.push_back({"nan_volume_window",
-               [](const std::string& d) {
-                 const std::string p = absl::StrCat(d, "/allnan_8x8x8_f32.raw");
-                 std::vector<float> v(512, std::numeric_limits<float>::quiet_NaN());
-                 std::ofstream(p, std::ios::binary)
-                     .write(reinterpret_cast<const char*>(v.data()), v.size() * 4);
-                 return p;
-               },
-               false,
-               "",
-               "",
-               [](v1::CreateJobRequest& r) {
-                 r.mutable_parameters()->add_window(-1e30);
-                 r.mutable_parameters()->add_window(1e30);
-               },
-               false,
-               absl::StatusCode::kInvalidArgument,
-               {"allnan"}});
+      Fails("nrrd_gzip_cut",
+            [](const std::string& d) {
+              const std::string p = d + "/g.nrrd";
+              auto sink = CreateNrrdWriter(p, SheetVolume({32, 32, 16}).info, NrrdEncoding::kGzip);
+              EXPECT_TRUE(sink.ok() && WriteDense(SheetVolume({32, 32, 16}), **sink).ok());
+              CutFile(p, 0.6);
+              return p;
+            },
+            "", StatusCode::kInvalidArgument, {"g.nrrd"}));
+  c.push_back(Fails("nrrd_sizes_beyond_the_file",
+                    [](const std::string& d) {
+                      return Write(
+                          d + "/h.nrrd",
+                          "NRRD0004\ntype: float\ndimension: 3\nsizes: 100000 100000 100000\n"
+                          "encoding: raw\n\nxxxx");
+                    },
+                    "", StatusCode::kResourceExhausted, {"100000"}));
+  c.push_back(Fails("grayscale_float_without_phase",
+                    [](const std::string& d) { return WriteGrayscale(d, 24); }, "",
+                    StatusCode::kInvalidArgument, {"input.labels", "input.window"}));
+  c.push_back(Fails(
+      "nan_volume_window",
+      [](const std::string& d) {
+        const std::string p = d + "/allnan_8x8x8_f32.raw";
+        std::vector<float> v(512, std::numeric_limits<float>::quiet_NaN());
+        std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), 2048);
+        return p;
+      },
+      "", StatusCode::kInvalidArgument, {"allnan"},
+      [](v1::CreateJobRequest& r) {
+        r.mutable_parameters()->add_window(-1e30);
+        r.mutable_parameters()->add_window(1e30);
+      }));
   for (const char* bad : {"../p_32x32x32_u8.raw", "/", "..", "a/b.raw"}) {
-    c.push_back({absl::StrCat("file_name ", bad),
-                 phantom,
-                 false,
-                 bad,
-                 "",
-                 nullptr,
-                 true,
-                 absl::StatusCode::kInvalidArgument,
-                 {"input.file_name"}});
+    c.push_back(Refused(absl::StrCat("file_name ", bad), phantom, StatusCode::kInvalidArgument,
+                        {"input.file_name"}, nullptr, bad));
   }
-  c.push_back({"path_outside_the_roots",
-               nullptr,
-               true,
-               "",
-               "/etc/passwd",
-               nullptr,
-               true,
-               absl::StatusCode::kPermissionDenied,
-               {"/etc/passwd"}});
-  c.push_back({"path_with_nul",
-               nullptr,
-               true,
-               "",
-               std::string("/etc/passwd\0.raw", 16),
-               nullptr,
-               true,
-               absl::StatusCode::kInvalidArgument,
-               {"NUL"}});
-  c.push_back(
-      {"refine_close_radius_100000",
-       phantom,
-       false,
-       "",
-       "",
-       [](v1::CreateJobRequest& r) { r.mutable_parameters()->set_refine_close_radius(100000); },
-       true,
-       absl::StatusCode::kInvalidArgument,
-       {"refine_close_radius", "100000"}});
-  c.push_back(
-      {"detect_rounds_2^31-1",
-       phantom,
-       false,
-       "",
-       "",
-       [](v1::CreateJobRequest& r) { r.mutable_parameters()->set_detect_rounds(2147483647); },
-       true,
-       absl::StatusCode::kInvalidArgument,
-       {"detect_rounds", "2147483647"}});
-  c.push_back({"tet_max_volume_1e-12",
-               phantom,
-               false,
-               "",
-               "",
-               [](v1::CreateJobRequest& r) {
-                 r.mutable_parameters()->set_volume_mesh(true);
-                 r.mutable_parameters()->set_tet_max_volume(1e-12);
-               },
-               false,
-               absl::StatusCode::kInvalidArgument,
-               {"tet.max_volume", "1e-12"}});
-  c.push_back({"time_limit_reached",
-               phantom,
-               false,
-               "",
-               "",
-               [](v1::CreateJobRequest& r) {
-                 r.mutable_parameters()->set_extract(true);
-                 r.mutable_parameters()->set_time_limit_seconds(0.05);
-               },
-               false,
-               absl::StatusCode::kDeadlineExceeded,
-               {"time limit"}});
-  c.push_back({"request_id_with_a_control_character",
-               phantom,
-               false,
-               "",
-               "",
-               [](v1::CreateJobRequest& r) { r.set_request_id("a\nb"); },
-               true,
-               absl::StatusCode::kInvalidArgument,
-               {"request_id"}});
-  c.push_back({"digest_not_stored",
-               phantom,
-               false,
-               "",
-               "",
-               [](v1::CreateJobRequest& r) {
-                 r.mutable_input()->mutable_volume_digest()->set_hash(std::string(64, 'a'));
-               },
-               true,
-               absl::StatusCode::kFailedPrecondition,
-               {"upload it first"}});
-  c.push_back(
-      {"digest_malformed",
-       phantom,
-       false,
-       "",
-       "",
-       [](v1::CreateJobRequest& r) { r.mutable_input()->mutable_volume_digest()->set_hash("XYZ"); },
-       true,
-       absl::StatusCode::kInvalidArgument,
-       {"XYZ"}});
+  c.push_back(RefusedPath("path_outside_the_roots", "/etc/passwd", StatusCode::kPermissionDenied,
+                          {"/etc/passwd"}));
+  c.push_back(RefusedPath("path_with_nul", std::string("/etc/passwd\0.raw", 16),
+                          StatusCode::kInvalidArgument, {"NUL"}));
+  c.push_back(Refused("refine_close_radius_100000", phantom, StatusCode::kInvalidArgument,
+                      {"refine_close_radius", "100000"}, [](v1::CreateJobRequest& r) {
+                        r.mutable_parameters()->set_refine_close_radius(100000);
+                      }));
+  c.push_back(Refused("detect_rounds_2^31-1", phantom, StatusCode::kInvalidArgument,
+                      {"detect_rounds", "2147483647"}, [](v1::CreateJobRequest& r) {
+                        r.mutable_parameters()->set_detect_rounds(2147483647);
+                      }));
+  c.push_back(Fails("tet_max_volume_1e-12", phantom, "", StatusCode::kInvalidArgument,
+                    {"tet.max_volume", "1e-12"}, [](v1::CreateJobRequest& r) {
+                      r.mutable_parameters()->set_volume_mesh(true);
+                      r.mutable_parameters()->set_tet_max_volume(1e-12);
+                    }));
+  c.push_back(Fails("time_limit_reached", phantom, "", StatusCode::kDeadlineExceeded,
+                    {"time limit"}, [](v1::CreateJobRequest& r) {
+                      r.mutable_parameters()->set_extract(true);
+                      r.mutable_parameters()->set_time_limit_seconds(0.05);
+                    }));
+  c.push_back(Refused("request_id_with_a_control_character", phantom, StatusCode::kInvalidArgument,
+                      {"request_id"}, [](v1::CreateJobRequest& r) { r.set_request_id("a\nb"); }));
+  c.push_back(Refused("digest_not_stored", phantom, StatusCode::kFailedPrecondition,
+                      {"upload it first"}, [](v1::CreateJobRequest& r) {
+                        r.mutable_input()->mutable_volume_digest()->set_hash(std::string(64, 'a'));
+                      }));
+  c.push_back(Refused("digest_malformed", phantom, StatusCode::kInvalidArgument, {"XYZ"},
+                      [](v1::CreateJobRequest& r) {
+                        r.mutable_input()->mutable_volume_digest()->set_hash("XYZ");
+                      }));
   return c;
 }
 

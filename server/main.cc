@@ -66,27 +66,9 @@ ABSL_FLAG(double, job_memory_gb, 0,
 ABSL_FLAG(int64_t, job_cpu_seconds, 0, "each job's CPU time limit, seconds (0: none)");
 ABSL_FLAG(int64_t, job_time_limit_seconds, 86400, "each job's wall-clock limit, seconds");
 
-int main(int argc, char** argv) {
-  // A job's child process (server.h, isolate_jobs) runs the pipeline and ends here.
-  if (const int code = sheetmesh::runtime::RunJobChildIfAsked(argc, argv); code >= 0) return code;
-  // Two malloc arenas: upload buffers allocated by gRPC's threads and freed by the
-  // handlers' stay in a bounded heap instead of one arena per thread (measured in
-  // bench/RESULTS.md, "Service").
-  sheetmesh::UseTransparentHugePages(argc, argv, /*max_arenas=*/2);
-  absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
-  if (sheetmesh::WantsHelp(argc, argv)) {
-    std::cout << "sheetmesh-server --data_dir=DIR [flags]\n\n";
-    sheetmesh::PrintFlagsOf("server/main.cc", std::cout);
-    return 0;
-  }
-  absl::ParseCommandLine(argc, argv);
-  // Signals go to one thread that waits for them.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+namespace {
 
+sheetmesh::server::ServerOptions OptionsFromFlags() {
   sheetmesh::server::ServerOptions o;
   o.address = absl::GetFlag(FLAGS_address);
   o.data_dir = absl::GetFlag(FLAGS_data_dir);
@@ -124,6 +106,33 @@ int main(int argc, char** argv) {
       static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_job_cpu_seconds)));
   o.job_limits.wall =
       absl::Seconds(std::max<int64_t>(1, absl::GetFlag(FLAGS_job_time_limit_seconds)));
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // A job's child process (server.h, isolate_jobs) runs the pipeline and ends here.
+  if (const int code = sheetmesh::runtime::RunJobChildIfAsked(argc, argv); code >= 0) return code;
+  // Two malloc arenas: upload buffers allocated by gRPC's threads and freed by the
+  // handlers' stay in a bounded heap instead of one arena per thread (measured in
+  // bench/RESULTS.md, "Service").
+  sheetmesh::UseTransparentHugePages(argc, argv, /*max_arenas=*/2);
+  absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
+  if (sheetmesh::WantsHelp(argc, argv)) {
+    std::cout << "sheetmesh-server --data_dir=DIR [flags]\n\n";
+    sheetmesh::PrintFlagsOf("server/main.cc", std::cout);
+    return 0;
+  }
+  absl::ParseCommandLine(argc, argv);
+  // Signals go to one thread that waits for them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  const sheetmesh::server::ServerOptions o = OptionsFromFlags();
   if (absl::GetFlag(FLAGS_gc_once)) {
     if (o.data_dir.empty()) {
       std::cerr << "sheetmesh-server: --gc_once needs --data_dir\n";

@@ -41,6 +41,11 @@ std::pair<int64_t, int64_t> Descriptors() {
   return {open, limit};
 }
 
+std::string Slurp(const std::string& path) {
+  auto s = ReadFileToString(path);
+  return s.ok() ? *s : std::string();
+}
+
 }  // namespace
 
 struct Server::Impl {
@@ -93,6 +98,48 @@ struct Server::Impl {
     }
   }
 
+  // The gRPC server: the services, TLS, the token gate, message and thread limits.
+  absl::Status StartGrpc(int* port) {
+    const ServerOptions& o = options;
+    grpc::EnableDefaultHealthCheckService(true);
+    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+    grpc::ServerBuilder builder;
+    std::shared_ptr<grpc::ServerCredentials> creds = grpc::InsecureServerCredentials();
+    if (!o.tls_cert.empty()) {
+      grpc::SslServerCredentialsOptions ssl;
+      ssl.pem_key_cert_pairs.push_back({Slurp(o.tls_key), Slurp(o.tls_cert)});
+      creds = grpc::SslServerCredentials(ssl);
+    }
+    if (!tenants.open()) {
+      // Reflection (and any service but health and sheetmesh's own) only with a known token.
+      std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> gates;
+      gates.push_back(TokenGate(&tenants));
+      builder.experimental().SetInterceptorCreators(std::move(gates));
+    }
+    builder.AddListeningPort(o.address, creds, port);
+    builder.RegisterService(blob_service.get());
+    builder.RegisterService(job_service.get());
+    builder.RegisterService(volume_service.get());
+    builder.SetMaxReceiveMessageSize(o.max_message_bytes);
+    builder.SetMaxSendMessageSize(o.max_message_bytes);
+    // Synchronous handlers hold a thread each: uploads (bounded by their limit), reads and
+    // short calls. Past this, gRPC answers RESOURCE_EXHAUSTED instead of growing threads.
+    grpc::ResourceQuota quota("sheetmesh");
+    quota.SetMaxThreads(o.limits.max_upload_streams + 256);
+    builder.SetResourceQuota(quota);
+    // Keepalive: ping idle connections, and let clients ping watch streams that wait long.
+    builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 60000);
+    builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20000);
+    builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+    builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
+    builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
+    grpc_server = builder.BuildAndStart();
+    if (grpc_server == nullptr || *port == 0) {
+      return absl::UnavailableError(absl::StrCat("cannot listen on ", o.address));
+    }
+    return absl::OkStatus();
+  }
+
   // NOT_SERVING while uploads could not be taken: the disk nearly full, or descriptors
   // nearly all used.
   void CheckHealth() {
@@ -120,11 +167,6 @@ struct Server::Impl {
     grpc_server->GetHealthCheckService()->SetServingStatus(why.empty());
   }
 };
-
-static std::string Slurp(const std::string& path) {
-  auto s = ReadFileToString(path);
-  return s.ok() ? *s : std::string();
-}
 
 absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   if (o.data_dir.empty())
@@ -185,42 +227,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   s.job_service = std::make_unique<JobServiceImpl>(&s.ctx);
   s.volume_service = std::make_unique<VolumeServiceImpl>(&s.ctx);
 
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  grpc::ServerBuilder builder;
-  std::shared_ptr<grpc::ServerCredentials> creds = grpc::InsecureServerCredentials();
-  if (!o.tls_cert.empty()) {
-    grpc::SslServerCredentialsOptions ssl;
-    ssl.pem_key_cert_pairs.push_back({Slurp(o.tls_key), Slurp(o.tls_cert)});
-    creds = grpc::SslServerCredentials(ssl);
-  }
-  if (!s.tenants.open()) {
-    // Reflection (and any service but health and sheetmesh's own) only with a known token.
-    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> gates;
-    gates.push_back(TokenGate(&s.tenants));
-    builder.experimental().SetInterceptorCreators(std::move(gates));
-  }
-  builder.AddListeningPort(o.address, creds, &server->port_);
-  builder.RegisterService(s.blob_service.get());
-  builder.RegisterService(s.job_service.get());
-  builder.RegisterService(s.volume_service.get());
-  builder.SetMaxReceiveMessageSize(o.max_message_bytes);
-  builder.SetMaxSendMessageSize(o.max_message_bytes);
-  // Synchronous handlers hold a thread each: uploads (bounded by their limit), reads and
-  // short calls. Past this, gRPC answers RESOURCE_EXHAUSTED instead of growing threads.
-  grpc::ResourceQuota quota("sheetmesh");
-  quota.SetMaxThreads(o.limits.max_upload_streams + 256);
-  builder.SetResourceQuota(quota);
-  // Keepalive: ping idle connections, and let clients ping watch streams that wait long.
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 60000);
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20000);
-  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
-  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
-  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 0);
-  s.grpc_server = builder.BuildAndStart();
-  if (s.grpc_server == nullptr || server->port_ == 0) {
-    return absl::UnavailableError(absl::StrCat("cannot listen on ", o.address));
-  }
+  SM_RETURN_IF_ERROR(s.StartGrpc(&server->port_));
   s.grpc_server->GetHealthCheckService()->SetServingStatus(true);
 
   runtime::WorkerPoolOptions wo;

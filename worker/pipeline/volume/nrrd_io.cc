@@ -57,6 +57,124 @@ bool ParseVector(absl::string_view s, Vec3* out) {
   return true;
 }
 
+// The fields every header must have.
+struct RequiredFields {
+  bool dimension = false, type = false, sizes = false, encoding = false;
+};
+
+// The fields that say how the voxels are laid out: false when `key` is none of them.
+absl::StatusOr<bool> ApplyLayoutField(const std::string& key, absl::string_view value,
+                                      absl::string_view path, NrrdHeader* h, RequiredFields* seen) {
+  if (key == "dimension") {
+    int d = 0;
+    if (!absl::SimpleAtoi(value, &d) || d != 3) {
+      return FieldError(path, key, value, "is not supported; only 3-dimensional volumes");
+    }
+    seen->dimension = true;
+  } else if (key == "type") {
+    SM_ASSIGN_OR_RETURN(h->dtype, ParseNrrdType(value, path));
+    seen->type = true;
+  } else if (key == "sizes") {
+    std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
+    int64_t n[3] = {0, 0, 0};
+    if (parts.size() != 3 || !absl::SimpleAtoi(parts[0], &n[0]) ||
+        !absl::SimpleAtoi(parts[1], &n[1]) || !absl::SimpleAtoi(parts[2], &n[2])) {
+      return FieldError(path, key, value, "must be three integers");
+    }
+    h->dims = {n[0], n[1], n[2]};
+    seen->sizes = true;
+  } else if (key == "endian") {
+    if (value != "little" && value != "big") {
+      return FieldError(path, key, value, "must be little or big");
+    }
+    h->byte_order = value == "little" ? ByteOrder::kLittle : ByteOrder::kBig;
+  } else if (key == "encoding") {
+    if (value == "raw") {
+      h->encoding = NrrdEncoding::kRaw;
+    } else if (value == "gzip" || value == "gz") {
+      h->encoding = NrrdEncoding::kGzip;
+    } else {
+      return FieldError(path, key, value, "is not supported; use raw or gzip");
+    }
+    seen->encoding = true;
+  } else if (key == "data file" || key == "datafile") {
+    if (absl::StartsWith(value, "LIST") || value.find('%') != absl::string_view::npos) {
+      return FieldError(path, key, value, "lists several files; only one data file is supported");
+    }
+    h->data_file = std::string(value);
+  } else if (key == "byte skip" || key == "byteskip") {
+    if (!absl::SimpleAtoi(value, &h->byte_skip) || h->byte_skip < -1) {
+      return FieldError(path, key, value, "must be an integer >= -1");
+    }
+  } else if (key == "line skip" || key == "lineskip") {
+    if (!absl::SimpleAtoi(value, &h->line_skip) || h->line_skip < 0) {
+      return FieldError(path, key, value, "must be an integer >= 0");
+    }
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// The fields that place the grid in space: false when `key` is none of them.
+absl::StatusOr<bool> ApplyPlacementField(const std::string& key, absl::string_view value,
+                                         absl::string_view path, Placement* p) {
+  if (key == "spacings") {
+    std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
+    if (parts.size() != 3) return FieldError(path, key, value, "must be three numbers");
+    for (int k = 0; k < 3; ++k) {
+      double v = 0;
+      if (!absl::SimpleAtod(parts[k], &v) || !(v > 0) || !std::isfinite(v)) {
+        return FieldError(path, key, value, "must be three positive numbers");
+      }
+      p->spacing[k] = v;
+    }
+  } else if (key == "space directions") {
+    std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
+    if (parts.size() != 3) return FieldError(path, key, value, "must be three vectors");
+    for (int k = 0; k < 3; ++k) {
+      Vec3 v;
+      if (!ParseVector(parts[k], &v)) {
+        return FieldError(path, key, value, "must be three vectors like (1,0,0)");
+      }
+      // Axis-aligned grids only: the length of each direction is the spacing.
+      const double len = Norm(v);
+      if (!(len > 0)) return FieldError(path, key, value, "has a zero-length direction");
+      if (std::abs(v[k]) < len * (1 - 1e-6)) {
+        return FieldError(path, key, value, "is not axis-aligned; oblique grids are not supported");
+      }
+      p->spacing[k] = len;
+    }
+  } else if (key == "space origin") {
+    if (!ParseVector(value, &p->origin)) {
+      return FieldError(path, key, value, "must be a vector like (0,0,0)");
+    }
+  } else if (key == "space units") {
+    std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
+    if (!parts.empty()) {
+      p->unit = std::string(absl::StripPrefix(absl::StripSuffix(parts[0], "\""), "\""));
+    }
+  } else {
+    return false;
+  }
+  return true;
+}
+
+absl::Status CheckRequired(const RequiredFields& seen, const NrrdHeader& h,
+                           absl::string_view path) {
+  for (const auto& [have, name] :
+       {std::pair{seen.dimension, "dimension"}, std::pair{seen.type, "type"},
+        std::pair{seen.sizes, "sizes"}, std::pair{seen.encoding, "encoding"}}) {
+    if (!have) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks '", name, "'"));
+    }
+  }
+  if (h.byte_skip == -1 && h.encoding != NrrdEncoding::kRaw) {
+    return FieldError(path, "byte skip", "-1", "is only valid with raw encoding");
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_view path,
@@ -66,26 +184,21 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": not a NRRD file (it does not start with NRRD000x)"));
   }
-  size_t pos = 0;
-  bool first = true, have_dimension = false, have_sizes = false, have_type = false;
-  bool have_encoding = false, closed = false;
-  while (pos < text.size() && pos < static_cast<size_t>(kMaxHeaderBytes)) {
+  RequiredFields seen;
+  size_t pos = text.find('\n') + 1;  // past the magic line
+  bool closed = false;
+  while (pos > 0 && pos < text.size() && pos < static_cast<size_t>(kMaxHeaderBytes)) {
     const size_t nl = text.find('\n', pos);
     if (nl == absl::string_view::npos) break;
     absl::string_view line = text.substr(pos, nl - pos);
     pos = nl + 1;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    if (first) {
-      first = false;
-      continue;  // the magic line
-    }
     if (line.empty()) {
       closed = true;
       break;
     }
-    if (line[0] == '#') continue;
-    // "key:=value" lines are key/value pairs that carry no field of ours.
-    if (line.find(":=") != absl::string_view::npos) continue;
+    // Comments, and "key:=value" pairs, which carry no field of ours.
+    if (line[0] == '#' || line.find(":=") != absl::string_view::npos) continue;
     const size_t colon = line.find(": ");
     if (colon == absl::string_view::npos) {
       return absl::InvalidArgumentError(
@@ -93,99 +206,10 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
     }
     const std::string key = absl::AsciiStrToLower(line.substr(0, colon));
     const absl::string_view value = absl::StripAsciiWhitespace(line.substr(colon + 2));
-    if (key == "dimension") {
-      int d = 0;
-      if (!absl::SimpleAtoi(value, &d) || d != 3) {
-        return FieldError(path, key, value, "is not supported; only 3-dimensional volumes");
-      }
-      have_dimension = true;
-    } else if (key == "type") {
-      SM_ASSIGN_OR_RETURN(h.dtype, ParseNrrdType(value, path));
-      have_type = true;
-    } else if (key == "sizes") {
-      std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
-      int64_t n[3] = {0, 0, 0};
-      if (parts.size() != 3 || !absl::SimpleAtoi(parts[0], &n[0]) ||
-          !absl::SimpleAtoi(parts[1], &n[1]) || !absl::SimpleAtoi(parts[2], &n[2])) {
-        return FieldError(path, key, value, "must be three integers");
-      }
-      h.dims = {n[0], n[1], n[2]};
-      have_sizes = true;
-    } else if (key == "endian") {
-      if (value == "little") {
-        h.byte_order = ByteOrder::kLittle;
-      } else if (value == "big") {
-        h.byte_order = ByteOrder::kBig;
-      } else {
-        return FieldError(path, key, value, "must be little or big");
-      }
-    } else if (key == "encoding") {
-      if (value == "raw") {
-        h.encoding = NrrdEncoding::kRaw;
-      } else if (value == "gzip" || value == "gz") {
-        h.encoding = NrrdEncoding::kGzip;
-      } else {
-        return FieldError(path, key, value, "is not supported; use raw or gzip");
-      }
-      have_encoding = true;
-    } else if (key == "spacings") {
-      std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
-      if (parts.size() != 3) return FieldError(path, key, value, "must be three numbers");
-      for (int k = 0; k < 3; ++k) {
-        double v = 0;
-        if (!absl::SimpleAtod(parts[k], &v) || !(v > 0) || !std::isfinite(v)) {
-          return FieldError(path, key, value, "must be three positive numbers");
-        }
-        h.placement.spacing[k] = v;
-      }
-    } else if (key == "space directions") {
-      std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
-      if (parts.size() != 3) return FieldError(path, key, value, "must be three vectors");
-      for (int k = 0; k < 3; ++k) {
-        Vec3 v;
-        if (!ParseVector(parts[k], &v)) {
-          return FieldError(path, key, value, "must be three vectors like (1,0,0)");
-        }
-        // Axis-aligned grids only: the length of each direction is the spacing.
-        const double len = Norm(v);
-        if (!(len > 0)) return FieldError(path, key, value, "has a zero-length direction");
-        if (std::abs(v[k]) < len * (1 - 1e-6)) {
-          return FieldError(path, key, value,
-                            "is not axis-aligned; oblique grids are not supported");
-        }
-        h.placement.spacing[k] = len;
-      }
-    } else if (key == "space origin") {
-      if (!ParseVector(value, &h.placement.origin)) {
-        return FieldError(path, key, value, "must be a vector like (0,0,0)");
-      }
-    } else if (key == "space units") {
-      std::vector<absl::string_view> parts = absl::StrSplit(value, ' ', absl::SkipEmpty());
-      if (!parts.empty())
-        h.placement.unit = std::string(absl::StripPrefix(absl::StripSuffix(parts[0], "\""), "\""));
-    } else if (key == "data file" || key == "datafile") {
-      if (absl::StartsWith(value, "LIST") || value.find('%') != absl::string_view::npos) {
-        return FieldError(path, key, value, "lists several files; only one data file is supported");
-      }
-      h.data_file = std::string(value);
-    } else if (key == "byte skip" || key == "byteskip") {
-      if (!absl::SimpleAtoi(value, &h.byte_skip) || h.byte_skip < -1) {
-        return FieldError(path, key, value, "must be an integer >= -1");
-      }
-    } else if (key == "line skip" || key == "lineskip") {
-      if (!absl::SimpleAtoi(value, &h.line_skip) || h.line_skip < 0) {
-        return FieldError(path, key, value, "must be an integer >= 0");
-      }
-    } else if (key == "kinds" || key == "space" || key == "content" || key == "labels" ||
-               key == "units" || key == "min" || key == "max" || key == "old min" ||
-               key == "old max" || key == "thicknesses" || key == "axis mins" ||
-               key == "axis maxs" || key == "centers" || key == "centerings" ||
-               key == "measurement frame" || key == "sample units" || key == "block size" ||
-               key == "space dimension") {
-      // Known fields that do not change how voxels are read.
-    } else {
-      // Unknown fields are tolerated, as the NRRD format asks readers to do.
-    }
+    SM_ASSIGN_OR_RETURN(const bool layout, ApplyLayoutField(key, value, path, &h, &seen));
+    if (!layout) SM_RETURN_IF_ERROR(ApplyPlacementField(key, value, path, &h.placement).status());
+    // Other fields (kinds, labels, min, max, ...) do not change how voxels are read, and
+    // unknown ones are tolerated, as the format asks of readers.
   }
   if (!closed) {
     if (pos >= static_cast<size_t>(kMaxHeaderBytes)) {
@@ -195,17 +219,7 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
     return absl::OutOfRangeError(absl::StrCat(
         path, ": NRRD header has no closing blank line in its first ", text.size(), " bytes"));
   }
-  if (!have_dimension)
-    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'dimension'"));
-  if (!have_type)
-    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'type'"));
-  if (!have_sizes)
-    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'sizes'"));
-  if (!have_encoding)
-    return absl::InvalidArgumentError(absl::StrCat(path, ": NRRD header lacks 'encoding'"));
-  if (h.byte_skip == -1 && h.encoding != NrrdEncoding::kRaw) {
-    return FieldError(path, "byte skip", "-1", "is only valid with raw encoding");
-  }
+  SM_RETURN_IF_ERROR(CheckRequired(seen, h, path));
   SM_RETURN_IF_ERROR(CheckDims(h.dims, h.dtype, limits, path));
   h.header_bytes = static_cast<int64_t>(pos);
   return h;

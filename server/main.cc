@@ -3,6 +3,7 @@
 //                    [--allowed_root=/data/scans,...] [--auth_token=...] [--tls_cert/--tls_key]
 // SIGTERM or SIGINT drain the workers (up to --drain_seconds) and stop.
 #include <signal.h>
+#include <sys/resource.h>
 
 #include <iostream>
 #include <string>
@@ -125,6 +126,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   absl::ParseCommandLine(argc, argv);
+  // Every open upload holds descriptors: take the most the system allows this process (the
+  // soft limit, often 1024, up to the hard one).
+  struct rlimit files;
+  if (::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur < files.rlim_max) {
+    files.rlim_cur = files.rlim_max;
+    ::setrlimit(RLIMIT_NOFILE, &files);
+  }
   // Signals go to one thread that waits for them.
   sigset_t signals;
   sigemptyset(&signals);

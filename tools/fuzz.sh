@@ -21,14 +21,18 @@ targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(tiff_file nrrd_file vdb_file raw_file nrrd_header text_parsers)
 cmake --build build-fuzz -j "$(nproc)" --target "${targets[@]/%/_fuzzer}"
 run() {
-  local target=$1 work=build-fuzz/corpus-$1
+  local target=$1 work=build-fuzz/corpus-$1 leaks=1
   mkdir -p "$work"
   cp -n tests/fuzz/corpus/$target/* "$work/" 2>/dev/null || true
-  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1 \
+  # OpenVDB 10 leaks the nodes it had read when a damaged file makes its topology reader
+  # throw (tests/fuzz/corpus/vdb_file/openvdb_topology_leak); a job's child process frees
+  # them when it ends. Leak checks stay on for the readers written here.
+  [ "$target" != vdb_file ] || leaks=0
+  ASAN_OPTIONS=detect_leaks=$leaks UBSAN_OPTIONS=halt_on_error=1 \
     build-fuzz/tests/fuzz/${target}_fuzzer "$work" -max_total_time="$seconds" \
     -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=10 \
     -artifact_prefix=build-fuzz/crash-$target- > build-fuzz/$target.log 2>&1 || true
-  echo "== $target: ${seconds}s: $(grep -E '^#[0-9]+ +DONE' build-fuzz/$target.log | tail -1)"
+  echo "== $target: ${seconds}s: $(grep -E '^Done [0-9]+ runs' build-fuzz/$target.log | tail -1)"
   grep -E "ERROR|SUMMARY" build-fuzz/$target.log | head -5 || true
 }
 status=0

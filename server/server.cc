@@ -223,6 +223,11 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   s.ctx.watch_streams = s.watch_streams.get();
   s.ctx.heartbeat = o.heartbeat;
   s.ctx.cache = o.cache;
+  s.ctx.inspect.isolate = o.isolate_jobs;
+  s.ctx.inspect.program = o.job_program;
+  s.ctx.inspect.scratch_dir = o.data_dir + "/scratch";
+  s.ctx.inspect.limits = o.job_limits;
+  s.ctx.inspect.limits.wall = std::min(o.job_limits.wall, absl::Minutes(2));
   s.blob_service = std::make_unique<BlobServiceImpl>(&s.ctx);
   s.job_service = std::make_unique<JobServiceImpl>(&s.ctx);
   s.volume_service = std::make_unique<VolumeServiceImpl>(&s.ctx);

@@ -12,6 +12,7 @@
 #include "server/job_store.h"
 #include "server/local_job_host.h"
 #include "server/stream_limits.h"
+#include "worker/runtime/job_process.h"
 
 namespace sheetmesh::server {
 
@@ -30,6 +31,15 @@ struct ServiceLimits {
   absl::Duration upload_expiry = absl::Hours(24);
 };
 
+// How InspectVolume opens a volume: in a child with a job's memory limit (a header can
+// claim any size, and a reader that believed one would take the server with it), or here.
+struct InspectOptions {
+  bool isolate = true;
+  std::string program;      // the child's program ("": this one)
+  std::string scratch_dir;  // the child's folder is made here
+  runtime::JobLimits limits;
+};
+
 struct ServiceContext {
   JobStore* jobs = nullptr;
   BlobStore* blobs = nullptr;
@@ -42,6 +52,7 @@ struct ServiceContext {
   StreamLimits* watch_streams = nullptr;
   absl::Duration heartbeat = absl::Seconds(5);  // WatchJob sends at least this often
   bool cache = true;                            // reuse results of identical work
+  InspectOptions inspect;
 };
 
 }  // namespace sheetmesh::server

@@ -1,12 +1,68 @@
 #include "server/volume_service.h"
 
+#include <stdlib.h>
 #include <sys/stat.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "common/file_util.h"
+#include "common/status_macros.h"
 #include "server/references.h"
 #include "server/status_util.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::server {
+
+namespace {
+
+// Opens `path` in a child process (InspectOptions) and says what it holds.
+absl::StatusOr<runtime::InspectedVolume> InspectIsolated(const InspectOptions& o,
+                                                         const std::string& path,
+                                                         const std::string& display,
+                                                         const std::string& parameters,
+                                                         const std::vector<std::string>& roots) {
+  std::string program = o.program;
+  if (program.empty()) {
+    SM_ASSIGN_OR_RETURN(program, runtime::SelfPath());
+  }
+  SM_RETURN_IF_ERROR(MakeDirs(o.scratch_dir));
+  std::string dir = o.scratch_dir + "/inspect-XXXXXX";
+  if (::mkdtemp(dir.data()) == nullptr) {
+    return absl::InternalError(
+        absl::StrCat(o.scratch_dir, ": cannot make a folder: ", std::strerror(errno)));
+  }
+  struct Cleanup {
+    std::string dir;
+    ~Cleanup() {
+      std::error_code ec;
+      std::filesystem::remove_all(dir, ec);
+    }
+  } cleanup{dir};
+  runtime::JobSpec spec;
+  spec.volume_path = path;
+  spec.display_name = display;
+  spec.output_dir = dir;
+  spec.parameters = parameters;
+  spec.allowed_roots = roots;
+  spec.data_files = true;  // a named volume's detached data may lie in any allowed root
+  return runtime::InspectVolumeInChild(program, spec, o.limits);
+}
+
+// Opens `path` here.
+absl::StatusOr<runtime::InspectedVolume> InspectHere(const std::string& path,
+                                                     const std::string& parameters) {
+  SM_ASSIGN_OR_RETURN(PipelineOptions o, runtime::OptionsFromResolved(parameters, path));
+  SM_ASSIGN_OR_RETURN(std::unique_ptr<VolumeSource> source, OpenVolume(path, o.input.open));
+  const VolumeInfo& info = source->info();
+  const Vec3& s = info.placement.spacing;
+  return runtime::InspectedVolume{{info.dims.nx, info.dims.ny, info.dims.nz},
+                                  std::string(DTypeName(info.dtype)),
+                                  {s.x, s.y, s.z}};
+}
+
+}  // namespace
 
 grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
                                               const v1::InspectVolumeRequest* r,
@@ -19,17 +75,18 @@ grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
   *input.mutable_format() = r->format();
   absl::StatusOr<std::string> parameters = runtime::ResolveJobParameters({}, input);
   if (!parameters.ok()) return ToGrpcStatus(parameters.status());
+  // Checks the format fields before a child is started for them.
   absl::StatusOr<PipelineOptions> o = runtime::OptionsFromResolved(*parameters, *path);
   if (!o.ok()) return ToGrpcStatus(o.status());
-  absl::StatusOr<std::unique_ptr<VolumeSource>> source = OpenVolume(*path, o->input.open);
-  if (!source.ok()) return ToGrpcStatus(source.status());
-  const VolumeInfo& info = (*source)->info();
+  absl::StatusOr<runtime::InspectedVolume> v =
+      ctx_->inspect.isolate
+          ? InspectIsolated(ctx_->inspect, *path, r->path(), *parameters, ctx_->allowed_roots)
+          : InspectHere(*path, *parameters);
+  if (!v.ok()) return ToGrpcStatus(v.status());
   response->set_path(*path);
-  response->add_dims(info.dims.nx);
-  response->add_dims(info.dims.ny);
-  response->add_dims(info.dims.nz);
-  response->set_dtype(std::string(DTypeName(info.dtype)));
-  for (int k = 0; k < 3; ++k) response->add_spacing(info.placement.spacing[k]);
+  for (int k = 0; k < 3; ++k) response->add_dims(v->dims[k]);
+  response->set_dtype(v->dtype);
+  for (int k = 0; k < 3; ++k) response->add_spacing(v->spacing[k]);
   struct stat st;
   if (::stat(path->c_str(), &st) == 0) response->set_size_bytes(st.st_size);
   return grpc::Status::OK;

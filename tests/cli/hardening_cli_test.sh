@@ -72,4 +72,13 @@ case_ refine_close_radius_100000 2 "refine_close_radius|100000" -- "$cli" run "$
 case_ detect_rounds_2^31-1 2 "detect_rounds|2147483647" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --detect_rounds=2147483647
 case_ tet_max_volume_1e-12 2 "tet.max_volume" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --volume_mesh --tet_max_volume=1e-12 --similarity_hausdorff=false
 case_ time_limit 1 "time limit" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --time_limit_seconds=0.05
+# Headers that make OpenVDB allocate tens of GiB: under the address-space limit (here 1 GiB;
+# by default three quarters of the machine) that is a bad file, not the kernel's OOM killer.
+corpus=$(cd "$(dirname "$0")/../fuzz/corpus/vdb_file" && pwd)
+cp "$corpus/openvdb_claims_gigabytes" "$tmp/claims.vdb"
+cp "$corpus/openvdb_gigabyte_name" "$tmp/name.vdb"
+case_ vdb_claiming_gigabytes 2 "claims.vdb|not a readable .vdb" -- "$cli" info "$tmp/claims.vdb" --memory_limit_gb=1
+case_ vdb_with_a_gigabyte_name 2 "name.vdb|not a readable .vdb" -- "$cli" info "$tmp/name.vdb" --memory_limit_gb=1
+[ "$("$cli" info "$tmp/name.vdb" --memory_limit_gb=1 2>&1 | wc -c)" -lt 1000 ] || fail "name.vdb: the message quotes the file's garbage at length"
+case_ memory_limit_negative 2 "memory_limit_gb=-3" -- "$cli" info "$tmp/s.vdb" --memory_limit_gb=-3
 echo "hardening CLI: $cases cases passed"

@@ -343,6 +343,36 @@ TEST_F(HardeningTest, AJobPastItsMemoryLimitFailsResourceExhausted) {
   ExpectServing();
 }
 
+// Two files the VDB fuzzer made: 2 KB and 4 KB whose headers make OpenVDB allocate tens
+// of GiB (a string of a declared length, node buffers). InspectVolume opens them in a child
+// under the job memory limit; in the server's own process they would take it down.
+TEST_F(HardeningTest, InspectingAVdbThatClaimsGigabytesFailsInItsChildNotTheServer) {
+  options_.job_limits.memory_bytes = uint64_t{1} << 30;
+  StartServer();
+  for (const char* name : {"openvdb_claims_gigabytes", "openvdb_gigabyte_name"}) {
+    SCOPED_TRACE(name);
+    const std::string path = options_.allowed_roots[0] + "/" + name + ".vdb";
+    std::filesystem::copy_file(std::string(SHEETMESH_FUZZ_CORPUS) + "/vdb_file/" + name, path);
+    v1::InspectVolumeRequest r;
+    r.set_path(path);
+    v1::InspectVolumeResponse response;
+    const grpc::Status st =
+        client_->volumes()->InspectVolume(client_->Context().get(), r, &response);
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
+    EXPECT_THAT(st.error_message(), HasSubstr(path));
+    EXPECT_THAT(st.error_message(), HasSubstr("not a readable .vdb"));
+    EXPECT_LT(st.error_message().size(), 1000u);  // not the gigabyte name quoted back
+    ExpectServing();
+  }
+  // A good volume is still inspected, in its own child.
+  const std::string good = WritePhantom(options_.allowed_roots[0], "fine", 24, 2);
+  v1::InspectVolumeRequest r;
+  r.set_path(good);
+  v1::InspectVolumeResponse response;
+  ASSERT_TRUE(client_->volumes()->InspectVolume(client_->Context().get(), r, &response).ok());
+  EXPECT_THAT(response.dims(), ::testing::ElementsAre(24, 24, 24));
+}
+
 TEST_F(HardeningTest, AReferencedVolumeTruncatedWhileReadFailsTheJobNotTheServer) {
   StartServer();
   const std::string path = options_.allowed_roots[0] + "/race_256x256x256_u8.raw";

@@ -23,6 +23,7 @@
 #include "common/subprocess.h"
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline.h"
+#include "worker/pipeline/volume/volume_open.h"
 #include "worker/runtime/sandbox.h"
 
 namespace sheetmesh::runtime {
@@ -65,6 +66,34 @@ class ChildObserver : public ProgressObserver {
   std::string stage_ = "start";
 };
 
+// Names the volume the client knows, not this machine's path for it.
+std::string AsClientSees(const absl::Status& st, const std::string& display,
+                         const std::string& volume) {
+  std::string message(st.message());
+  if (display != volume) message = absl::StrReplaceAll(message, {{volume, display}});
+  return message;
+}
+
+// An inspecting child opens the volume, says what it holds, and runs no stage.
+int InspectChild(const PipelineOptions& options, const std::string& display,
+                 const std::string& volume) {
+  absl::StatusOr<std::unique_ptr<VolumeSource>> source = OpenVolume(volume, options.input.open);
+  if (!source.ok()) {
+    Tell({{"result",
+           {{"code", static_cast<int>(source.status().code())},
+            {"message", AsClientSees(source.status(), display, volume)}}}});
+    return 1;
+  }
+  const VolumeInfo& info = (*source)->info();
+  Tell({{"result",
+         {{"code", 0},
+          {"dims", {info.dims.nx, info.dims.ny, info.dims.nz}},
+          {"dtype", std::string(DTypeName(info.dtype))},
+          {"spacing",
+           {info.placement.spacing.x, info.placement.spacing.y, info.placement.spacing.z}}}}});
+  return 0;
+}
+
 int ChildMain(const std::string& spec_path) {
   ChildObserver observer;
   uint64_t memory = 0;
@@ -102,13 +131,11 @@ int ChildMain(const std::string& spec_path) {
     limits.named_file_roots = data_files ? roots : std::vector<std::string>{};
     // Readers refuse what would not fit: half the job's address space, at once.
     if (memory > 0) limits.memory_bytes = static_cast<int64_t>(memory / 2);
+    if (spec.value("inspect", false)) return InspectChild(*options, display, volume);
     options->output.dir = out;
     absl::StatusOr<PipelineReport> report = RunPipeline(*options, Progress(&observer, "read"));
     if (!report.ok()) {
-      // Name the volume the client knows, not this machine's path for it.
-      std::string message(report.status().message());
-      if (display != volume) message = absl::StrReplaceAll(message, {{volume, display}});
-      return fail(report.status().code(), message);
+      return fail(report.status().code(), AsClientSees(report.status(), display, volume));
     }
     Tell({{"result", {{"code", 0}, {"files", report->files}}}});
     return 0;
@@ -199,9 +226,11 @@ int RunJobChildIfAsked(int argc, char** argv) {
   return ChildMain(argv[2]);
 }
 
-absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, const JobSpec& spec,
-                                                       const JobLimits& limits,
-                                                       const JobProgressFn& progress) {
+namespace {
+
+// Runs the child for `spec` and returns its result line (code 0) or the status it ended with.
+absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, const JobLimits& limits,
+                              const JobProgressFn& progress) {
   const std::string spec_path = spec.output_dir + ".spec.json";
   const std::string log = spec.output_dir + ".log";
   struct Cleanup {
@@ -216,6 +245,7 @@ absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, 
                   {"parameters", spec.parameters},
                   {"allowed_roots", spec.allowed_roots},
                   {"data_files", spec.data_files},
+                  {"inspect", spec.inspect},
                   {"memory_limit_bytes", limits.memory_bytes}};
   SM_RETURN_IF_ERROR(WriteFileAtomically(spec_path, JsonText(j)));
   SubprocessOptions o;
@@ -269,7 +299,36 @@ absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, 
   if (code != 0) {
     return absl::Status(static_cast<absl::StatusCode>(code), result->value("message", ""));
   }
-  return result->value("files", std::vector<std::string>{});
+  return *result;
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, const JobSpec& spec,
+                                                       const JobLimits& limits,
+                                                       const JobProgressFn& progress) {
+  JobSpec job = spec;
+  job.inspect = false;
+  SM_ASSIGN_OR_RETURN(const Json result, RunChild(self, job, limits, progress));
+  return result.value("files", std::vector<std::string>{});
+}
+
+absl::StatusOr<InspectedVolume> InspectVolumeInChild(const std::string& self, const JobSpec& spec,
+                                                     const JobLimits& limits) {
+  JobSpec inspect = spec;
+  inspect.inspect = true;
+  SM_ASSIGN_OR_RETURN(const Json result, RunChild(self, inspect, limits,
+                                                  [](const std::string&, double,
+                                                     const std::string&) { return true; }));
+  InspectedVolume v;
+  try {
+    v.dims = result.at("dims").get<std::array<int64_t, 3>>();
+    v.dtype = result.at("dtype").get<std::string>();
+    v.spacing = result.at("spacing").get<std::array<double, 3>>();
+  } catch (const Json::exception& e) {
+    return absl::InternalError(absl::StrCat("the inspecting child answered wrongly: ", e.what()));
+  }
+  return v;
 }
 
 }  // namespace sheetmesh::runtime

@@ -7,6 +7,7 @@
 #ifndef SHEETMESH_WORKER_RUNTIME_JOB_PROCESS_H_
 #define SHEETMESH_WORKER_RUNTIME_JOB_PROCESS_H_
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -27,6 +28,8 @@ struct JobSpec {
   // `data_files` false: the volume may name none (an upload).
   std::vector<std::string> allowed_roots;
   bool data_files = false;
+  // Only open the volume and say what it holds (InspectVolumeInChild); no stage runs.
+  bool inspect = false;
 };
 
 // The limits of one child.
@@ -49,6 +52,19 @@ using JobProgressFn =
 absl::StatusOr<std::vector<std::string>> RunJobInChild(const std::string& self, const JobSpec& spec,
                                                        const JobLimits& limits,
                                                        const JobProgressFn& progress);
+
+// What a volume holds, as the child that opened it saw it.
+struct InspectedVolume {
+  std::array<int64_t, 3> dims{};
+  std::string dtype;  // "uint8", "uint16", "float32"
+  std::array<double, 3> spacing{};
+};
+
+// Opens spec.volume_path in a child with `limits` (only the format parameters of
+// spec.parameters matter) and returns what it holds. A reader that crashes or that a hostile
+// header drives past the memory limit ends the child, not the caller; errors as RunJobInChild.
+absl::StatusOr<InspectedVolume> InspectVolumeInChild(const std::string& self, const JobSpec& spec,
+                                                     const JobLimits& limits);
 
 // When argv says this process is a job child (argv[1] == "--sheetmesh-job-child"), runs the
 // job and returns its exit code; otherwise -1, and main() carries on.

@@ -2,6 +2,9 @@
 //   sheetmesh-pipeline info|surface|run|volume|score|phantom|convert|params ARGS [FLAGS]
 // Pipeline parameters are flags named after the parameter table (parameter_flags.h); the
 // flags below are the commands' own.
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <iostream>
 #include <string>
@@ -23,6 +26,10 @@
 #include "worker/pipeline/cli/phantom_command.h"
 #include "worker/pipeline/cli/surface_command.h"
 
+ABSL_FLAG(double, memory_limit_gb, -1,
+          "the address space this program may use, in GiB (default: three quarters of the "
+          "machine's memory; 0: no limit); past it a reader or stage fails cleanly instead of "
+          "the kernel's out-of-memory killer ending the program");
 ABSL_FLAG(std::string, o, "", "output path (a folder; phantom and convert: the volume file)");
 ABSL_FLAG(std::string, config, "",
           "surface/run/volume: a JSON file of parameters (flags given override it)");
@@ -270,6 +277,28 @@ void PrintHelp(const std::string& command) {
   PrintFlagsOf("cli/main.cc", std::cout);
 }
 
+// A header may claim any size, and a third-party reader (OpenVDB) believes it: with a limit
+// on the address space that claim is std::bad_alloc, reported as a bad file.
+absl::Status LimitMemory(double gib) {
+  if (gib == 0) return absl::OkStatus();
+  if (gib < 0 && gib != -1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--memory_limit_gb=", gib, ": give a size in GiB, or 0 for no limit"));
+  }
+  uint64_t bytes = static_cast<uint64_t>(gib * double(uint64_t{1} << 30));
+  if (gib < 0) {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page <= 0) return absl::OkStatus();
+    bytes = static_cast<uint64_t>(pages) * static_cast<uint64_t>(page) / 4 * 3;
+  }
+  struct rlimit rl;
+  if (::getrlimit(RLIMIT_AS, &rl) != 0) return absl::OkStatus();
+  if (rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur <= bytes) return absl::OkStatus();
+  rl.rlim_cur = bytes;
+  ::setrlimit(RLIMIT_AS, &rl);  // refused only above the hard limit, which then holds
+  return absl::OkStatus();
+}
+
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
@@ -292,7 +321,8 @@ int Main(int argc, char** argv) {
         absl::ParseCommandLine(static_cast<int>(flags->rest.size()), flags->rest.data());
     const std::vector<std::string> args(positional.begin() + std::min<size_t>(2, positional.size()),
                                         positional.end());
-    status = Dispatch(command, args, *flags);
+    status = LimitMemory(absl::GetFlag(FLAGS_memory_limit_gb));
+    if (status.ok()) status = Dispatch(command, args, *flags);
   }
   if (!status.ok()) {
     std::cerr << "sheetmesh-pipeline " << command << ": " << absl::StatusCodeToString(status.code())

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "common/excerpt.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
 
@@ -49,10 +50,11 @@ absl::Status WriteGridsAtomically(const std::string& path, const openvdb::GridPt
     file.close();
   } catch (const openvdb::Exception& e) {
     std::remove(part.c_str());
-    return absl::InternalError(absl::StrCat(path, ": OpenVDB could not write: ", e.what()));
+    return absl::InternalError(
+        absl::StrCat(path, ": OpenVDB could not write: ", Excerpt(e.what())));
   } catch (const std::exception& e) {
     std::remove(part.c_str());
-    return absl::InternalError(absl::StrCat(path, ": could not write: ", e.what()));
+    return absl::InternalError(absl::StrCat(path, ": could not write: ", Excerpt(e.what())));
   }
   if (std::rename(part.c_str(), path.c_str()) != 0) {
     const int err = errno;
@@ -94,9 +96,10 @@ class VdbSource : public VolumeSource {
           break;
       }
     } catch (const openvdb::Exception& e) {
-      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB: ", Excerpt(e.what())));
     } catch (const std::exception& e) {
-      return absl::InvalidArgumentError(absl::StrCat(info_.path, ": OpenVDB failed: ", e.what()));
+      return absl::InvalidArgumentError(
+          absl::StrCat(info_.path, ": OpenVDB failed: ", Excerpt(e.what())));
     }
     return absl::OkStatus();
   }
@@ -162,9 +165,9 @@ class VdbSink : public VolumeSink {
           break;
       }
     } catch (const openvdb::Exception& e) {
-      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB: ", e.what()));
+      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB: ", Excerpt(e.what())));
     } catch (const std::exception& e) {
-      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB failed: ", e.what()));
+      return absl::InternalError(absl::StrCat(info_.path, ": OpenVDB failed: ", Excerpt(e.what())));
     }
     return absl::OkStatus();
   }
@@ -222,7 +225,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
     }
     file.close();
   } catch (const openvdb::Exception& e) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": not a readable .vdb: ", e.what()));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a readable .vdb: ", Excerpt(e.what())));
   } catch (const std::bad_alloc&) {
     // A cut or corrupt file gives OpenVDB sizes from random bytes.
     return absl::InvalidArgumentError(
@@ -230,7 +234,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
                      ": not a readable .vdb: it claims more data than memory holds (cut "
                      "short or corrupt?)"));
   } catch (const std::exception& e) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": not a readable .vdb: ", e.what()));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": not a readable .vdb: ", Excerpt(e.what())));
   }
 
   VolumeInfo info;
@@ -326,9 +331,9 @@ absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,
       grids.push_back(label_grid);
     }
   } catch (const openvdb::Exception& e) {
-    return absl::InternalError(absl::StrCat(path, ": OpenVDB: ", e.what()));
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB: ", Excerpt(e.what())));
   } catch (const std::exception& e) {
-    return absl::InternalError(absl::StrCat(path, ": OpenVDB failed: ", e.what()));
+    return absl::InternalError(absl::StrCat(path, ": OpenVDB failed: ", Excerpt(e.what())));
   }
   return WriteGridsAtomically(path, grids);
 }

@@ -1,9 +1,13 @@
 #!/usr/bin/python3
-"""Feature extraction: similarity against the raw phase with and without extraction, piece
-counts against the phantoms' ground truth, and each step's wall time.
+"""Feature extraction (issue 20): how much of each fracture the model keeps, whether every
+true sheet is found in its plane, the similarity against the raw phase with and without
+extraction, each step's time and the run's peak memory.
 
 Usage: /usr/bin/python3 bench/extraction.py [BUILD_DIR] [--paper]
-  --paper also runs the 1012 x 1024 x 931 phantom (bench/data, generated if absent; minutes).
+  Volumes: NETL and DPM (../shared/data, skipped when absent) and the phantom presets
+  sample, thick_slab and rough_network (generated under bench/out/extraction); --paper
+  adds the 1012 x 1024 x 931 preset (bench/data, generated if absent; minutes), read once
+  with `cat` beside it to show the machine's state.
 Writes bench/out/extraction.md and prints it.
 """
 import json
@@ -11,19 +15,30 @@ import math
 import os
 import subprocess
 import sys
+import tempfile
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.environ.get("SHEETMESH_SHARED_DATA", os.path.join(ROOT, "..", "shared", "data"))
+COMMON = ["--r=7", "--output_formats=ply", "--similarity_hausdorff=false", "--similarity_grid_rates="]
 
 
-def run(cmd):
-    return subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+def timed(cmd):
+    """Runs cmd; returns (wall seconds, the child's peak RSS in MiB)."""
+    start = time.monotonic()
+    with tempfile.TemporaryFile() as err:
+        child = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(child.pid, 0)
+        wall = time.monotonic() - start
+        if os.waitstatus_to_exitcode(status) != 0:
+            err.seek(0)
+            raise RuntimeError("%s failed: %s" % (" ".join(cmd), err.read().decode()))
+    return wall, usage.ru_maxrss / 1024.0
 
 
 def report(cli, command, vol, out, extra=()):
-    run([cli, command, vol, "-o", out, "--r=7", "--output_formats=ply", "--similarity_hausdorff=false",
-         "--similarity_grid_rates="] + list(extra))
-    return json.load(open(os.path.join(out, "report.json")))
+    wall, rss = timed([cli, command, vol, "-o", out] + COMMON + list(extra))
+    return json.load(open(os.path.join(out, "report.json"))), wall, rss
 
 
 def angle(a, b):
@@ -31,22 +46,45 @@ def angle(a, b):
     return math.degrees(math.acos(min(1.0, c)))
 
 
-def truth_match(rep, truth):
-    """Per truth sheet: the smallest normal error among the planar pieces (planarity >= 0.9)
-    whose centroid lies in its band; and the pieces that are not planar (mixes of sheets)."""
-    out = []
-    pieces = rep.get("pieces", [])
+def matched(rep, truth):
+    """Per true sheet: the smallest normal error among the pieces holding at least a tenth
+    of its voxels' worth and lying in its band."""
+    errors = []
     for s in truth["sheets"]:
         band = s["aperture"]["max"] / 2 + s["undulation"] + 2
         best = None
-        for p in pieces:
+        for p in rep.get("pieces", []):
             d = abs(sum((c - o) * n for c, o, n in zip(p["centroid"], s["center"], s["normal"])))
-            if d <= band and p["planarity"] >= 0.9:
+            if d <= band and p["voxels"] >= s["voxels"] / 10:
                 a = angle(p["normal"], s["normal"])
                 best = a if best is None else min(best, a)
-        out.append(best)
-    mixed = [p for p in pieces if p["planarity"] < 0.9]
-    return out, len(mixed), sum(p["voxels"] for p in mixed)
+        errors.append(best)
+    return errors
+
+
+def volumes(cli, out_root):
+    vols = []
+    for name, f in [("NETL fracture", "netl_binary_fracture_small.tif"),
+                    ("DPM junction", "dpm_3fractures_100x100x100_u8.raw")]:
+        path = os.path.join(SHARED, f)
+        if os.path.exists(path):
+            vols.append((name, path, [], None))
+        else:
+            print("skipping %s: %s is absent" % (name, path))
+    for preset, dims in [("sample", "128,112,96"), ("thick_slab", "100,100,111"),
+                         ("rough_network", "160,160,160")]:
+        raw = os.path.join(out_root, preset + ".raw")
+        if not os.path.exists(raw):
+            subprocess.run([cli, "phantom", "--preset=" + preset, "-o", raw], check=True,
+                           capture_output=True)
+        vols.append(("preset " + preset, raw, ["--dims=" + dims], json.load(open(raw + ".truth.json"))))
+    if "--paper" in sys.argv:
+        raw = os.path.join(ROOT, "bench", "data", "paper_1012x1024x931_u8.raw")
+        if not os.path.exists(raw):
+            os.makedirs(os.path.dirname(raw), exist_ok=True)
+            subprocess.run([cli, "phantom", "--preset=paper", "-o", raw], check=True, capture_output=True)
+        vols.append(("preset paper", raw, [], json.load(open(raw + ".truth.json"))))
+    return vols
 
 
 def main():
@@ -54,41 +92,32 @@ def main():
     cli = os.path.join(build, "worker", "pipeline", "sheetmesh-pipeline")
     out_root = os.path.join(ROOT, "bench", "out", "extraction")
     os.makedirs(out_root, exist_ok=True)
-    vols = []
-    for name, f in [("NETL fracture", "netl_binary_fracture_small.tif"),
-                    ("DPM junction", "dpm_3fractures_100x100x100_u8.raw")]:
-        if os.path.exists(os.path.join(SHARED, f)):
-            vols.append((name, os.path.join(SHARED, f), None))
-    for name, dims, args in [("phantom 128^3 seed 4", "128x128x128", ["--seed=4", "--sheets=3", "--specks=30"]),
-                             ("phantom 192^3 seed 3", "192x192x192", ["--seed=3", "--sheets=4", "--specks=-1"])]:
-        raw = os.path.join(out_root, "phantom_%s_%s_u8.raw" % (args[0].split("=")[1], dims))
-        if not os.path.exists(raw):
-            run([cli, "phantom", "-o", raw, "--phantom_dims=" + dims] + args)
-        vols.append((name, raw, json.load(open(raw + ".truth.json"))))
-    if "--paper" in sys.argv:
-        raw = os.path.join(ROOT, "bench", "data", "paper_1012x1024x931_u8.raw")
-        if not os.path.exists(raw):
-            run([cli, "phantom", "--preset=paper", "-o", raw])
-        vols.append(("paper phantom 1012x1024x931", raw, json.load(open(raw + ".truth.json"))))
-    lines = ["| volume | similarity vs raw, no extraction | with extraction: vs raw | vs model | "
-             "pieces | truth sheets matched by a planar piece (normal error) | refine / detect / separate / remove / recover / surface, s |",
-             "|---|---|---|---|---|---|---|"]
-    for name, vol, truth in vols:
-        d = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
-        plain = report(cli, "surface", vol, d + "_surface")
-        ext = report(cli, "run", vol, d + "_run")
-        steps = {s["step"]: s["seconds"] for s in ext["extraction"]["steps"]}
+    lines = ["| volume | kept of the phase (specks / crossings / minor pieces dropped) | pieces | "
+             "true sheets within 10° (errors) | similarity vs raw: without / with extraction | "
+             "refine / detect / separate / remove / recover s | run wall s, peak MiB | separate.r, M used |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, vol, extra, truth in volumes(cli, out_root):
+        d = os.path.join(out_root, name.replace(" ", "_"))
+        if name == "preset paper":
+            start = time.monotonic()
+            subprocess.run("cat '%s' > /dev/null" % vol, shell=True, check=True)
+            print("reading %s with cat: %.1f s" % (vol, time.monotonic() - start), flush=True)
+        plain, _, _ = report(cli, "surface", vol, d + "_surface", extra)
+        ext, wall, rss = report(cli, "run", vol, d + "_run", extra + ["--extract"])
+        e = ext["extraction"]
+        t = e["retention"]
+        steps = {s["step"]: s["seconds"] for s in e["steps"]}
         match = "-"
         if truth:
-            m, mixed, mixed_voxels = truth_match(ext, truth)
-            match = "%d of %d within 10° (%s); %d mixed pieces (%d voxels)" % (
-                sum(x is not None and x <= 10 for x in m), len(m),
-                ", ".join("%.1f°" % x if x is not None else "none" for x in m), mixed, mixed_voxels)
-        line = "| %s | %.4f | %.4f | %.4f | %d | %s | %s / %.1f |" % (
-            name, plain["similarity"]["similarity"], ext["similarity"]["raw"]["similarity"],
-            ext["similarity"]["similarity"], ext["extraction"]["pieces"], match,
-            " / ".join("%.1f" % steps[k] for k in ["refine", "detect", "separate", "remove_minor", "recover"]),
-            ext["seconds"]["surface"])
+            m = matched(ext, truth)
+            match = "%d of %d (%s)" % (sum(x is not None and x <= 10 for x in m), len(m),
+                                       ", ".join("%.1f°" % x if x is not None else "none" for x in m))
+        line = "| %s | %.4f (%d / %d / %d of %d) | %d | %s | %.3f / %.3f | %s | %.1f, %.0f | %.1f, %d |" % (
+            name, t["fraction_kept"], t["dropped_specks"], t["dropped_at_crossings"],
+            t["dropped_minor_pieces"], t["input_voxels"], e["pieces"], match,
+            plain["similarity"]["similarity"], ext["similarity"]["raw"]["similarity"],
+            " / ".join("%.2f" % steps[k] for k in ["refine", "detect", "separate", "remove_minor", "recover"]),
+            wall, rss, e["scale"]["separate.r"]["value"], e["scale"]["M"]["value"])
         print(line, flush=True)
         lines.append(line)
     with open(os.path.join(out_root, "..", "extraction.md"), "w") as f:

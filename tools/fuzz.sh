@@ -31,12 +31,16 @@ run() {
   # ends. For that target the fuzzer lets allocations fail as they do in production, and
   # does not count leaks; both checks stay on for the readers written here.
   local asan="detect_leaks=1" malloc_limit="-malloc_limit_mb=1024"
-  if [ "$target" = vdb_file ]; then asan="detect_leaks=0:allocator_may_return_null=1"; malloc_limit="-malloc_limit_mb=1000000000"; fi
+  # Its findings do not stop it (fork mode): each is kept for the replay below.
+  if [ "$target" = vdb_file ]; then
+    asan="detect_leaks=0:allocator_may_return_null=1"
+    malloc_limit="-malloc_limit_mb=1000000000 -fork=1 -ignore_ooms=1 -ignore_crashes=1"
+  fi
   ASAN_OPTIONS=$asan UBSAN_OPTIONS=halt_on_error=1 \
     build-fuzz/tests/fuzz/${target}_fuzzer "$work" -max_total_time="$seconds" \
     -rss_limit_mb=2048 $malloc_limit -timeout=10 \
     -artifact_prefix=build-fuzz/crash-$target- > build-fuzz/$target.log 2>&1 || true
-  echo "== $target: ${seconds}s: $(grep -E '^Done [0-9]+ runs' build-fuzz/$target.log | tail -1)"
+  echo "== $target: ${seconds}s: $(grep -E '^Done [0-9]+ runs|^#[0-9]+: cov' build-fuzz/$target.log | tail -1)"
   grep -E "ERROR|SUMMARY" build-fuzz/$target.log | head -5 || true
 }
 status=0

@@ -25,6 +25,7 @@
 #include "worker/pipeline/cli/parameter_flags.h"
 #include "worker/pipeline/cli/phantom_command.h"
 #include "worker/pipeline/cli/surface_command.h"
+#include "worker/pipeline/phantom/phantom_presets.h"
 
 ABSL_FLAG(double, memory_limit_gb, -1,
           "the address space this program may use, in GiB (default: three quarters of the "
@@ -44,7 +45,8 @@ ABSL_FLAG(std::string, out_format, "raw",
           "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip or vdb");
 ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
 // phantom
-ABSL_FLAG(std::string, preset, "", "phantom: sample (the demo volume) or paper (1012x1024x931)");
+ABSL_FLAG(std::string, preset, "",
+          "phantom: sample (the demo volume), paper (1012x1024x931), thick_slab or rough_network");
 ABSL_FLAG(std::string, dims, "", "phantom: its size NXxNYxNZ");
 ABSL_FLAG(std::string, phantom_dims, "", "phantom: its size NXxNYxNZ (as --dims)");
 ABSL_FLAG(std::string, dtype, "", "phantom: voxel type uint8, uint16 or float32");
@@ -153,15 +155,8 @@ absl::Status Phantom(const std::vector<std::string>& args) {
   if (!args.empty()) return Usage("phantom -o FILE [flags]");
   PhantomCommandOptions options;
   const std::string preset = absl::GetFlag(FLAGS_preset);
-  if (preset == "sample") {
-    options.phantom = SamplePhantomOptions();
-  } else if (preset == "paper") {
-    options.phantom.dims = {1012, 1024, 931};
-    options.phantom.num_sheets = 6;
-    options.phantom.num_specks = -1;
-  } else if (!preset.empty()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--preset=", preset, " is not known; use sample or paper"));
+  if (!preset.empty()) {
+    SM_ASSIGN_OR_RETURN(options.phantom, PhantomPreset(preset));
   }
   if (!absl::GetFlag(FLAGS_phantom_dims).empty() && !absl::GetFlag(FLAGS_dims).empty()) {
     return absl::InvalidArgumentError("give the phantom's size once: --dims or --phantom_dims");

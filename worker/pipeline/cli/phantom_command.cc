@@ -7,20 +7,6 @@
 
 namespace sheetmesh {
 
-PhantomOptions SamplePhantomOptions() {
-  PhantomOptions o;
-  o.dims = {128, 112, 96};
-  o.seed = 7;
-  o.num_sheets = 3;
-  o.aperture_voxels = 4.0;
-  o.undulation_voxels = 2.0;
-  o.extent_fraction = 0.42;
-  o.holes_per_sheet = 1;
-  o.fragmented_sheets = 1;
-  o.num_specks = 40;
-  return o;
-}
-
 absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out) {
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(PhantomTruth truth, PlanPhantom(options.phantom));

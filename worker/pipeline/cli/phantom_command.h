@@ -19,10 +19,6 @@ struct PhantomCommandOptions {
   std::string truth_path;                    // ground truth JSON ("" = <output>.truth.json)
 };
 
-// The small sample volume the demo meshes: three crossing rough sheets with holes, one of
-// them fragmented, and specks.
-PhantomOptions SamplePhantomOptions();
-
 // Generates and writes the phantom, then prints a one-line summary to `out`.
 absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out);
 

@@ -13,6 +13,7 @@
 #include "worker/pipeline/mesh/vertex_normals.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/scvd/rim_classifier.h"
+#include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
 
 namespace sheetmesh {
@@ -34,19 +35,9 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
                                          const VoxelSet* within, const Progress& progress) {
   const Dims& d = patch.set.dims();
   SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
-  ScvdOptions so;
-  so.radius_voxels = o.scvd_radius_voxels;
-  so.seed = o.seed;
-  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                           sheet.thickness_stats.mean, so, progress.Sub(0.2, 0.6)));
-  std::vector<Vec3> pos(scvd.num_generators());
-  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
-  DualTriangleOptions to;
-  to.rim = false;
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
-                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to));
-  // Formula 4's n: the normalised mean of the generator's triangles' normals.
-  const std::vector<Vec3> normal = VertexNormals(pos, tri.faces);
+  SM_ASSIGN_OR_RETURN(PatchNormals pn, ComputePatchNormals(sheet, o, progress.Sub(0.2, 0.6)));
+  const Scvd& scvd = *pn.scvd;
+  const std::vector<Vec3>& normal = pn.normal;
   // Cells on the rim (the outer edge or a hole's): the only ones whose cylinder can reach
   // beyond the patch in its plane.
   std::vector<uint8_t> rim_cell(scvd.num_generators(), 0);
@@ -129,6 +120,25 @@ LabelledVoxels Merge(const LabelledVoxels& patch, const std::vector<Claim>& clai
 }
 
 }  // namespace
+
+absl::StatusOr<PatchNormals> ComputePatchNormals(const SheetAnalysis& sheet, const ExtendOptions& o,
+                                                 const Progress& progress) {
+  ScvdOptions so;
+  so.radius_voxels = o.scvd_radius_voxels;
+  so.seed = o.seed;
+  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                           sheet.thickness_stats.mean, so, progress));
+  std::vector<Vec3> pos(scvd.num_generators());
+  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
+  DualTriangleOptions to;
+  to.rim = false;
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to));
+  PatchNormals out;
+  out.normal = VertexNormals(pos, tri.faces);
+  out.scvd = std::make_unique<Scvd>(std::move(scvd));
+  return out;
+}
 
 absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
                                     const VoxelSet* within, const Progress& progress) {

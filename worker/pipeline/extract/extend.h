@@ -5,9 +5,12 @@
 #define SHEETMESH_WORKER_PIPELINE_EXTRACT_EXTEND_H_
 
 #include <cstdint>
+#include <memory>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
+#include "common/types.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
 
 namespace sheetmesh {
@@ -26,6 +29,19 @@ struct ExtendResult {
   uint64_t added = 0;
   int rounds = 0;  // rounds that added something
 };
+
+struct Scvd;
+struct SheetAnalysis;
+
+// Formula 4's normals: the SCVD of a patch (r and seed from `options`) and, per generator,
+// the normalised mean normal of its dual triangles (zero for a generator with none).
+struct PatchNormals {
+  std::unique_ptr<Scvd> scvd;
+  std::vector<Vec3> normal;
+};
+absl::StatusOr<PatchNormals> ComputePatchNormals(const SheetAnalysis& sheet,
+                                                 const ExtendOptions& options,
+                                                 const Progress& progress = {});
 
 // Extends `patch`. Detection mode when `within` is null: empty space may be added, so
 // fragments lying in one plane bridge (Fig. 6). Recovery mode otherwise: only voxels of

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/extract/regrow.h"
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/morphology.h"
@@ -102,6 +103,7 @@ class Workflow {
       objects_ = objects_.Select([&](int32_t l) { return original[l] >= m_; });
       s->objects_after = objects_.CountLabels();
       s->added = ext.added;
+      s->rounds = ext.rounds;
     } else {
       objects_ = objects_.Select([&](int32_t l) { return refined_components.sizes[l] >= m_; });
       s->objects_after = objects_.CountLabels();
@@ -125,7 +127,26 @@ class Workflow {
       s->voxels_before = s->voxels_after = objects_.set.size();
     }
     s->objects_after = pieces_.CountLabels();
+    separated_ = pieces_.set;
     return absl::OkStatus();
+  }
+
+  // Where each voxel of the input went (the model is final and labelled).
+  void Account(const LabelledVoxels& model) {
+    ExtractionRetention& r = out_.retention;
+    r.input_voxels = input_.size();
+    const VoxelSet lost = Difference(input_, model.set);
+    r.kept = r.input_voxels - lost.size();
+    r.dropped_by_refine = Difference(lost, refined_).size();
+    const VoxelSet detected = Intersection(lost, refined_);
+    r.dropped_specks = Difference(detected, objects_.set).size();
+    const VoxelSet separated = Intersection(detected, objects_.set);
+    r.dropped_at_crossings = Difference(separated, separated_).size();
+    r.dropped_minor_pieces = Intersection(separated, separated_).size();
+    r.kept_per_piece.assign(model.CountLabels(), 0);
+    model.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+      if (input_.Contains(x, y, z)) ++r.kept_per_piece[model.label[i]];
+    });
   }
 
   // 4. remove the minor pieces.
@@ -149,8 +170,9 @@ class Workflow {
     s->voxels_before = pieces_.set.size();
     if (s->ran) {
       SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(pieces_, Following(o_.recover_extend, o_.separation), &refined_,
+                          Regrow(pieces_, Following(o_.recover_extend, o_.separation), refined_,
                                  progress_.Stage("recover")));
+      s->rounds = ext.rounds;
       s->added = ext.added;
       pieces_ = std::move(ext.patch);
     }
@@ -183,6 +205,7 @@ class Workflow {
     }
     SM_RETURN_IF_ERROR(Step("recover", o_.recover, [&](ExtractionStep* s) { return Recover(s); }));
     pieces_.RelabelBySize();
+    Account(pieces_);
     out_.model = std::move(pieces_);
     out_.model_voxels = out_.model.set.size();
     out_.pieces = out_.model.CountLabels();
@@ -197,6 +220,7 @@ class Workflow {
   VoxelSet refined_;
   LabelledVoxels objects_;
   LabelledVoxels pieces_;
+  VoxelSet separated_;  // the pieces as separation left them
   ExtractionResult out_;
 };
 
@@ -210,15 +234,37 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
     return absl::InvalidArgumentError(absl::StrCat("refine radii ", o.refine_close_radius, " and ",
                                                    o.refine_open_radius, " must not be negative"));
   }
-  // M defaults to three cells of the separation SCVD: a piece smaller than that cannot
-  // give a triangle.
+  // The lengths left at 0 follow the measured mean thickness t̄ of the sheet phase.
+  ExtractionOptions scaled = o;
+  std::vector<DerivedValue> derived;
+  double mean_thickness = 0;
+  if (o.separation.radius_voxels == 0 || o.min_object_voxels == 0) {
+    SM_ASSIGN_OR_RETURN(std::vector<uint16_t> tau, ComputeThickness(input));
+    mean_thickness = SummarizeThickness(tau).mean;
+  }
+  // Separation's cells must be wider than the sheet is thick, or they stack across it and
+  // their triangles fold (paper §3: r near the thickness breaks a sheet into pieces).
+  if (o.separation.radius_voxels == 0) {
+    scaled.separation.radius_voxels = std::max(kSeparationRadiusFloor, mean_thickness / 2);
+    derived.push_back({"separate.r", scaled.separation.radius_voxels,
+                       absl::StrCat("max(5, t/2) with the mean thickness t = ", mean_thickness)});
+  } else {
+    derived.push_back({"separate.r", o.separation.radius_voxels, "set"});
+  }
+  // M: three cells of the separation SCVD; a piece smaller than that cannot give a triangle.
   uint64_t m = o.min_object_voxels;
   if (m == 0) {
-    SM_ASSIGN_OR_RETURN(std::vector<uint16_t> tau, ComputeThickness(input));
     m = static_cast<uint64_t>(
-        std::ceil(3 * CellVolume(SummarizeThickness(tau).mean, o.separation.radius_voxels)));
+        std::ceil(3 * CellVolume(mean_thickness, scaled.separation.radius_voxels)));
+    derived.push_back(
+        {"M", double(m),
+         absl::StrCat("3 t (1 + 2 r (r - 1)) with t = ", mean_thickness, ", r = separate.r")});
+  } else {
+    derived.push_back({"M", double(m), "set"});
   }
-  return Workflow(input, o, progress, m).Run();
+  SM_ASSIGN_OR_RETURN(ExtractionResult r, Workflow(input, scaled, progress, m).Run());
+  r.derived = std::move(derived);
+  return r;
 }
 
 }  // namespace sheetmesh

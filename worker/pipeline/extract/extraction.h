@@ -5,10 +5,9 @@
 #define SHEETMESH_WORKER_PIPELINE_EXTRACT_EXTRACTION_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -26,14 +25,17 @@ struct ExtractionOptions {
   bool detect = true;           // 2. extend (detection mode); objects = components
   ExtendOptions detect_extend = {1.5, 7.0, 1, 0.0, 1};  // t, R, rounds, r, seed (r 0:
                                                         // separation.radius_voxels)
-  uint64_t min_object_voxels = 0;  // M: an object (detect) or piece (remove minor) with
-                                   // fewer voxels goes; 0 = three cells of the separation
-                                   // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
-  bool separate = true;            // 3. Algorithm 2
-  SeparationOptions separation;    //    r = 5, D_ang = 150
-  bool remove_minor = true;        // 4. pieces below M go
-  bool recover = true;             // 5. extend (recovery mode) within the refined input
-  ExtendOptions recover_extend = {1.5, 7.0, 10, 0.0, 1};  // r 0: separation.radius_voxels
+  uint64_t min_object_voxels = 0;        // M: an object (detect) or piece (remove minor) with
+                                         // fewer voxels goes; 0 = three cells of the separation
+                                         // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
+  bool separate = true;                  // 3. Algorithm 2
+  SeparationOptions separation = {0.0};  // r (0: max(5, t̄ / 2)), D_ang = 150
+  bool remove_minor = true;              // 4. pieces below M go
+  bool recover = true;                   // 5. extend (recovery mode) within the refined input
+  ExtendOptions recover_extend = {1.5, 7.0, 0, 0.0, 1};  // Regrow (regrow.h): t is the least
+                                                         // half-thickness, rounds 0: until
+                                                         // nothing is added; r 0:
+                                                         // separation.radius_voxels
 };
 
 // What one step changed.
@@ -46,15 +48,44 @@ struct ExtractionStep {
   uint64_t removed = 0;
   uint32_t objects_before = 0;  // components (refine, detect) or labels
   uint32_t objects_after = 0;
+  int rounds = 0;  // detect, recover: rounds that added voxels
   double seconds = 0;
 
   // The step's figures by name, for the report.
   nlohmann::json Fields() const;
 };
 
+// Where the voxels of the sheet phase went: each is kept in the model or was dropped by
+// exactly one step (the first that lost it for good).
+struct ExtractionRetention {
+  uint64_t input_voxels = 0;             // the sheet phase
+  uint64_t kept = 0;                     // of those, in the model
+  uint64_t dropped_by_refine = 0;        // the opening erased them
+  uint64_t dropped_specks = 0;           // objects below M at detection (specks, small bits)
+  uint64_t dropped_at_crossings = 0;     // cut by separation, not recovered
+  uint64_t dropped_minor_pieces = 0;     // pieces below M after separation, not recovered
+  std::vector<uint64_t> kept_per_piece;  // by the model's labels
+
+  double fraction_kept() const { return input_voxels ? double(kept) / input_voxels : 0.0; }
+  nlohmann::json Fields() const;
+};
+
+// A length the workflow used, and where it came from: "set" (the user's value) or the
+// rule that derived it from the measured thickness.
+struct DerivedValue {
+  std::string key;  // the parameter's key: separate.r, M
+  double value = 0;
+  std::string from;
+};
+
+// separate.r left at 0 is max(this, t̄ / 2).
+inline constexpr double kSeparationRadiusFloor = 5.0;
+
 // What the workflow did, for the report.
 struct ExtractionSummary {
+  std::vector<DerivedValue> derived;  // the scale-dependent values as used
   std::vector<ExtractionStep> steps;
+  ExtractionRetention retention;
   uint64_t min_object_voxels = 0;  // M as used
   uint64_t model_voxels = 0;       // voxels of the model
   uint32_t pieces = 0;             // its labels

@@ -71,19 +71,56 @@ std::vector<PieceGeology> ComputePieceGeology(const LabelledVoxels& model,
     }
     out.push_back(g);
   }
+  AssignSheets(&out);
   return out;
+}
+
+namespace {
+
+// Whether pieces a and b lie in one plane: normals within kSheetAngleDegrees, each centroid
+// within half their apertures together of the other's plane, both planar enough for their
+// normals to mean something.
+bool OnePlane(const PieceGeology& a, const PieceGeology& b) {
+  if (a.planarity < kSheetMinPlanarity || b.planarity < kSheetMinPlanarity) return false;
+  if (AngleBetweenNormalsDegrees(a.normal, b.normal) > kSheetAngleDegrees) return false;
+  const double tolerance = 0.5 * (a.max_aperture + b.max_aperture);
+  const Vec3 d = b.centroid - a.centroid;
+  return std::abs(Dot(d, a.normal)) <= tolerance && std::abs(Dot(d, b.normal)) <= tolerance;
+}
+
+}  // namespace
+
+void AssignSheets(std::vector<PieceGeology>* pieces) {
+  std::vector<PieceGeology>& p = *pieces;
+  std::vector<size_t> root(p.size());
+  for (size_t i = 0; i < p.size(); ++i) root[i] = i;
+  auto find = [&](size_t i) {
+    while (root[i] != i) i = root[i] = root[root[i]];
+    return i;
+  };
+  for (size_t i = 0; i < p.size(); ++i) {
+    for (size_t j = i + 1; j < p.size(); ++j) {
+      if (OnePlane(p[i], p[j])) root[std::max(find(i), find(j))] = std::min(find(i), find(j));
+    }
+  }
+  // Sheets numbered in the order of their first piece (pieces are ordered by label).
+  std::map<size_t, int32_t> sheet_of_root;
+  for (size_t i = 0; i < p.size(); ++i) {
+    auto [it, fresh] = sheet_of_root.try_emplace(find(i), int32_t(sheet_of_root.size()));
+    p[i].sheet = it->second;
+  }
 }
 
 std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces) {
   std::string out =
       "piece,voxels,triangles,area,mean_aperture,max_aperture,normal_x,normal_y,normal_z,"
-      "dip,dip_direction,planarity,centroid_x,centroid_y,centroid_z\n";
+      "dip,dip_direction,planarity,centroid_x,centroid_y,centroid_z,sheet\n";
   for (const PieceGeology& g : pieces) {
     absl::StrAppendFormat(
-        &out, "%d,%d,%d,%.6g,%.6g,%.6g,%.6f,%.6f,%.6f,%.3f,%.3f,%.4f,%.6g,%.6g,%.6g\n", g.piece,
+        &out, "%d,%d,%d,%.6g,%.6g,%.6g,%.6f,%.6f,%.6f,%.3f,%.3f,%.4f,%.6g,%.6g,%.6g,%d\n", g.piece,
         g.voxels, g.triangles, g.area, g.mean_aperture, g.max_aperture, g.normal.x, g.normal.y,
         g.normal.z, g.dip_degrees, g.dip_direction_degrees, g.planarity, g.centroid.x, g.centroid.y,
-        g.centroid.z);
+        g.centroid.z, g.sheet);
   }
   return out;
 }

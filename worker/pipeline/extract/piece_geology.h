@@ -5,11 +5,10 @@
 #define SHEETMESH_WORKER_PIPELINE_EXTRACT_PIECE_GEOLOGY_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
@@ -19,6 +18,7 @@ namespace sheetmesh {
 
 struct PieceGeology {
   int32_t piece = 0;
+  int32_t sheet = 0;  // pieces in one plane (B and C of Fig. 4, split by a crossing) share it
   uint64_t voxels = 0;
   uint64_t triangles = 0;    // faces of the mesh carrying this piece
   double area = 0;           // mesh area of those faces, physical units^2
@@ -41,8 +41,16 @@ std::vector<PieceGeology> ComputePieceGeology(const LabelledVoxels& model,
                                               std::span<const uint16_t> thickness,
                                               const TriangleMesh& mesh, const Placement& placement);
 
+// Pieces in one plane are one sheet: normals within this angle, each centroid within half
+// their two max apertures of the other's plane, both at least this planar.
+inline constexpr double kSheetAngleDegrees = 10.0;
+inline constexpr double kSheetMinPlanarity = 0.8;
+
+// Sets every piece's sheet id (0, 1, ... in the order of each sheet's first piece).
+void AssignSheets(std::vector<PieceGeology>* pieces);
+
 // CSV with a header line: piece, voxels, triangles, area, mean_aperture, max_aperture,
-// normal_x/y/z, dip, dip_direction, planarity, centroid_x/y/z.
+// normal_x/y/z, dip, dip_direction, planarity, centroid_x/y/z, sheet.
 std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces);
 
 }  // namespace sheetmesh

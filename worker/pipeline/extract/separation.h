@@ -17,7 +17,8 @@
 namespace sheetmesh {
 
 struct SeparationOptions {
-  double radius_voxels = 5.0;        // r of the SCVD built for separation (Fig. 4: r = 5)
+  double radius_voxels = 5.0;        // r of the SCVD built for separation (Fig. 4: r = 5);
+                                     // ExtractFeatures takes 0 as max(5, t̄ / 2)
   double dihedral_degrees = 150.0;   // D_ang: below this, two triangles are not flat
   uint64_t seed = 1;                 // SCVD seed
   int widen_rings = 1;               // beyond the paper: a piece that is not planar and

@@ -141,9 +141,11 @@ absl::Status Validate(const PhantomOptions& o) {
     return absl::InvalidArgumentError(
         absl::StrCat("phantom extent_fraction ", o.extent_fraction, " must be in (0, 1.5]"));
   }
-  if (!(o.min_dip_degrees >= 0 && o.min_dip_degrees <= 90)) {
+  if (!(o.min_dip_degrees >= 0 && o.min_dip_degrees <= o.max_dip_degrees &&
+        o.max_dip_degrees <= 90)) {
     return absl::InvalidArgumentError(
-        absl::StrCat("phantom min_dip_degrees ", o.min_dip_degrees, " must be in [0, 90]"));
+        absl::StrCat("phantom dips ", o.min_dip_degrees, " to ", o.max_dip_degrees,
+                     " degrees must satisfy 0 <= min_dip_degrees <= max_dip_degrees <= 90"));
   }
   return absl::OkStatus();
 }
@@ -322,7 +324,7 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
   const double rad = kPi / 180.0;
   for (int k = 0; k < options.num_sheets; ++k) {
     PhantomSheet s;
-    const double dip = rng.Uniform(options.min_dip_degrees, 90.0) * rad;
+    const double dip = rng.Uniform(options.min_dip_degrees, options.max_dip_degrees) * rad;
     // Spread the dip directions so that sheets cross rather than stack.
     const double az = (360.0 * k / std::max(1, options.num_sheets) + rng.Uniform(0, 40)) * rad;
     s.normal =

@@ -19,22 +19,23 @@ namespace sheetmesh {
 struct PhantomOptions {
   Dims dims{256, 256, 256};
   uint64_t seed = 1;
-  int num_sheets = 4;                 // sheets, placed so that they cross near the centre
-  double aperture_voxels = 5.0;       // mean sheet thickness
-  double aperture_variation = 0.35;   // relative amplitude of aperture change along a sheet
-  double undulation_voxels = 3.0;     // amplitude of the sheet's large-scale waviness
-  double wall_roughness_voxels = 0.8; // amplitude of each wall's small-scale roughness
-  double extent_fraction = 0.45;      // sheet half-extent as a fraction of the box size
-  int holes_per_sheet = 2;            // round holes through each sheet
-  double hole_radius_fraction = 0.12; // hole radius, fraction of the sheet's half-extent
-  int fragmented_sheets = 1;          // sheets cut into fragments by narrow gaps
-  double fragment_gap_voxels = 3.0;   // width of those gaps (below R = 7: detection bridges)
-  double min_dip_degrees = 25.0;      // sheets steeper than this
-  int num_specks = 0;                 // small blobs (-1: one per 20^3 voxels of box)
+  int num_sheets = 4;                  // sheets, placed so that they cross near the centre
+  double aperture_voxels = 5.0;        // mean sheet thickness
+  double aperture_variation = 0.35;    // relative amplitude of aperture change along a sheet
+  double undulation_voxels = 3.0;      // amplitude of the sheet's large-scale waviness
+  double wall_roughness_voxels = 0.8;  // amplitude of each wall's small-scale roughness
+  double extent_fraction = 0.45;       // sheet half-extent as a fraction of the box size
+  int holes_per_sheet = 2;             // round holes through each sheet
+  double hole_radius_fraction = 0.12;  // hole radius, fraction of the sheet's half-extent
+  int fragmented_sheets = 1;           // sheets cut into fragments by narrow gaps
+  double fragment_gap_voxels = 3.0;    // width of those gaps (below R = 7: detection bridges)
+  double min_dip_degrees = 25.0;       // sheets dip between these two
+  double max_dip_degrees = 90.0;
+  int num_specks = 0;  // small blobs (-1: one per 20^3 voxels of box)
   double speck_radius_voxels = 1.5;
   DType dtype = DType::kUInt8;
-  double sheet_value = 255;           // value of sheet voxels
-  double speck_value = 255;           // specks share the sheet phase (they are minor objects)
+  double sheet_value = 255;  // value of sheet voxels
+  double speck_value = 255;  // specks share the sheet phase (they are minor objects)
   double background_value = 0;
 };
 
@@ -48,10 +49,10 @@ struct PhantomGap {
 };
 
 struct PhantomSheet {
-  Vec3 center;              // voxel coordinates
-  Vec3 normal;              // unit, z >= 0
-  Vec3 u, v;                // unit in-plane axes
-  double half_extent_u = 0; // elliptical outline: (a/Ru)^2 + (b/Rv)^2 <= 1
+  Vec3 center;               // voxel coordinates
+  Vec3 normal;               // unit, z >= 0
+  Vec3 u, v;                 // unit in-plane axes
+  double half_extent_u = 0;  // elliptical outline: (a/Ru)^2 + (b/Rv)^2 <= 1
   double half_extent_v = 0;
   double aperture_mean = 0;
   double aperture_min = 0;
@@ -60,7 +61,7 @@ struct PhantomSheet {
   double wall_roughness = 0;
   std::vector<PhantomHole> holes;
   std::vector<PhantomGap> gaps;
-  uint64_t voxels = 0;      // filled in by generation
+  uint64_t voxels = 0;  // filled in by generation
 };
 
 struct PhantomSpeck {

@@ -22,7 +22,6 @@ const std::vector<Renamed>& RenamedParameters() {
       {"detect", "detect.enabled"},
       {"detect_r_cylinder", "detect.R"},
       {"recover", "recover.enabled"},
-      {"recover_r_cylinder", "recover.R"},
       {"separate", "separate.enabled"},
       {"r_sep", "separate.r"},
       {"D_ang", "separate.D_ang"},

@@ -98,13 +98,21 @@ void AddExtendRows(const std::string& step, const std::string& what,
       what));
   rows->push_back(Number(
       step + ".t", [ref](PipelineOptions& o) -> double& { return ref(o).half_thickness_voxels; },
-      "(0, 100]", "voxels", "t of formula 4: half-thickness of the extension's flat cylinder"));
-  rows->push_back(Number(
-      step + ".R", [ref](PipelineOptions& o) -> double& { return ref(o).radius_voxels; },
-      "(0, 1000]", "voxels", "R of formula 4: radius of the extension's flat cylinder"));
+      "(0, 100]", "voxels",
+      step == "recover" ? "t of formula 4: the least half-thickness of a cell's plane (each "
+                          "cell takes half its thickest run plus half a voxel when more)"
+                        : "t of formula 4: half-thickness of the extension's flat cylinder"));
+  const bool front = step == "recover";  // regrow.h: a front, a voxel per round
+  if (!front) {
+    rows->push_back(Number(
+        step + ".R", [ref](PipelineOptions& o) -> double& { return ref(o).radius_voxels; },
+        "(0, 1000]", "voxels", "R of formula 4: radius of the extension's flat cylinder"));
+  }
   rows->push_back(Integer(
       step + ".rounds", [ref](PipelineOptions& o) -> int& { return ref(o).max_rounds; }, max_rounds,
-      "", "rebuild-and-extend rounds at most"));
+      "",
+      front ? "rounds of the growing front at most (0: until nothing is added)"
+            : "rebuild-and-extend rounds at most"));
   rows->push_back(Number(
       step + ".scvd_r", [ref](PipelineOptions& o) -> double& { return ref(o).scvd_radius_voxels; },
       "0 | (0, 1000]", "voxels",
@@ -129,10 +137,12 @@ std::vector<ParamRow> ExtractionRows() {
                 &ExtractionOptions::detect_extend, &ExtractionOptions::detect, "[0, 100]", &rows);
   rows.push_back(Bool("separate.enabled", SM_MEMBER(extraction.separate),
                       "separate crossing sheets (Algorithm 2)"));
-  rows.push_back(Number("separate.r", SM_MEMBER(extraction.separation.radius_voxels), "(0, 1000]",
-                        "voxels", "r of the SCVD built for separation"));
+  rows.push_back(Number("separate.r", SM_MEMBER(extraction.separation.radius_voxels),
+                        "0 | (0, 1000]", "voxels",
+                        "r of the SCVD built for separation (0: max(5, t/2) with t the sheet "
+                        "phase's mean thickness; the report's extraction.scale says which)"));
   rows.push_back(Number("separate.D_ang", SM_MEMBER(extraction.separation.dihedral_degrees),
-                        "(0, 180]", "degrees",
+                        "(90, 180)", "degrees",
                         "D_ang: two triangles meeting below this dihedral angle are not flat"));
   rows.push_back(Integer("separate.widen_rings", SM_MEMBER(extraction.separation.widen_rings),
                          "[0, 5]", "",
@@ -141,7 +151,7 @@ std::vector<ParamRow> ExtractionRows() {
   rows.push_back(Bool("remove_minor.enabled", SM_MEMBER(extraction.remove_minor),
                       "remove the pieces with fewer than M voxels"));
   AddExtendRows("recover", "recover the gaps separation cut, extending within the image (Fig. 7)",
-                &ExtractionOptions::recover_extend, &ExtractionOptions::recover, "[0, 1000]",
+                &ExtractionOptions::recover_extend, &ExtractionOptions::recover, "[0, 100000]",
                 &rows);
   return rows;
 }

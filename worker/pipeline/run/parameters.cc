@@ -43,6 +43,12 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
     return Broken{"improve.insert_below_degrees", absl::StrCat(im.insert_below_degrees),
                   absl::StrCat("must be at most improve.target_degrees = ", im.target_degrees)};
   }
+  const ExtendOptions& detect = o.extraction.detect_extend;
+  if (detect.radius_voxels < detect.half_thickness_voxels) {
+    return Broken{"detect.R", absl::StrCat(detect.radius_voxels),
+                  absl::StrCat("must be at least detect.t = ", detect.half_thickness_voxels,
+                               " (a cylinder wider than it is thick)")};
+  }
   const RadiusSearchOptions& rs = o.radius_search;
   if (rs.max_radius_voxels != 0 && rs.max_radius_voxels < rs.min_radius_voxels) {
     return Broken{
@@ -276,8 +282,11 @@ std::string ParametersMarkdown() {
     std::optional<ParamValue> d = GetParameter(s, defaults);
     std::string shown = d ? ShowValue(*d) : "unset";
     if (s.preset) shown = "\"extended\"";
-    absl::StrAppend(&md, "| `", s.key, "` | `--", s.name(), "` | ", s.Describe(), " | `", shown,
-                    "` | ", s.doc, s.scope == ParamScope::kLocal ? " (offline only)" : "", " |\n");
+    // A '|' inside a cell ("0 | (0, 1000]") would end it.
+    auto cell = [](const std::string& text) { return absl::StrReplaceAll(text, {{"|", "\\|"}}); };
+    absl::StrAppend(&md, "| `", s.key, "` | `--", s.name(), "` | ", cell(s.Describe()), " | `",
+                    shown, "` | ", cell(s.doc),
+                    s.scope == ParamScope::kLocal ? " (offline only)" : "", " |\n");
   }
   return md;
 }

@@ -1,5 +1,6 @@
 // PipelineReport::ToJson: the report artifact. Each stage's result lists its own fields;
 // this only nests them.
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "common/json_text.h"
@@ -52,8 +53,13 @@ std::string PipelineReport::ToJson() const {
   if (extraction) {
     j["extraction"] = extraction->Fields();
     nlohmann::json pieces = nlohmann::json::array();
-    for (const PieceGeology& g : geology) pieces.push_back(g.Fields());
+    int32_t sheets = 0;
+    for (const PieceGeology& g : geology) {
+      pieces.push_back(g.Fields());
+      sheets = std::max(sheets, g.sheet + 1);
+    }
     j["pieces"] = pieces;
+    j["extraction"]["sheets"] = sheets;
   }
   if (surface) j["surface"] = surface->Fields();
   if (similarity) j["similarity"] = similarity->Fields();

@@ -57,13 +57,29 @@ nlohmann::json ExtractionStep::Fields() const {
           {"removed", removed},
           {"objects_before", objects_before},
           {"objects_after", objects_after},
+          {"rounds", rounds},
           {"seconds", seconds}};
+}
+
+nlohmann::json ExtractionRetention::Fields() const {
+  return {{"input_voxels", input_voxels},
+          {"kept", kept},
+          {"fraction_kept", fraction_kept()},
+          {"dropped_by_refine", dropped_by_refine},
+          {"dropped_specks", dropped_specks},
+          {"dropped_at_crossings", dropped_at_crossings},
+          {"dropped_minor_pieces", dropped_minor_pieces},
+          {"kept_per_piece", kept_per_piece}};
 }
 
 nlohmann::json ExtractionSummary::Fields() const {
   nlohmann::json s = nlohmann::json::array();
   for (const ExtractionStep& step : steps) s.push_back(step.Fields());
+  nlohmann::json used = nlohmann::json::object();
+  for (const DerivedValue& d : derived) used[d.key] = {{"value", d.value}, {"from", d.from}};
   return {{"steps", s},
+          {"scale", used},
+          {"retention", retention.Fields()},
           {"min_object_voxels", min_object_voxels},
           {"model_voxels", model_voxels},
           {"pieces", pieces}};
@@ -71,6 +87,7 @@ nlohmann::json ExtractionSummary::Fields() const {
 
 nlohmann::json PieceGeology::Fields() const {
   return {{"piece", piece},
+          {"sheet", sheet},
           {"voxels", voxels},
           {"triangles", triangles},
           {"area", area},

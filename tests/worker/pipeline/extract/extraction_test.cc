@@ -5,10 +5,10 @@
 
 #include <map>
 
+#include "common/orientation.h"
 #include "tests/testing/shapes.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
-#include "common/orientation.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/voxel/sheet_input.h"
@@ -44,6 +44,9 @@ TEST(ExtractionTest, PiercedPlateBecomesAHoledPlateAndTwoHalves) {
   EXPECT_NEAR(g[1].dip_degrees, 90.0, 1.0);
   EXPECT_NEAR(g[2].dip_degrees, 90.0, 1.0);
   EXPECT_NE(g[1].centroid.z > 32, g[2].centroid.z > 32) << "one half above the plate, one below";
+  // The halves lie in one plane (B and C of Fig. 4): one sheet, apart from the plate's.
+  EXPECT_EQ(g[1].sheet, g[2].sheet);
+  EXPECT_NE(g[0].sheet, g[1].sheet);
   // Every step ran and reported.
   ASSERT_EQ(r.steps.size(), 5u);
   for (const ExtractionStep& s : r.steps) EXPECT_TRUE(s.ran) << s.name;
@@ -101,6 +104,18 @@ TEST(ExtractionTest, CoplanarFragmentsBelowMSurviveAsOneObject) {
   o.detect = false;
   EXPECT_THAT(ExtractFeatures(s, o),
               StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("M = 500")));
+}
+
+TEST(ExtractionTest, AnEmptyOrAllMinorPhaseIsAnErrorNotAnEmptyModel) {
+  const Dims d{32, 32, 32};
+  EXPECT_THAT(ExtractFeatures(VoxelSet(d), {}),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("empty")));
+  // Specks only: every object is below M.
+  VoxelSet specks(d);
+  for (int k = 0; k < 4; ++k)
+    specks = Union(specks, BoxSet(d, {6 * k + 2, 4, 4}, {6 * k + 4, 6, 6}));
+  EXPECT_THAT(ExtractFeatures(specks, {}), StatusIs(absl::StatusCode::kInvalidArgument,
+                                                    ::testing::HasSubstr("min_object_voxels")));
 }
 
 TEST(ExtractionTest, DpmJunctionGivesItsThreeSlabs) {

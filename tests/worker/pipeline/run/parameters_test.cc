@@ -119,10 +119,10 @@ TEST(ParametersTest, EveryRowRoundTripsThroughConfigJsonAndFlagText) {
     SCOPED_TRACE(s.key);
     const PipelineOptions defaults;
     // A value the other defaults allow (improve.target_degrees must stay above
-    // improve.insert_below_degrees, ...).
+    // improve.insert_below_degrees, detect.t at most detect.R, ...).
     ParamValue v;
     absl::StatusOr<PipelineOptions> from_json;
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < 9; ++k) {
       v = SomeOtherValue(s, GetParameter(s, defaults), k);
       // Config JSON, nested by the key path.
       nlohmann::json doc = nlohmann::json::object();
@@ -170,6 +170,26 @@ TEST(ParametersTest, OutOfRangeValuesNameTheKeyAndValue) {
                 StatusIs(absl::StatusCode::kInvalidArgument,
                          ::testing::AllOf(HasSubstr(s.key), HasSubstr(s.range.text))));
   }
+}
+
+// Extraction's lengths and angle out of their meaning: each names its key and value.
+TEST(ParametersTest, ExtractionSettingsOutOfTheirMeaningAreRefused) {
+  struct Case {
+    const char* json;
+    const char* key;
+    const char* value;
+  };
+  for (const Case& c : {Case{R"({"detect": {"t": 0}})", "detect.t", "0"},
+                        Case{R"({"recover": {"t": -1}})", "recover.t", "-1"},
+                        Case{R"({"detect": {"t": 4, "R": 3}})", "detect.R", "3"},
+                        Case{R"({"separate": {"D_ang": 60}})", "separate.D_ang", "60"},
+                        Case{R"({"separate": {"D_ang": 180}})", "separate.D_ang", "180"},
+                        Case{R"({"separate": {"r": -2}})", "separate.r", "-2"}}) {
+    SCOPED_TRACE(c.json);
+    EXPECT_THAT(FromJson(c.json), StatusIs(absl::StatusCode::kInvalidArgument,
+                                           ::testing::AllOf(HasSubstr(c.key), HasSubstr(c.value))));
+  }
+  EXPECT_THAT(FromJson(R"({"detect": {"t": 3, "R": 3}, "separate": {"D_ang": 91}})"), IsOk());
 }
 
 TEST(ParametersTest, ConfigSetsEveryGroup) {

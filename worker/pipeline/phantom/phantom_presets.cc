@@ -1,0 +1,82 @@
+#include "worker/pipeline/phantom/phantom_presets.h"
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+
+namespace sheetmesh {
+namespace {
+
+PhantomOptions Sample() {
+  PhantomOptions o;
+  o.dims = {128, 112, 96};
+  o.seed = 7;
+  o.num_sheets = 3;
+  o.aperture_voxels = 4.0;
+  o.undulation_voxels = 2.0;
+  o.extent_fraction = 0.42;
+  o.holes_per_sheet = 1;
+  o.fragmented_sheets = 1;
+  o.num_specks = 40;
+  return o;
+}
+
+PhantomOptions Paper() {
+  PhantomOptions o;
+  o.dims = {1012, 1024, 931};
+  o.num_sheets = 6;
+  o.num_specks = -1;
+  return o;
+}
+
+PhantomOptions ThickSlab() {
+  PhantomOptions o;
+  o.dims = {100, 100, 111};
+  o.seed = 3;
+  o.num_sheets = 1;
+  o.aperture_voxels = 40.0;
+  o.aperture_variation = 0.25;  // 30-50 voxels along the slab
+  o.undulation_voxels = 2.0;
+  o.wall_roughness_voxels = 4.0;
+  o.extent_fraction = 1.0;  // beyond the box: the slab crosses it
+  o.holes_per_sheet = 0;
+  o.fragmented_sheets = 0;
+  o.min_dip_degrees = 0.0;
+  o.max_dip_degrees = 5.0;
+  o.num_specks = 0;
+  return o;
+}
+
+PhantomOptions RoughNetwork() {
+  PhantomOptions o;
+  o.dims = {160, 160, 160};
+  o.seed = 11;
+  o.num_sheets = 4;
+  o.aperture_voxels = 5.0;
+  o.aperture_variation = 0.35;
+  o.undulation_voxels = 3.0;
+  o.wall_roughness_voxels = 1.5;
+  o.extent_fraction = 0.28;  // half-extents 36-54 voxels
+  o.holes_per_sheet = 2;
+  o.hole_radius_fraction = 0.15;
+  o.fragmented_sheets = 0;
+  o.num_specks = 200;
+  return o;
+}
+
+}  // namespace
+
+std::vector<std::string> PhantomPresetNames() {
+  return {"sample", "paper", "thick_slab", "rough_network"};
+}
+
+absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
+  if (name == "sample") return Sample();
+  if (name == "paper") return Paper();
+  if (name == "thick_slab") return ThickSlab();
+  if (name == "rough_network") return RoughNetwork();
+  return absl::InvalidArgumentError(
+      absl::StrCat("--preset=", absl::string_view(name.data(), name.size()), " is not known; use ",
+                   absl::StrJoin(PhantomPresetNames(), ", ")));
+}
+
+}  // namespace sheetmesh

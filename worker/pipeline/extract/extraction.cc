@@ -137,12 +137,30 @@ class Workflow {
     r.input_voxels = input_.size();
     const VoxelSet lost = Difference(input_, model.set);
     r.kept = r.input_voxels - lost.size();
-    r.dropped_by_refine = Difference(lost, refined_).size();
+    const VoxelSet by_refine = Difference(lost, refined_);
     const VoxelSet detected = Intersection(lost, refined_);
-    r.dropped_specks = Difference(detected, objects_.set).size();
+    const VoxelSet specks = Difference(detected, objects_.set);
     const VoxelSet separated = Intersection(detected, objects_.set);
-    r.dropped_at_crossings = Difference(separated, separated_).size();
-    r.dropped_minor_pieces = Intersection(separated, separated_).size();
+    const VoxelSet at_crossings = Difference(separated, separated_);
+    const VoxelSet minor = Intersection(separated, separated_);
+    r.dropped_by_refine = by_refine.size();
+    r.dropped_specks = specks.size();
+    r.dropped_at_crossings = at_crossings.size();
+    r.dropped_minor_pieces = minor.size();
+    // The same, as one labelled set (the four are disjoint and make up `lost`).
+    out_.dropped.set = lost;
+    out_.dropped.label.reserve(lost.size());
+    lost.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+      DroppedBy why = DroppedBy::kMinorPiece;
+      if (by_refine.Contains(x, y, z)) {
+        why = DroppedBy::kRefine;
+      } else if (specks.Contains(x, y, z)) {
+        why = DroppedBy::kSpeck;
+      } else if (at_crossings.Contains(x, y, z)) {
+        why = DroppedBy::kCrossing;
+      }
+      out_.dropped.label.push_back(static_cast<int32_t>(why));
+    });
     r.kept_per_piece.assign(model.CountLabels(), 0);
     model.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
       if (input_.Contains(x, y, z)) ++r.kept_per_piece[model.label[i]];

@@ -94,8 +94,13 @@ struct ExtractionSummary {
   nlohmann::json Fields() const;
 };
 
+// The labels of ExtractionResult::dropped: the step that lost each voxel.
+// (The label volume writes each as code + 1: 1 refine, 2 specks, 3 crossings, 4 minor pieces.)
+enum class DroppedBy : int32_t { kRefine = 0, kSpeck = 1, kCrossing = 2, kMinorPiece = 3 };
+
 struct ExtractionResult : ExtractionSummary {
-  LabelledVoxels model;  // pieces labelled 0, 1, ... largest first
+  LabelledVoxels model;    // pieces labelled 0, 1, ... largest first
+  LabelledVoxels dropped;  // the input's voxels not in the model, labelled by DroppedBy
 };
 
 // Runs the workflow on the sheet phase `input`. kInvalidArgument for bad parameters or

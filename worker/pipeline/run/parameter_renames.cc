@@ -46,6 +46,7 @@ const std::vector<Renamed>& RenamedParameters() {
       {"hausdorff", "similarity.hausdorff"},
       {"grid_rates", "similarity.grid_rates"},
       {"formats", "output.formats"},
+      {"write_dropped", "output.dropped"},
       {"volume_formats", "output.volume_formats"},
       {"volume_mesh.enabled", "volume_mesh"},
       {"volume_mesh.radius_edge_ratio", "tet.radius_edge_ratio"},

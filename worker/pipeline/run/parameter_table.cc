@@ -367,6 +367,10 @@ std::vector<ParamRow> OutputRows() {
       "surface mesh files to write"));
   rows.push_back(Bool("output.model", SM_MEMBER(output.model),
                       "with extraction: the model (model.vdb, a label volume, pieces.csv)"));
+  rows.push_back(Bool("output.dropped", SM_MEMBER(output.dropped),
+                      "with extraction: the voxels the model dropped, labelled by why "
+                      "(dropped_labels_<dims>_u16.raw: 1 refine, 2 specks, 3 crossings, 4 "
+                      "minor pieces)"));
   rows.push_back(Formats(
       "output.volume_formats",
       {{"vtu", &OutputOptions::vtu}, {"msh", &OutputOptions::msh}, {"inp", &OutputOptions::inp}},

@@ -64,7 +64,8 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
 // last. `volume` is null without a volume mesh.
 absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
                           const TriangleMesh& mesh, const LabelledVoxels& model,
-                          const TetMesh* volume, PipelineReport* report) {
+                          const LabelledVoxels& dropped, const TetMesh* volume,
+                          PipelineReport* report) {
   const std::string& dir = options.output.dir;
   SM_RETURN_IF_ERROR(MakeDirs(dir));
   auto path = [&](const std::string& name) { return (std::filesystem::path(dir) / name).string(); };
@@ -78,6 +79,13 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
     report->files.push_back(labels);
     SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report->geology)));
     report->files.push_back("pieces.csv");
+  }
+  if (options.extract && options.output.dropped) {
+    // Labels 1 refine, 2 specks, 3 crossings, 4 minor pieces; 0 kept or never sheet.
+    const std::string labels =
+        absl::StrCat("dropped_labels_", model.set.dims().ToString(), "_u16.raw");
+    SM_RETURN_IF_ERROR(WriteLabelVolume(dropped, path(labels), VolumeFormat::kRaw, pl));
+    report->files.push_back(labels);
   }
   if (volume != nullptr) {
     SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files));
@@ -171,12 +179,13 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   // The set that is meshed: the extracted model, or the input's sheet phase as it is.
   VoxelSet meshed = phase.sheet;
   std::vector<int32_t> piece_of_voxel;
-  LabelledVoxels model;
+  LabelledVoxels model, dropped;
   if (options.extract) {
     StageTimer t(&report, "extract");
     SM_ASSIGN_OR_RETURN(ExtractionResult ex,
                         ExtractFeatures(phase.sheet, options.extraction, progress));
     model = std::move(ex.model);
+    dropped = std::move(ex.dropped);
     report.extraction = std::move(static_cast<ExtractionSummary&>(ex));
     meshed = model.set;
     piece_of_voxel = model.label;
@@ -227,7 +236,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
 
   if (!options.output.dir.empty()) {
     StageTimer t(&report, "write");
-    SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, mesh, model,
+    SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, mesh, model, dropped,
                                     report.volume_mesh ? &volume.mesh : nullptr, &report));
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
   }

@@ -5,11 +5,10 @@
 #define SHEETMESH_WORKER_PIPELINE_RUN_PIPELINE_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -33,15 +32,17 @@ struct ScoreOptions {
 };
 
 struct OutputOptions {
-  std::string dir;    // where files go (created); empty: write nothing
-  bool ply = true;    // surface.ply
-  bool vtp = true;    // surface.vtp
-  bool obj = true;    // surface.obj
-  bool model = true;  // with extraction: model.vdb (mask + labels) and
-                      // model_labels_<dims>_u16.raw, and pieces.csv
-  bool vtu = true;    // with a volume mesh: volume.vtu
-  bool msh = true;    // volume.msh (Gmsh 4.1)
-  bool inp = true;    // volume.inp (Abaqus)
+  std::string dir;       // where files go (created); empty: write nothing
+  bool ply = true;       // surface.ply
+  bool vtp = true;       // surface.vtp
+  bool obj = true;       // surface.obj
+  bool model = true;     // with extraction: model.vdb (mask + labels) and
+                         // model_labels_<dims>_u16.raw, and pieces.csv
+  bool dropped = false;  // with extraction: dropped_labels_<dims>_u16.raw, the voxels of
+                         // the phase the model lacks labelled by why (DroppedBy)
+  bool vtu = true;       // with a volume mesh: volume.vtu
+  bool msh = true;       // volume.msh (Gmsh 4.1)
+  bool inp = true;       // volume.inp (Abaqus)
 };
 
 struct PipelineOptions {
@@ -75,10 +76,10 @@ struct GridFigure {
 // How faithful the mesh is (formula 5), against the set it meshed and, with extraction,
 // against the input's raw phase; the other prism model and the grid baselines of Table 2.
 struct SimilarityReport {
-  bool against_model = false;                // the meshed set is the extracted model
-  SimilarityScore score;                     // of `score.height`'s prisms
-  std::optional<SimilarityScore> raw;        // against the input's phase (with extraction)
-  double shell_similarity = 0;               // the other prism model
+  bool against_model = false;          // the meshed set is the extracted model
+  SimilarityScore score;               // of `score.height`'s prisms
+  std::optional<SimilarityScore> raw;  // against the input's phase (with extraction)
+  double shell_similarity = 0;         // the other prism model
   std::vector<GridFigure> grid;
 
   nlohmann::json Fields() const;

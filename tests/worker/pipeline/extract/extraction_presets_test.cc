@@ -121,6 +121,14 @@ TEST(ExtractionPresetsTest, RetentionAccountsForEveryVoxelOnce) {
   EXPECT_EQ(t.kept_per_piece.size(), r.model.CountLabels());
   // The specks are small objects: detection drops them.
   EXPECT_GT(t.dropped_specks, 0u);
+  // The dropped voxels, labelled by why, are the rest of the phase.
+  EXPECT_EQ(r.dropped.set, Difference(p.phase, r.model.set));
+  std::map<int32_t, uint64_t> why;
+  for (int32_t l : r.dropped.label) ++why[l];
+  EXPECT_EQ(why[static_cast<int32_t>(DroppedBy::kRefine)], t.dropped_by_refine);
+  EXPECT_EQ(why[static_cast<int32_t>(DroppedBy::kSpeck)], t.dropped_specks);
+  EXPECT_EQ(why[static_cast<int32_t>(DroppedBy::kCrossing)], t.dropped_at_crossings);
+  EXPECT_EQ(why[static_cast<int32_t>(DroppedBy::kMinorPiece)], t.dropped_minor_pieces);
   // Recovery stopped because nothing more could be added, not on a cap.
   EXPECT_GT(r.steps[4].rounds, 0);
 }

@@ -78,10 +78,11 @@ std::vector<PieceGeology> ComputePieceGeology(const LabelledVoxels& model,
 namespace {
 
 // Whether pieces a and b lie in one plane: normals within kSheetAngleDegrees, each centroid
-// within half their apertures together of the other's plane, both planar enough for their
-// normals to mean something.
+// within half their apertures together of the other's plane, and at least one of them
+// planar enough for its normal to mean something.
 bool OnePlane(const PieceGeology& a, const PieceGeology& b) {
-  if (a.planarity < kSheetMinPlanarity || b.planarity < kSheetMinPlanarity) return false;
+  // A small piece cut near a crossing is often not planar itself; it joins a planar one.
+  if (a.planarity < kSheetMinPlanarity && b.planarity < kSheetMinPlanarity) return false;
   if (AngleBetweenNormalsDegrees(a.normal, b.normal) > kSheetAngleDegrees) return false;
   const double tolerance = 0.5 * (a.max_aperture + b.max_aperture);
   const Vec3 d = b.centroid - a.centroid;

@@ -42,7 +42,7 @@ std::vector<PieceGeology> ComputePieceGeology(const LabelledVoxels& model,
                                               const TriangleMesh& mesh, const Placement& placement);
 
 // Pieces in one plane are one sheet: normals within this angle, each centroid within half
-// their two max apertures of the other's plane, both at least this planar.
+// their two max apertures of the other's plane, one of them at least this planar.
 inline constexpr double kSheetAngleDegrees = 10.0;
 inline constexpr double kSheetMinPlanarity = 0.8;
 

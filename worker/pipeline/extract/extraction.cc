@@ -122,6 +122,7 @@ class Workflow {
       SM_ASSIGN_OR_RETURN(SeparationResult sep, sheetmesh::Separate(objects_.set, o_.separation,
                                                                     progress_.Stage("separate")));
       pieces_ = std::move(sep.pieces);
+      cells_ = std::move(sep.cells);
       Count(objects_.set, pieces_.set, s);
     } else {
       s->voxels_before = s->voxels_after = objects_.set.size();
@@ -129,6 +130,19 @@ class Workflow {
     s->objects_after = pieces_.CountLabels();
     separated_ = pieces_.set;
     return absl::OkStatus();
+  }
+
+  // Separation's cells, with the cell of every voxel of the pieces that remain.
+  CellPlanes CellsOfPieces() const {
+    CellPlanes c;
+    c.centroid = cells_.centroid;
+    c.normal = cells_.normal;
+    c.thickest = cells_.thickest;
+    c.cell_of_voxel.reserve(pieces_.set.size());
+    pieces_.set.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+      c.cell_of_voxel.push_back(cells_.cell_of_voxel[separated_.Find(x, y, z)]);
+    });
+    return c;
   }
 
   // Where each voxel of the input went (the model is final and labelled).
@@ -187,9 +201,15 @@ class Workflow {
     s->objects_before = pieces_.CountLabels();
     s->voxels_before = pieces_.set.size();
     if (s->ran) {
-      SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Regrow(pieces_, Following(o_.recover_extend, o_.separation), refined_,
-                                 progress_.Stage("recover")));
+      const ExtendOptions e = Following(o_.recover_extend, o_.separation);
+      // Separation's cells serve when they have recovery's radius: the pieces are made of
+      // whole cells of them.
+      const bool reuse = o_.separate && e.scvd_radius_voxels == o_.separation.radius_voxels &&
+                         e.seed == o_.separation.seed;
+      CellPlanes known;
+      if (reuse) known = CellsOfPieces();
+      SM_ASSIGN_OR_RETURN(ExtendResult ext, Regrow(pieces_, e, refined_, reuse ? &known : nullptr,
+                                                   progress_.Stage("recover")));
       s->rounds = ext.rounds;
       s->added = ext.added;
       pieces_ = std::move(ext.patch);
@@ -239,6 +259,7 @@ class Workflow {
   LabelledVoxels objects_;
   LabelledVoxels pieces_;
   VoxelSet separated_;  // the pieces as separation left them
+  CellPlanes cells_;    // separation's cells over them
   ExtractionResult out_;
 };
 

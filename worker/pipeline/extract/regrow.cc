@@ -21,35 +21,43 @@ struct Plane {
 
 constexpr uint32_t kUnclaimed = UINT32_MAX;
 
-// One plane per cell of the patch's SCVD.
-absl::StatusOr<std::vector<Plane>> CellPlanes(const LabelledVoxels& patch,
-                                              const SheetAnalysis& sheet, const ExtendOptions& o,
-                                              std::vector<uint32_t>* cell,
-                                              const Progress& progress) {
+// The cells of the patch's own SCVD.
+absl::StatusOr<CellPlanes> BuildCellPlanes(const SheetAnalysis& sheet, const ExtendOptions& o,
+                                           const Progress& progress) {
   SM_ASSIGN_OR_RETURN(PatchNormals pn, ComputePatchNormals(sheet, o, progress));
   Scvd& scvd = *pn.scvd;
-  const std::vector<Vec3>& normal = pn.normal;
-  std::vector<uint16_t> thickest(scvd.num_generators(), 0);
+  CellPlanes c;
+  c.thickest.assign(scvd.num_generators(), 0);
   for (size_t v = 0; v < scvd.cell.size(); ++v) {
-    const uint32_t c = scvd.cell[v];
-    if (c < thickest.size()) thickest[c] = std::max(thickest[c], sheet.thickness[v]);
+    const uint32_t g = scvd.cell[v];
+    if (g < c.thickest.size()) c.thickest[g] = std::max(c.thickest[g], sheet.thickness[v]);
   }
-  std::vector<Plane> planes(scvd.num_generators());
+  c.centroid = std::move(scvd.centroid);
+  c.normal = std::move(pn.normal);
+  c.cell_of_voxel = std::move(scvd.cell);
+  return c;
+}
+
+// One plane per cell, labelled like the patch's voxels in it.
+std::vector<Plane> PlanesOf(const LabelledVoxels& patch, const CellPlanes& c, double t) {
+  std::vector<Plane> planes(c.centroid.size());
   for (uint32_t g = 0; g < planes.size(); ++g) {
-    planes[g].point = scvd.centroid[g];
-    planes[g].normal = normal[g];
-    planes[g].half_thickness =
-        static_cast<float>(std::max(o.half_thickness_voxels, 0.5 * thickest[g] + 0.5));
-    planes[g].label = patch.label[scvd.generator_voxel[g]];
+    planes[g].point = c.centroid[g];
+    planes[g].normal = c.normal[g];
+    planes[g].half_thickness = static_cast<float>(std::max(t, 0.5 * c.thickest[g] + 0.5));
   }
-  *cell = std::move(scvd.cell);
+  for (size_t i = 0; i < patch.label.size(); ++i) {
+    const uint32_t g = c.cell_of_voxel[i];
+    if (g < planes.size()) planes[g].label = patch.label[i];
+  }
   return planes;
 }
 
 }  // namespace
 
 absl::StatusOr<ExtendResult> Regrow(const LabelledVoxels& patch, const ExtendOptions& o,
-                                    const VoxelSet& within, const Progress& progress) {
+                                    const VoxelSet& within, const CellPlanes* known,
+                                    const Progress& progress) {
   if (!(o.half_thickness_voxels > 0) || !(o.scvd_radius_voxels > 0)) {
     return absl::InvalidArgumentError(absl::StrCat("recover t = ", o.half_thickness_voxels,
                                                    " and r = ", o.scvd_radius_voxels,
@@ -62,10 +70,16 @@ absl::StatusOr<ExtendResult> Regrow(const LabelledVoxels& patch, const ExtendOpt
   out.patch = patch;
   const VoxelSet open = Difference(within, patch.set);  // what may be claimed
   if (patch.set.empty() || open.empty()) return out;
-  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
-  std::vector<uint32_t> cell;
-  SM_ASSIGN_OR_RETURN(std::vector<Plane> planes,
-                      CellPlanes(patch, sheet, o, &cell, progress.Sub(0.2, 0.8)));
+  CellPlanes own;
+  if (known == nullptr) {
+    SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
+    SM_ASSIGN_OR_RETURN(own, BuildCellPlanes(sheet, o, progress.Sub(0.2, 0.8)));
+    known = &own;
+  } else if (known->cell_of_voxel.size() != patch.set.size()) {
+    return absl::InternalError("recover: the cells given do not cover the patch");
+  }
+  const std::vector<Plane> planes = PlanesOf(patch, *known, o.half_thickness_voxels);
+  const std::vector<uint32_t>& cell = known->cell_of_voxel;
   const Dims& d = patch.set.dims();
   auto key = [&](int64_t x, int64_t y, int64_t z) {
     return static_cast<uint64_t>((z * d.ny + y) * d.nx + x);

@@ -14,6 +14,7 @@
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
+#include "worker/pipeline/extract/cell_planes.h"
 #include "worker/pipeline/extract/extend.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
 
@@ -24,8 +25,11 @@ namespace sheetmesh {
 // the rounds (0: until nothing is added); radius_voxels is unused (the front moves a voxel
 // per round). The result's rounds counts the rounds that added voxels.
 // kInvalidArgument for t or r not positive or other dims; kCancelled if asked.
+// With `known` (cells of an SCVD already built over a set the patch is made of whole cells
+// of, as separation's), no SCVD is built: those cells give the planes.
 absl::StatusOr<ExtendResult> Regrow(const LabelledVoxels& patch, const ExtendOptions& options,
-                                    const VoxelSet& within, const Progress& progress = {});
+                                    const VoxelSet& within, const CellPlanes* known = nullptr,
+                                    const Progress& progress = {});
 
 }  // namespace sheetmesh
 

@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
 
@@ -183,6 +184,19 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
     if (keep[v]) out.pieces.label.push_back(piece[scvd.cell[v]]);
   }
   out.removed_voxels = sheet.set.size() - out.pieces.set.size();
+  // The cells, for recovery to grow from without building another SCVD. (Normals from the
+  // kept cells' triangles alone were tried: they lost voxels and similarity on the presets.)
+  out.cells.normal = VertexNormals(pos, tri.faces);
+  out.cells.thickest.assign(scvd.num_generators(), 0);
+  out.cells.cell_of_voxel.reserve(out.pieces.set.size());
+  for (size_t v = 0; v < keep.size(); ++v) {
+    const uint32_t c = scvd.cell[v];
+    if (c < out.cells.thickest.size()) {
+      out.cells.thickest[c] = std::max(out.cells.thickest[c], sheet.thickness[v]);
+    }
+    if (keep[v]) out.cells.cell_of_voxel.push_back(c);
+  }
+  out.cells.centroid = std::move(scvd.centroid);
   out.pieces.RelabelBySize();
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return out;

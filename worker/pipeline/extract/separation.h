@@ -11,6 +11,7 @@
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
+#include "worker/pipeline/extract/cell_planes.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
 
@@ -36,6 +37,7 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
 
 struct SeparationResult {
   LabelledVoxels pieces;        // one label per flood, largest first
+  CellPlanes cells;             // the SCVD's cells, cell_of_voxel per voxel of pieces
   uint64_t removed_voxels = 0;  // voxels of non-flat cells
   uint32_t generators = 0;
   uint32_t nonflat_generators = 0;

@@ -10,11 +10,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/extract/scvd_of_set.h"
 #include "worker/pipeline/mesh/vertex_normals.h"
-#include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/scvd/rim_classifier.h"
-#include "worker/pipeline/scvd/scvd.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
 
 namespace sheetmesh {
 namespace {
@@ -31,13 +29,17 @@ struct Claim {
 };
 
 // One round: the claims of every rim generator's cylinder.
+// The SCVD it was built on is moved to *built when that is not null.
 absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const ExtendOptions& o,
-                                         const VoxelSet* within, const Progress& progress) {
+                                         const VoxelSet* within, const Progress& progress,
+                                         ScvdOfSet* built) {
   const Dims& d = patch.set.dims();
-  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
-  SM_ASSIGN_OR_RETURN(PatchNormals pn, ComputePatchNormals(sheet, o, progress.Sub(0.2, 0.6)));
-  const Scvd& scvd = *pn.scvd;
-  const std::vector<Vec3>& normal = pn.normal;
+  SM_ASSIGN_OR_RETURN(
+      ScvdOfSet s, BuildScvdOfSet(patch.set, o.scvd_radius_voxels, o.seed, progress.Sub(0, 0.6)));
+  const SheetAnalysis& sheet = s.sheet;
+  const Scvd& scvd = s.scvd;
+  // Formula 4's n: the normalised mean of the generator's triangles' normals.
+  const std::vector<Vec3> normal = VertexNormals(s.positions, s.faces);
   // Cells on the rim (the outer edge or a hole's): the only ones whose cylinder can reach
   // beyond the patch in its plane.
   std::vector<uint8_t> rim_cell(scvd.num_generators(), 0);
@@ -87,6 +89,7 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   claims.erase(std::unique(claims.begin(), claims.end(),
                            [](const Claim& a, const Claim& b) { return a.key == b.key; }),
                claims.end());
+  if (built != nullptr) *built = std::move(s);
   return claims;
 }
 
@@ -121,27 +124,9 @@ LabelledVoxels Merge(const LabelledVoxels& patch, const std::vector<Claim>& clai
 
 }  // namespace
 
-absl::StatusOr<PatchNormals> ComputePatchNormals(const SheetAnalysis& sheet, const ExtendOptions& o,
-                                                 const Progress& progress) {
-  ScvdOptions so;
-  so.radius_voxels = o.scvd_radius_voxels;
-  so.seed = o.seed;
-  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                           sheet.thickness_stats.mean, so, progress));
-  std::vector<Vec3> pos(scvd.num_generators());
-  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
-  DualTriangleOptions to;
-  to.rim = false;
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
-                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to));
-  PatchNormals out;
-  out.normal = VertexNormals(pos, tri.faces);
-  out.scvd = std::make_unique<Scvd>(std::move(scvd));
-  return out;
-}
-
 absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
-                                    const VoxelSet* within, const Progress& progress) {
+                                    const VoxelSet* within, const Progress& progress,
+                                    ScvdOfSet* first_round) {
   if (!(options.half_thickness_voxels > 0) || !(options.radius_voxels > 0) ||
       !(options.scvd_radius_voxels > 0)) {
     return absl::InvalidArgumentError(
@@ -157,7 +142,8 @@ absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOpt
   for (int round = 0; round < options.max_rounds; ++round) {
     const Progress p =
         progress.Sub(double(round) / options.max_rounds, double(round + 1) / options.max_rounds);
-    SM_ASSIGN_OR_RETURN(std::vector<Claim> claims, Round(out.patch, options, within, p));
+    SM_ASSIGN_OR_RETURN(std::vector<Claim> claims,
+                        Round(out.patch, options, within, p, round == 0 ? first_round : nullptr));
     if (claims.empty()) break;
     out.added += claims.size();
     ++out.rounds;

@@ -5,12 +5,9 @@
 #define SHEETMESH_WORKER_PIPELINE_EXTRACT_EXTEND_H_
 
 #include <cstdint>
-#include <memory>
-#include <vector>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
-#include "common/types.h"
 #include "worker/pipeline/voxel/labelled_voxels.h"
 
 namespace sheetmesh {
@@ -30,18 +27,7 @@ struct ExtendResult {
   int rounds = 0;  // rounds that added something
 };
 
-struct Scvd;
-struct SheetAnalysis;
-
-// Formula 4's normals: the SCVD of a patch (r and seed from `options`) and, per generator,
-// the normalised mean normal of its dual triangles (zero for a generator with none).
-struct PatchNormals {
-  std::unique_ptr<Scvd> scvd;
-  std::vector<Vec3> normal;
-};
-absl::StatusOr<PatchNormals> ComputePatchNormals(const SheetAnalysis& sheet,
-                                                 const ExtendOptions& options,
-                                                 const Progress& progress = {});
+struct ScvdOfSet;  // scvd_of_set.h
 
 // Extends `patch`. Detection mode when `within` is null: empty space may be added, so
 // fragments lying in one plane bridge (Fig. 6). Recovery mode otherwise: only voxels of
@@ -49,9 +35,11 @@ absl::StatusOr<PatchNormals> ComputePatchNormals(const SheetAnalysis& sheet,
 // to the one whose plane it is nearest. Only cells on the patch's rim extend: elsewhere
 // the cylinder lies inside the patch. kInvalidArgument for t, R or r not positive or a
 // `within` of other dims; kCancelled if asked.
+// With `first_round`, the SCVD the first round was built on is left there (when the patch
+// is not empty), for a later step with the same radius and seed.
 absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
-                                    const VoxelSet* within = nullptr,
-                                    const Progress& progress = {});
+                                    const VoxelSet* within = nullptr, const Progress& progress = {},
+                                    ScvdOfSet* first_round = nullptr);
 
 }  // namespace sheetmesh
 

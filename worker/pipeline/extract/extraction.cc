@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/extract/regrow.h"
+#include "worker/pipeline/extract/scvd_of_set.h"
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/voxel/components.h"
 #include "worker/pipeline/voxel/morphology.h"
@@ -86,9 +88,15 @@ class Workflow {
     objects_ = LabelByComponents(refined_, refined_components);
     s->objects_before = refined_components.count();
     if (s->ran) {
+      const ExtendOptions e = Following(o_.detect_extend, o_.separation);
+      // Separation may flood detection's SCVD when it has the same radius and seed: the
+      // major objects are whole components, so whole cells of it.
+      const bool share = o_.separate && e.scvd_radius_voxels == o_.separation.radius_voxels &&
+                         e.seed == o_.separation.seed;
+      if (share) detected_ = std::make_unique<ScvdOfSet>();
       SM_ASSIGN_OR_RETURN(ExtendResult ext,
-                          Extend(objects_, Following(o_.detect_extend, o_.separation), nullptr,
-                                 progress_.Stage("detect")));
+                          Extend(objects_, e, nullptr, progress_.Stage("detect"), detected_.get()));
+      if (detected_ && detected_->scvd.num_generators() == 0) detected_.reset();
       SM_ASSIGN_OR_RETURN(Components merged, LabelComponents(ext.patch.set, Connectivity::k6));
       const std::vector<uint32_t> object_of = merged.VoxelLabels(ext.patch.set);
       std::map<uint32_t, uint64_t> original;
@@ -119,8 +127,22 @@ class Workflow {
     pieces_ = objects_;
     s->objects_before = objects_.CountLabels();
     if (s->ran) {
-      SM_ASSIGN_OR_RETURN(SeparationResult sep, sheetmesh::Separate(objects_.set, o_.separation,
-                                                                    progress_.Stage("separate")));
+      SeparationResult sep;
+      if (detected_) {
+        // The cells of major objects (a cell lies in one component, so its generator tells).
+        const Scvd& scvd = detected_->scvd;
+        std::vector<uint8_t> major(scvd.num_generators(), 0);
+        for (uint32_t g = 0; g < major.size(); ++g) {
+          const Index3& z = scvd.generators[g];
+          major[g] = objects_.set.Contains(z.x, z.y, z.z);
+        }
+        SM_ASSIGN_OR_RETURN(
+            sep, SeparateOver(*detected_, major, o_.separation, progress_.Stage("separate")));
+        detected_.reset();
+      } else {
+        SM_ASSIGN_OR_RETURN(
+            sep, sheetmesh::Separate(objects_.set, o_.separation, progress_.Stage("separate")));
+      }
       pieces_ = std::move(sep.pieces);
       cells_ = std::move(sep.cells);
       Count(objects_.set, pieces_.set, s);
@@ -258,8 +280,9 @@ class Workflow {
   VoxelSet refined_;
   LabelledVoxels objects_;
   LabelledVoxels pieces_;
-  VoxelSet separated_;  // the pieces as separation left them
-  CellPlanes cells_;    // separation's cells over them
+  VoxelSet separated_;                   // the pieces as separation left them
+  CellPlanes cells_;                     // separation's cells over them
+  std::unique_ptr<ScvdOfSet> detected_;  // detection's SCVD, for separation
   ExtractionResult out_;
 };
 

@@ -6,8 +6,8 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
-#include "worker/pipeline/scvd/scvd.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/extract/scvd_of_set.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
 
 namespace sheetmesh {
 namespace {
@@ -22,19 +22,18 @@ struct Plane {
 constexpr uint32_t kUnclaimed = UINT32_MAX;
 
 // The cells of the patch's own SCVD.
-absl::StatusOr<CellPlanes> BuildCellPlanes(const SheetAnalysis& sheet, const ExtendOptions& o,
+absl::StatusOr<CellPlanes> BuildCellPlanes(const VoxelSet& set, const ExtendOptions& o,
                                            const Progress& progress) {
-  SM_ASSIGN_OR_RETURN(PatchNormals pn, ComputePatchNormals(sheet, o, progress));
-  Scvd& scvd = *pn.scvd;
+  SM_ASSIGN_OR_RETURN(ScvdOfSet s, BuildScvdOfSet(set, o.scvd_radius_voxels, o.seed, progress));
   CellPlanes c;
-  c.thickest.assign(scvd.num_generators(), 0);
-  for (size_t v = 0; v < scvd.cell.size(); ++v) {
-    const uint32_t g = scvd.cell[v];
-    if (g < c.thickest.size()) c.thickest[g] = std::max(c.thickest[g], sheet.thickness[v]);
+  c.thickest.assign(s.scvd.num_generators(), 0);
+  for (size_t v = 0; v < s.scvd.cell.size(); ++v) {
+    const uint32_t g = s.scvd.cell[v];
+    if (g < c.thickest.size()) c.thickest[g] = std::max(c.thickest[g], s.sheet.thickness[v]);
   }
-  c.centroid = std::move(scvd.centroid);
-  c.normal = std::move(pn.normal);
-  c.cell_of_voxel = std::move(scvd.cell);
+  c.normal = VertexNormals(s.positions, s.faces);
+  c.centroid = std::move(s.scvd.centroid);
+  c.cell_of_voxel = std::move(s.scvd.cell);
   return c;
 }
 
@@ -72,8 +71,7 @@ absl::StatusOr<ExtendResult> Regrow(const LabelledVoxels& patch, const ExtendOpt
   if (patch.set.empty() || open.empty()) return out;
   CellPlanes own;
   if (known == nullptr) {
-    SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(patch.set, progress.Sub(0, 0.2)));
-    SM_ASSIGN_OR_RETURN(own, BuildCellPlanes(sheet, o, progress.Sub(0.2, 0.8)));
+    SM_ASSIGN_OR_RETURN(own, BuildCellPlanes(patch.set, o, progress.Sub(0, 0.8)));
     known = &own;
   } else if (known->cell_of_voxel.size() != patch.set.size()) {
     return absl::InternalError("recover: the cells given do not cover the patch");

@@ -7,10 +7,9 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/extract/scvd_of_set.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/mesh/vertex_normals.h"
-#include "worker/pipeline/scvd/dual_triangles.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
 
 namespace sheetmesh {
 
@@ -82,41 +81,54 @@ double Planarity(const std::vector<Vec3>& pos, const std::vector<uint32_t>& ids)
   return l(1) > 0 ? 1.0 - l(0) / l(1) : 1.0;
 }
 
-}  // namespace
-
-absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
-                                          const Progress& progress) {
+absl::Status CheckAngle(const SeparationOptions& options) {
   if (!(options.dihedral_degrees > 0 && options.dihedral_degrees <= 180)) {
     return absl::InvalidArgumentError(absl::StrCat("separation D_ang = ", options.dihedral_degrees,
                                                    " degrees must be in (0, 180]"));
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,
+                                          const Progress& progress) {
+  SM_RETURN_IF_ERROR(CheckAngle(options));
+  SM_ASSIGN_OR_RETURN(
+      ScvdOfSet s, BuildScvdOfSet(set, options.radius_voxels, options.seed, progress.Sub(0, 0.9)));
+  return SeparateOver(s, {}, options, progress.Sub(0.9, 1.0));
+}
+
+absl::StatusOr<SeparationResult> SeparateOver(const ScvdOfSet& s,
+                                              std::span<const uint8_t> cell_in_set,
+                                              const SeparationOptions& options,
+                                              const Progress& progress) {
+  SM_RETURN_IF_ERROR(CheckAngle(options));
+  const SheetAnalysis& sheet = s.sheet;
+  const Scvd& scvd = s.scvd;
+  const std::vector<Vec3>& pos = s.positions;
+  auto in_set = [&](uint32_t g) { return cell_in_set.empty() || cell_in_set[g] != 0; };
+  std::vector<Face> faces;
+  for (const Face& f : s.faces) {
+    if (in_set(f[0]) && in_set(f[1]) && in_set(f[2])) faces.push_back(f);
+  }
   SeparationResult out;
-  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeSheet(set, progress.Sub(0, 0.2)));
-  ScvdOptions so;
-  so.radius_voxels = options.radius_voxels;
-  so.seed = options.seed;
-  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                           sheet.thickness_stats.mean, so, progress.Sub(0.2, 0.7)));
-  std::vector<Vec3> pos(scvd.num_generators());
-  for (uint32_t g = 0; g < pos.size(); ++g) pos[g] = Vec3::Of(scvd.generators[g]);
-  // Triangles folding back onto each other (below the selection's fold angle, 50° by
-  // default) are noise of the discrete diagram, not crossings; crossings meet at wider
-  // angles and survive the selection to fail Algorithm 2's test.
-  DualTriangleOptions to;
-  to.rim = false;
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
-                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, pos, to,
-                                      progress.Sub(0.7, 0.9)));
-  const std::vector<uint8_t> flat = FlatVertices(pos, tri.faces, options.dihedral_degrees);
+  std::vector<uint8_t> flat = FlatVertices(pos, faces, options.dihedral_degrees);
+  for (uint32_t g = 0; g < flat.size(); ++g) {
+    if (!in_set(g)) flat[g] = 0;  // outside the set: never flooded, never kept
+  }
   std::vector<std::vector<uint32_t>> adj(scvd.num_generators());
-  for (const Face& f : tri.faces) {
+  for (const Face& f : faces) {
     for (int k = 0; k < 3; ++k) {
       adj[f[k]].push_back(f[(k + 1) % 3]);
       adj[f[(k + 1) % 3]].push_back(f[k]);
     }
   }
-  out.generators = scvd.num_generators();
-  for (uint8_t f : flat) out.nonflat_generators += f == 0;
+  for (uint32_t g = 0; g < flat.size(); ++g) {
+    if (!in_set(g)) continue;
+    ++out.generators;
+    out.nonflat_generators += flat[g] == 0;
+  }
 
   // Algorithm 2: flood over flat, unmarked generators through mesh edges.
   std::vector<int32_t> piece(scvd.num_generators(), -1);
@@ -183,10 +195,13 @@ absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationO
   for (size_t v = 0; v < keep.size(); ++v) {
     if (keep[v]) out.pieces.label.push_back(piece[scvd.cell[v]]);
   }
-  out.removed_voxels = sheet.set.size() - out.pieces.set.size();
+  uint64_t set_voxels = 0;
+  for (size_t v = 0; v < keep.size(); ++v)
+    set_voxels += scvd.cell[v] < flat.size() && in_set(scvd.cell[v]);
+  out.removed_voxels = set_voxels - out.pieces.set.size();
   // The cells, for recovery to grow from without building another SCVD. (Normals from the
   // kept cells' triangles alone were tried: they lost voxels and similarity on the presets.)
-  out.cells.normal = VertexNormals(pos, tri.faces);
+  out.cells.normal = VertexNormals(pos, faces);
   out.cells.thickest.assign(scvd.num_generators(), 0);
   out.cells.cell_of_voxel.reserve(out.pieces.set.size());
   for (size_t v = 0; v < keep.size(); ++v) {

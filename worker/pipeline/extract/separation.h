@@ -43,6 +43,16 @@ struct SeparationResult {
   uint32_t nonflat_generators = 0;
 };
 
+struct ScvdOfSet;  // scvd_of_set.h
+
+// Algorithm 2 over an SCVD already built, restricted to the cells flagged in `cell_in_set`
+// (per generator; empty: all): the others are neither flooded nor kept, and their
+// triangles do not count. The set must be made of whole cells (its components are).
+absl::StatusOr<SeparationResult> SeparateOver(const ScvdOfSet& scvd,
+                                              std::span<const uint8_t> cell_in_set,
+                                              const SeparationOptions& options,
+                                              const Progress& progress = {});
+
 // Separates `set`. kInvalidArgument for r <= 0 or D_ang outside (0, 180]; errors of the
 // SCVD pass through; kCancelled if asked.
 absl::StatusOr<SeparationResult> Separate(const VoxelSet& set, const SeparationOptions& options,

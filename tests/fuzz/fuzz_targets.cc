@@ -58,17 +58,11 @@ absl::string_view Bytes(const uint8_t* data, size_t size) {
 
 }  // namespace
 
-void FuzzTiffFile(const uint8_t* data, size_t size) {
-  OpenAndRead(Bytes(data, size), ".tif", {});
-}
+void FuzzTiffFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".tif", {}); }
 
-void FuzzNrrdFile(const uint8_t* data, size_t size) {
-  OpenAndRead(Bytes(data, size), ".nrrd", {});
-}
+void FuzzNrrdFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".nrrd", {}); }
 
-void FuzzVdbFile(const uint8_t* data, size_t size) {
-  OpenAndRead(Bytes(data, size), ".vdb", {});
-}
+void FuzzVdbFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".vdb", {}); }
 
 void FuzzRawFile(const uint8_t* data, size_t size) {
   if (size < 3) return;

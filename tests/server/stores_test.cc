@@ -2,6 +2,7 @@
 // store, references under allowed roots, and the job events watchers wait on.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -10,8 +11,6 @@
 #include "absl/strings/str_cat.h"
 #include "common/file_util.h"
 #include "common/sha256.h"
-#include <sqlite3.h>
-
 #include "server/blob_store.h"
 #include "server/job_events.h"
 #include "server/job_store.h"

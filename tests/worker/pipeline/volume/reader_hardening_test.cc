@@ -53,8 +53,8 @@ TEST(ReaderHardeningTest, TiffHeaderBombsAreRefusedBeforeAllocating) {
       ASSERT_THAT(WriteFileAtomically(path, testing::TiffClaiming(side, side, deflate)), IsOk());
       ASSERT_LT(std::filesystem::file_size(path), 20000u);
       const absl::Status st = OpenAndReadAll(path);
-      EXPECT_THAT(st.code(), AnyOf(absl::StatusCode::kInvalidArgument,
-                                   absl::StatusCode::kResourceExhausted))
+      EXPECT_THAT(st.code(),
+                  AnyOf(absl::StatusCode::kInvalidArgument, absl::StatusCode::kResourceExhausted))
           << "side " << side << (deflate ? " deflate" : "") << ": " << st;
       EXPECT_THAT(std::string(st.message()), AllOf(HasSubstr(path), HasSubstr(absl::StrCat(side))));
     }

@@ -55,11 +55,7 @@ absl::StatusOr<runtime::InspectedVolume> InspectHere(const std::string& path,
                                                      const std::string& parameters) {
   SM_ASSIGN_OR_RETURN(PipelineOptions o, runtime::OptionsFromResolved(parameters, path));
   SM_ASSIGN_OR_RETURN(std::unique_ptr<VolumeSource> source, OpenVolume(path, o.input.open));
-  const VolumeInfo& info = source->info();
-  const Vec3& s = info.placement.spacing;
-  return runtime::InspectedVolume{{info.dims.nx, info.dims.ny, info.dims.nz},
-                                  std::string(DTypeName(info.dtype)),
-                                  {s.x, s.y, s.z}};
+  return runtime::InspectedOf(source->info());
 }
 
 }  // namespace

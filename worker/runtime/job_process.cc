@@ -19,6 +19,7 @@
 #include "absl/strings/str_replace.h"
 #include "common/file_util.h"
 #include "common/json_text.h"
+#include "common/machine.h"
 #include "common/status_macros.h"
 #include "common/subprocess.h"
 #include "worker/pipeline/run/parameters.h"
@@ -84,13 +85,8 @@ int InspectChild(const PipelineOptions& options, const std::string& display,
             {"message", AsClientSees(source.status(), display, volume)}}}});
     return 1;
   }
-  const VolumeInfo& info = (*source)->info();
-  Tell({{"result",
-         {{"code", 0},
-          {"dims", {info.dims.nx, info.dims.ny, info.dims.nz}},
-          {"dtype", std::string(DTypeName(info.dtype))},
-          {"spacing",
-           {info.placement.spacing.x, info.placement.spacing.y, info.placement.spacing.z}}}}});
+  const InspectedVolume v = InspectedOf((*source)->info());
+  Tell({{"result", {{"code", 0}, {"dims", v.dims}, {"dtype", v.dtype}, {"spacing", v.spacing}}}});
   return 0;
 }
 
@@ -206,10 +202,16 @@ absl::Status Died(const ChildExit& exit, const std::string& stage, const JobLimi
 
 }  // namespace
 
+InspectedVolume InspectedOf(const VolumeInfo& info) {
+  const Vec3& s = info.placement.spacing;
+  return {{info.dims.nx, info.dims.ny, info.dims.nz},
+          std::string(DTypeName(info.dtype)),
+          {s.x, s.y, s.z}};
+}
+
 uint64_t DefaultJobMemory() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-  if (pages <= 0 || page <= 0) return uint64_t{8} << 30;
-  return static_cast<uint64_t>(pages) * static_cast<uint64_t>(page) / 4 * 3;
+  const uint64_t bytes = PhysicalMemoryBytes(0);
+  return bytes > 0 ? bytes / 4 * 3 : uint64_t{8} << 30;
 }
 
 absl::StatusOr<std::string> SelfPath() {

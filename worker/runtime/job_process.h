@@ -16,6 +16,10 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 
+namespace sheetmesh {
+struct VolumeInfo;  // volume_source.h
+}  // namespace sheetmesh
+
 namespace sheetmesh::runtime {
 
 // What the child runs.
@@ -59,6 +63,9 @@ struct InspectedVolume {
   std::string dtype;  // "uint8", "uint16", "float32"
   std::array<double, 3> spacing{};
 };
+
+// What `info` says, as InspectedVolume.
+InspectedVolume InspectedOf(const VolumeInfo& info);
 
 // Opens spec.volume_path in a child with `limits` (only the format parameters of
 // spec.parameters matter) and returns what it holds. A reader that crashes or that a hostile

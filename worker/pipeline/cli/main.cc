@@ -20,6 +20,7 @@
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
+#include "common/machine.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/parameter_flags.h"
@@ -280,12 +281,9 @@ absl::Status LimitMemory(double gib) {
     return absl::InvalidArgumentError(
         absl::StrCat("--memory_limit_gb=", gib, ": give a size in GiB, or 0 for no limit"));
   }
-  uint64_t bytes = static_cast<uint64_t>(gib * double(uint64_t{1} << 30));
-  if (gib < 0) {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page <= 0) return absl::OkStatus();
-    bytes = static_cast<uint64_t>(pages) * static_cast<uint64_t>(page) / 4 * 3;
-  }
+  const uint64_t bytes = gib < 0 ? PhysicalMemoryBytes(0) / 4 * 3
+                                 : static_cast<uint64_t>(gib * double(uint64_t{1} << 30));
+  if (bytes == 0) return absl::OkStatus();  // the system did not say
   struct rlimit rl;
   if (::getrlimit(RLIMIT_AS, &rl) != 0) return absl::OkStatus();
   if (rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur <= bytes) return absl::OkStatus();

@@ -154,12 +154,13 @@ class Workflow {
     return absl::OkStatus();
   }
 
-  // Separation's cells, with the cell of every voxel of the pieces that remain.
-  CellPlanes CellsOfPieces() const {
+  // Separation's cells (taken: recovery is their last use), with the cell of every voxel of
+  // the pieces that remain.
+  CellPlanes CellsOfPieces() {
     CellPlanes c;
-    c.centroid = cells_.centroid;
-    c.normal = cells_.normal;
-    c.thickest = cells_.thickest;
+    c.centroid = std::move(cells_.centroid);
+    c.normal = std::move(cells_.normal);
+    c.thickest = std::move(cells_.thickest);
     c.cell_of_voxel.reserve(pieces_.set.size());
     pieces_.set.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
       c.cell_of_voxel.push_back(cells_.cell_of_voxel[separated_.Find(x, y, z)]);

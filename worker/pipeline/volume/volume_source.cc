@@ -7,6 +7,7 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "common/machine.h"
 
 namespace sheetmesh {
 
@@ -102,9 +103,7 @@ absl::Status AsInputError(absl::Status status) {
 
 int64_t MemoryBudget(const VolumeLimits& limits) {
   if (limits.memory_bytes > 0) return limits.memory_bytes;
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-  if (pages <= 0 || page <= 0) return int64_t{4} << 30;
-  return static_cast<int64_t>(pages) * page / 4;
+  return static_cast<int64_t>(PhysicalMemoryBytes(uint64_t{16} << 30) / 4);
 }
 
 absl::Status CheckAllocation(int64_t bytes, const VolumeLimits& limits, absl::string_view what) {

@@ -325,6 +325,32 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input, const Ex
   } else {
     derived.push_back({"M", double(m), "set"});
   }
+  // Detection's cylinder follows the cells: from a rim cell's centroid it must reach past
+  // the rim to bridge a gap, and a cell's centroid lies about r inside it.
+  const double r_sep = scaled.separation.radius_voxels;
+  ExtendOptions& detect = scaled.detect_extend;
+  const bool t_set = detect.half_thickness_voxels > 0, cap_set = detect.radius_voxels > 0;
+  if (!cap_set) {
+    detect.radius_voxels =
+        std::max(kDetectRadiusPerRadius * r_sep, t_set ? detect.half_thickness_voxels : 0.0);
+  }
+  if (!t_set) {
+    detect.half_thickness_voxels =
+        std::min(kDetectHalfThicknessPerRadius * r_sep, detect.radius_voxels);
+  }
+  derived.push_back({"detect.t", detect.half_thickness_voxels,
+                     t_set ? "set" : "0.3 r with r = separate.r (1.5 at the paper's r = 5)"});
+  derived.push_back({"detect.R", detect.radius_voxels,
+                     cap_set ? "set" : "1.4 r with r = separate.r (7 at the paper's r = 5)"});
+  for (const auto& [key, radius] : {std::pair{"refine.close_radius", o.refine_close_radius},
+                                    std::pair{"refine.open_radius", o.refine_open_radius}}) {
+    derived.push_back({key, double(radius),
+                       "as given, not scaled (0: none; a closing adds voxels the image does not "
+                       "have, an opening erases sheets thinner than twice its radius)"});
+  }
+  derived.push_back({"recover.t", o.recover_extend.half_thickness_voxels,
+                     "set: the least half-thickness; each cell's plane takes max(t, half its "
+                     "thickest run + 0.5), the local thickness"});
   SM_ASSIGN_OR_RETURN(ExtractionResult r, Workflow(input, scaled, progress, m).Run());
   r.derived = std::move(derived);
   return r;

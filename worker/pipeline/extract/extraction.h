@@ -19,12 +19,15 @@ namespace sheetmesh {
 
 struct ExtractionOptions {
   bool refine = true;           // 1. closing then opening (§2.2.1's refinement by t)
-  int refine_close_radius = 1;  //    closing radius, voxels (0: none)
+  int refine_close_radius = 0;  //    closing radius, voxels (0: none; a closing adds voxels
+                                //    the image does not have, and at any thickness measured
+                                //    it lowered the similarity against the raw phase)
   int refine_open_radius = 0;   //    opening radius, voxels (0: none; it would erase
                                 //    sheets thinner than twice the radius)
   bool detect = true;           // 2. extend (detection mode); objects = components
-  ExtendOptions detect_extend = {1.5, 7.0, 1, 0.0, 1};  // t, R, rounds, r, seed (r 0:
-                                                        // separation.radius_voxels)
+  ExtendOptions detect_extend = {0.0, 0.0, 1, 0.0, 1};  // t, R, rounds, r, seed; 0: from
+                                                        // separation.radius_voxels (t 0.3 r,
+                                                        // R 1.4 r: 1.5 and 7 at r = 5)
   uint64_t min_object_voxels = 0;        // M: an object (detect) or piece (remove minor) with
                                          // fewer voxels goes; 0 = three cells of the separation
                                          // SCVD, 3 t̄ (1 + 2 r (r - 1)): too small for a triangle
@@ -73,13 +76,17 @@ struct ExtractionRetention {
 // A length the workflow used, and where it came from: "set" (the user's value) or the
 // rule that derived it from the measured thickness.
 struct DerivedValue {
-  std::string key;  // the parameter's key: separate.r, M
+  std::string key;  // the parameter's key: separate.r, M, detect.t, ...
   double value = 0;
   std::string from;
 };
 
 // separate.r left at 0 is max(this, t̄ / 2).
 inline constexpr double kSeparationRadiusFloor = 5.0;
+// detect.t and detect.R left at 0 are these multiples of separate.r (the paper's 1.5 and 7
+// at r = 5), so the cylinder reaches past a cell's rim whatever the cell's size.
+inline constexpr double kDetectHalfThicknessPerRadius = 0.3;
+inline constexpr double kDetectRadiusPerRadius = 1.4;
 
 // What the workflow did, for the report.
 struct ExtractionSummary {

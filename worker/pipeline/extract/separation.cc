@@ -2,7 +2,9 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <map>
+#include <numbers>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
@@ -13,8 +15,50 @@
 
 namespace sheetmesh {
 
+namespace {
+
+// The eigenvalues, ascending, of the covariance of the positions `ids`.
+Eigen::Vector3d CovarianceEigenvalues(std::span<const Vec3> pos, const std::vector<uint32_t>& ids) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (uint32_t z : ids) mean += Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z);
+  mean /= double(ids.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (uint32_t z : ids) {
+    const Eigen::Vector3d d = Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z) - mean;
+    cov += d * d.transpose();
+  }
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+}
+
+// sqrt(λ_min / λ_mid) of the covariance of the positions: 0 for points on a plane, about
+// tan(φ / 2) for two half-planes folded by φ.
+double FoldOfFit(std::span<const Vec3> pos, const std::vector<uint32_t>& ids) {
+  if (ids.size() < 4) return 0.0;
+  const Eigen::Vector3d l = CovarianceEigenvalues(pos, ids);
+  return l(1) > 0 ? std::sqrt(std::max(0.0, l(0)) / l(1)) : 0.0;
+}
+
+// The vertices within `rings` edges of `v` (v among them), by breadth-first search.
+std::vector<uint32_t> Neighbourhood(const std::vector<std::vector<uint32_t>>& adj, uint32_t v,
+                                    int rings) {
+  std::vector<uint32_t> out = {v};
+  size_t begin = 0;
+  for (int k = 0; k < rings; ++k) {
+    const size_t end = out.size();
+    for (size_t i = begin; i < end; ++i) {
+      for (uint32_t u : adj[out[i]]) {
+        if (std::find(out.begin(), out.end(), u) == out.end()) out.push_back(u);
+      }
+    }
+    begin = end;
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<const Face> faces,
-                                  double dihedral_degrees) {
+                                  double dihedral_degrees, int fit_rings) {
   std::vector<uint8_t> flat(positions.size(), 1);
   absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
   auto key = [](uint32_t a, uint32_t b) {
@@ -23,9 +67,10 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
   for (uint32_t f = 0; f < faces.size(); ++f) {
     for (int k = 0; k < 3; ++k) edge_faces[key(faces[f][k], faces[f][(k + 1) % 3])].push_back(f);
   }
+  std::vector<uint8_t> folded(positions.size(), 0);  // at a fold or an edge of 3+ triangles
   for (const auto& [k, fs] : edge_faces) {
     const uint32_t p = static_cast<uint32_t>(k >> 32), q = static_cast<uint32_t>(k);
-    bool bent = fs.size() >= 3;  // a crossing
+    bool bent = fs.size() >= 3;  // a crossing, or cells stacked across a thick sheet
     for (size_t i = 0; i < fs.size() && !bent; ++i) {
       for (size_t j = i + 1; j < fs.size() && !bent; ++j) {
         auto third = [&](const Face& f) {
@@ -35,7 +80,23 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
                                     positions[third(faces[fs[j]])]) < dihedral_degrees;
       }
     }
-    if (bent) flat[p] = flat[q] = 0;
+    if (bent) folded[p] = folded[q] = 1;
+  }
+  if (fit_rings <= 0) {
+    for (size_t v = 0; v < flat.size(); ++v) flat[v] &= !folded[v];
+    return flat;
+  }
+  std::vector<std::vector<uint32_t>> adj(positions.size());
+  for (const auto& [k, fs] : edge_faces) {
+    const uint32_t p = static_cast<uint32_t>(k >> 32), q = static_cast<uint32_t>(k);
+    adj[p].push_back(q);
+    adj[q].push_back(p);
+  }
+  const double most = std::tan((180.0 - dihedral_degrees) / 2 * std::numbers::pi / 180);
+  for (uint32_t v = 0; v < flat.size(); ++v) {
+    if (folded[v] && flat[v] && FoldOfFit(positions, Neighbourhood(adj, v, fit_rings)) > most) {
+      flat[v] = 0;
+    }
   }
   return flat;
 }
@@ -69,15 +130,7 @@ void Flood(const std::vector<std::vector<uint32_t>>& adj, const std::vector<uint
 // 1 - λ_min / λ_mid of the positions' covariance: near 1 for points on a plane.
 double Planarity(const std::vector<Vec3>& pos, const std::vector<uint32_t>& ids) {
   if (ids.size() < 4) return 1.0;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (uint32_t z : ids) mean += Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z);
-  mean /= double(ids.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (uint32_t z : ids) {
-    const Eigen::Vector3d d = Eigen::Vector3d(pos[z].x, pos[z].y, pos[z].z) - mean;
-    cov += d * d.transpose();
-  }
-  const Eigen::Vector3d l = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+  const Eigen::Vector3d l = CovarianceEigenvalues(pos, ids);
   return l(1) > 0 ? 1.0 - l(0) / l(1) : 1.0;
 }
 
@@ -113,7 +166,7 @@ absl::StatusOr<SeparationResult> SeparateOver(const ScvdOfSet& s,
     if (in_set(f[0]) && in_set(f[1]) && in_set(f[2])) faces.push_back(f);
   }
   SeparationResult out;
-  std::vector<uint8_t> flat = FlatVertices(pos, faces, options.dihedral_degrees);
+  std::vector<uint8_t> flat = FlatVertices(pos, faces, options.dihedral_degrees, options.fit_rings);
   for (uint32_t g = 0; g < flat.size(); ++g) {
     if (!in_set(g)) flat[g] = 0;  // outside the set: never flooded, never kept
   }

@@ -2,6 +2,9 @@
 // A generator is flat when every pair of its triangles that share an edge meets at a
 // dihedral angle of at least D_ang and none of its edges has three or more triangles;
 // pieces are floods over flat generators through mesh edges; voxels of non-flat cells go.
+// Beyond the paper, a fold is also judged at a scale above the roughness: a generator
+// whose triangles fold but whose neighbourhood of `fit_rings` mesh edges lies in one plane
+// (a rough or thick sheet, not a crossing) stays flat.
 #ifndef SHEETMESH_WORKER_PIPELINE_EXTRACT_SEPARATION_H_
 #define SHEETMESH_WORKER_PIPELINE_EXTRACT_SEPARATION_H_
 
@@ -28,12 +31,19 @@ struct SeparationOptions {
                                      // by this many mesh edges, and the ring then rejoins the
                                      // piece of most of its neighbours (0: the paper)
   double planarity_threshold = 0.9;  // pieces below this planarity count as leaked
+  int fit_rings = 2;                 // beyond the paper: a fold between two triangles cuts only
+                                     // when the generators within this many mesh edges do not
+                                     // lie in one plane to within the fold D_ang allows
+                                     // (0: the paper, every fold cuts)
 };
 
 // Flat flags per vertex of `faces` over `positions` (Algorithm 2's test). Vertices with no
-// face are flat.
+// face are flat. With `fit_rings` > 0, a vertex at a fold (not at an edge of three or more
+// triangles) stays flat when the vertices within that many edges of it fit one plane:
+// sqrt(λ_min / λ_mid) of their covariance at most tan((180° - D_ang) / 2), what two
+// half-planes folded at D_ang would give.
 std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<const Face> faces,
-                                  double dihedral_degrees);
+                                  double dihedral_degrees, int fit_rings = 0);
 
 struct SeparationResult {
   LabelledVoxels pieces;        // one label per flood, largest first

@@ -96,17 +96,20 @@ void AddExtendRows(const std::string& step, const std::string& what,
   rows->push_back(Bool(
       step + ".enabled", [enabled](PipelineOptions& o) -> bool& { return o.extraction.*enabled; },
       what));
+  const bool front = step == "recover";  // regrow.h: a front, a voxel per round
   rows->push_back(Number(
       step + ".t", [ref](PipelineOptions& o) -> double& { return ref(o).half_thickness_voxels; },
-      "(0, 100]", "voxels",
-      step == "recover" ? "t of formula 4: the least half-thickness of a cell's plane (each "
-                          "cell takes half its thickest run plus half a voxel when more)"
-                        : "t of formula 4: half-thickness of the extension's flat cylinder"));
-  const bool front = step == "recover";  // regrow.h: a front, a voxel per round
+      front ? "(0, 100]" : "0 | (0, 100]", "voxels",
+      front ? "t of formula 4: the least half-thickness of a cell's plane (each "
+              "cell takes half its thickest run plus half a voxel when more)"
+            : "t of formula 4: half-thickness of the extension's flat cylinder (0: 0.3 "
+              "separate.r, 1.5 at r = 5)"));
   if (!front) {
     rows->push_back(Number(
         step + ".R", [ref](PipelineOptions& o) -> double& { return ref(o).radius_voxels; },
-        "(0, 1000]", "voxels", "R of formula 4: radius of the extension's flat cylinder"));
+        "0 | (0, 1000]", "voxels",
+        "R of formula 4: radius of the extension's flat cylinder (0: 1.4 separate.r, 7 at r "
+        "= 5)"));
   }
   rows->push_back(Integer(
       step + ".rounds", [ref](PipelineOptions& o) -> int& { return ref(o).max_rounds; }, max_rounds,
@@ -129,7 +132,9 @@ std::vector<ParamRow> ExtractionRows() {
   rows.push_back(Bool("refine.enabled", SM_MEMBER(extraction.refine),
                       "refine the phase by a closing and an opening (§2.2.1)"));
   rows.push_back(Integer("refine.close_radius", SM_MEMBER(extraction.refine_close_radius),
-                         "[0, 50]", "voxels", "closing radius (0: none)"));
+                         "[0, 50]", "voxels",
+                         "closing radius (0: none; a closing adds voxels the image does not "
+                         "have, which the similarity against the raw phase counts against it)"));
   rows.push_back(Integer("refine.open_radius", SM_MEMBER(extraction.refine_open_radius), "[0, 50]",
                          "voxels",
                          "opening radius (0: none; it erases sheets thinner than twice it)"));
@@ -148,6 +153,11 @@ std::vector<ParamRow> ExtractionRows() {
                          "[0, 5]", "",
                          "a piece that leaked through a missed cell is flooded again with the "
                          "non-flat set widened by this many mesh edges (0: the paper)"));
+  rows.push_back(Integer("separate.fit_rings", SM_MEMBER(extraction.separation.fit_rings), "[0, 5]",
+                         "",
+                         "a fold of two triangles cuts only where the generators within this "
+                         "many mesh edges do not fit one plane, so a rough or thick sheet is "
+                         "not cut (0: the paper, every fold cuts)"));
   rows.push_back(Bool("remove_minor.enabled", SM_MEMBER(extraction.remove_minor),
                       "remove the pieces with fewer than M voxels"));
   AddExtendRows("recover", "recover the gaps separation cut, extending within the image (Fig. 7)",

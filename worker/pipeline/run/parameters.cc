@@ -44,7 +44,7 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
                   absl::StrCat("must be at most improve.target_degrees = ", im.target_degrees)};
   }
   const ExtendOptions& detect = o.extraction.detect_extend;
-  if (detect.radius_voxels < detect.half_thickness_voxels) {
+  if (detect.radius_voxels > 0 && detect.radius_voxels < detect.half_thickness_voxels) {
     return Broken{"detect.R", absl::StrCat(detect.radius_voxels),
                   absl::StrCat("must be at least detect.t = ", detect.half_thickness_voxels,
                                " (a cylinder wider than it is thick)")};

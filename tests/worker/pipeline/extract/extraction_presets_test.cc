@@ -70,6 +70,20 @@ TEST(ExtractionPresetsTest, ThickRoughSlabStaysOnePieceAndWhole) {
   EXPECT_GE(Kept(p, r), 0.98);
 }
 
+TEST(ExtractionPresetsTest, SeparationJudgesTheSlabsFlatnessAboveItsRoughness) {
+  // At the r extraction uses for this slab (t / 2), its rough walls fold the SCVD's
+  // triangles: the paper's test cuts a good part of it, the fit over two rings nothing.
+  const Preset p = Make("thick_slab");
+  SeparationOptions o;
+  o.radius_voxels =
+      std::max(kSeparationRadiusFloor, SummarizeThickness(*ComputeThickness(p.sheets)).mean / 2);
+  SM_ASSERT_OK_AND_ASSIGN(SeparationResult fitted, Separate(p.sheets, o));
+  EXPECT_LE(fitted.removed_voxels, p.sheets.size() / 100);
+  o.fit_rings = 0;
+  SM_ASSERT_OK_AND_ASSIGN(SeparationResult paper, Separate(p.sheets, o));
+  EXPECT_GE(paper.removed_voxels, p.sheets.size() / 10);
+}
+
 TEST(ExtractionPresetsTest, RoughCrossingNetworkGivesItsFourSheets) {
   const Preset p = Make("rough_network");
   SM_ASSERT_OK_AND_ASSIGN(ExtractionResult r, ExtractFeatures(p.phase, {}));
@@ -153,16 +167,24 @@ TEST(ExtractionPresetsTest, SeparationRadiusFollowsTheThicknessUnlessSet) {
   EXPECT_THAT(Used(r, "separate.r")->from, ::testing::HasSubstr("t = 30"));
   ASSERT_NE(Used(r, "M"), nullptr);
   EXPECT_DOUBLE_EQ(Used(r, "M")->value, 37890.0);
+  // Detection's cylinder follows r: t = 0.3 r = 4.5, R = 1.4 r = 21.
+  EXPECT_DOUBLE_EQ(Used(r, "detect.t")->value, 4.5);
+  EXPECT_DOUBLE_EQ(Used(r, "detect.R")->value, 21.0);
+  EXPECT_THAT(Used(r, "detect.R")->from, ::testing::HasSubstr("separate.r"));
   EXPECT_EQ(r.model.CountLabels(), 1u);
   EXPECT_EQ(r.retention.kept, slab.size());
-  // A user's value is used as given, and said to be.
+  // A user's value is used as given, and said to be; what follows it keeps R >= t.
   o.separation.radius_voxels = 8;
   o.min_object_voxels = 1000;
+  o.detect_extend.half_thickness_voxels = 12;
   SM_ASSERT_OK_AND_ASSIGN(ExtractionResult set, ExtractFeatures(slab, o));
   EXPECT_DOUBLE_EQ(Used(set, "separate.r")->value, 8.0);
   EXPECT_EQ(Used(set, "separate.r")->from, "set");
   EXPECT_DOUBLE_EQ(Used(set, "M")->value, 1000.0);
   EXPECT_EQ(Used(set, "M")->from, "set");
+  EXPECT_DOUBLE_EQ(Used(set, "detect.t")->value, 12.0);
+  EXPECT_EQ(Used(set, "detect.t")->from, "set");
+  EXPECT_DOUBLE_EQ(Used(set, "detect.R")->value, 12.0);  // max(1.4 · 8, t)
 }
 
 TEST(ExtractionPresetsTest, EveryPresetIsKnownAndAnUnknownOneIsNamed) {

@@ -25,6 +25,44 @@ TEST(SeparationTest, FlatnessFollowsAlgorithm2) {
   EXPECT_THAT(FlatVertices(cross_pos, three, 10), ::testing::ElementsAre(0, 0, 1, 1, 1));
 }
 
+// A 9 x 9 grid of unit squares, two triangles each, placed by `at(i, j)`, i, j in [-4, 4].
+template <class At>
+std::pair<std::vector<Vec3>, std::vector<Face>> Grid(At at) {
+  std::vector<Vec3> pos;
+  std::vector<Face> faces;
+  auto id = [](int i, int j) { return static_cast<uint32_t>((i + 4) * 9 + (j + 4)); };
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j) pos.push_back(at(i, j));
+  for (int i = -4; i < 4; ++i) {
+    for (int j = -4; j < 4; ++j) {
+      faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return {pos, faces};
+}
+
+TEST(SeparationTest, ARoughPlaneIsFlatAtTheScaleOfItsRingsButAFoldIsNot) {
+  // Heights alternating by ±0.2 fold neighbouring triangles by about 40°: the paper's test
+  // cuts nearly every vertex; the two-ring fit sees one plane (tan 15° allows 0.27).
+  auto [rough, rough_faces] = Grid([](int i, int j) {
+    return Vec3{double(i), double(j), (i + j) % 2 == 0 ? 0.2 : -0.2};
+  });
+  const std::vector<uint8_t> paper = FlatVertices(rough, rough_faces, 150);
+  EXPECT_GT(std::count(paper.begin(), paper.end(), 0), 60);
+  // (Within two edges of the grid's rim a neighbourhood is too lopsided to tell.)
+  const std::vector<uint8_t> fitted = FlatVertices(rough, rough_faces, 150, 2);
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j) EXPECT_EQ(fitted[(i + 4) * 9 + (j + 4)], 1) << i << ", " << j;
+  // A right-angle fold along i = 0 is a fold at every scale.
+  auto [folded, folded_faces] = Grid([](int i, int j) {
+    return i <= 0 ? Vec3{double(i), double(j), 0} : Vec3{0, double(j), double(i)};
+  });
+  const std::vector<uint8_t> flat = FlatVertices(folded, folded_faces, 150, 2);
+  for (int j = -4; j <= 4; ++j) EXPECT_EQ(flat[(0 + 4) * 9 + (j + 4)], 0) << "j = " << j;
+  EXPECT_EQ(flat[0], 1);  // far from the fold
+}
+
 TEST(SeparationTest, PiercedPlateGivesThreePiecesAsFig4) {
   const Dims d{64, 64, 64};
   const VoxelSet plate = BoxSet(d, {5, 5, 30}, {59, 59, 35});

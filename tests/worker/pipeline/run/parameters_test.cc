@@ -179,7 +179,7 @@ TEST(ParametersTest, ExtractionSettingsOutOfTheirMeaningAreRefused) {
     const char* key;
     const char* value;
   };
-  for (const Case& c : {Case{R"({"detect": {"t": 0}})", "detect.t", "0"},
+  for (const Case& c : {Case{R"({"detect": {"t": -1}})", "detect.t", "-1"},
                         Case{R"({"recover": {"t": -1}})", "recover.t", "-1"},
                         Case{R"({"detect": {"t": 4, "R": 3}})", "detect.R", "3"},
                         Case{R"({"separate": {"D_ang": 60}})", "separate.D_ang", "60"},
@@ -254,7 +254,7 @@ TEST(ParametersTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"input": {"window": [5, 1]}})", "'input.window' = [5.0,1.0] must be [lo, hi]"},
       {R"({"input": {"labels": [1], "window": [0, 2]}})", "exclude each other"},
       {R"({"M": -3})", "'M' = -3"},
-      {R"({"detect": {"R": 0}})", "'detect.R' = 0"},
+      {R"({"detect": {"R": -3}})", "'detect.R' = -3"},
       {R"({"improve": {"passes": -1}})", "'improve.passes' = -1"},
       {R"({"improve": {"insert_below_degrees": 60}})",
        "'improve.insert_below_degrees' = 60 must be at most improve.target_degrees = 50"},

@@ -5,7 +5,14 @@ The peer is marching cubes (scikit-image) on the binary sheet phase, decimated w
 quadric decimation to the triangle count sheetmesh produced; it is a closed surface and is
 scored by the volume it encloses. Both are scored by sheetmesh's own scorer (formula 5).
 
-Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--radii 3,4,5,7,11,15]
+For each volume and triangle budget, sheetmesh's `surface --triangles N` picks r; the mesh
+at that r is timed and scored (formula 5, Dice, Hausdorff); the peer is decimated to the
+same count, timed (marching cubes plus decimation) and scored the same way. Volumes: NETL
+and DPM (../shared/data, skipped when absent), the phantom sample, the extraction presets
+thick_slab and rough_network, and a planar constant-aperture junction built here.
+
+Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--budgets 100,200,...] [--FLAG=VALUE]
+Other --FLAG=VALUE arguments go to sheetmesh's surface runs (e.g. --surface_fit_walls=false).
 Writes bench/out/fidelity.md and prints the table.
 """
 import argparse
@@ -13,6 +20,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 from skimage import measure
@@ -42,10 +50,14 @@ def volumes(cli, out_dir):
         vols.append(("DPM junction", dpm, (100, 100, 100), 255))
     else:
         print("shared data absent: benchmarking the phantoms only", file=sys.stderr)
+    junction = os.path.join(out_dir, "planar_junction_120x120x120_u8.raw")
+    if not os.path.exists(junction):
+        planar_junction().tofile(junction)
+    vols.append(("planar junction", junction, (120, 120, 120), 255))
     for name, args, dims in [
         ("phantom sample", ["--preset=sample"], (128, 112, 96)),
-        ("phantom 192^3", ["--phantom_dims=192x192x192", "--seed=3", "--sheets=4",
-                           "--aperture=5", "--specks=0"], (192, 192, 192)),
+        ("preset thick_slab", ["--preset=thick_slab"], (100, 100, 111)),
+        ("preset rough_network", ["--preset=rough_network"], (160, 160, 160)),
     ]:
         raw = os.path.join(out_dir, "%s_%dx%dx%d_u8.raw" % (name.replace(" ", "_").replace("^", ""), *dims))
         if not os.path.exists(raw):
@@ -54,15 +66,40 @@ def volumes(cli, out_dir):
     return vols
 
 
-def ours(cli, raw, value, r, out_dir):
-    d = os.path.join(out_dir, "ours_r%g" % r)
-    run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--output_formats=ply",
-         "--similarity_hausdorff=false", "--similarity_grid_rates="])
+def planar_junction():
+    """Three planar slabs of constant aperture 4 in a 120^3 box: two crossing at right angles
+    and one ending against them (a T), the kind of sheet a closed surface encloses exactly."""
+    v = np.zeros((120, 120, 120), dtype=np.uint8)  # (z, y, x)
+    v[58:62, 10:110, 10:110] = 255   # z = 58..61
+    v[10:110, 10:110, 58:62] = 255   # x = 58..61
+    v[62:110, 28:32, 60:110] = 255   # y = 28..31, above the first, against the second
+    return v
+
+
+def dims_flag(raw, dims):
+    return [] if "_%dx%dx%d_" % dims in os.path.basename(raw) else ["--dims=%d,%d,%d" % dims]
+
+
+def ours(cli, raw, dims, value, budget, out_dir, extra):
+    """sheetmesh at `budget` triangles: (triangles, S, shell S, Dice, Hausdorff, seconds)."""
+    d = os.path.join(out_dir, "ours_%d" % budget)
+    common = [raw, "--labels=%g" % value, "-o", d, "--output_formats=ply",
+              "--similarity_grid_rates="] + dims_flag(raw, dims) + extra
+    run([cli, "surface", "--triangles=%d" % budget, "--similarity_hausdorff=false"] + common)
+    r = json.load(open(os.path.join(d, "report.json")))["radius_search"]["chosen_r"]
+    start = time.monotonic()
+    run([cli, "surface", "--r=%r" % r, "--similarity_hausdorff=true"] + common)
+    seconds = time.monotonic() - start
     rep = json.load(open(os.path.join(d, "report.json")))
-    return rep["surface"]["triangles"], rep["similarity"]["similarity"], rep["similarity"]["shell_similarity"]
+    sim = rep["similarity"]
+    return (rep["surface"]["triangles"], sim["similarity"], sim["shell_similarity"], sim["dice"],
+            sim.get("hausdorff_voxels"), seconds, r)
 
 
 def peer(cli, raw, dims, value, triangles, out_dir):
+    """Marching cubes decimated to `triangles`: (triangles, S, Dice, Hausdorff, full count,
+    seconds of marching cubes and decimation)."""
+    start = time.monotonic()
     nx, ny, nz = dims
     vol = np.fromfile(raw, dtype=np.uint8).reshape(nz, ny, nx)
     binary = np.pad((vol == value).astype(np.float32), 1)
@@ -80,36 +117,51 @@ def peer(cli, raw, dims, value, triangles, out_dir):
     dec.SetInputData(poly)
     dec.SetTargetReduction(max(0.0, 1.0 - triangles / float(len(faces))))
     dec.Update()
+    seconds = time.monotonic() - start
     path = os.path.join(out_dir, "peer_%d.ply" % triangles)
     w = vtk.vtkPLYWriter()
     w.SetFileName(path)
     w.SetInputData(dec.GetOutput())
     w.Write()
-    s = json.loads(run([cli, "score", raw, path, "--labels=%g" % value, "--closed", "--json",
-                        "--similarity_hausdorff=false"]))
-    return dec.GetOutput().GetNumberOfCells(), s["similarity"], len(faces)
+    s = json.loads(run([cli, "score", raw, path, "--labels=%g" % value, "--closed", "--json"] +
+                       dims_flag(raw, dims)))
+    return (dec.GetOutput().GetNumberOfCells(), s["similarity"], s["dice"],
+            s.get("hausdorff_voxels"), len(faces), seconds)
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("build", nargs="?", default=os.path.join(ROOT, "build"))
-    ap.add_argument("--radii", default="3,4,5,7,11,15")
-    args = ap.parse_args()
+    ap.add_argument("--budgets", default="100,200,500,1000,2000,5000,10000,20000")
+    args, extra = ap.parse_known_args()
     cli = os.path.join(args.build, "worker", "pipeline", "sheetmesh-pipeline")
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
     os.makedirs(out_root, exist_ok=True)
-    radii = [float(r) for r in args.radii.split(",")]
-    lines = ["| volume | r | triangles | sheetmesh (face) | sheetmesh (shell) | peer triangles | peer | ahead |",
-             "|---|---|---|---|---|---|---|---|"]
+    budgets = [int(b) for b in args.budgets.split(",")]
+    lines = ["| volume | budget | triangles (r) | S ours (shell) | S peer | Δ S | shortfall ratio "
+             "| Dice ours / peer | Hausdorff ours / peer | s ours / peer |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, raw, dims, value in volumes(cli, out_root):
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
-        for r in radii:
-            tri, sim, shell = ours(cli, raw, value, r, vdir)
-            ptri, psim, full = peer(cli, raw, dims, value, tri, vdir)
-            best = max(sim, shell)
-            line = "| %s | %g | %d | %.4f | %.4f | %d (of %d) | %.4f | %s |" % (
-                name, r, tri, sim, shell, ptri, full, psim, "yes" if best >= psim else "no")
+        last = None
+        for budget in budgets:
+            try:
+                tri, sim, shell, dice, haus, secs, r = ours(cli, raw, dims, value, budget, vdir, extra)
+            except subprocess.CalledProcessError as e:
+                line = "| %s | %d | refused: %s |" % (name, budget, e.stderr.strip().splitlines()[-1])
+                print(line, flush=True)
+                lines.append(line)
+                continue
+            if tri == last:
+                continue  # the finest mesh r_min allows, reached already
+            last = tri
+            ptri, psim, pdice, phaus, full, psecs = peer(cli, raw, dims, value, tri, vdir)
+            ratio = (1 - sim) / (1 - psim) if psim < 1 else float("inf")
+            line = ("| %s | %d | %d (%.2f) | %.4f (%.4f) | %.4f | %+.4f | %.2f | %.3f / %.3f | "
+                    "%.1f / %.1f | %.2f / %.2f |") % (
+                name, budget, tri, r, sim, shell, psim, sim - psim, ratio, dice, pdice,
+                haus or 0, phaus or 0, secs, psecs)
             print(line, flush=True)
             lines.append(line)
     with open(os.path.join(out_root, "..", "fidelity.md"), "w") as f:

@@ -55,10 +55,17 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   if (r.radius_choice) {
     out << "r search   ";
     for (const RadiusTrial& t : r.radius_choice->trials) {
-      out << absl::StrFormat(" r=%g:%.3f(%d)", t.radius, t.similarity, t.triangles);
+      if (t.scored) {
+        out << absl::StrFormat(" r=%g:%.3f(%d)", t.radius, t.similarity, t.triangles);
+      } else {
+        out << absl::StrFormat(" r=%g:(%d)", t.radius, t.triangles);
+      }
     }
-    out << absl::StrFormat("\n            chose r = %g%s\n", r.radius_choice->radius,
-                           r.radius_choice->target_reached ? "" : " (target not reached: best r)");
+    out << absl::StrFormat(
+        "\n            chose r = %g%s\n", r.radius_choice->radius,
+        r.radius_choice->target_reached
+            ? ""
+            : absl::StrCat(" (target not reached: ", r.radius_choice->message, ")"));
   }
   const SurfaceStats& m = *r.surface;
   out << absl::StrFormat(

@@ -171,23 +171,36 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Number("r", SM_MEMBER(surface.scvd.radius_voxels), "(0, 4096]", "voxels",
                         "SCVD cell radius r of formula 3: the one size parameter"));
   {
-    ParamRow r = Row("target_similarity", ParamType::kNumber, "0 | (0, 1)", "",
-                     "search the largest r whose similarity reaches this (paper: 0.6; 0: no "
-                     "search)");
+    ParamRow r = Row("target_similarity", ParamType::kNumber, "(0, 1)", "",
+                     "search the largest r whose similarity reaches this (paper: 0.6; unset: "
+                     "no search)");
     r.spec.exclusive = "radius search";
     r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
-      const bool on = o.search_radius && o.radius_search.goal == RadiusGoal::kTargetSimilarity;
-      return ParamValue(on ? o.radius_search.target_similarity : 0.0);
+      if (!o.search_radius || o.radius_search.goal != RadiusGoal::kTargetSimilarity) {
+        return std::nullopt;
+      }
+      return ParamValue(o.radius_search.target_similarity);
     };
     r.set = [](const ParamValue& v, PipelineOptions& o) {
-      const double target = std::get<double>(v);
-      if (target > 0) {
-        o.search_radius = true;
-        o.radius_search.goal = RadiusGoal::kTargetSimilarity;
-        o.radius_search.target_similarity = target;
-      } else if (o.radius_search.goal == RadiusGoal::kTargetSimilarity) {
-        o.search_radius = false;
-      }
+      o.search_radius = true;
+      o.radius_search.goal = RadiusGoal::kTargetSimilarity;
+      o.radius_search.target_similarity = std::get<double>(v);
+    };
+    rows.push_back(std::move(r));
+  }
+  {
+    ParamRow r = Row("triangles", ParamType::kInteger, "[1, 1e9]", "",
+                     "search the r whose mesh has this many triangles, within 5% (unset: r as "
+                     "given)");
+    r.spec.exclusive = "radius search";
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      if (!o.search_radius || o.radius_search.goal != RadiusGoal::kTriangles) return std::nullopt;
+      return ParamValue(int64_t(o.radius_search.target_triangles));
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      o.search_radius = true;
+      o.radius_search.goal = RadiusGoal::kTriangles;
+      o.radius_search.target_triangles = uint64_t(std::get<int64_t>(v));
     };
     rows.push_back(std::move(r));
   }
@@ -255,6 +268,9 @@ std::vector<ParamRow> SurfaceRows() {
       Choice("surface.thickness_measure", SM_MEMBER(surface.thickness),
              {{"axis_runs", ThicknessMeasure::kAxisRuns}, {"normal", ThicknessMeasure::kNormal}},
              "triangle thickness from the shortest axis run, or along the normal"));
+  rows.push_back(Bool("surface.fit_walls", SM_MEMBER(surface.fit_walls),
+                      "fit each face's thickness to the best formula-5 score of the prisms "
+                      "together (false: the mean τ of the voxels it passes through)"));
   rows.push_back(Bool("surface.rim", SM_MEMBER(surface.triangles.rim),
                       "close the band along the rims with a strip of triangles"));
   rows.push_back(Bool("surface.close_cracks", SM_MEMBER(surface.triangles.close_cracks),

@@ -196,9 +196,13 @@ nlohmann::json SurfaceStats::Fields() const {
 nlohmann::json RadiusChoice::Fields() const {
   nlohmann::json t = nlohmann::json::array();
   for (const RadiusTrial& x : trials) {
-    t.push_back({{"r", x.radius}, {"triangles", x.triangles}, {"similarity", x.similarity}});
+    nlohmann::json trial = {{"r", x.radius}, {"triangles", x.triangles}};
+    if (x.scored) trial["similarity"] = x.similarity;
+    t.push_back(std::move(trial));
   }
-  return {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
+  nlohmann::json j = {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
+  if (!message.empty()) j["message"] = message;
+  return j;
 }
 
 }  // namespace sheetmesh

@@ -29,7 +29,8 @@ class Evaluator {
             const Progress& progress)
       : sheet_(sheet), surface_(surface), height_(height), progress_(progress) {}
 
-  absl::StatusOr<RadiusTrial> Eval(double r) {
+  // Counts only, without the similarity, when `score` is false.
+  absl::StatusOr<RadiusTrial> Eval(double r, bool score = true) {
     auto it = done_.find(r);
     if (it != done_.end()) return it->second;
     SM_RETURN_IF_ERROR(progress_.Update(0.0, absl::StrCat("trying r = ", r)));
@@ -39,13 +40,14 @@ class Evaluator {
     RadiusTrial t;
     t.radius = r;
     t.triangles = s.mesh.num_faces();
-    if (t.triangles > 0) {
+    t.scored = score;
+    if (t.triangles > 0 && score) {
       SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(s.mesh, sheet_.set.dims(), height_));
       t.similarity = ScoreModel(model, sheet_.set).similarity;
     } else {
       t.similarity = 0.0;
     }
-    done_[r] = t;
+    if (score) done_[r] = t;
     trials_.push_back(t);
     return t;
   }
@@ -59,6 +61,70 @@ class Evaluator {
   std::map<double, RadiusTrial> done_;
   std::vector<RadiusTrial> trials_;
 };
+
+// kTriangles: the count falls about as r^-2; a secant in log r, log count from two trials
+// on, until a count within 5% of the target.
+absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, double lo, double hi,
+                                             uint64_t target) {
+  constexpr int kMaxTrials = 14;
+  auto within = [&](uint64_t n) { return std::abs(double(n) - double(target)) <= 0.05 * target; };
+  std::vector<RadiusTrial> seen;
+  double r = std::clamp(start, lo, hi);
+  RadiusChoice choice;
+  for (int i = 0; i < kMaxTrials; ++i) {
+    SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(r, false));
+    seen.push_back(t);
+    if (within(t.triangles)) break;
+    // The two trials nearest the target in log count give the slope (−2 until there are two).
+    double slope = -2;
+    std::vector<RadiusTrial> near = seen;
+    std::sort(near.begin(), near.end(), [&](const RadiusTrial& a, const RadiusTrial& b) {
+      return std::abs(std::log(double(std::max<uint64_t>(a.triangles, 1)) / target)) <
+             std::abs(std::log(double(std::max<uint64_t>(b.triangles, 1)) / target));
+    });
+    const RadiusTrial& a = near[0];
+    if (near.size() >= 2 && near[1].radius != a.radius && near[1].triangles != a.triangles &&
+        a.triangles > 0 && near[1].triangles > 0) {
+      slope =
+          std::log(double(near[1].triangles) / a.triangles) / std::log(near[1].radius / a.radius);
+      if (!(slope < -0.5) || !(slope > -8)) slope = -2;
+    }
+    double next =
+        a.radius * std::pow(double(target) / std::max<uint64_t>(a.triangles, 1), 1 / slope);
+    next = std::clamp(next, lo, hi);
+    auto tried = [&](double x) {
+      return std::any_of(seen.begin(), seen.end(),
+                         [&](const RadiusTrial& s) { return std::abs(s.radius - x) < 1e-3 * x; });
+    };
+    // Tried already (at a bound, or between two counts the target falls between): halfway
+    // from the nearest, or stop.
+    if (tried(next)) next = std::clamp(0.5 * (next + a.radius), lo, hi);
+    if (tried(next)) break;
+    r = next;
+  }
+  const RadiusTrial* best = &seen[0];
+  for (const RadiusTrial& t : seen) {
+    if (std::abs(double(t.triangles) - target) < std::abs(double(best->triangles) - target)) {
+      best = &t;
+    }
+  }
+  // Fewer than the coarsest mesh has: the outline needs that many.
+  const auto coarsest = std::max_element(seen.begin(), seen.end(),
+                                         [](auto& x, auto& y) { return x.radius < y.radius; });
+  if (!within(best->triangles) && double(target) < best->triangles && coarsest->radius >= hi) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("triangles = ", target,
+                     " is below the fewest this sheet can be meshed with: ", coarsest->triangles,
+                     " at the largest r tried, ", hi, " (raise triangles or radius_search.r_max)"));
+  }
+  choice.radius = best->radius;
+  choice.target_reached = within(best->triangles);
+  if (!choice.target_reached) {
+    choice.message = absl::StrCat("no r gave ", target, " triangles within 5%: the nearest, ",
+                                  best->triangles, ", at r = ", best->radius);
+  }
+  return choice;
+}
 
 }  // namespace
 
@@ -74,11 +140,23 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     return absl::InvalidArgumentError(
         absl::StrCat("radius search range [", lo, ", ", hi, "] must be positive and not inverted"));
   }
-  if (options.goal == RadiusGoal::kTargetSimilarity && !(options.target_similarity <= 1.0)) {
-    return absl::InvalidArgumentError(absl::StrCat("target similarity ", options.target_similarity,
-                                                   " is above 1, the best possible"));
+  if (options.goal == RadiusGoal::kTargetSimilarity &&
+      !(options.target_similarity > 0 && options.target_similarity < 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("target_similarity = ", options.target_similarity,
+                     " must be in (0, 1): 1 is a perfect model"));
+  }
+  if (options.goal == RadiusGoal::kTriangles && options.target_triangles == 0) {
+    return absl::InvalidArgumentError("triangles = 0: a mesh needs at least one triangle");
   }
   Evaluator eval(sheet, surface, options.height, progress);
+  if (options.goal == RadiusGoal::kTriangles) {
+    SM_ASSIGN_OR_RETURN(RadiusChoice c, SearchTriangles(eval, surface.scvd.radius_voxels, lo, hi,
+                                                        options.target_triangles));
+    c.trials = eval.trials();
+    SM_RETURN_IF_ERROR(progress.Update(1.0));
+    return c;
+  }
   const std::vector<double> ladder = Ladder(lo, hi);
   RadiusChoice choice;
   RadiusTrial best;
@@ -124,6 +202,9 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
   } else if (good < 0) {
     choice.radius = best.radius;
     choice.target_reached = false;
+    choice.message =
+        absl::StrCat("no r reached similarity ", options.target_similarity,
+                     ": the best mesh found, at r = ", best.radius, ", scores ", best.similarity);
   } else {
     // Bisect the integers between the last success and the first failure above it.
     if (bad > 0) {

@@ -5,9 +5,9 @@
 #define SHEETMESH_WORKER_PIPELINE_SURFACE_RADIUS_SEARCH_H_
 
 #include <cstdint>
-#include <vector>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -20,11 +20,13 @@ namespace sheetmesh {
 enum class RadiusGoal {
   kBestSimilarity,    // the r with the highest similarity
   kTargetSimilarity,  // the largest r whose similarity reaches the target
+  kTriangles,         // the r whose mesh has target_triangles triangles, within 5%
 };
 
 struct RadiusSearchOptions {
   RadiusGoal goal = RadiusGoal::kBestSimilarity;
   double target_similarity = 0.60;  // kTargetSimilarity: the similarity to reach
+  uint64_t target_triangles = 0;    // kTriangles: the triangle count wanted
   double min_radius_voxels = 2.0;   // smallest r tried
   double max_radius_voxels = 0.0;   // largest r tried; 0 = a quarter of the largest extent
   int patience = 3;                 // trials past the peak (or below target) before stopping
@@ -35,12 +37,15 @@ struct RadiusTrial {
   double radius = 0;
   uint64_t triangles = 0;
   double similarity = 0;
+  bool scored = false;  // false: counted only (the triangle goal), no similarity
 };
 
 struct RadiusChoice {
   double radius = 0;                // the chosen r
   bool target_reached = true;       // kTargetSimilarity: false when no r reached the target (the
-                                    // best r is chosen then)
+                                    // best r is chosen then); kTriangles: false when no r gave
+                                    // a count within 5% (the nearest is chosen then)
+  std::string message;              // why the target was not reached, for the user
   std::vector<RadiusTrial> trials;  // every r tried, in order of trial
 
   // chosen_r, target_reached and the trials, for the report.
@@ -48,8 +53,9 @@ struct RadiusChoice {
 };
 
 // Searches r on `sheet` with the other settings of `surface`. kInvalidArgument for a
-// non-positive or inverted radius range or a target outside (-inf, 1]; errors of meshing
-// pass through; kCancelled if asked.
+// non-positive or inverted radius range, a similarity target outside (0, 1), a triangle
+// target of 0 or below the fewest triangles the sheet's outline needs (the count at the
+// largest r, which the message names); errors of meshing pass through; kCancelled if asked.
 absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const SurfaceOptions& surface,
                                           const RadiusSearchOptions& options,
                                           const Progress& progress = {});

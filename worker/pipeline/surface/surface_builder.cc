@@ -8,6 +8,7 @@
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/surface/face_attributes.h"
+#include "worker/pipeline/surface/wall_fit.h"
 
 namespace sheetmesh {
 
@@ -18,6 +19,7 @@ SurfaceOptions SurfaceOptions::Paper() {
   o.triangles.rim = false;
   o.triangles.close_cracks = false;
   o.scvd.domain = ScvdDomain::kVoxels;
+  o.fit_walls = false;
   return o;
 }
 
@@ -68,8 +70,13 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     mesh.faces.push_back(g);
   }
   if (options.orient) OrientConsistently(&mesh);
-
   mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+  if (options.fit_walls) {
+    // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
+    std::vector<float> search(mesh.face_thickness.size());
+    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
+    mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
+  }
   // Vertex normals (faces are oriented now, or flipped to agree) for the per-vertex measure.
   std::vector<Vec3> vnormal(mesh.vertices.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {

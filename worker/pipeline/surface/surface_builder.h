@@ -32,6 +32,8 @@ struct SurfaceOptions {
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
   bool orient = true;  // orient faces consistently per manifold piece
+  bool fit_walls = true;  // each face's thickness fitted to the prisms' best formula-5 score
+                          // (wall_fit.h; beyond the paper; false: the mean τ)
 
   // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
   static SurfaceOptions Paper();

@@ -68,6 +68,47 @@ TEST(RadiusSearchTest, UnreachableTargetFallsBackToTheBestRadius) {
   EXPECT_GT(c.radius, 0);
 }
 
+TEST(RadiusSearchTest, TriangleGoalMeetsTheBudgetWithinFivePercent) {
+  const SheetAnalysis sheet = Sheet();
+  for (uint64_t n : {60, 150, 400, 900}) {
+    RadiusSearchOptions o;
+    o.goal = RadiusGoal::kTriangles;
+    o.target_triangles = n;
+    SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
+    EXPECT_TRUE(c.target_reached) << n << ": " << c.message;
+    SurfaceOptions s;
+    s.scvd.radius_voxels = c.radius;
+    SM_ASSERT_OK_AND_ASSIGN(SurfaceResult built, BuildSurface(sheet, s));
+    EXPECT_NEAR(double(built.mesh.num_faces()), double(n), 0.05 * n) << "r = " << c.radius;
+  }
+}
+
+TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
+  const SheetAnalysis sheet = Sheet();
+  RadiusSearchOptions o;
+  o.goal = RadiusGoal::kTriangles;
+  o.target_triangles = 0;
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("triangles = 0")));
+  // Two triangles: fewer than the coarsest mesh (the largest r) has; the message names it.
+  o.target_triangles = 2;
+  o.max_radius_voxels = 12;
+  SurfaceOptions coarsest;
+  coarsest.scvd.radius_voxels = 12;
+  SM_ASSERT_OK_AND_ASSIGN(SurfaceResult c, BuildSurface(sheet, coarsest));
+  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       ::testing::HasSubstr(absl::StrCat(c.mesh.num_faces(), " at the largest r"))));
+  // More than the smallest r gives: the finest mesh, said not to reach it.
+  o.target_triangles = 1000000;
+  o.max_radius_voxels = 0;
+  o.min_radius_voxels = 3;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice fine, SearchRadius(sheet, SurfaceOptions(), o));
+  EXPECT_FALSE(fine.target_reached);
+  EXPECT_DOUBLE_EQ(fine.radius, 3);
+  EXPECT_THAT(fine.message, ::testing::HasSubstr("1000000 triangles"));
+}
+
 TEST(RadiusSearchTest, BadRangesAreInvalidArgument) {
   const SheetAnalysis sheet = Sheet();
   RadiusSearchOptions o;

@@ -81,19 +81,18 @@ def dims_flag(raw, dims):
 
 
 def ours(cli, raw, dims, value, budget, out_dir, extra):
-    """sheetmesh at `budget` triangles: (triangles, S, shell S, Dice, Hausdorff, seconds)."""
+    """sheetmesh at `budget` triangles (`surface --triangles`, its search included in the
+    time): (triangles, S, shell S, Dice, Hausdorff, seconds, r, decimated)."""
     d = os.path.join(out_dir, "ours_%d" % budget)
-    common = [raw, "--labels=%g" % value, "-o", d, "--output_formats=ply",
-              "--similarity_grid_rates="] + dims_flag(raw, dims) + extra
-    run([cli, "surface", "--triangles=%d" % budget, "--similarity_hausdorff=false"] + common)
-    r = json.load(open(os.path.join(d, "report.json")))["radius_search"]["chosen_r"]
     start = time.monotonic()
-    run([cli, "surface", "--r=%r" % r, "--similarity_hausdorff=true"] + common)
+    run([cli, "surface", raw, "--labels=%g" % value, "-o", d, "--output_formats=ply",
+         "--similarity_grid_rates=", "--triangles=%d" % budget] + dims_flag(raw, dims) + extra)
     seconds = time.monotonic() - start
     rep = json.load(open(os.path.join(d, "report.json")))
     sim = rep["similarity"]
+    search = rep["radius_search"]
     return (rep["surface"]["triangles"], sim["similarity"], sim["shell_similarity"], sim["dice"],
-            sim.get("hausdorff_voxels"), seconds, r)
+            sim.get("hausdorff_voxels"), seconds, search["chosen_r"], "decimated_to" in search)
 
 
 def peer(cli, raw, dims, value, triangles, out_dir):
@@ -138,7 +137,7 @@ def main():
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
     os.makedirs(out_root, exist_ok=True)
     budgets = [int(b) for b in args.budgets.split(",")]
-    lines = ["| volume | budget | triangles (r) | S ours (shell) | S peer | Δ S | shortfall ratio "
+    lines = ["| volume | budget | triangles (r; dec.: decimated) | S ours (shell) | S peer | Δ S | shortfall ratio "
              "| Dice ours / peer | Hausdorff ours / peer | s ours / peer |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for name, raw, dims, value in volumes(cli, out_root):
@@ -147,7 +146,8 @@ def main():
         last = None
         for budget in budgets:
             try:
-                tri, sim, shell, dice, haus, secs, r = ours(cli, raw, dims, value, budget, vdir, extra)
+                tri, sim, shell, dice, haus, secs, r, dec = ours(cli, raw, dims, value, budget, vdir,
+                                                                 extra)
             except subprocess.CalledProcessError as e:
                 line = "| %s | %d | refused: %s |" % (name, budget, e.stderr.strip().splitlines()[-1])
                 print(line, flush=True)
@@ -158,9 +158,9 @@ def main():
             last = tri
             ptri, psim, pdice, phaus, full, psecs = peer(cli, raw, dims, value, tri, vdir)
             ratio = (1 - sim) / (1 - psim) if psim < 1 else float("inf")
-            line = ("| %s | %d | %d (%.2f) | %.4f (%.4f) | %.4f | %+.4f | %.2f | %.3f / %.3f | "
+            line = ("| %s | %d | %d (%.2f%s) | %.4f (%.4f) | %.4f | %+.4f | %.2f | %.3f / %.3f | "
                     "%.1f / %.1f | %.2f / %.2f |") % (
-                name, budget, tri, r, sim, shell, psim, sim - psim, ratio, dice, pdice,
+                name, budget, tri, r, ", dec." if dec else "", sim, shell, psim, sim - psim, ratio, dice, pdice,
                 haus or 0, phaus or 0, secs, psecs)
             print(line, flush=True)
             lines.append(line)

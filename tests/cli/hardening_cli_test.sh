@@ -69,6 +69,17 @@ case_ raw_type_i7 2 "'i7'" -- "$cli" info "$tmp/v_128x112x96_i7.raw"
 case_ grayscale_float_without_phase 2 "gray_24x24x24_f32.raw|input.window" -- "$cli" info "$tmp/gray_24x24x24_f32.raw"
 case_ nan_is_never_sheet 2 "nan_8x8x8_f32.raw|matched no voxel" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=-1e30:1e30
 case_ refine_close_radius_100000 2 "refine_close_radius|100000" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --refine_close_radius=100000
+case_ triangles_0 2 "triangles|0" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --triangles=0
+# Two parallel slabs apart: no mesh of them has fewer than two triangles.
+/usr/bin/python3 -c "
+import numpy as np
+v = np.zeros((48, 64, 64), np.uint8)
+v[10:14, 8:56, 8:56] = 255
+v[34:38, 8:56, 8:56] = 255
+v.tofile('$tmp/two_64x64x48_u8.raw')"
+case_ triangles_below_the_outline 2 "triangles = 1|below the fewest" -- "$cli" surface "$tmp/two_64x64x48_u8.raw" -o "$tmp/x" --triangles=1
+case_ target_similarity_1 2 "target_similarity|1" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --target_similarity=1
+case_ target_similarity_0 2 "target_similarity|0" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --target_similarity=0
 case_ detect_rounds_2^31-1 2 "detect_rounds|2147483647" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --detect_rounds=2147483647
 case_ tet_max_volume_1e-12 2 "tet.max_volume" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --volume_mesh --tet_max_volume=1e-12 --similarity_hausdorff=false
 case_ time_limit 1 "time limit" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --time_limit_seconds=0.05

@@ -221,6 +221,9 @@ std::vector<ParamRow> SurfaceRows() {
     };
     rows.push_back(std::move(r));
   }
+  rows.push_back(Bool("surface.decimate", SM_MEMBER(radius_search.decimate),
+                      "with triangles: mesh about 4 times as many, then merge the flattest "
+                      "(quadric edge collapses) down to the count (false: r alone)"));
   rows.push_back(Number("radius_search.r_min", SM_MEMBER(radius_search.min_radius_voxels),
                         "(0, 4096]", "voxels", "smallest r a search tries"));
   rows.push_back(Number("radius_search.r_max", SM_MEMBER(radius_search.max_radius_voxels),

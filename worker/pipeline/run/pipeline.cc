@@ -206,6 +206,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                                                            progress.Stage("search-r")));
     surface.scvd.radius_voxels = report.radius_choice->radius;
     report.options.surface.scvd.radius_voxels = report.radius_choice->radius;
+    surface.target_faces = report.radius_choice->decimate_to;
   }
   SurfaceResult result;
   {
@@ -214,6 +215,13 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                         BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   const TriangleMesh& mesh = result.mesh;
+  if (surface.target_faces > 0 && mesh.num_faces() > 1.05 * surface.target_faces) {
+    return absl::InvalidArgumentError(absl::StrCat("triangles = ", surface.target_faces,
+                                                   " is below the fewest this sheet can be meshed "
+                                                   "with: ",
+                                                   mesh.num_faces(),
+                                                   " (its outline and junctions need them)"));
+  }
   report.surface = DescribeSurface(result, phase.info.placement);
 
   {

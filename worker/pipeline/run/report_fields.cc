@@ -186,6 +186,11 @@ nlohmann::json SurfaceStats::Fields() const {
   j["components_without_triangles"] = skipped_components;
   j["voxels_without_triangles"] = skipped_voxels;
   j["topology"] = topology.Fields();
+  if (decimation) {
+    j["decimation"] = {{"dual_triangles", decimation->faces_before},
+                       {"collapses", decimation->collapses},
+                       {"largest_error_voxels2", decimation->largest_error}};
+  }
   j["scvd"] = {{"generators", generators},
                {"lloyd_iterations", lloyd_iterations},
                {"lloyd_converged", lloyd_converged},
@@ -198,9 +203,11 @@ nlohmann::json RadiusChoice::Fields() const {
   for (const RadiusTrial& x : trials) {
     nlohmann::json trial = {{"r", x.radius}, {"triangles", x.triangles}};
     if (x.scored) trial["similarity"] = x.similarity;
+    if (x.decimated_to > 0) trial["decimated_to"] = x.decimated_to;
     t.push_back(std::move(trial));
   }
   nlohmann::json j = {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
+  if (decimate_to > 0) j["decimated_to"] = decimate_to;
   if (!message.empty()) j["message"] = message;
   return j;
 }

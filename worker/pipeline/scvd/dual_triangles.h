@@ -9,10 +9,9 @@
 #define SHEETMESH_WORKER_PIPELINE_SCVD_DUAL_TRIANGLES_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <span>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -37,9 +36,11 @@ struct DualTriangleOptions {
   // voxels is closed by that triangle; real holes (over empty space) stay open.
   bool close_cracks = true;
   double crack_angle_degrees = 60.0;
-  double rim_normal_cos = 0.4;  // a step d along the sheet has |d . n| / |d| below this
-                                // (n: the vertex normal); a voxel from which such a step
-                                // leaves the sheet is a rim voxel
+  double rim_normal_cos = 0.4;   // a step d along the sheet has |d . n| / |d| below this
+                                 // (n: the vertex normal); a voxel from which such a step
+                                 // leaves the sheet is a rim voxel
+  double rim_push_voxels = 0.5;  // rim vertices this far out past the outermost voxels'
+                                 // centres: at the voxels' edge
 };
 
 struct DualTriangleStats {

@@ -104,6 +104,9 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
     Vec3 q = outer_sum[g] / outer_count[g];
     q -= normal[g] * Dot(q - centroid[g], normal[g]);
     if (Norm2(q - (*pos)[g]) < 0.25) continue;  // the generator already sits on the rim
+    // The voxels' edge, not their centres: half a voxel further out, so that prisms on
+    // the strip hold the outermost layer where the outline runs between voxel centres.
+    q += outward[g] * options.rim_push_voxels;
     rim_id[g] = static_cast<uint32_t>(pos->size());
     pos->push_back(q);
     out->rim_positions.push_back(q);

@@ -30,12 +30,14 @@ class Evaluator {
       : sheet_(sheet), surface_(surface), height_(height), progress_(progress) {}
 
   // Counts only, without the similarity, when `score` is false.
-  absl::StatusOr<RadiusTrial> Eval(double r, bool score = true) {
-    auto it = done_.find(r);
+  // With `decimate_to`, the mesh is decimated to that many faces.
+  absl::StatusOr<RadiusTrial> Eval(double r, bool score = true, uint64_t decimate_to = 0) {
+    auto it = done_.find({r, decimate_to});
     if (it != done_.end()) return it->second;
     SM_RETURN_IF_ERROR(progress_.Update(0.0, absl::StrCat("trying r = ", r)));
     SurfaceOptions o = surface_;
     o.scvd.radius_voxels = r;
+    o.target_faces = decimate_to;
     SM_ASSIGN_OR_RETURN(SurfaceResult s, BuildSurface(sheet_, o));
     RadiusTrial t;
     t.radius = r;
@@ -47,7 +49,8 @@ class Evaluator {
     } else {
       t.similarity = 0.0;
     }
-    if (score) done_[r] = t;
+    t.decimated_to = decimate_to;
+    if (score) done_[{r, decimate_to}] = t;
     trials_.push_back(t);
     return t;
   }
@@ -58,14 +61,14 @@ class Evaluator {
   SurfaceOptions surface_;
   PrismHeight height_;
   Progress progress_;
-  std::map<double, RadiusTrial> done_;
+  std::map<std::pair<double, uint64_t>, RadiusTrial> done_;
   std::vector<RadiusTrial> trials_;
 };
 
 // kTriangles: the count falls about as r^-2; a secant in log r, log count from two trials
 // on, until a count within 5% of the target.
 absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, double lo, double hi,
-                                             uint64_t target) {
+                                             uint64_t target, bool coarsest_below) {
   constexpr int kMaxTrials = 14;
   auto within = [&](uint64_t n) { return std::abs(double(n) - double(target)) <= 0.05 * target; };
   std::vector<RadiusTrial> seen;
@@ -111,6 +114,10 @@ absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, doub
   // Fewer than the coarsest mesh has: the outline needs that many.
   const auto coarsest = std::max_element(seen.begin(), seen.end(),
                                          [](auto& x, auto& y) { return x.radius < y.radius; });
+  if (coarsest_below && double(target) < best->triangles) {
+    choice.radius = coarsest->radius;  // the decimation goes on from there
+    return choice;
+  }
   if (!within(best->triangles) && double(target) < best->triangles && coarsest->radius >= hi) {
     return absl::InvalidArgumentError(
         absl::StrCat("triangles = ", target,
@@ -151,8 +158,36 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
   }
   Evaluator eval(sheet, surface, options.height, progress);
   if (options.goal == RadiusGoal::kTriangles) {
-    SM_ASSIGN_OR_RETURN(RadiusChoice c, SearchTriangles(eval, surface.scvd.radius_voxels, lo, hi,
-                                                        options.target_triangles));
+    const uint64_t n = options.target_triangles;
+    absl::StatusOr<RadiusChoice> plain =
+        SearchTriangles(eval, surface.scvd.radius_voxels, lo, hi, n, false);
+    if (!options.decimate) {
+      if (plain.ok()) plain->trials = eval.trials();
+      return plain;
+    }
+    if (!plain.ok() && plain.status().code() != absl::StatusCode::kInvalidArgument) {
+      return plain.status();
+    }
+    // The dual mesh with about kOversample times the count, decimated to it, against the
+    // dual mesh at the count: the one that scores higher (a plain mesh below the count's
+    // reach does not compete).
+    SM_ASSIGN_OR_RETURN(RadiusChoice fine,
+                        SearchTriangles(eval, plain.ok() ? plain->radius : hi, lo, hi,
+                                        static_cast<uint64_t>(std::ceil(kOversample * n)), true));
+    SM_ASSIGN_OR_RETURN(RadiusTrial decimated, eval.Eval(fine.radius, true, n));
+    RadiusChoice c = fine;
+    c.decimate_to = n;
+    c.target_reached = std::abs(double(decimated.triangles) - n) <= 0.05 * n;
+    if (!c.target_reached) {
+      c.message = decimated.triangles > n
+                      ? absl::StrCat("decimation stopped at ", decimated.triangles, " triangles")
+                      : absl::StrCat("no r gave ", n, " triangles within 5%: the finest, ",
+                                     decimated.triangles, ", at r = ", c.radius);
+    }
+    if (plain.ok() && plain->target_reached) {
+      SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(plain->radius, true));
+      if (t.similarity >= decimated.similarity || !c.target_reached) c = *plain;
+    }
     c.trials = eval.trials();
     SM_RETURN_IF_ERROR(progress.Update(1.0));
     return c;

@@ -27,21 +27,31 @@ struct RadiusSearchOptions {
   RadiusGoal goal = RadiusGoal::kBestSimilarity;
   double target_similarity = 0.60;  // kTargetSimilarity: the similarity to reach
   uint64_t target_triangles = 0;    // kTriangles: the triangle count wanted
+  bool decimate = true;             // kTriangles: search r for kOversample times the count
+                                    // (the caller decimates to it); below the coarsest r's
+                                    // count, the coarsest r
   double min_radius_voxels = 2.0;   // smallest r tried
   double max_radius_voxels = 0.0;   // largest r tried; 0 = a quarter of the largest extent
   int patience = 3;                 // trials past the peak (or below target) before stopping
   PrismHeight height = PrismHeight::kFace;  // the model the similarity is computed on
 };
 
+// kTriangles with decimation: the dual mesh is built with this many times the triangles
+// wanted, and the flattest of them merged away.
+inline constexpr double kOversample = 4.0;
+
 struct RadiusTrial {
   double radius = 0;
   uint64_t triangles = 0;
   double similarity = 0;
-  bool scored = false;  // false: counted only (the triangle goal), no similarity
+  bool scored = false;        // false: counted only (the triangle goal), no similarity
+  uint64_t decimated_to = 0;  // > 0: the dual mesh decimated to this many faces
 };
 
 struct RadiusChoice {
   double radius = 0;                // the chosen r
+  uint64_t decimate_to = 0;         // kTriangles: > 0 when the dual mesh at r is decimated to
+                                    // this many faces
   bool target_reached = true;       // kTargetSimilarity: false when no r reached the target (the
                                     // best r is chosen then); kTriangles: false when no r gave
                                     // a count within 5% (the nearest is chosen then)

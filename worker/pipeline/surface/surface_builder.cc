@@ -4,6 +4,7 @@
 
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/decimate.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
@@ -70,13 +71,6 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     mesh.faces.push_back(g);
   }
   if (options.orient) OrientConsistently(&mesh);
-  mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
-  if (options.fit_walls) {
-    // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
-    std::vector<float> search(mesh.face_thickness.size());
-    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
-    mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
-  }
   // Vertex normals (faces are oriented now, or flipped to agree) for the per-vertex measure.
   std::vector<Vec3> vnormal(mesh.vertices.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -103,6 +97,33 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                              : piece_of_voxel[scvd.generator_voxel[g]];
   }
   mesh.face_piece = FaceLabels(mesh, vertex_piece);
+  if (options.target_faces > 0 && mesh.faces.size() > options.target_faces) {
+    DecimateOptions d;
+    d.target_faces = options.target_faces;
+    out.decimation = Decimate(&mesh, d);
+  }
+  mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+  if (options.fit_walls) {
+    // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
+    std::vector<float> search(mesh.face_thickness.size());
+    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
+    mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
+  }
+  if (out.decimation) {
+    // The vertices are no longer generators: each takes its faces' mean thickness.
+    std::vector<double> sum(mesh.vertices.size(), 0.0), area(mesh.vertices.size(), 0.0);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      const double a = Area(Corners(mesh, f));
+      for (uint32_t v : mesh.faces[f]) {
+        sum[v] += a * mesh.face_thickness[f];
+        area[v] += a;
+      }
+    }
+    mesh.vertex_thickness.resize(mesh.vertices.size());
+    for (size_t v = 0; v < sum.size(); ++v) {
+      mesh.vertex_thickness[v] = static_cast<float>(area[v] > 0 ? sum[v] / area[v] : 0.0);
+    }
+  }
 
   // Components that gave no triangle.
   out.components = sheet.components.count();
@@ -124,6 +145,7 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
 SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& placement) {
   const TriangleMesh& mesh = result.mesh;
   SurfaceStats s;
+  s.decimation = result.decimation;
   s.generators = result.scvd.num_generators();
   s.lloyd_iterations = result.scvd.iterations;
   s.lloyd_converged = result.scvd.converged;

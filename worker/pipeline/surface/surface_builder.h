@@ -4,13 +4,14 @@
 #define SHEETMESH_WORKER_PIPELINE_SURFACE_SURFACE_BUILDER_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <span>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
-
 #include "absl/status/statusor.h"
 #include "common/progress.h"
+#include "worker/pipeline/mesh/decimate.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
@@ -31,9 +32,10 @@ struct SurfaceOptions {
   DualTriangleOptions triangles;  // candidate selection
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
-  bool orient = true;  // orient faces consistently per manifold piece
-  bool fit_walls = true;  // each face's thickness fitted to the prisms' best formula-5 score
-                          // (wall_fit.h; beyond the paper; false: the mean τ)
+  bool orient = true;         // orient faces consistently per manifold piece
+  uint64_t target_faces = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
+  bool fit_walls = true;      // each face's thickness fitted to the prisms' best formula-5 score
+                              // (wall_fit.h; beyond the paper; false: the mean τ)
 
   // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
   static SurfaceOptions Paper();
@@ -46,8 +48,10 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                       // face_thickness, face_piece, vertex_thickness set
-  std::vector<uint32_t> vertex_generator;  // SCVD generator of each mesh vertex
+  TriangleMesh mesh;                        // face_thickness, face_piece, vertex_thickness set
+  std::vector<uint32_t> vertex_generator;   // SCVD generator of each vertex of the dual mesh
+                                            // (before any decimation)
+  std::optional<DecimateStats> decimation;  // when target_faces decimated the mesh
   Scvd scvd;
   DualTriangleStats triangle_stats;
   uint32_t components = 0;          // 6-connected components of the sheet
@@ -75,6 +79,7 @@ struct SurfaceStats {
   TopologyReport topology;          // without the edge list
   uint32_t skipped_components = 0;  // components too small for a triangle
   uint64_t skipped_voxels = 0;
+  std::optional<DecimateStats> decimation;
 
   // The figures by name, the SCVD's and the topology nested, for the report.
   nlohmann::json Fields() const;

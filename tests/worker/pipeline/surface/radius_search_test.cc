@@ -70,16 +70,21 @@ TEST(RadiusSearchTest, UnreachableTargetFallsBackToTheBestRadius) {
 
 TEST(RadiusSearchTest, TriangleGoalMeetsTheBudgetWithinFivePercent) {
   const SheetAnalysis sheet = Sheet();
-  for (uint64_t n : {60, 150, 400, 900}) {
-    RadiusSearchOptions o;
-    o.goal = RadiusGoal::kTriangles;
-    o.target_triangles = n;
-    SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
-    EXPECT_TRUE(c.target_reached) << n << ": " << c.message;
-    SurfaceOptions s;
-    s.scvd.radius_voxels = c.radius;
-    SM_ASSERT_OK_AND_ASSIGN(SurfaceResult built, BuildSurface(sheet, s));
-    EXPECT_NEAR(double(built.mesh.num_faces()), double(n), 0.05 * n) << "r = " << c.radius;
+  for (bool decimate : {false, true}) {
+    for (uint64_t n : {60, 150, 400, 900}) {
+      RadiusSearchOptions o;
+      o.goal = RadiusGoal::kTriangles;
+      o.target_triangles = n;
+      o.decimate = decimate;
+      SM_ASSERT_OK_AND_ASSIGN(RadiusChoice c, SearchRadius(sheet, SurfaceOptions(), o));
+      EXPECT_TRUE(c.target_reached) << n << ": " << c.message;
+      if (!decimate) EXPECT_EQ(c.decimate_to, 0u);
+      SurfaceOptions s;
+      s.scvd.radius_voxels = c.radius;
+      s.target_faces = c.decimate_to;
+      SM_ASSERT_OK_AND_ASSIGN(SurfaceResult built, BuildSurface(sheet, s));
+      EXPECT_NEAR(double(built.mesh.num_faces()), double(n), 0.05 * n) << "r = " << c.radius;
+    }
   }
 }
 
@@ -91,6 +96,8 @@ TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
   EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
               StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("triangles = 0")));
   // Two triangles: fewer than the coarsest mesh (the largest r) has; the message names it.
+  // (Decimating, the search says where the collapses stopped; the pipeline refuses that.)
+  o.decimate = false;
   o.target_triangles = 2;
   o.max_radius_voxels = 12;
   SurfaceOptions coarsest;
@@ -107,6 +114,16 @@ TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
   EXPECT_FALSE(fine.target_reached);
   EXPECT_DOUBLE_EQ(fine.radius, 3);
   EXPECT_THAT(fine.message, ::testing::HasSubstr("1000000 triangles"));
+  o.decimate = true;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice finest, SearchRadius(sheet, SurfaceOptions(), o));
+  EXPECT_FALSE(finest.target_reached);
+  EXPECT_THAT(finest.message, ::testing::HasSubstr("1000000 triangles"));
+  o.target_triangles = 2;
+  o.max_radius_voxels = 12;
+  o.min_radius_voxels = 2;
+  SM_ASSERT_OK_AND_ASSIGN(RadiusChoice stopped, SearchRadius(sheet, SurfaceOptions(), o));
+  EXPECT_FALSE(stopped.target_reached);
+  EXPECT_THAT(stopped.message, ::testing::HasSubstr("decimation stopped at"));
 }
 
 TEST(RadiusSearchTest, BadRangesAreInvalidArgument) {

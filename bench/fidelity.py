@@ -9,7 +9,8 @@ For each volume and triangle budget, sheetmesh's `surface --triangles N` picks r
 at that r is timed and scored (formula 5, Dice, Hausdorff); the peer is decimated to the
 same count, timed (marching cubes plus decimation) and scored the same way. Volumes: NETL
 and DPM (../shared/data, skipped when absent), the phantom sample, the extraction presets
-thick_slab and rough_network, and a planar constant-aperture junction built here.
+thick_slab and rough_network, a 192³ phantom, and a planar constant-aperture junction
+built here.
 
 Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--budgets 100,200,...] [--FLAG=VALUE]
 Other --FLAG=VALUE arguments go to sheetmesh's surface runs (e.g. --surface_fit_walls=false).
@@ -56,6 +57,8 @@ def volumes(cli, out_dir):
     vols.append(("planar junction", junction, (120, 120, 120), 255))
     for name, args, dims in [
         ("phantom sample", ["--preset=sample"], (128, 112, 96)),
+        ("phantom 192^3", ["--phantom_dims=192x192x192", "--seed=3", "--sheets=4",
+                           "--aperture=5", "--specks=0"], (192, 192, 192)),
         ("preset thick_slab", ["--preset=thick_slab"], (100, 100, 111)),
         ("preset rough_network", ["--preset=rough_network"], (160, 160, 160)),
     ]:

@@ -116,7 +116,7 @@ def peer(cli, raw, dims, value, start, target, switches, out_dir):
     """The fewest decimated marching-cubes triangles reaching `target` that TetGen accepts."""
     tried = []
     for mult in [0.25, 0.35, 0.5, 0.7, 1, 1.5, 2, 3, 4, 6, 8, 12, 16, 24, 32]:
-        tri, sim, full = fidelity.peer(cli, raw, dims, value, int(start * mult), out_dir)
+        tri, sim, _, _, full, _ = fidelity.peer(cli, raw, dims, value, int(start * mult), out_dir)
         if sim < target and tri < full:
             continue
         path = os.path.join(out_dir, "peer_%d.ply" % int(start * mult))

@@ -39,8 +39,9 @@ struct DualTriangleOptions {
   double rim_normal_cos = 0.4;   // a step d along the sheet has |d . n| / |d| below this
                                  // (n: the vertex normal); a voxel from which such a step
                                  // leaves the sheet is a rim voxel
-  double rim_push_voxels = 0.5;  // rim vertices this far out past the outermost voxels'
-                                 // centres: at the voxels' edge
+  double rim_push_voxels = 0.0;  // rim vertices this far out past the outermost voxels'
+                                 // centres (0.5: at the voxels' edge; off by default: the
+                                 // volume mesh's smallest angles suffer, RESULTS)
 };
 
 struct DualTriangleStats {

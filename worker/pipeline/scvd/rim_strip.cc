@@ -106,7 +106,15 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
     if (Norm2(q - (*pos)[g]) < 0.25) continue;  // the generator already sits on the rim
     // The voxels' edge, not their centres: half a voxel further out, so that prisms on
     // the strip hold the outermost layer where the outline runs between voxel centres.
-    q += outward[g] * options.rim_push_voxels;
+    // Not past the image's outermost voxel centres: where a sheet runs out of the image
+    // its outline is the image's edge, and the volume mesh's box face lies there.
+    const Vec3 pushed = q + outward[g] * options.rim_push_voxels;
+    const double extent[3] = {double(set.dims().nx - 1), double(set.dims().ny - 1),
+                              double(set.dims().nz - 1)};
+    for (int k = 0; k < 3; ++k) {
+      const bool leaves = pushed[k] < 0 || pushed[k] > extent[k];
+      q[k] = leaves ? std::clamp(q[k], 0.0, extent[k]) : pushed[k];
+    }
     rim_id[g] = static_cast<uint32_t>(pos->size());
     pos->push_back(q);
     out->rim_positions.push_back(q);

@@ -20,14 +20,16 @@ struct AtBudget {
   double similarity = 0;
 };
 
-// The mesh the triangle goal gives for `n` triangles, scored by formula 5.
+// The mesh the triangle goal gives for `n` triangles, scored by formula 5; rim vertices at
+// the voxels' edge (surface.rim_push 0.5).
 AtBudget Mesh(const SheetAnalysis& sheet, uint64_t n) {
   RadiusSearchOptions o;
   o.goal = RadiusGoal::kTriangles;
   o.target_triangles = n;
-  absl::StatusOr<RadiusChoice> c = SearchRadius(sheet, SurfaceOptions(), o);
-  EXPECT_TRUE(c.ok()) << c.status();
   SurfaceOptions s;
+  s.triangles.rim_push_voxels = 0.5;
+  absl::StatusOr<RadiusChoice> c = SearchRadius(sheet, s, o);
+  EXPECT_TRUE(c.ok()) << c.status();
   s.scvd.radius_voxels = c->radius;
   s.target_faces = c->decimate_to;
   AtBudget out;

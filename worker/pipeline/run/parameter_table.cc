@@ -274,8 +274,8 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Bool("surface.fit_walls", SM_MEMBER(surface.fit_walls),
                       "fit each face's thickness to the best formula-5 score of the prisms "
                       "together (false: the mean τ of the voxels it passes through)"));
-  rows.push_back(Number("surface.rim_push", SM_MEMBER(surface.triangles.rim_push_voxels),
-                        "[0, 1]", "voxels",
+  rows.push_back(Number("surface.rim_push", SM_MEMBER(surface.triangles.rim_push_voxels), "[0, 1]",
+                        "voxels",
                         "rim vertices this far past the outermost voxels' centres (0.5: at the "
                         "voxels' edge, a closer rim; 0: the volume mesh keeps larger angles)"));
   rows.push_back(Bool("surface.rim", SM_MEMBER(surface.triangles.rim),

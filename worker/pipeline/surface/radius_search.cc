@@ -32,8 +32,9 @@ class Evaluator {
   // Counts only, without the similarity, when `score` is false.
   // With `decimate_to`, the mesh is decimated to that many faces.
   absl::StatusOr<RadiusTrial> Eval(double r, bool score = true, uint64_t decimate_to = 0) {
+    // A trial made before serves unless it was only counted and a score is wanted now.
     auto it = done_.find({r, decimate_to});
-    if (it != done_.end()) return it->second;
+    if (it != done_.end() && (it->second.scored || !score)) return it->second;
     SM_RETURN_IF_ERROR(progress_.Update(0.0, absl::StrCat("trying r = ", r)));
     SurfaceOptions o = surface_;
     o.scvd.radius_voxels = r;
@@ -50,7 +51,7 @@ class Evaluator {
       t.similarity = 0.0;
     }
     t.decimated_to = decimate_to;
-    if (score) done_[{r, decimate_to}] = t;
+    done_[{r, decimate_to}] = t;
     trials_.push_back(t);
     return t;
   }

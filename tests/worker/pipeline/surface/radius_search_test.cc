@@ -103,9 +103,10 @@ TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
   SurfaceOptions coarsest;
   coarsest.scvd.radius_voxels = 12;
   SM_ASSERT_OK_AND_ASSIGN(SurfaceResult c, BuildSurface(sheet, coarsest));
-  EXPECT_THAT(SearchRadius(sheet, SurfaceOptions(), o),
-              StatusIs(absl::StatusCode::kInvalidArgument,
-                       ::testing::HasSubstr(absl::StrCat(c.mesh.num_faces(), " at the largest r"))));
+  EXPECT_THAT(
+      SearchRadius(sheet, SurfaceOptions(), o),
+      StatusIs(absl::StatusCode::kInvalidArgument,
+               ::testing::HasSubstr(absl::StrCat(c.mesh.num_faces(), " at the largest r"))));
   // More than the smallest r gives: the finest mesh, said not to reach it.
   o.target_triangles = 1000000;
   o.max_radius_voxels = 0;

@@ -92,6 +92,7 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
     adj[p].push_back(q);
     adj[q].push_back(p);
   }
+  for (std::vector<uint32_t>& ring : adj) std::sort(ring.begin(), ring.end());  // not hash order
   const double most = std::tan((180.0 - dihedral_degrees) / 2 * std::numbers::pi / 180);
   for (uint32_t v = 0; v < flat.size(); ++v) {
     if (folded[v] && flat[v] && FoldOfFit(positions, Neighbourhood(adj, v, fit_rings)) > most) {

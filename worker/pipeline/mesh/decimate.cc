@@ -42,7 +42,12 @@ struct Candidate {
   uint32_t u, v;  // u goes into v
   uint32_t stamp_u, stamp_v;
   Vec3 at;
-  bool operator>(const Candidate& o) const { return cost > o.cost; }
+  // Ties by vertex ids, so the order of collapses (and the result) is the same every run.
+  bool operator>(const Candidate& o) const {
+    if (cost != o.cost) return cost > o.cost;
+    if (u != o.u) return u > o.u;
+    return v > o.v;
+  }
 };
 
 class Decimator {
@@ -72,8 +77,14 @@ class Decimator {
       }
       for (int k = 0; k < 3; ++k) edge_faces[EdgeKey(t[k], t[(k + 1) % 3])].push_back(f);
     }
+    // In key order: the quadrics' sums and the heap's pushes must not follow the hash
+    // table's order, which differs between tables.
+    std::vector<std::pair<uint64_t, std::vector<uint32_t>>> edges(edge_faces.begin(),
+                                                                  edge_faces.end());
+    edge_faces = {};
+    std::sort(edges.begin(), edges.end());
     // Rims, junctions and seams between pieces.
-    for (const auto& [key, fs] : edge_faces) {
+    for (const auto& [key, fs] : edges) {
       const uint32_t a = static_cast<uint32_t>(key >> 32), b = static_cast<uint32_t>(key);
       if (fs.size() >= 3) {
         locked_[a] = locked_[b] = 1;
@@ -93,7 +104,7 @@ class Decimator {
         q_[b].AddPlane(m, -Dot(m, pos_[a]), w);
       }
     }
-    for (const auto& [key, fs] : edge_faces) {
+    for (const auto& [key, fs] : edges) {
       Push(static_cast<uint32_t>(key >> 32), static_cast<uint32_t>(key));
     }
   }

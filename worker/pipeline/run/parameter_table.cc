@@ -274,6 +274,12 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Bool("surface.fit_walls", SM_MEMBER(surface.fit_walls),
                       "fit each face's thickness to the best formula-5 score of the prisms "
                       "together (false: the mean τ of the voxels it passes through)"));
+  rows.push_back(Number("surface.error_density", SM_MEMBER(surface.error_density), "[0, 100]", "",
+                        "> 0: a second SCVD whose density ρ (formula 2) rises by this much where "
+                        "the first surface misses the sheet; the better by formula 5 is kept"));
+  rows.push_back(Integer("surface.smooth", SM_MEMBER(surface.smooth_iterations), "[0, 1000]", "",
+                         "λ|μ smoothing steps of the mid-surface where the sheet is thicker than "
+                         "its triangles are wide (0: none)"));
   rows.push_back(Number("surface.rim_push", SM_MEMBER(surface.triangles.rim_push_voxels), "[0, 1]",
                         "voxels",
                         "rim vertices this far past the outermost voxels' centres (0.5: at the "

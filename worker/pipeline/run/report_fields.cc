@@ -186,6 +186,12 @@ nlohmann::json SurfaceStats::Fields() const {
   j["components_without_triangles"] = skipped_components;
   j["voxels_without_triangles"] = skipped_voxels;
   j["topology"] = topology.Fields();
+  j["smoothed_vertices"] = smoothed_vertices;
+  if (error_density) {
+    j["error_density"] = {{"plain_similarity", error_density->plain_similarity},
+                          {"weighted_similarity", error_density->weighted_similarity},
+                          {"kept_weighted", error_density->kept_weighted}};
+  }
   if (decimation) {
     j["decimation"] = {{"dual_triangles", decimation->faces_before},
                        {"collapses", decimation->collapses},

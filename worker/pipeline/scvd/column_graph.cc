@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 
 namespace sheetmesh {
@@ -21,7 +22,7 @@ void RunAlong(const NeighborTable& nt, uint32_t start, int axis, std::vector<uin
 }  // namespace
 
 absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const NeighborTable& nt,
-                                             uint32_t max_column_voxels) {
+                                             uint32_t max_column_voxels, uint32_t vote_block) {
   const uint32_t n = static_cast<uint32_t>(set.size());
   // Run lengths along each axis, saturated at 65535.
   std::vector<std::array<uint16_t, 3>> len(n);
@@ -35,13 +36,59 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
     }
   }
   // Thin axis per voxel; z first, then y, then x on ties.
-  auto thin = [&](uint32_t v) {
+  std::vector<uint8_t> thin(n);
+  for (uint32_t v = 0; v < n; ++v) {
     int best = 2;
     for (int axis : {1, 0}) {
       if (len[v][axis] < len[v][best]) best = axis;
     }
-    return best;
-  };
+    thin[v] = static_cast<uint8_t>(best);
+  }
+  len = {};
+  // The shortest run is not always across the sheet: where a thick tilted sheet meets its
+  // own rim, runs along the sheet are cut short in a wedge and would cross the columns of
+  // their neighbours (stacked cells, folded triangles). So the axis is voted for in blocks
+  // about a thickness wide: every voxel takes the majority of its block and
+  // the 26 around it (its own vote on ties),
+  // and a column is a run its neighbourhood agrees is the thickness.
+  if (vote_block > 1) {
+    const Dims& d = set.dims();
+    const int64_t nbx = d.nx / vote_block + 3, nby = d.ny / vote_block + 3;
+    // Blocks are numbered with a margin of one, so the 27 around any block exist.
+    auto block_of = [&](int64_t bx, int64_t by, int64_t bz) {
+      return static_cast<uint64_t>(((bz + 1) * nby + by + 1) * nbx + bx + 1);
+    };
+    auto block_of_voxel = [&](int32_t x, int32_t y, int32_t z) {
+      return block_of(x / vote_block, y / vote_block, z / vote_block);
+    };
+    absl::flat_hash_map<uint64_t, std::array<uint32_t, 3>> own, votes;
+    set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+      ++own[block_of_voxel(x, y, z)][thin[v]];
+    });
+    // Each block's vote: its own and its 26 neighbours' voxels.
+    for (const auto& [key, count] : own) {
+      const int64_t bx = static_cast<int64_t>(key % nbx) - 1;
+      const int64_t by = static_cast<int64_t>(key / nbx % nby) - 1;
+      const int64_t bz = static_cast<int64_t>(key / nbx / nby) - 1;
+      std::array<uint32_t, 3>& sum = votes[key];
+      for (int64_t dz = -1; dz <= 1; ++dz)
+        for (int64_t dy = -1; dy <= 1; ++dy)
+          for (int64_t dx = -1; dx <= 1; ++dx) {
+            const auto it = own.find(block_of(bx + dx, by + dy, bz + dz));
+            if (it == own.end()) continue;
+            for (int a = 0; a < 3; ++a) sum[a] += it->second[a];
+          }
+    }
+    own = {};
+    set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+      const std::array<uint32_t, 3>& c = votes.at(block_of_voxel(x, y, z));
+      int best = thin[v];
+      for (int axis : {2, 1, 0}) {
+        if (c[axis] > c[best]) best = axis;
+      }
+      thin[v] = static_cast<uint8_t>(best);
+    });
+  }
   // Each voxel's column: the middle voxel of its run along its thin axis.
   std::vector<uint32_t> rep(n, kUnset);
   for (int axis = 0; axis < 3; ++axis) {
@@ -51,11 +98,11 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
       if (run.size() > max_column_voxels) continue;
       const uint32_t mid = run[(run.size() - 1) / 2];
       for (uint32_t w : run) {
-        if (thin(w) == axis) rep[w] = mid;
+        if (thin[w] == axis) rep[w] = mid;
       }
     }
   }
-  len = {};
+  thin = {};
   ColumnGraph g;
   std::vector<uint32_t> node_of_rep(n, kUnset);
   for (uint32_t v = 0; v < n; ++v) {

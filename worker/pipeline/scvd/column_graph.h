@@ -41,10 +41,12 @@ struct ColumnGraph {
 };
 
 // Builds the columns of `set`. Runs along a voxel's thinnest axis (ties: z, then y, then x)
-// of at most `max_column_voxels` voxels become columns. kResourceExhausted beyond 2^32
-// nodes.
+// of at most `max_column_voxels` voxels become columns; with `vote_block` > 1 the axis is
+// the majority of the thinnest axes in the voxel's block of vote_block^3 (about a thickness
+// wide), so runs cut short along the sheet near a rim do not cross the columns.
+// kResourceExhausted beyond 2^32 nodes.
 absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const NeighborTable& neighbors,
-                                             uint32_t max_column_voxels);
+                                             uint32_t max_column_voxels, uint32_t vote_block = 0);
 
 }  // namespace sheetmesh
 

@@ -124,6 +124,18 @@ absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& 
         absl::StrCat("SCVD mean thickness ", thickness, " voxels must be positive"));
   }
   if (set.empty()) return absl::InvalidArgumentError("SCVD of an empty sheet phase");
+  if (!o.density.empty()) {
+    if (o.density.size() != set.size()) {
+      return absl::InvalidArgumentError(absl::StrCat("SCVD density has ", o.density.size(),
+                                                     " values for ", set.size(), " voxels"));
+    }
+    for (float rho : o.density) {
+      if (!(rho > 0) || !std::isfinite(rho)) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("SCVD density ", rho, " must be positive and finite"));
+      }
+    }
+  }
   if (o.lloyd_max_iter < 0 || !(o.lloyd_tol >= 0)) {
     return absl::InvalidArgumentError(absl::StrCat("SCVD lloyd_max_iter ", o.lloyd_max_iter,
                                                    " and lloyd_tol ", o.lloyd_tol,
@@ -147,26 +159,33 @@ std::vector<Index3> Coordinates(const VoxelSet& set) {
   return xyz;
 }
 
-// Per cell sums for centroids and the energy against the current generators.
+// Per cell sums for centroids and the energy against the current generators (formula 2:
+// every voxel weighs its density ρ, 1 without one).
 struct CellStats {
-  std::vector<Vec3> sum;
-  std::vector<uint32_t> count;
+  std::vector<Vec3> sum;        // Σ ρ x
+  std::vector<double> weight;   // Σ ρ
+  std::vector<uint32_t> count;  // voxels
   double energy = 0;
+
+  Vec3 Centroid(uint32_t c) const { return sum[c] / weight[c]; }
 };
 
 CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>& cell,
-                     const std::vector<Index3>& generators) {
+                     const std::vector<Index3>& generators, std::span<const float> density) {
   CellStats s;
   s.sum.assign(generators.size(), Vec3());
+  s.weight.assign(generators.size(), 0.0);
   s.count.assign(generators.size(), 0);
   for (size_t v = 0; v < xyz.size(); ++v) {
     const uint32_t c = cell[v];
     if (c == kNoCell) continue;
+    const double rho = density.empty() ? 1.0 : density[v];
     const Index3& p = xyz[v];
-    s.sum[c] += Vec3(p.x, p.y, p.z);
+    s.sum[c] += Vec3(p.x, p.y, p.z) * rho;
+    s.weight[c] += rho;
     ++s.count[c];
     const double dx = p.x - generators[c].x, dy = p.y - generators[c].y, dz = p.z - generators[c].z;
-    s.energy += dx * dx + dy * dy + dz * dz;
+    s.energy += rho * (dx * dx + dy * dy + dz * dz);
   }
   return s;
 }
@@ -203,9 +222,29 @@ absl::StatusOr<std::vector<uint32_t>> SeedGenerators(const VoxelSet& set,
                     : GeneratorsForComponent(size, scvd->cell_volume);
     n = std::min<int64_t>(n, static_cast<int64_t>(nodes));
     uint32_t* m = members.data() + start[c];
-    for (int64_t k = 0; k < n; ++k) {
+    if (options.density.empty()) {
+      for (int64_t k = 0; k < n; ++k) {
+        const uint64_t j = k + rng.Below(nodes - k);
+        std::swap(m[k], m[j]);
+        seeds.push_back(m[k]);
+        scvd->generator_component.push_back(c);
+      }
+      continue;
+    }
+    // With a density, a node is kept with probability sqrt(ρ / ρ_max) as the shuffle
+    // reaches it (a planar CVT's cells are as dense as sqrt ρ), the rest in shuffle order
+    // if too few are kept.
+    float most = 0;
+    for (uint64_t k = 0; k < nodes; ++k) most = std::max(most, options.density[voxel_of(m[k])]);
+    uint64_t kept = 0;
+    for (uint64_t k = 0; k < nodes && kept < static_cast<uint64_t>(n); ++k) {
       const uint64_t j = k + rng.Below(nodes - k);
       std::swap(m[k], m[j]);
+      if (rng.Uniform() * most < std::sqrt(options.density[voxel_of(m[k])] * most)) {
+        std::swap(m[kept++], m[k]);
+      }
+    }
+    for (uint64_t k = 0; k < static_cast<uint64_t>(n); ++k) {
       seeds.push_back(m[k]);
       scvd->generator_component.push_back(c);
     }
@@ -229,7 +268,7 @@ std::vector<uint32_t> NearestToCentroids(const std::vector<Index3>& xyz,
     const uint32_t v = voxel_of(n);
     const uint32_t c = cell[v];
     if (c == kNoCell) continue;
-    const Vec3 centroid = stats.sum[c] / stats.count[c];
+    const Vec3 centroid = stats.Centroid(c);
     const double d2 = Norm2(Vec3(xyz[v].x, xyz[v].y, xyz[v].z) - centroid);
     if (d2 < best[c]) {
       best[c] = d2;
@@ -266,7 +305,8 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   if (columns) {
     const uint32_t cap =
         static_cast<uint32_t>(std::max(1.0, std::floor(options.max_column_thickness * t)));
-    SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap));
+    const auto block = static_cast<uint32_t>(std::clamp(std::round(t), 1.0, 64.0));
+    SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap, block));
   }
   const uint32_t num_nodes = columns ? cg.num_nodes() : static_cast<uint32_t>(set.size());
   auto voxel_of = [&](uint32_t n) { return columns ? cg.node_voxel[n] : n; };
@@ -290,7 +330,7 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
     } else {
       SM_ASSIGN_OR_RETURN(cell, GrowCells(neighbors, seeds, step));
     }
-    stats = Accumulate(xyz, cell, gen);
+    stats = Accumulate(xyz, cell, gen, options.density);
     scvd.energy.push_back(stats.energy);
     scvd.iterations = it + 1;
     if (it > 0) {
@@ -317,8 +357,7 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   scvd.cell_size = std::move(stats.count);
   scvd.centroid.resize(scvd.generators.size());
   for (size_t c = 0; c < scvd.centroid.size(); ++c) {
-    scvd.centroid[c] =
-        scvd.cell_size[c] > 0 ? stats.sum[c] / scvd.cell_size[c] : Vec3::Of(scvd.generators[c]);
+    scvd.centroid[c] = scvd.cell_size[c] > 0 ? stats.Centroid(c) : Vec3::Of(scvd.generators[c]);
   }
   scvd.adjacency = CellAdjacency(neighbors, cell);
   scvd.cell = std::move(cell);

@@ -41,6 +41,10 @@ struct ScvdOptions {
   double auto_column_ratio = 1.2;     // kAuto: the r / t̄ below which columns are used
   double max_column_thickness = 3.0;  // kColumns: runs longer than this many t̄ are extent,
                                       // not thickness, and are not merged into columns
+  // ρ of formula 2, one per voxel of the set, all positive; empty: ρ = 1. Centroids and the
+  // energy weigh each voxel by it, and seeds are drawn as sqrt ρ, so cells are smaller
+  // where it is larger. The caller keeps it alive.
+  std::span<const float> density;
 };
 
 // V_vol of formula 3: t̄ (1 + 2 r (r - 1)), the voxels of one cell.
@@ -58,7 +62,7 @@ struct Scvd {
   std::vector<uint32_t> generator_component;  // component of each generator
   std::vector<uint32_t> cell;                 // generator of each voxel
   std::vector<uint32_t> cell_size;            // voxels per cell
-  std::vector<Vec3> centroid;                 // centroid of each cell (formula 2, ρ = 1)
+  std::vector<Vec3> centroid;                 // centroid of each cell (formula 2)
   std::vector<std::pair<uint32_t, uint32_t>> adjacency;  // cells whose fronts met, a < b
   std::vector<double> energy;                            // E after each growth
   int iterations = 0;                                    // growths done

@@ -7,7 +7,9 @@
 #include "worker/pipeline/mesh/decimate.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/smooth.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/surface/error_density.h"
 #include "worker/pipeline/surface/face_attributes.h"
 #include "worker/pipeline/surface/wall_fit.h"
 
@@ -21,6 +23,7 @@ SurfaceOptions SurfaceOptions::Paper() {
   o.triangles.close_cracks = false;
   o.scvd.domain = ScvdDomain::kVoxels;
   o.fit_walls = false;
+  o.smooth_iterations = 0;
   return o;
 }
 
@@ -28,6 +31,9 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                            const SurfaceOptions& options,
                                            std::span<const int32_t> piece_of_voxel,
                                            const Progress& progress) {
+  if (options.error_density > 0) {
+    return BuildErrorDrivenSurface(sheet, options, piece_of_voxel, progress);
+  }
   SurfaceResult out;
   absl::Time t0 = absl::Now();
   SM_ASSIGN_OR_RETURN(
@@ -97,6 +103,12 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                              : piece_of_voxel[scvd.generator_voxel[g]];
   }
   mesh.face_piece = FaceLabels(mesh, vertex_piece);
+  if (options.smooth_iterations > 0) {
+    SmoothOptions so;
+    so.iterations = options.smooth_iterations;
+    out.smoothed_vertices =
+        SmoothVertices(&mesh, ThicknessSmoothingWeights(mesh, mesh.vertex_thickness), so);
+  }
   if (options.target_faces > 0 && mesh.faces.size() > options.target_faces) {
     DecimateOptions d;
     d.target_faces = options.target_faces;
@@ -146,6 +158,8 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   const TriangleMesh& mesh = result.mesh;
   SurfaceStats s;
   s.decimation = result.decimation;
+  s.smoothed_vertices = result.smoothed_vertices;
+  s.error_density = result.error_density;
   s.generators = result.scvd.num_generators();
   s.lloyd_iterations = result.scvd.iterations;
   s.lloyd_converged = result.scvd.converged;

@@ -32,13 +32,24 @@ struct SurfaceOptions {
   DualTriangleOptions triangles;  // candidate selection
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
-  bool orient = true;         // orient faces consistently per manifold piece
-  uint64_t target_faces = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
-  bool fit_walls = true;      // each face's thickness fitted to the prisms' best formula-5 score
-                              // (wall_fit.h; beyond the paper; false: the mean τ)
+  bool orient = true;          // orient faces consistently per manifold piece
+  uint64_t target_faces = 0;   // > 0: the dual mesh is decimated to this many faces (decimate.h)
+  bool fit_walls = true;       // each face's thickness fitted to the prisms' best formula-5 score
+                               // (wall_fit.h; beyond the paper; false: the mean τ)
+  double error_density = 0;    // > 0: a second SCVD with ρ from the first surface's local fit
+                               // error, this strong (error_density.h; beyond the paper)
+  int smooth_iterations = 30;  // λ|μ smoothing pairs where the sheet is thicker than the
+                               // triangles are wide (smooth.h; beyond the paper; 0: none)
 
   // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
   static SurfaceOptions Paper();
+};
+
+// What error-driven sizing did: both surfaces' formula-5 scores and which was kept.
+struct ErrorDensityStats {
+  double plain_similarity = 0;
+  double weighted_similarity = 0;
+  bool kept_weighted = false;
 };
 
 // A component that gave no triangle: too small for three cells at this r.
@@ -52,6 +63,8 @@ struct SurfaceResult {
   std::vector<uint32_t> vertex_generator;   // SCVD generator of each vertex of the dual mesh
                                             // (before any decimation)
   std::optional<DecimateStats> decimation;  // when target_faces decimated the mesh
+  size_t smoothed_vertices = 0;             // vertices the thick-sheet smoothing moved
+  std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
   Scvd scvd;
   DualTriangleStats triangle_stats;
   uint32_t components = 0;          // 6-connected components of the sheet
@@ -80,6 +93,8 @@ struct SurfaceStats {
   uint32_t skipped_components = 0;  // components too small for a triangle
   uint64_t skipped_voxels = 0;
   std::optional<DecimateStats> decimation;
+  uint64_t smoothed_vertices = 0;  // vertices the thick-sheet smoothing moved
+  std::optional<ErrorDensityStats> error_density;
 
   // The figures by name, the SCVD's and the topology nested, for the report.
   nlohmann::json Fields() const;

@@ -158,5 +158,34 @@ TEST(ScvdTest, UserGeneratorCountIsSpreadOverComponents) {
   EXPECT_EQ(s.num_generators(), 25u);
 }
 
+TEST(ScvdTest, DensityMakesCellsSmallerWhereItIsLarger) {
+  // Formula 2 with ρ = 9 on the half x < 48 of a slab and 1 on the rest.
+  const SheetAnalysis a = Analyze(PlaneSlab({96, 48, 12}, {48, 24, 6}, {0, 0, 1}, 3));
+  std::vector<float> rho(a.set.size());
+  a.set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t, int32_t) { rho[v] = x < 48 ? 9 : 1; });
+  ScvdOptions o;
+  o.radius_voxels = 4;
+  o.density = rho;
+  SM_ASSERT_OK_AND_ASSIGN(Scvd s,
+                          BuildScvd(a.set, a.neighbors, a.components, a.thickness_stats.mean, o));
+  const Scvd plain = Build(a, 4);
+  EXPECT_EQ(s.num_generators(), plain.num_generators()) << "the same budget";
+  auto left = [](const Scvd& d) {
+    size_t n = 0;
+    for (const Index3& g : d.generators) n += g.x < 48;
+    return double(n) / d.num_generators();
+  };
+  EXPECT_NEAR(left(plain), 0.5, 0.08);
+  EXPECT_GT(left(s), 0.6) << "sqrt 9 = 3 times the generators per area on the dense half";
+  // A density that does not match the set, or is not positive, is refused.
+  o.density = std::span<const float>(rho).first(rho.size() - 1);
+  EXPECT_THAT(BuildScvd(a.set, a.neighbors, a.components, 3, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("density")));
+  rho[7] = 0;
+  o.density = rho;
+  EXPECT_THAT(BuildScvd(a.set, a.neighbors, a.components, 3, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("density 0")));
+}
+
 }  // namespace
 }  // namespace sheetmesh

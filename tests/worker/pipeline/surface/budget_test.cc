@@ -107,5 +107,25 @@ TEST(BudgetTest, AHoleStaysAHoleAndTheRimIsCovered) {
   }
 }
 
+TEST(BudgetTest, TheSameBudgetGivesTheSameMeshEveryTime) {
+  // Decimation once followed a hash table's order, which differs between tables: the same
+  // budget gave a different mesh on each call.
+  const SheetAnalysis sheet =
+      *AnalyzeSheet(testing::ShapeSet({80, 80, 20}, [](double x, double y, double z) {
+        return std::abs(z - 10 - 3 * std::sin(x / 9)) <= 1.5 && std::hypot(x - 40, y - 40) < 35;
+      }));
+  SurfaceOptions s;
+  s.scvd.radius_voxels = 3;
+  s.target_faces = 100;
+  const SurfaceResult first = *BuildSurface(sheet, s);
+  ASSERT_TRUE(first.decimation.has_value());
+  for (int i = 0; i < 5; ++i) {
+    const SurfaceResult again = *BuildSurface(sheet, s);
+    EXPECT_EQ(again.mesh.faces, first.mesh.faces) << "call " << i;
+    EXPECT_EQ(again.mesh.vertices, first.mesh.vertices) << "call " << i;
+    EXPECT_EQ(again.mesh.face_thickness, first.mesh.face_thickness) << "call " << i;
+  }
+}
+
 }  // namespace
 }  // namespace sheetmesh

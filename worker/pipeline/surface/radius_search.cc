@@ -115,7 +115,7 @@ absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, doub
   // Fewer than the coarsest mesh has: the outline needs that many.
   const auto coarsest = std::max_element(seen.begin(), seen.end(),
                                          [](auto& x, auto& y) { return x.radius < y.radius; });
-  if (coarsest_below && double(target) < best->triangles) {
+  if (coarsest_below && !within(best->triangles) && double(target) < coarsest->triangles) {
     choice.radius = coarsest->radius;  // the decimation goes on from there
     return choice;
   }

@@ -84,6 +84,15 @@ TEST(RadiusSearchTest, TriangleGoalMeetsTheBudgetWithinFivePercent) {
       s.target_faces = c.decimate_to;
       SM_ASSERT_OK_AND_ASSIGN(SurfaceResult built, BuildSurface(sheet, s));
       EXPECT_NEAR(double(built.mesh.num_faces()), double(n), 0.05 * n) << "r = " << c.radius;
+      if (c.decimate_to > 0) {
+        // Decimated from the dual mesh of about four times the count (or the finest, at
+        // r_min), not from the one at the count (a search that stopped just above 4 n once
+        // fell back to the coarsest).
+        ASSERT_TRUE(built.decimation.has_value());
+        if (c.radius > o.min_radius_voxels) {
+          EXPECT_GE(built.decimation->faces_before, 3 * n) << "r = " << c.radius;
+        }
+      }
     }
   }
 }

@@ -42,13 +42,24 @@ struct Candidate {
   uint32_t u, v;  // u goes into v
   uint32_t stamp_u, stamp_v;
   Vec3 at;
-  // Ties by vertex ids, so the order of collapses (and the result) is the same every run.
+  uint64_t tie;  // a fixed scramble of the edge's vertex ids
+  // Ties (a flat sheet's edges all cost 0) go by the scramble: the same order every run, but
+  // spread over the sheet — an order swept along the vertex numbering, or by edge length,
+  // leaves collapses blocked early (a planar junction stopped at 120 of 100 triangles).
   bool operator>(const Candidate& o) const {
     if (cost != o.cost) return cost > o.cost;
+    if (tie != o.tie) return tie > o.tie;
     if (u != o.u) return u > o.u;
     return v > o.v;
   }
 };
+
+// SplitMix64's finaliser: a fixed, well-spread permutation of 64-bit keys.
+uint64_t Scramble(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
 
 class Decimator {
  public:
@@ -177,7 +188,8 @@ class Decimator {
       }
     }
     const uint32_t from = into == a ? b : a;
-    heap_.push({std::max(0.0, best), from, into, stamp_[from], stamp_[into], at});
+    heap_.push(
+        {std::max(0.0, best), from, into, stamp_[from], stamp_[into], at, Scramble(EdgeKey(a, b))});
   }
 
   // Collapses c.u into c.v at c.at; the faces removed, or -1 when not allowed.

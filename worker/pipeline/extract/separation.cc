@@ -61,11 +61,9 @@ std::vector<uint8_t> FlatVertices(std::span<const Vec3> positions, std::span<con
                                   double dihedral_degrees, int fit_rings) {
   std::vector<uint8_t> flat(positions.size(), 1);
   absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
-  auto key = [](uint32_t a, uint32_t b) {
-    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-  };
   for (uint32_t f = 0; f < faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) edge_faces[key(faces[f][k], faces[f][(k + 1) % 3])].push_back(f);
+    for (int k = 0; k < 3; ++k)
+      edge_faces[EdgeKey(faces[f][k], faces[f][(k + 1) % 3])].push_back(f);
   }
   std::vector<uint8_t> folded(positions.size(), 0);  // at a fold or an edge of 3+ triangles
   for (const auto& [k, fs] : edge_faces) {

@@ -33,10 +33,6 @@ struct Quadric {
   }
 };
 
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
 struct Candidate {
   double cost;
   uint32_t u, v;  // u goes into v

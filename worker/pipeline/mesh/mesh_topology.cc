@@ -9,11 +9,6 @@
 namespace sheetmesh {
 namespace {
 
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<uint64_t>(a) << 32) | b;
-}
-
 struct Dsu {
   std::vector<uint32_t> p;
   explicit Dsu(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0u); }

@@ -4,16 +4,7 @@
 #include <utility>
 #include <vector>
 
-#include "absl/container/flat_hash_map.h"
-
 namespace sheetmesh {
-namespace {
-
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
-}  // namespace
 
 std::vector<double> ThicknessSmoothingWeights(const TriangleMesh& mesh,
                                               std::span<const float> vertex_thickness) {
@@ -43,20 +34,25 @@ std::vector<double> ThicknessSmoothingWeights(const TriangleMesh& mesh,
 size_t SmoothVertices(TriangleMesh* mesh, std::span<const double> weight,
                       const SmoothOptions& options) {
   const size_t n = mesh->num_vertices();
-  absl::flat_hash_map<uint64_t, int> faces_of_edge;
+  // Edges sorted, so runs of one key count its faces and the rings' order (the order of
+  // the sums) is the same every run.
+  std::vector<uint64_t> edges;
+  edges.reserve(3 * mesh->faces.size());
   for (const Face& f : mesh->faces) {
-    for (int i = 0; i < 3; ++i) ++faces_of_edge[EdgeKey(f[i], f[(i + 1) % 3])];
+    for (int i = 0; i < 3; ++i) edges.push_back(EdgeKey(f[i], f[(i + 1) % 3]));
   }
+  std::sort(edges.begin(), edges.end());
   std::vector<uint8_t> fixed(n, 0);
   std::vector<std::vector<uint32_t>> ring(n);
-  for (const auto& [key, faces] : faces_of_edge) {
-    const auto a = static_cast<uint32_t>(key >> 32), b = static_cast<uint32_t>(key);
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    const auto a = static_cast<uint32_t>(edges[i] >> 32), b = static_cast<uint32_t>(edges[i]);
     ring[a].push_back(b);
     ring[b].push_back(a);
-    if (faces != 2) fixed[a] = fixed[b] = 1;
+    if (j - i != 2) fixed[a] = fixed[b] = 1;
+    i = j;
   }
-  // Sums in vertex order, not the hash table's, so every run gives the same mesh.
-  for (std::vector<uint32_t>& r : ring) std::sort(r.begin(), r.end());
   size_t moved = 0;
   std::vector<uint32_t> free;
   for (uint32_t v = 0; v < n; ++v) {

@@ -24,6 +24,11 @@ struct TriangleMesh {
   size_t num_faces() const { return faces.size(); }
 };
 
+// The key of the undirected edge {a, b}: the smaller id in the high half.
+inline uint64_t EdgeKey(uint32_t a, uint32_t b) {
+  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
+}
+
 // Corners of face `f`.
 inline std::array<Vec3, 3> Corners(const TriangleMesh& m, size_t f) {
   return {m.vertices[m.faces[f][0]], m.vertices[m.faces[f][1]], m.vertices[m.faces[f][2]]};

@@ -5,26 +5,14 @@
 
 #include <cmath>
 
+#include "tests/testing/meshes.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 
 namespace sheetmesh {
 namespace {
 
-// A grid of n x m unit quads, two triangles each, placed by `at(x, y)`.
-template <class At>
-TriangleMesh Grid(int n, int m, At at) {
-  TriangleMesh mesh;
-  for (int y = 0; y <= m; ++y)
-    for (int x = 0; x <= n; ++x) mesh.vertices.push_back(at(x, y));
-  auto id = [n](int x, int y) { return static_cast<uint32_t>(y * (n + 1) + x); };
-  for (int y = 0; y < m; ++y)
-    for (int x = 0; x < n; ++x) {
-      mesh.faces.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
-      mesh.faces.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
-    }
-  return mesh;
-}
+using ::sheetmesh::testing::Grid;
 
 double TotalArea(const TriangleMesh& m) {
   double a = 0;

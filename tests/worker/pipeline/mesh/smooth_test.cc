@@ -6,25 +6,18 @@
 
 #include <cmath>
 
+#include "tests/testing/meshes.h"
+
 namespace sheetmesh {
 namespace {
 
-// An n x n grid of unit squares, two triangles each, whose interior vertices wander in z by
-// +-1 in a checkerboard.
+// An n x n grid of unit squares whose interior vertices wander in z by +-1 in a
+// checkerboard.
 TriangleMesh WanderingGrid(int n) {
-  TriangleMesh m;
-  for (int y = 0; y <= n; ++y)
-    for (int x = 0; x <= n; ++x) {
-      const bool inner = x > 0 && y > 0 && x < n && y < n;
-      m.vertices.push_back(Vec3(x, y, inner ? ((x + y) % 2 ? 1.0 : -1.0) : 0.0));
-    }
-  auto id = [n](int x, int y) { return static_cast<uint32_t>(y * (n + 1) + x); };
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      m.faces.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
-      m.faces.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
-    }
-  return m;
+  return testing::Grid(n, n, [n](int x, int y) {
+    const bool inner = x > 0 && y > 0 && x < n && y < n;
+    return Vec3(x, y, inner ? ((x + y) % 2 ? 1.0 : -1.0) : 0.0);
+  });
 }
 
 double LargestWander(const TriangleMesh& m) {

@@ -57,6 +57,11 @@ uint64_t Scramble(uint64_t z) {
   return z ^ (z >> 31);
 }
 
+Face Sorted(Face f) {
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
 class Decimator {
  public:
   Decimator(TriangleMesh* mesh, const DecimateOptions& o)
@@ -152,16 +157,52 @@ class Decimator {
     return n;
   }
 
+  // How many alive faces share the edge (v, w), for every neighbour w of v.
+  std::vector<std::pair<uint32_t, int>> EdgeFaceCounts(uint32_t v) const {
+    std::vector<uint32_t> ends;
+    for (uint32_t f : faces_of_[v]) {
+      if (!alive_[f]) continue;
+      for (uint32_t w : mesh_.faces[f]) {
+        if (w != v) ends.push_back(w);
+      }
+    }
+    std::sort(ends.begin(), ends.end());
+    std::vector<std::pair<uint32_t, int>> counts;
+    for (uint32_t w : ends) {
+      if (counts.empty() || counts.back().first != w) counts.push_back({w, 0});
+      ++counts.back().second;
+    }
+    return counts;
+  }
+
+  // A vertex on junction curves (edges of three or more faces) that may slide along them:
+  // it has no boundary edge (where a curve reaches a rim, the vertex stays). The faces'
+  // quadrics, planes of every sheet meeting there, keep a curve straight and a point where
+  // curves meet in place.
+  bool MayFollowJunction(uint32_t v) const {
+    for (const auto& [w, n] : EdgeFaceCounts(v)) {
+      if (n == 1) return false;
+    }
+    return true;
+  }
+
   // Queues the cheaper direction of collapsing edge (a, b), if any is allowed.
   void Push(uint32_t a, uint32_t b) {
-    if (locked_[a] && locked_[b]) return;
     Quadric q = q_[a];
     q += q_[b];
     // Where the merged vertex may go: a locked vertex stays, a rim vertex stays on the rim.
     std::array<std::pair<uint32_t, Vec3>, 3> options;
     int n = 0;
     auto add = [&](uint32_t into, const Vec3& at) { options[n++] = {into, at}; };
-    if (locked_[a] || locked_[b]) {
+    if (locked_[a] && locked_[b]) {
+      // Along a junction curve: an inner vertex of the curve goes into its neighbour.
+      int shared = 0;
+      for (const auto& [w, count] : EdgeFaceCounts(a)) shared += w == b ? count : 0;
+      if (shared < 3) return;
+      if (MayFollowJunction(a)) add(b, pos_[b]);
+      if (MayFollowJunction(b)) add(a, pos_[a]);
+      if (n == 0) return;
+    } else if (locked_[a] || locked_[b]) {
       const uint32_t keep = locked_[a] ? a : b;
       add(keep, pos_[keep]);
     } else if (rim_[a] != rim_[b]) {
@@ -199,7 +240,7 @@ class Decimator {
         shared.push_back(f);
       }
     }
-    if (shared.empty() || shared.size() > 2) return -1;
+    if (shared.empty() || (shared.size() > 2 && !(locked_[u] && locked_[v]))) return -1;
     const std::vector<uint32_t> nu = Neighbours(u), nv = Neighbours(v);
     std::vector<uint32_t> common;
     std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
@@ -213,6 +254,20 @@ class Decimator {
       }
     }
     if (remaining == 0) return -1;
+    // Around a junction the link condition does not rule out two faces becoming one.
+    if (shared.size() > 2) {
+      std::vector<Face> at_v;
+      for (uint32_t f : faces_of_[v]) {
+        if (alive_[f]) at_v.push_back(Sorted(mesh_.faces[f]));
+      }
+      std::sort(at_v.begin(), at_v.end());
+      for (uint32_t f : faces_of_[u]) {
+        if (!alive_[f] || std::find(shared.begin(), shared.end(), f) != shared.end()) continue;
+        Face g = mesh_.faces[f];
+        for (uint32_t& x : g) x = x == u ? v : x;
+        if (std::binary_search(at_v.begin(), at_v.end(), Sorted(g))) return -1;
+      }
+    }
     // No face may flip, fold or degenerate.
     const double turn = std::cos(o_.max_normal_turn * 3.14159265358979323846 / 180.0);
     for (uint32_t w : {u, v}) {

@@ -29,8 +29,9 @@ struct DecimateStats {
 // Decimates `mesh` in place. Per-face arrays (face_piece, face_thickness) follow their
 // faces; per-vertex thickness is dropped (the caller recomputes what it needs). A collapse
 // that would change the mesh's topology (or take a piece's last faces), flip or fold a
-// face, or move a vertex of an edge of three or more faces is not made, so the target may
-// not be reached.
+// face, or move a vertex of an edge of three or more faces off its junction curve (or
+// move one where curves meet or a curve reaches a rim) is not made, so the target may not
+// be reached.
 DecimateStats Decimate(TriangleMesh* mesh, const DecimateOptions& options);
 
 }  // namespace sheetmesh

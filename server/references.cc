@@ -6,12 +6,13 @@
 namespace sheetmesh::server {
 
 absl::StatusOr<std::string> ResolveReference(const std::string& path,
-                                             const std::vector<std::string>& roots) {
+                                             const std::vector<std::string>& roots,
+                                             const char* field) {
   if (roots.empty()) {
     return absl::PermissionDeniedError(absl::StrCat(
-        "volume_path '", path, "': this server reads no paths (no --allowed_root configured)"));
+        field, " '", path, "': this server reads no paths (no --allowed_root configured)"));
   }
-  return ResolveUnderRoots(path, roots, "volume_path");
+  return ResolveUnderRoots(path, roots, field);
 }
 
 }  // namespace sheetmesh::server

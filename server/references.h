@@ -11,9 +11,12 @@
 namespace sheetmesh::server {
 
 // The real path of `path` when it lies under one of `roots`. kPermissionDenied naming the
-// path when it does not (or when no root is configured); kNotFound when it does not exist.
+// request's field (`field`: "volume_path" in a job's input, "path" in the volume calls) and
+// the path when it does not (or when no root is configured); kNotFound when it does not
+// exist.
 absl::StatusOr<std::string> ResolveReference(const std::string& path,
-                                             const std::vector<std::string>& roots);
+                                             const std::vector<std::string>& roots,
+                                             const char* field = "volume_path");
 
 }  // namespace sheetmesh::server
 

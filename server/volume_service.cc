@@ -65,7 +65,7 @@ grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
                                               v1::InspectVolumeResponse* response) {
   std::string tenant;
   if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
-  absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots);
+  absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots, "path");
   if (!path.ok()) return ToGrpcStatus(path.status());
   v1::JobInput input;
   *input.mutable_format() = r->format();
@@ -93,7 +93,7 @@ grpc::Status VolumeServiceImpl::ImportVolume(grpc::ServerContext* context,
                                              v1::ImportVolumeResponse* response) {
   std::string tenant;
   if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
-  absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots);
+  absl::StatusOr<std::string> path = ResolveReference(r->path(), ctx_->allowed_roots, "path");
   if (!path.ok()) return ToGrpcStatus(path.status());
   struct stat st;
   if (::stat(path->c_str(), &st) == 0 && st.st_size > ctx_->limits.max_blob_bytes) {

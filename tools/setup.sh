@@ -20,7 +20,12 @@ packages=(
   # Python tooling (always run with /usr/bin/python3)
   python3 python3-numpy python3-scipy python3-vtk9 python3-skimage python3-meshio
   python3-grpcio python3-protobuf python3-yaml
+  # the HTTP gateway (Go in GOPATH mode, no module downloads), previews, browser tests
+  golang-go golang-grpc-gateway golang-github-grpc-ecosystem-grpc-gateway-dev
+  golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev libpng-dev chromium
 )
+# Node and npm for the front-end: Debian's, unless the machine has its own.
+command -v npm >/dev/null || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -48,6 +48,7 @@ std::string MediaTypeOf(const std::string& name) {
     return "application/vnd.vtk+xml";
   if (absl::EndsWith(name, ".msh")) return "model/x-gmsh";
   if (absl::EndsWith(name, ".inp")) return "text/x-abaqus-input";
+  if (absl::EndsWith(name, ".png")) return "image/png";
   return "application/octet-stream";
 }
 

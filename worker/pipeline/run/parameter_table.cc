@@ -410,6 +410,9 @@ std::vector<ParamRow> OutputRows() {
                       "with extraction: the voxels the model dropped, labelled by why "
                       "(dropped_labels_<dims>_u16.raw: 1 refine, 2 specks, 3 crossings, 4 "
                       "minor pieces)"));
+  rows.push_back(Bool("output.previews", SM_MEMBER(output.previews),
+                      "PNG previews: three slices through the middle with the phase and the "
+                      "mesh's cross-section, and the largest sheet's thickness map"));
   rows.push_back(Formats(
       "output.volume_formats",
       {{"vtu", &OutputOptions::vtu}, {"msh", &OutputOptions::msh}, {"inp", &OutputOptions::inp}},

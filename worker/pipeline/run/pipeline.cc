@@ -9,6 +9,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/preview/previews.h"
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
@@ -60,12 +61,27 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
   return sim;
 }
 
+// The previews of `phase` (the input's sheet phase) and `mesh`, described in the report.
+absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const TriangleMesh& mesh,
+                           PipelineReport* report) {
+  for (Preview& p : RunPreviews(phase, mesh)) {
+    SM_ASSIGN_OR_RETURN(std::string png, EncodePng(p.image));
+    SM_RETURN_IF_ERROR(WriteFileAtomically((std::filesystem::path(dir) / p.file).string(), png));
+    report->files.push_back(p.file);
+    p.fields["file"] = p.file;
+    p.fields["width"] = p.image.width;
+    p.fields["height"] = p.image.height;
+    report->previews.push_back(p.fields.dump());
+  }
+  return absl::OkStatus();
+}
+
 // The files of options.output into options.output.dir, listed in report->files, the report
 // last. `volume` is null without a volume mesh.
 absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
-                          const TriangleMesh& mesh, const LabelledVoxels& model,
-                          const LabelledVoxels& dropped, const TetMesh* volume,
-                          PipelineReport* report) {
+                          const VoxelSet& phase, const TriangleMesh& mesh,
+                          const LabelledVoxels& model, const LabelledVoxels& dropped,
+                          const TetMesh* volume, PipelineReport* report) {
   const std::string& dir = options.output.dir;
   SM_RETURN_IF_ERROR(MakeDirs(dir));
   auto path = [&](const std::string& name) { return (std::filesystem::path(dir) / name).string(); };
@@ -90,6 +106,7 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
   if (volume != nullptr) {
     SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files));
   }
+  if (options.output.previews) SM_RETURN_IF_ERROR(WritePreviews(dir, phase, mesh, report));
   report->files.push_back("report.json");
   return WriteFileAtomically(path("report.json"), report->ToJson());
 }
@@ -244,8 +261,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
 
   if (!options.output.dir.empty()) {
     StageTimer t(&report, "write");
-    SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, mesh, model, dropped,
-                                    report.volume_mesh ? &volume.mesh : nullptr, &report));
+    SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, phase.sheet, mesh, model,
+                                    dropped, report.volume_mesh ? &volume.mesh : nullptr, &report));
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
   }
   return report;

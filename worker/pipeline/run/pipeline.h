@@ -43,6 +43,7 @@ struct OutputOptions {
   bool vtu = true;       // with a volume mesh: volume.vtu
   bool msh = true;       // volume.msh (Gmsh 4.1)
   bool inp = true;       // volume.inp (Abaqus)
+  bool previews = true;  // preview_slice_{x,y,z}.png, preview_thickness.png
 };
 
 struct PipelineOptions {
@@ -102,6 +103,7 @@ struct PipelineReport {
   std::optional<VolumeMeshStats> volume_mesh;
   std::vector<StageTime> timings;
   std::vector<std::string> files;  // written, relative to output.dir
+  std::vector<std::string> previews;  // each preview's description, as JSON text
 
   // The report as JSON (the report.json artifact): the sections this report has.
   std::string ToJson() const;

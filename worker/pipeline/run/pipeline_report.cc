@@ -73,6 +73,11 @@ std::string PipelineReport::ToJson() const {
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;
   j["seconds"] = times;
+  if (!previews.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const std::string& p : previews) list.push_back(nlohmann::json::parse(p));
+    j["previews"] = list;
+  }
   j["files"] = files;
   return JsonText(j, 2);
 }

@@ -1,0 +1,80 @@
+package main
+
+import (
+	"strings"
+	"testing"
+
+	"google.golang.org/grpc/codes"
+	pb "sheetmesh/v1"
+)
+
+func TestRanges(t *testing.T) {
+	for _, c := range []struct {
+		header           string
+		size             int64
+		start, end       int64
+		partial, satisfy bool
+	}{
+		{"", 100, 0, 100, false, true},
+		{"bytes=0-9", 100, 0, 10, true, true},
+		{"bytes=90-", 100, 90, 100, true, true},
+		{"bytes=90-500", 100, 90, 100, true, true},
+		{"bytes=-10", 100, 90, 100, true, true},
+		{"bytes=-500", 100, 0, 100, true, true},
+		{"bytes=100-", 100, 0, 0, false, false},
+		{"bytes=-0", 100, 0, 0, false, false},
+		{"bytes=5-2", 100, 0, 100, false, true},     // invalid: the whole blob
+		{"bytes=0-1,5-6", 100, 0, 100, false, true}, // several: the whole blob
+		{"items=0-1", 100, 0, 100, false, true},
+	} {
+		r, partial, ok := parseRange(c.header, c.size)
+		if ok != c.satisfy || (ok && (r.start != c.start || r.end != c.end || partial != c.partial)) {
+			t.Errorf("%q of %d: got [%d, %d) partial %v ok %v", c.header, c.size, r.start, r.end, partial, ok)
+		}
+	}
+}
+
+func TestCodesMapToHTTP(t *testing.T) {
+	want := map[codes.Code]int{codes.InvalidArgument: 400, codes.Unauthenticated: 401, codes.PermissionDenied: 403,
+		codes.NotFound: 404, codes.FailedPrecondition: 409, codes.AlreadyExists: 409, codes.ResourceExhausted: 429,
+		codes.Unavailable: 503, codes.Internal: 500, codes.DeadlineExceeded: 504}
+	for c, h := range want {
+		if got := httpStatus(c); got != h {
+			t.Errorf("%v: %d, want %d", c, got, h)
+		}
+	}
+	if codeName(codes.InvalidArgument) != "INVALID_ARGUMENT" || codeName(codes.Canceled) != "CANCELLED" ||
+		codeName(codes.NotFound) != "NOT_FOUND" {
+		t.Errorf("code names: %s %s %s", codeName(codes.InvalidArgument), codeName(codes.Canceled), codeName(codes.NotFound))
+	}
+}
+
+func TestUnknownFieldsAreRefused(t *testing.T) {
+	var req pb.CreateJobRequest
+	err := strictJSON{}.Unmarshal([]byte(`{"request_id": "a", "colour": "red"}`), &req)
+	if err == nil || !strings.Contains(err.Error(), "colour") || !strings.Contains(err.Error(), "sheetmesh.v1.CreateJobRequest") {
+		t.Fatalf("unknown field: %v", err)
+	}
+	if err := (strictJSON{}).Unmarshal([]byte(`{"request_id": "a", "parameters": {"r": 7, "volume_mesh": true}}`), &req); err != nil {
+		t.Fatal(err)
+	}
+	if req.GetParameters().GetR() != 7 || !req.GetParameters().GetVolumeMesh() {
+		t.Fatalf("parsed %v", req.GetParameters())
+	}
+	out, err := strictJSON{}.Marshal(&req)
+	if err != nil || !strings.Contains(string(out), `"request_id":"a"`) {
+		t.Fatalf("marshal: %s %v", out, err)
+	}
+}
+
+func TestFlags(t *testing.T) {
+	o, err := parseFlags([]string{"--cors_origins=https://a.example/, *", "--max_chunk_mb=8"})
+	if err != nil || len(o.corsOrigins) != 2 || o.corsOrigins[0] != "https://a.example" || o.maxChunkBytes != 8<<20 {
+		t.Fatalf("%+v %v", o, err)
+	}
+	for _, bad := range [][]string{{"--max_chunk_mb=0"}, {"--server_ca=x.pem"}, {"stray"}, {"--no_such_flag"}} {
+		if _, err := parseFlags(bad); err == nil {
+			t.Errorf("%v accepted", bad)
+		}
+	}
+}

@@ -1,0 +1,146 @@
+// sheetmesh-gateway: HTTP/JSON in front of the sheetmesh gRPC server, and the web
+// front-end. The JSON routes are generated from the protos and
+// deploy/gateway/sheetmesh_gateway.yaml; artifact downloads (raw bytes, ranges), resumable
+// uploads in chunks, the watch as newline-delimited JSON or Server-Sent Events, the
+// OpenAPI document and the front-end are served here.
+//
+//	sheetmesh-gateway --listen=127.0.0.1:8080 --server=127.0.0.1:50051
+//	    [--server_tls --server_ca=ca.pem --server_name=NAME] [--cors_origins=https://a,...]
+//	    [--web_root=DIR] [--port_file=FILE]
+//
+// A request's "Authorization: Bearer <token>" goes through to the server as is (GET
+// routes a browser opens without headers may carry it as ?access_token=).
+package main
+
+import (
+	"context"
+	"flag"
+	"fmt"
+	"log"
+	"net"
+	"net/http"
+	"os"
+	"os/signal"
+	"strings"
+	"syscall"
+	"time"
+
+	"google.golang.org/grpc"
+	"google.golang.org/grpc/credentials"
+)
+
+type options struct {
+	listen, server, serverCA, serverName, webRoot, portFile string
+	serverTLS                                               bool
+	corsOrigins                                             []string
+	maxChunkBytes                                           int64
+}
+
+func parseFlags(args []string) (options, error) {
+	var o options
+	fs := flag.NewFlagSet("sheetmesh-gateway", flag.ContinueOnError)
+	fs.StringVar(&o.listen, "listen", "127.0.0.1:8080", "HTTP address to listen on (port 0: any free port)")
+	fs.StringVar(&o.server, "server", "127.0.0.1:50051", "the sheetmesh gRPC server, host:port")
+	fs.BoolVar(&o.serverTLS, "server_tls", false, "talk TLS to the server")
+	fs.StringVar(&o.serverCA, "server_ca", "", "PEM certificates to trust for the server (default: the system's)")
+	fs.StringVar(&o.serverName, "server_name", "", "name to expect in the server's certificate (default: its host)")
+	cors := fs.String("cors_origins", "", "origins allowed to call from a browser, comma-separated ('*': any)")
+	fs.StringVar(&o.webRoot, "web_root", "", "serve the front-end from this folder instead of the built-in one")
+	fs.StringVar(&o.portFile, "port_file", "", "write the bound port here once listening (for scripts)")
+	chunkMB := fs.Int64("max_chunk_mb", 64, "largest upload chunk one request may carry, MiB")
+	if err := fs.Parse(args); err != nil {
+		return o, err
+	}
+	if fs.NArg() != 0 {
+		return o, fmt.Errorf("unexpected argument %q", fs.Arg(0))
+	}
+	if *chunkMB < 1 || *chunkMB > 4096 {
+		return o, fmt.Errorf("--max_chunk_mb=%d: must be within [1, 4096]", *chunkMB)
+	}
+	o.maxChunkBytes = *chunkMB << 20
+	for _, c := range strings.Split(*cors, ",") {
+		if c = strings.TrimSpace(c); c != "" {
+			o.corsOrigins = append(o.corsOrigins, strings.TrimRight(c, "/"))
+		}
+	}
+	if (o.serverCA != "" || o.serverName != "") && !o.serverTLS {
+		return o, fmt.Errorf("--server_ca and --server_name need --server_tls")
+	}
+	return o, nil
+}
+
+func dial(o options) (*grpc.ClientConn, error) {
+	creds := grpc.WithInsecure()
+	if o.serverTLS {
+		if o.serverCA != "" {
+			c, err := credentials.NewClientTLSFromFile(o.serverCA, o.serverName)
+			if err != nil {
+				return nil, fmt.Errorf("--server_ca=%s: %v", o.serverCA, err)
+			}
+			creds = grpc.WithTransportCredentials(c)
+		} else {
+			creds = grpc.WithTransportCredentials(credentials.NewClientTLSFromCert(nil, o.serverName))
+		}
+	}
+	// Blob reads come in pieces of at most 1 MiB; job lists can be larger.
+	return grpc.Dial(o.server, creds, grpc.WithDefaultCallOptions(grpc.MaxCallRecvMsgSize(64<<20)))
+}
+
+func main() {
+	log.SetFlags(log.LstdFlags | log.Lmicroseconds)
+	o, err := parseFlags(os.Args[1:])
+	if err != nil {
+		if err == flag.ErrHelp {
+			os.Exit(0)
+		}
+		fmt.Fprintln(os.Stderr, "sheetmesh-gateway:", err)
+		os.Exit(2)
+	}
+	conn, err := dial(o)
+	if err != nil {
+		fmt.Fprintln(os.Stderr, "sheetmesh-gateway:", err)
+		os.Exit(2)
+	}
+	defer conn.Close()
+	ctx, stop := context.WithCancel(context.Background())
+	defer stop()
+	handler, err := newGateway(ctx, conn, o)
+	if err != nil {
+		fmt.Fprintln(os.Stderr, "sheetmesh-gateway:", err)
+		os.Exit(2)
+	}
+	ln, err := net.Listen("tcp", o.listen)
+	if err != nil {
+		fmt.Fprintf(os.Stderr, "sheetmesh-gateway: --listen=%s: %v\n", o.listen, err)
+		os.Exit(2)
+	}
+	port := ln.Addr().(*net.TCPAddr).Port
+	if o.portFile != "" {
+		tmp := o.portFile + ".tmp"
+		if err := os.WriteFile(tmp, []byte(fmt.Sprintf("%d\n", port)), 0o644); err == nil {
+			err = os.Rename(tmp, o.portFile)
+		}
+		if err != nil {
+			fmt.Fprintf(os.Stderr, "sheetmesh-gateway: --port_file=%s: %v\n", o.portFile, err)
+			os.Exit(2)
+		}
+	}
+	srv := &http.Server{Handler: handler, ReadHeaderTimeout: 30 * time.Second}
+	done := make(chan struct{})
+	go func() {
+		sig := make(chan os.Signal, 1)
+		signal.Notify(sig, syscall.SIGINT, syscall.SIGTERM)
+		<-sig
+		stop() // ends the watches
+		c, cancel := context.WithTimeout(context.Background(), 10*time.Second)
+		defer cancel()
+		srv.Shutdown(c)
+		close(done)
+	}()
+	log.Printf("sheetmesh-gateway: listening on %s, server %s", ln.Addr(), o.server)
+	if err := srv.Serve(ln); err != http.ErrServerClosed {
+		fmt.Fprintln(os.Stderr, "sheetmesh-gateway:", err)
+		os.Exit(1)
+	}
+	<-done
+}

@@ -1,0 +1,383 @@
+#!/usr/bin/python3
+"""sheetmesh-gateway over a real sheetmesh-server on loopback: every route a browser or
+curl uses, with status codes and bodies, errors, the watch to the final state (JSON lines
+and Server-Sent Events), a resumed upload and ranged downloads checked against the
+artifact's digest.
+
+    /usr/bin/python3 tests/gateway/gateway_test.py SERVER_BIN GATEWAY_BIN PIPELINE_BIN
+"""
+
+import hashlib
+import http.client
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+import uuid
+
+import numpy as np
+
+SERVER_BIN = GATEWAY_BIN = PIPELINE_BIN = None
+TOKEN = "gateway-test-token"
+
+
+def wait_port(path, proc, what):
+    deadline = time.time() + 60
+    while not (path.exists() and path.read_text().endswith("\n")):
+        if time.time() > deadline or proc.poll() is not None:
+            raise RuntimeError("%s did not start" % what)
+        time.sleep(0.02)
+    return int(path.read_text())
+
+
+def decode_png(data):
+    """A PNG decoded by VTK's reader (libpng underneath) to an (h, w, 3) array, top row first."""
+    import vtk
+    from vtk.util import numpy_support
+    reader = vtk.vtkPNGReader()
+    reader.SetMemoryBuffer(data)
+    reader.SetMemoryBufferLength(len(data))
+    reader.Update()
+    img = reader.GetOutput()
+    w, h, _ = img.GetDimensions()
+    arr = numpy_support.vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)
+    return arr[::-1, :, :3]  # VTK's first row is the bottom one
+
+
+class GatewayTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = pathlib.Path(tempfile.mkdtemp(prefix="sheetmesh_gateway_"))
+        cls.root = cls.tmp / "root"
+        cls.root.mkdir()
+        cls.sample = cls.root / "rock_128x112x96_u8.raw"
+        subprocess.run([PIPELINE_BIN, "phantom", "--preset=sample", "-o", str(cls.sample)], check=True,
+                       stdout=subprocess.DEVNULL)
+        cls.slow = cls.root / "slow_256x256x256_u8.raw"
+        subprocess.run([PIPELINE_BIN, "phantom", "--dims=256x256x256", "--seed=14", "-o", str(cls.slow)],
+                       check=True, stdout=subprocess.DEVNULL)
+        (cls.tmp / "token").write_text(TOKEN + "\n")
+        cls.server = subprocess.Popen(
+            [SERVER_BIN, "--address=127.0.0.1:0", "--data_dir=%s" % (cls.tmp / "data"),
+             "--port_file=%s" % (cls.tmp / "port"), "--allowed_root=%s" % cls.root, "--workers=1",
+             "--max_queued_jobs=1", "--heartbeat_seconds=1", "--auth_token_file=%s" % (cls.tmp / "token")],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        port = wait_port(cls.tmp / "port", cls.server, "sheetmesh-server")
+        cls.gateway = subprocess.Popen(
+            [GATEWAY_BIN, "--listen=127.0.0.1:0", "--server=127.0.0.1:%d" % port,
+             "--port_file=%s" % (cls.tmp / "gport"), "--cors_origins=http://front.example", "--max_chunk_mb=1"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        cls.port = wait_port(cls.tmp / "gport", cls.gateway, "sheetmesh-gateway")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.gateway.terminate()
+        cls.server.terminate()
+        cls.gateway.wait(timeout=30)
+        cls.server.wait(timeout=60)
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    # --- helpers ------------------------------------------------------------------------
+
+    def request(self, method, path, body=None, headers=None, token=True):
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=120)
+        h = dict(headers or {})
+        if token:
+            h.setdefault("Authorization", "Bearer " + TOKEN)
+        if isinstance(body, (dict, list)):
+            body = json.dumps(body)
+            h.setdefault("Content-Type", "application/json")
+        conn.request(method, path, body=body, headers=h)
+        resp = conn.getresponse()
+        data = resp.read()
+        conn.close()
+        return resp, data
+
+    def json_call(self, method, path, body=None, status=200, **kw):
+        resp, data = self.request(method, path, body, **kw)
+        self.assertEqual(resp.status, status, data)
+        return json.loads(data) if data else None
+
+    def assert_error(self, resp, data, status, code, *words):
+        self.assertEqual(resp.status, status, data)
+        self.assertEqual(resp.getheader("Content-Type"), "application/json")
+        body = json.loads(data)
+        self.assertEqual(body["status"], code, body)
+        for w in words:
+            self.assertIn(w, body["message"])
+        return body
+
+    def upload(self, data, chunk=300_000, stop_after=None):
+        digest = hashlib.sha256(data).hexdigest()
+        base = "/v1/uploads/%s/blobs/%s/%d" % (uuid.uuid4().hex, digest, len(data))
+        offset = 0
+        while offset < len(data):
+            end = min(len(data), offset + chunk)
+            if stop_after is not None and offset >= stop_after:
+                return base, digest, offset
+            last = end == len(data)
+            r = self.json_call("PUT", "%s?offset=%d%s" % (base, offset, "&finish=true" if last else ""),
+                               data[offset:end], headers={"Content-Type": "application/octet-stream"})
+            offset = int(r["committed_size"])
+        return base, digest, offset
+
+    def create(self, **fields):
+        body = {"request_id": uuid.uuid4().hex}
+        body.update(fields)
+        return self.json_call("POST", "/v1/jobs", body)
+
+    def watch_lines(self, name):
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=300)
+        conn.request("GET", "/v1/%s:watch" % name, headers={"Authorization": "Bearer " + TOKEN})
+        resp = conn.getresponse()
+        self.assertEqual(resp.status, 200)
+        self.assertEqual(resp.getheader("Content-Type"), "application/x-ndjson")
+        states = []
+        for line in resp:
+            if line.strip():
+                msg = json.loads(line)
+                self.assertNotIn("error", msg)
+                states.append(msg["result"]["job"]["state"])
+        conn.close()
+        return states
+
+    def check_previews(self, job, report):
+        """The PNG previews exist, decode, have the size the report states, and their phase
+        pixels are the sample's phase in that slice."""
+        arts = {a["name"]: a for a in job["artifacts"]}
+        previews = {p["file"]: p for p in report["previews"]}
+        self.assertEqual(set(previews), {"preview_slice_x.png", "preview_slice_y.png", "preview_slice_z.png",
+                                         "preview_thickness.png"})
+        volume = np.fromfile(self.sample, dtype=np.uint8).reshape(96, 112, 128) == 255  # (z, y, x)
+        for name, p in previews.items():
+            self.assertEqual(arts[name]["media_type"], "image/png")
+            resp, data = self.request("GET", "/v1/%s/artifacts/%s" % (job["name"], name))
+            self.assertEqual((resp.status, resp.getheader("Content-Type")), (200, "image/png"))
+            img = decode_png(data)
+            self.assertEqual(img.shape, (p["height"], p["width"], 3), name)
+            if p["kind"] != "slice":
+                self.assertGreater(len(np.unique(img.reshape(-1, 3), axis=0)), 3, "a blank thickness map")
+                continue
+            axis = "xyz".index(p["axis"])
+            cut = np.take(volume, p["index"], axis=2 - axis)  # 2-D, (rows, cols) in (z|y, y|x) order
+            if p["rows_upward"]:
+                cut = cut[::-1]
+            k = int(p["pixels_per_voxel"])
+            truth = np.repeat(np.repeat(cut, k, axis=0), k, axis=1)
+            colours = p["colours"]
+            drawn = np.all(img == colours["mid_surface"], axis=2) | np.all(img == colours["prism_wall"], axis=2)
+            shown = np.all(img == colours["phase"], axis=2)
+            background = np.all(img == colours["background"], axis=2)
+            self.assertTrue(np.all(shown | background | drawn), name)
+            self.assertTrue(np.array_equal(shown[~drawn], truth[~drawn]), name)
+            self.assertGreater(shown.sum(), 0, name)
+            self.assertGreater(drawn.sum(), 0, "%s: no cross-section drawn" % name)
+
+    def cancel_all(self):
+        for j in self.json_call("GET", "/v1/jobs?page_size=1000")["jobs"]:
+            if j["state"] in ("QUEUED", "RUNNING"):
+                self.json_call("POST", "/v1/%s:cancel" % j["name"], {})
+        deadline = time.time() + 120
+        while any(j["state"] in ("QUEUED", "RUNNING") for j in self.json_call("GET", "/v1/jobs")["jobs"]):
+            self.assertLess(time.time(), deadline, "jobs did not end after cancel")
+            time.sleep(0.2)
+
+    # --- tests --------------------------------------------------------------------------
+
+    def test_a_mesh_job_end_to_end(self):
+        """Resumed upload, job from the digest, watch to SUCCEEDED, downloads whole and ranged."""
+        data = self.sample.read_bytes()
+        base, digest, stopped = self.upload(data, stop_after=600_000)
+        self.assertEqual(stopped, 600_000)
+        status = self.json_call("GET", base + ":status")
+        self.assertEqual(int(status["committed_size"]), 600_000)
+        self.assertFalse(status["complete"])
+        # A chunk beyond the committed size is refused, naming the offset; one that overlaps
+        # it (a chunk sent again after a break) adds only what is new.
+        resp, body = self.request("PUT", base + "?offset=900000", data[900_000:1_000_000])
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "write_offset 900000")
+        r = self.json_call("PUT", base + "?offset=500000", data[500_000:700_000])
+        self.assertEqual(int(r["committed_size"]), 700_000)
+        offset = 700_000
+        while offset < len(data):
+            end = min(len(data), offset + 300_000)
+            r = self.json_call("PUT", "%s?offset=%d%s" % (base, offset, "&finish=true" if end == len(data) else ""),
+                               data[offset:end])
+            offset = int(r["committed_size"])
+        self.assertTrue(r["complete"])
+        self.assertEqual(offset, len(data))
+        missing = self.json_call("POST", "/v1/blobs:findMissing",
+                                 {"digests": [{"hash": digest, "size_bytes": len(data)}]})
+        self.assertEqual(missing["missing"], [])
+
+        job = self.create(input={"volume_digest": {"hash": digest, "size_bytes": str(len(data))},
+                                 "file_name": self.sample.name},
+                          parameters={"labels": [255], "r": 7})
+        self.assertTrue(job["name"].startswith("jobs/"))
+        states = self.watch_lines(job["name"])
+        self.assertEqual(states[-1], "SUCCEEDED", states)
+        job = self.json_call("GET", "/v1/" + job["name"])
+        arts = {a["name"]: a for a in job["artifacts"]}
+        self.assertIn("report.json", arts)
+
+        # The whole artifact: raw bytes, its type, length, name, and the digest matches.
+        rep = arts["report.json"]
+        resp, body = self.request("GET", "/v1/%s/artifacts/report.json" % job["name"])
+        self.assertEqual(resp.status, 200)
+        self.assertEqual(resp.getheader("Content-Type"), "application/json")
+        self.assertEqual(int(resp.getheader("Content-Length")), int(rep["digest"]["size_bytes"]))
+        self.assertEqual(resp.getheader("Content-Disposition"), 'attachment; filename=report.json')
+        self.assertEqual(hashlib.sha256(body).hexdigest(), rep["digest"]["hash"])
+        report = json.loads(body)
+        self.assertIn("similarity", report)
+
+        # Ranges: the pieces put together are the artifact.
+        ply = arts["surface.ply"]
+        size = int(ply["digest"]["size_bytes"])
+        parts = []
+        for first, last in ((0, 999), (1000, size // 2), (size // 2 + 1, size - 1)):
+            resp, part = self.request("GET", "/v1/%s/artifacts/surface.ply" % job["name"],
+                                      headers={"Range": "bytes=%d-%d" % (first, last)})
+            self.assertEqual(resp.status, 206)
+            self.assertEqual(resp.getheader("Content-Range"), "bytes %d-%d/%d" % (first, last, size))
+            self.assertEqual(len(part), last - first + 1)
+            parts.append(part)
+        self.assertEqual(hashlib.sha256(b"".join(parts)).hexdigest(), ply["digest"]["hash"])
+        resp, tail = self.request("GET", "/v1/%s/artifacts/surface.ply" % job["name"],
+                                  headers={"Range": "bytes=-100"})
+        self.assertEqual((resp.status, tail), (206, b"".join(parts)[-100:]))
+        resp, body = self.request("GET", "/v1/%s/artifacts/surface.ply" % job["name"],
+                                  headers={"Range": "bytes=%d-" % size})
+        self.assertEqual(resp.status, 416)
+        self.assertEqual(resp.getheader("Content-Range"), "bytes */%d" % size)
+        resp, body = self.request("HEAD", "/v1/%s/artifacts/surface.ply" % job["name"])
+        self.assertEqual((resp.status, int(resp.getheader("Content-Length")), body), (200, size, b""))
+        # A link without headers carries the token in the query.
+        resp, body = self.request("GET", "/v1/%s/artifacts/report.json?access_token=%s" % (job["name"], TOKEN),
+                                  token=False)
+        self.assertEqual(resp.status, 200)
+        resp, body = self.request("GET", "/v1/%s/artifacts/nothing.bin" % job["name"])
+        self.assert_error(resp, body, 404, "NOT_FOUND", "nothing.bin", "report.json")
+
+        self.check_previews(job, report)
+
+        # The finished job watched as Server-Sent Events: its state, then the end.
+        resp, body = self.request("GET", "/v1/%s:watch" % job["name"], headers={"Accept": "text/event-stream"})
+        self.assertEqual(resp.status, 200)
+        self.assertEqual(resp.getheader("Content-Type"), "text/event-stream")
+        events = [e for e in body.decode().split("\n\n") if e.strip()]
+        self.assertTrue(events[0].startswith("event: job\ndata: "), events)
+        self.assertEqual(json.loads(events[0].split("data: ", 1)[1])["job"]["state"], "SUCCEEDED")
+        self.assertEqual(events[-1], "event: end\ndata: {}")
+
+        # The JSON routes on the finished job: get, list by state, delete, then 404.
+        listed = self.json_call("GET", "/v1/jobs?state=SUCCEEDED")
+        self.assertIn(job["name"], [j["name"] for j in listed["jobs"]])
+        self.json_call("DELETE", "/v1/" + job["name"])
+        resp, body = self.request("GET", "/v1/" + job["name"])
+        self.assert_error(resp, body, 404, "NOT_FOUND", job["name"])
+
+    def test_b_upload_with_a_wrong_digest_stores_nothing(self):
+        data = b"\x01" * 5000
+        wrong = hashlib.sha256(b"something else").hexdigest()
+        base = "/v1/uploads/%s/blobs/%s/%d" % (uuid.uuid4().hex, wrong, len(data))
+        resp, body = self.request("PUT", base + "?finish=true", data)
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT")
+        missing = self.json_call("POST", "/v1/blobs:findMissing", {"digests": [{"hash": wrong, "size_bytes": 5000}]})
+        self.assertEqual(len(missing["missing"]), 1)
+        # A chunk above the gateway's limit (1 MiB here) is refused before it is read.
+        base = "/v1/uploads/%s/blobs/%s/%d" % (uuid.uuid4().hex, "0" * 64, 3 << 20)
+        resp, body = self.request("PUT", base, b"\0" * (2 << 20))
+        self.assert_error(resp, body, 429, "RESOURCE_EXHAUSTED", "--max_chunk_mb")
+        resp, body = self.request("PUT", base + "?offset=-4", b"")
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "offset=\"-4\"")
+
+    def test_c_errors_map_to_http(self):
+        # Bad JSON, an unknown field, a missing field.
+        resp, body = self.request("POST", "/v1/jobs", "{not json", headers={"Content-Type": "application/json"})
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT")
+        resp, body = self.request("POST", "/v1/jobs", {"request_id": "x", "colour": "red"})
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "colour", "sheetmesh.v1.CreateJobRequest")
+        resp, body = self.request("POST", "/v1/jobs", {"input": {"volume_path": str(self.sample)}})
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "request_id")
+        resp, body = self.request("POST", "/v1/jobs", {"request_id": "bad-r", "input": {"volume_path": str(self.sample)},
+                                                       "parameters": {"r": -3}})
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "-3")
+        # Outside the allowed roots, missing, unknown job.
+        resp, body = self.request("POST", "/v1/volumes:inspect", {"path": "/etc/passwd"})
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "path '/etc/passwd'")
+        self.assertNotIn("volume_path", json.loads(body)["message"])
+        resp, body = self.request("POST", "/v1/volumes:inspect", {"path": str(self.root / "none.raw")})
+        self.assert_error(resp, body, 404, "NOT_FOUND")
+        inspected = self.json_call("POST", "/v1/volumes:inspect", {"path": str(self.sample)})
+        self.assertEqual(inspected["dims"], ["128", "112", "96"])
+        resp, body = self.request("GET", "/v1/jobs/no-such-job")
+        self.assert_error(resp, body, 404, "NOT_FOUND", "no-such-job")
+        resp, body = self.request("GET", "/v1/jobs/no-such-job:watch")
+        self.assert_error(resp, body, 404, "NOT_FOUND")
+        resp, body = self.request("GET", "/v1/jobs/no-such-job/artifacts/report.json")
+        self.assert_error(resp, body, 404, "NOT_FOUND")
+        # No token, a wrong token.
+        resp, body = self.request("GET", "/v1/jobs", token=False)
+        self.assert_error(resp, body, 401, "UNAUTHENTICATED", "bearer token")
+        resp, body = self.request("GET", "/v1/jobs", headers={"Authorization": "Bearer nope"})
+        self.assert_error(resp, body, 401, "UNAUTHENTICATED")
+        # Routes that do not exist, a method a route does not take.
+        resp, body = self.request("GET", "/v1/nothing")
+        self.assert_error(resp, body, 404, "NOT_FOUND")
+        resp, body = self.request("POST", "/v1/jobs/x/artifacts/report.json", {})
+        self.assert_error(resp, body, 405, "UNIMPLEMENTED", "GET")
+
+    def test_d_queue_full_is_429_and_running_jobs_conflict(self):
+        body = {"input": {"volume_path": str(self.slow)}, "parameters": {"extract": True}, "no_cache": True}
+        first = self.create(**body)
+        deadline = time.time() + 120
+        while self.json_call("GET", "/v1/" + first["name"])["state"] != "RUNNING":
+            self.assertLess(time.time(), deadline)
+            time.sleep(0.1)
+        try:
+            self.create(**body)  # queued
+            resp, data = self.request("POST", "/v1/jobs", dict(body, request_id=uuid.uuid4().hex))
+            self.assert_error(resp, data, 429, "RESOURCE_EXHAUSTED", "max_queued_jobs = 1")
+            resp, data = self.request("DELETE", "/v1/" + first["name"])
+            self.assert_error(resp, data, 409, "FAILED_PRECONDITION")
+            # Its artifacts are not there yet.
+            resp, data = self.request("GET", "/v1/%s/artifacts/report.json" % first["name"])
+            self.assert_error(resp, data, 409, "FAILED_PRECONDITION", "SUCCEEDED")
+        finally:
+            self.cancel_all()
+        self.assertEqual(self.json_call("GET", "/v1/" + first["name"])["state"], "CANCELLED")
+        self.assertIn(first["name"], [j["name"] for j in self.json_call("GET", "/v1/jobs?state=CANCELLED")["jobs"]])
+
+    def test_e_cors_openapi_and_front_end(self):
+        resp, body = self.request("OPTIONS", "/v1/jobs", token=False, headers={
+            "Origin": "http://front.example", "Access-Control-Request-Method": "POST",
+            "Access-Control-Request-Headers": "authorization,content-type"})
+        self.assertEqual(resp.status, 204)
+        self.assertEqual(resp.getheader("Access-Control-Allow-Origin"), "http://front.example")
+        self.assertIn("Authorization", resp.getheader("Access-Control-Allow-Headers"))
+        resp, body = self.request("OPTIONS", "/v1/jobs", token=False, headers={
+            "Origin": "http://elsewhere.example", "Access-Control-Request-Method": "POST"})
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "elsewhere.example")
+        resp, body = self.request("GET", "/v1/jobs", headers={"Origin": "http://front.example"})
+        self.assertEqual(resp.getheader("Access-Control-Allow-Origin"), "http://front.example")
+        doc = self.json_call("GET", "/openapi.json", token=False)
+        self.assertEqual(doc["swagger"], "2.0")
+        for p in ("/v1/jobs", "/v1/jobs/{id}/artifacts/{name}", "/v1/jobs/{id}:watch",
+                  "/v1/uploads/{uuid}/blobs/{hash}/{size}", "/v1/volumes:inspect"):
+            self.assertIn(p, doc["paths"])
+        resp, body = self.request("GET", "/", token=False)
+        self.assertEqual(resp.status, 200)
+        self.assertIn(b"<title>sheetmesh</title>", body)
+        resp, body = self.request("GET", "/jobs/anything", token=False)  # the front-end's own routes
+        self.assertIn(b"<title>sheetmesh</title>", body)
+
+
+if __name__ == "__main__":
+    SERVER_BIN, GATEWAY_BIN, PIPELINE_BIN = sys.argv[1:4]
+    del sys.argv[1:4]
+    unittest.main(verbosity=2)

@@ -1,0 +1,75 @@
+// The thickness histogram of the surface's triangles.
+import { BarController, BarElement, CategoryScale, Chart, LinearScale, Tooltip } from "chart.js";
+
+Chart.register(BarController, BarElement, CategoryScale, LinearScale, Tooltip);
+
+export function thicknessHistogram(canvas, values, bins = 20) {
+  if (!values.length) return null;
+  let lo = Math.min(...values), hi = Math.max(...values);
+  if (hi <= lo) hi = lo + 1;
+  const counts = new Array(bins).fill(0);
+  for (const v of values) counts[Math.min(bins - 1, Math.floor(((v - lo) / (hi - lo)) * bins))]++;
+  const labels = counts.map((_, i) => (lo + ((i + 0.5) * (hi - lo)) / bins).toFixed(2));
+  return new Chart(canvas, {
+    type: "bar",
+    data: { labels, datasets: [{ label: "triangles", data: counts, backgroundColor: "#4a7bd0" }] },
+    options: {
+      animation: false,
+      responsive: false,
+      plugins: { tooltip: { enabled: true } },
+      scales: {
+        x: { title: { display: true, text: "thickness (voxels)" } },
+        y: { title: { display: true, text: "triangles" }, beginAtZero: true },
+      },
+    },
+  });
+}
+
+// Per-face thickness from a binary little-endian or ASCII PLY written by sheetmesh.
+export function faceThickness(bytes) {
+  const head = new TextDecoder().decode(bytes.slice(0, Math.min(bytes.byteLength, 4096)));
+  const end = head.indexOf("end_header");
+  if (end < 0) return [];
+  const header = head.slice(0, end).split("\n").map((l) => l.trim());
+  const elements = [];
+  for (const l of header) {
+    const w = l.split(/\s+/);
+    if (w[0] === "element") elements.push({ name: w[1], count: Number(w[2]), props: [] });
+    else if (w[0] === "property" && elements.length) elements[elements.length - 1].props.push(w);
+  }
+  const binary = header.some((l) => l.startsWith("format binary_little_endian"));
+  const size = { char: 1, uchar: 1, short: 2, ushort: 2, int: 4, uint: 4, float: 4, double: 8, int8: 1, uint8: 1, int32: 4, uint32: 4, float32: 4, float64: 8 };
+  const out = [];
+  if (!binary) return out;
+  const view = new DataView(bytes);
+  let at = head.indexOf("\n", end) + 1;
+  const read = (type) => {
+    let v;
+    switch (type) {
+      case "float": case "float32": v = view.getFloat32(at, true); break;
+      case "double": case "float64": v = view.getFloat64(at, true); break;
+      case "int": case "int32": v = view.getInt32(at, true); break;
+      case "uint": case "uint32": v = view.getUint32(at, true); break;
+      case "uchar": case "uint8": v = view.getUint8(at); break;
+      case "char": case "int8": v = view.getInt8(at); break;
+      case "short": v = view.getInt16(at, true); break;
+      default: v = view.getUint16(at, true);
+    }
+    at += size[type];
+    return v;
+  };
+  for (const e of elements) {
+    for (let i = 0; i < e.count; ++i) {
+      for (const p of e.props) {
+        if (p[1] === "list") {
+          const k = read(p[2]);
+          for (let j = 0; j < k; ++j) read(p[3]);
+        } else {
+          const v = read(p[1]);
+          if (e.name === "face" && p[2] === "thickness_voxels") out.push(v);
+        }
+      }
+    }
+  }
+  return out;
+}

@@ -1,0 +1,41 @@
+// Small DOM helpers shared by the pages.
+
+const errorBox = document.getElementById("error");
+
+export function showError(e) {
+  errorBox.textContent = e ? (e.message || String(e)) : "";
+  errorBox.hidden = !e;
+}
+
+export function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "class") e.className = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else if (v !== undefined && v !== null && v !== false) e.setAttribute(k, v === true ? "" : v);
+  }
+  for (const c of children.flat()) e.append(c instanceof Node ? c : document.createTextNode(String(c)));
+  return e;
+}
+
+export function progressBar(fraction, label) {
+  const bar = el("div", { class: "bar", role: "progressbar", "aria-valuemin": 0, "aria-valuemax": 100,
+    "aria-valuenow": Math.round(100 * fraction) });
+  bar.append(el("div", { class: "fill", style: `width:${(100 * fraction).toFixed(1)}%` }), el("span", {}, label));
+  return bar;
+}
+
+export function jobFraction(j) {
+  if (j.state === "SUCCEEDED") return 1;
+  const p = j.progress || {};
+  if (!p.stage_count) return 0;
+  return Math.min(1, ((p.stage_index || 1) - 1 + (p.fraction || 0)) / p.stage_count);
+}
+
+export function jobLabel(j) {
+  const p = j.progress || {};
+  if (j.state === "RUNNING") return `RUNNING ${p.stage || ""} ${Math.round(100 * jobFraction(j))}%`;
+  return j.state;
+}
+
+

@@ -1,0 +1,108 @@
+// One job: live progress, then its figures, tables, histogram, 3D view and downloads.
+import * as api from "./api.js";
+import { faceThickness, thicknessHistogram } from "./charts.js";
+import { el, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
+
+const fmt = (v, d = 4) => (v === undefined || v === null || Number.isNaN(v) ? "–" : Number(v).toFixed(d));
+
+function numbers(report) {
+  const s = report.similarity || {};
+  const surf = report.surface || {};
+  const rows = [
+    ["similarity", "similarity", fmt(s.similarity)],
+    ["dice", "Dice", fmt(s.dice)],
+    ["hausdorff", "Hausdorff (voxels)", fmt(s.hausdorff_voxels, 2)],
+    ["triangles", "triangles", surf.triangles ?? "–"],
+    ["vertices", "vertices", surf.vertices ?? "–"],
+  ];
+  return el("table", { id: "numbers", class: "numbers" },
+    el("tbody", {}, rows.map(([key, label, v]) => el("tr", {}, el("th", {}, label), el("td", { "data-key": key }, String(v))))));
+}
+
+function piecesTable(report) {
+  const pieces = report.pieces || [];
+  if (!pieces.length) return el("p", {}, "No pieces table (run with extraction for dip, dip direction and aperture per piece).");
+  return el("table", { id: "pieces" },
+    el("thead", {}, el("tr", {}, ["piece", "sheet", "voxels", "triangles", "dip (°)", "dip direction (°)", "mean aperture", "max aperture"].map((h) => el("th", {}, h)))),
+    el("tbody", {}, pieces.map((p) => el("tr", {},
+      el("td", {}, p.piece), el("td", {}, p.sheet ?? ""), el("td", {}, p.voxels), el("td", {}, p.triangles),
+      el("td", {}, fmt(p.dip_degrees ?? p.dip, 1)), el("td", {}, fmt(p.dip_direction_degrees ?? p.dip_direction, 1)),
+      el("td", {}, fmt(p.mean_aperture, 2)), el("td", {}, fmt(p.max_aperture, 2))))));
+}
+
+function qualityTable(report) {
+  const vm = report.volume_mesh;
+  if (!vm) return el("p", {}, "No volume mesh (tick “volume mesh” to make one).");
+  const q = vm.quality || {};
+  const row = (label, key) => el("tr", {}, el("th", {}, label),
+    el("td", {}, fmt(q[key] && q[key].min, 3)), el("td", {}, fmt(q[key] && q[key].mean, 3)));
+  return el("table", { id: "quality" },
+    el("thead", {}, el("tr", {}, el("th", {}, "Table 3"), el("th", {}, "min"), el("th", {}, "mean"))),
+    el("tbody", {},
+      el("tr", {}, el("th", {}, "tetrahedra"), el("td", { colspan: 2, "data-key": "tetrahedra" }, String(vm.tetrahedra))),
+      el("tr", {}, el("th", {}, "nodes"), el("td", { colspan: 2, "data-key": "nodes" }, String(vm.nodes))),
+      row("dihedral angle (°)", "min_dihedral_degrees"), row("radius aspect", "radius_aspect"),
+      row("gamma", "gamma"), row("edge aspect", "edge_aspect")));
+}
+
+async function results(root, job) {
+  const names = (job.artifacts || []).map((a) => a.name);
+  root.append(el("h3", {}, "Downloads"), el("ul", { id: "downloads" }, (job.artifacts || []).map((a) =>
+    el("li", {}, el("a", { href: api.artifactUrl(job.name, a.name), download: a.name, "data-name": a.name }, a.name),
+      ` ${Number(a.digest.size_bytes).toLocaleString()} bytes, ${a.media_type}`))));
+  if (!names.includes("report.json")) return;
+  const report = await (await api.fetchArtifact(job.name, "report.json")).json();
+  root.append(el("h3", {}, "Fidelity"), numbers(report));
+  const previews = names.filter((n) => n.endsWith(".png"));
+  if (previews.length) {
+    root.append(el("h3", {}, "Previews"), el("div", { class: "previews" }, previews.map((n) =>
+      el("figure", {}, el("img", { src: api.artifactUrl(job.name, n), alt: n }), el("figcaption", {}, n)))));
+  }
+  root.append(el("h3", {}, "Pieces"), piecesTable(report), el("h3", {}, "Volume mesh"), qualityTable(report));
+  const ply = names.find((n) => n.endsWith(".ply"));
+  if (!ply) return;
+  const bytes = await (await api.fetchArtifact(job.name, ply)).arrayBuffer();
+  const canvas = el("canvas", { id: "histogram", width: 560, height: 240 });
+  root.append(el("h3", {}, "Thickness"), canvas);
+  thicknessHistogram(canvas, faceThickness(bytes));
+  const view = el("div", { id: "view3d", class: "view3d" });
+  const boundary = el("input", { id: "boundary", type: "checkbox", disabled: !report.volume_mesh });
+  root.append(el("h3", {}, "Surface"), el("label", {}, boundary, " volume mesh boundary"), view);
+  const { showSurface } = await import("./viewer.js");
+  const viewer = showSurface(view, bytes, report.input && report.input.dims);
+  boundary.addEventListener("change", () => viewer.setBoundary(boundary.checked));
+  view.dataset.ready = "1";
+  return viewer;
+}
+
+export function jobPage(app, name) {
+  const abort = new AbortController();
+  const head = el("div", { id: "job_head" });
+  const body = el("div", { id: "job_results" });
+  app.replaceChildren(el("section", {}, el("h2", {}, name), head, body));
+  let viewer = null;
+  const render = (j) => {
+    head.replaceChildren(progressBar(jobFraction(j), jobLabel(j)),
+      el("p", { id: "job_state", "data-state": j.state }, j.state,
+        j.state === "QUEUED" || j.state === "RUNNING" ? el("button", { onclick: () => api.cancelJob(name).catch(showError) }, "Cancel") : ""),
+      j.error && j.error.message ? el("p", { class: "error", id: "job_error" }, j.error.message) : "");
+  };
+  (async () => {
+    try {
+      let last = await api.getJob(name);
+      render(last);
+      if (last.state === "QUEUED" || last.state === "RUNNING") {
+        await api.watchJob(name, (j) => { last = j; render(j); }, abort.signal);
+        last = await api.getJob(name);
+        render(last);
+      }
+      if (last.state === "SUCCEEDED") viewer = await results(body, last);
+    } catch (e) {
+      if (!abort.signal.aborted) showError(e);
+    }
+  })();
+  return () => {
+    abort.abort();
+    if (viewer) viewer.dispose();
+  };
+}

@@ -1,0 +1,79 @@
+// The surface in 3D: triangles coloured by the thickness they carry, turned and zoomed
+// with the mouse; the volume mesh's boundary (the box) as an optional wireframe.
+import * as THREE from "three";
+import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
+import { PLYLoader } from "three/examples/jsm/loaders/PLYLoader.js";
+
+// Blue (thin) to red (thick).
+function colourOf(t) {
+  const c = new THREE.Color();
+  c.setHSL((1 - Math.min(1, Math.max(0, t))) * 0.66, 0.85, 0.5);
+  return c;
+}
+
+export function showSurface(container, plyBytes, dims) {
+  const loader = new PLYLoader();
+  loader.setCustomPropertyNameMapping({ thickness: ["thickness"] });
+  const geometry = loader.parse(plyBytes);
+  const thick = geometry.getAttribute("thickness");
+  const n = geometry.getAttribute("position").count;
+  let lo = Infinity, hi = -Infinity;
+  for (let i = 0; thick && i < n; ++i) {
+    lo = Math.min(lo, thick.getX(i));
+    hi = Math.max(hi, thick.getX(i));
+  }
+  const colours = new Float32Array(3 * n);
+  for (let i = 0; i < n; ++i) {
+    const t = thick && hi > lo ? (thick.getX(i) - lo) / (hi - lo) : 0.5;
+    const c = colourOf(t);
+    colours.set([c.r, c.g, c.b], 3 * i);
+  }
+  geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+  geometry.computeVertexNormals();
+
+  const width = container.clientWidth || 640, height = container.clientHeight || 480;
+  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setSize(width, height);
+  container.replaceChildren(renderer.domElement);
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xf4f5f7);
+  const mesh = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+  scene.add(mesh);
+  scene.add(new THREE.AmbientLight(0xffffff, 0.55));
+  const sun = new THREE.DirectionalLight(0xffffff, 0.9);
+  sun.position.set(1, 2, 3);
+  scene.add(sun);
+
+  const [nx, ny, nz] = dims || [1, 1, 1];
+  const box = new THREE.LineSegments(
+    new THREE.EdgesGeometry(new THREE.BoxGeometry(nx, ny, nz)),
+    new THREE.LineBasicMaterial({ color: 0x555555 }));
+  box.position.set(nx / 2 - 0.5, ny / 2 - 0.5, nz / 2 - 0.5);
+  box.visible = false;
+  scene.add(box);
+
+  const centre = new THREE.Vector3(nx / 2, ny / 2, nz / 2);
+  const span = Math.max(nx, ny, nz);
+  const camera = new THREE.PerspectiveCamera(40, width / height, span / 100, span * 20);
+  camera.position.set(centre.x + span * 1.2, centre.y - span * 1.4, centre.z + span * 1.1);
+  camera.up.set(0, 0, 1);
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.target.copy(centre);
+  controls.update();
+  const draw = () => renderer.render(scene, camera);
+  controls.addEventListener("change", draw);
+  draw();
+  return {
+    range: [lo, hi],
+    setBoundary(on) {
+      box.visible = on;
+      draw();
+    },
+    dispose() {
+      controls.dispose();
+      renderer.dispose();
+      geometry.dispose();
+    },
+  };
+}

@@ -1,0 +1,66 @@
+// Previews: PNG pictures of a run for those who cannot open a 3D viewer (the CLI, the
+// Python client, CI logs). Three orthogonal slices through the middle of the volume with
+// the sheet phase and the mesh's cross-section (its mid-surface and the walls of its
+// prisms) drawn over them, and the thickness map of the largest sheet.
+#ifndef SHEETMESH_WORKER_PIPELINE_PREVIEW_PREVIEWS_H_
+#define SHEETMESH_WORKER_PIPELINE_PREVIEW_PREVIEWS_H_
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "nlohmann/json.hpp"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh {
+
+// The colours of the slice previews (RGB).
+inline constexpr std::array<uint8_t, 3> kPreviewBackground = {32, 36, 44};
+inline constexpr std::array<uint8_t, 3> kPreviewPhase = {120, 190, 255};
+inline constexpr std::array<uint8_t, 3> kPreviewMidSurface = {255, 60, 40};
+inline constexpr std::array<uint8_t, 3> kPreviewPrismWall = {255, 190, 40};
+
+// An RGB picture, rows top to bottom.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb;  // 3 * width * height
+
+  void Set(int x, int y, const std::array<uint8_t, 3>& c) {
+    if (x < 0 || y < 0 || x >= width || y >= height) return;
+    uint8_t* p = &rgb[3 * (static_cast<size_t>(y) * width + x)];
+    p[0] = c[0], p[1] = c[1], p[2] = c[2];
+  }
+};
+
+// One preview: its file and what its pixels show (the report lists these).
+struct Preview {
+  std::string file;  // "preview_slice_z.png", "preview_thickness.png"
+  RgbImage image;
+  nlohmann::json fields;  // kind, axis, index, rows and columns, scale, ...
+};
+
+// The slice through the middle of the volume normal to `axis` (0 x, 1 y, 2 z). Pixels are
+// square blocks of `scale` voxels' width (scale ≥ 1 for volumes up to 1024 across, below
+// 1 beyond, the nearest voxel taken); the slice of x or y has z upwards. Phase voxels in
+// kPreviewPhase, the rest kPreviewBackground, the mesh's mid-surface and prism walls
+// drawn over them.
+Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis);
+
+// The largest sheet (the faces joined across edges of two faces of one piece, the group of
+// largest area) seen along its mean normal, each triangle filled with the colour of its thickness
+// (blue thin to yellow thick), a colour bar along the bottom. Empty mesh: a blank picture saying so
+// in fields.
+Preview ThicknessPreview(const TriangleMesh& mesh);
+
+// The PNG encoding of `image` (8-bit RGB).
+absl::StatusOr<std::string> EncodePng(const RgbImage& image);
+
+// The four previews of a run.
+std::vector<Preview> RunPreviews(const VoxelSet& phase, const TriangleMesh& mesh);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_PREVIEW_PREVIEWS_H_

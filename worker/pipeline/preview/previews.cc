@@ -323,11 +323,4 @@ absl::StatusOr<std::string> EncodePng(const RgbImage& image) {
   return out;
 }
 
-std::vector<Preview> RunPreviews(const VoxelSet& phase, const TriangleMesh& mesh) {
-  std::vector<Preview> out;
-  for (int axis : {0, 1, 2}) out.push_back(SlicePreview(phase, mesh, axis));
-  out.push_back(ThicknessPreview(mesh));
-  return out;
-}
-
 }  // namespace sheetmesh

@@ -58,9 +58,6 @@ Preview ThicknessPreview(const TriangleMesh& mesh);
 // The PNG encoding of `image` (8-bit RGB).
 absl::StatusOr<std::string> EncodePng(const RgbImage& image);
 
-// The four previews of a run.
-std::vector<Preview> RunPreviews(const VoxelSet& phase, const TriangleMesh& mesh);
-
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_PREVIEW_PREVIEWS_H_

@@ -64,8 +64,11 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
 // The previews of `phase` (the input's sheet phase) and `mesh`, described in the report.
 absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const TriangleMesh& mesh,
                            PipelineReport* report) {
-  for (Preview& p : RunPreviews(phase, mesh)) {
+  for (int k = 0; k < 4; ++k) {
+    const absl::Time start = absl::Now();
+    Preview p = k < 3 ? SlicePreview(phase, mesh, k) : ThicknessPreview(mesh);
     SM_ASSIGN_OR_RETURN(std::string png, EncodePng(p.image));
+    p.fields["seconds"] = absl::ToDoubleSeconds(absl::Now() - start);  // drawn and encoded
     SM_RETURN_IF_ERROR(WriteFileAtomically((std::filesystem::path(dir) / p.file).string(), png));
     report->files.push_back(p.file);
     p.fields["file"] = p.file;

@@ -62,6 +62,9 @@ func decodeStrict(d *json.Decoder, v interface{}) error {
 	}
 	u := jsonpb.Unmarshaler{AllowUnknownFields: false}
 	if err := u.UnmarshalNext(d, m); err != nil {
+		if err == io.EOF {
+			return err // the end of a stream of requests, not an error
+		}
 		// Name the message as the protos do, not as its Go package does.
 		return fmt.Errorf("request body: %s", strings.ReplaceAll(err.Error(), "sheetmeshv1.", "sheetmesh.v1."))
 	}

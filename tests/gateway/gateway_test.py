@@ -353,6 +353,34 @@ class GatewayTest(unittest.TestCase):
         self.assertEqual(self.json_call("GET", "/v1/" + first["name"])["state"], "CANCELLED")
         self.assertIn(first["name"], [j["name"] for j in self.json_call("GET", "/v1/jobs?state=CANCELLED")["jobs"]])
 
+    def test_f_the_generated_blob_and_volume_routes(self):
+        """ImportVolume, the Write stream as JSON lines, the Read stream as JSON."""
+        imported = self.json_call("POST", "/v1/volumes:import", {"path": str(self.sample)})
+        data = self.sample.read_bytes()
+        self.assertEqual(imported["digest"]["hash"], hashlib.sha256(data).hexdigest())
+        resp, body = self.request("POST", "/v1/volumes:import", {"path": "/etc/hostname"})
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "path '/etc/hostname'")
+        # A blob written as newline-delimited WriteRequests (base64 data), read back in pieces.
+        blob = bytes(range(256)) * 40
+        digest = hashlib.sha256(blob).hexdigest()
+        resource = "uploads/%s/blobs/%s/%d" % (uuid.uuid4().hex, digest, len(blob))
+        import base64
+        lines = [json.dumps({"resource_name": resource, "write_offset": 0,
+                             "data": base64.b64encode(blob[:6000]).decode()}),
+                 json.dumps({"write_offset": 6000, "finish_write": True,
+                             "data": base64.b64encode(blob[6000:]).decode()})]
+        written = self.json_call("POST", "/v1/uploads:write", "\n".join(lines))
+        self.assertEqual(int(written["committed_size"]), len(blob))
+        resp, body = self.request("GET", "/v1/blobs/%s/%d?read_offset=100&read_limit=1000" % (digest, len(blob)))
+        self.assertEqual(resp.status, 200)
+        pieces = [json.loads(line)["result"]["data"] for line in body.decode().splitlines() if line.strip()]
+        self.assertEqual(b"".join(base64.b64decode(p) for p in pieces), blob[100:1100])
+        # A streamed route reports a failure inside the stream, as grpc-gateway does.
+        resp, body = self.request("GET", "/v1/blobs/%s/%d" % ("ab" * 32, 5))
+        err = json.loads(body.decode().splitlines()[-1])["error"]
+        self.assertEqual((err["grpc_code"], err["http_code"]), (5, 404))
+        self.assertIn("is not stored", err["message"])
+
     def test_e_cors_openapi_and_front_end(self):
         resp, body = self.request("OPTIONS", "/v1/jobs", token=False, headers={
             "Origin": "http://front.example", "Access-Control-Request-Method": "POST",

@@ -82,6 +82,12 @@ class JobStore {
 // SQLite in WAL mode at `path`.
 absl::StatusOr<std::unique_ptr<JobStore>> OpenSqliteJobStore(const std::string& path);
 
+// PostgreSQL named by a libpq connection string ("host=db port=5432 dbname=sheetmesh
+// user=sheetmesh", or a postgresql:// URI), for several servers over one database; the
+// tables are made when missing. kUnavailable naming the address when it cannot connect;
+// later calls answer kUnavailable while the database is gone and work again when it is back.
+absl::StatusOr<std::unique_ptr<JobStore>> OpenPostgresJobStore(const std::string& conninfo);
+
 }  // namespace sheetmesh::server
 
 #endif  // SHEETMESH_SERVER_JOB_STORE_H_

@@ -65,7 +65,7 @@ void LocalJobHost::MarkCancelled(const std::string& job) {
 bool LocalJobHost::ReportProgress(const std::string& job, const std::string& worker,
                                   const runtime::ProgressUpdate& u) {
   const absl::Time now = absl::Now();
-  bool notify = false, store = false, new_stage = false;
+  bool notify = false, store = false, new_stage = false, check_cancel = false;
   v1::JobProgress snapshot;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -90,12 +90,23 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
       store = true;
       live.stored = now;
     }
+    if (now - live.cancel_checked >= options_.cancel_poll_interval) {
+      check_cancel = true;
+      live.cancel_checked = now;
+    }
     snapshot = live.progress;
     // A stage's start is recorded before anyone can read it as the live progress (Progress
     // takes mu_), so a watcher that sees stage k has every stage before k in its log too.
     if (new_stage) events_->NotifyStage(job, snapshot);
   }
   if (store && !store_->SetProgress(job, worker, snapshot).ok()) return false;
+  if (check_cancel) {
+    absl::StatusOr<bool> stop = store_->CancelRequested(job);
+    if (stop.ok() && *stop) {
+      MarkCancelled(job);
+      return false;
+    }
+  }
   if (!new_stage && notify) events_->Notify(job);
   return true;
 }

@@ -25,6 +25,9 @@ struct LocalJobHostOptions {
   std::string scratch_dir;                                    // per-job links to uploaded volumes
   absl::Duration lease = absl::Seconds(30);                   // lease length
   absl::Duration progress_store_interval = absl::Seconds(2);  // store progress this often
+  // Look this often whether the store says stop (a cancel asked of another server over the
+  // same database, or the lease lost).
+  absl::Duration cancel_poll_interval = absl::Seconds(1);
 };
 
 // Thread-safe.
@@ -57,6 +60,7 @@ class LocalJobHost : public runtime::JobHost {
     absl::Time stored;    // when progress was last stored
     absl::Time notified;  // when watchers were last told
     double notified_fraction = -1;
+    absl::Time cancel_checked;  // when the store was last asked whether to stop
   };
 
   JobStore* store_;

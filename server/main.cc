@@ -23,6 +23,14 @@
 ABSL_FLAG(std::string, address, "127.0.0.1:50051",
           "host:port to listen on (port 0: any free port)");
 ABSL_FLAG(std::string, data_dir, "", "folder of the job store, blobs and scratch (required)");
+ABSL_FLAG(
+    std::string, postgres, "",
+    "libpq connection string (\"host=db dbname=sheetmesh user=sheetmesh\" or postgresql://...): "
+    "jobs in PostgreSQL, shared by every server over it and one blob folder, instead of "
+    "DATA_DIR/jobs.db");
+ABSL_FLAG(std::string, scratch_dir, "",
+          "the workers' scratch, emptied at start (default DATA_DIR/scratch; each server its own "
+          "when several share a data folder)");
 ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
 ABSL_FLAG(std::string, allowed_root, "",
           "comma-separated folders whose volumes jobs may name by path");
@@ -73,6 +81,8 @@ sheetmesh::server::ServerOptions OptionsFromFlags() {
   sheetmesh::server::ServerOptions o;
   o.address = absl::GetFlag(FLAGS_address);
   o.data_dir = absl::GetFlag(FLAGS_data_dir);
+  o.postgres = absl::GetFlag(FLAGS_postgres);
+  o.scratch_dir = absl::GetFlag(FLAGS_scratch_dir);
   o.workers = absl::GetFlag(FLAGS_workers);
   for (absl::string_view r :
        absl::StrSplit(absl::GetFlag(FLAGS_allowed_root), ',', absl::SkipEmpty())) {

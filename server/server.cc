@@ -7,6 +7,7 @@
 #include <grpcpp/resource_quota.h>
 #include <sys/resource.h>
 #include <sys/statvfs.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <condition_variable>
@@ -14,6 +15,7 @@
 #include <iostream>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
@@ -25,6 +27,12 @@
 
 namespace sheetmesh::server {
 namespace {
+
+// The job store the options name: PostgreSQL, or SQLite in the data folder.
+absl::StatusOr<std::unique_ptr<JobStore>> OpenJobStore(const ServerOptions& o) {
+  if (!o.postgres.empty()) return OpenPostgresJobStore(o.postgres);
+  return OpenSqliteJobStore(o.data_dir + "/jobs.db");
+}
 
 // Descriptors this process holds, and its limit.
 std::pair<int64_t, int64_t> Descriptors() {
@@ -191,19 +199,21 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
     SM_ASSIGN_OR_RETURN(s.tenants, Tenants::FromToken(o.auth_token));
   }
   SM_RETURN_IF_ERROR(MakeDirs(o.data_dir));
+  const std::string scratch = o.scratch_dir.empty() ? o.data_dir + "/scratch" : o.scratch_dir;
   // Nothing runs yet: what the scratch folder holds is left from a previous process (the
   // inputs and outputs of jobs it was running, failed or requeued since).
   std::error_code ec;
-  std::filesystem::remove_all(o.data_dir + "/scratch", ec);
-  SM_RETURN_IF_ERROR(MakeDirs(o.data_dir + "/scratch"));
-  SM_ASSIGN_OR_RETURN(s.jobs, OpenSqliteJobStore(o.data_dir + "/jobs.db"));
+  std::filesystem::remove_all(scratch, ec);
+  SM_RETURN_IF_ERROR(MakeDirs(scratch));
+  SM_ASSIGN_OR_RETURN(s.jobs, OpenJobStore(o));
   SM_ASSIGN_OR_RETURN(s.blobs, BlobStore::Open(o.data_dir + "/blobs"));
-  // Jobs that were running when the previous process ended have no worker any more.
-  SM_RETURN_IF_ERROR(s.jobs->RequeueExpired(o.max_attempts, /*all=*/true).status());
+  // Jobs that were running when the previous process ended have no worker any more. Over
+  // PostgreSQL other servers' workers may be running theirs: only expired leases go back.
+  SM_RETURN_IF_ERROR(s.jobs->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty()).status());
 
   LocalJobHostOptions ho;
   ho.allowed_roots = o.allowed_roots;
-  ho.scratch_dir = o.data_dir + "/scratch";
+  ho.scratch_dir = scratch;
   ho.lease = o.lease;
   s.host = std::make_unique<LocalJobHost>(s.jobs.get(), s.blobs.get(), &s.events, ho);
   s.upload_streams = std::make_unique<StreamLimits>("upload", "max_upload_streams",
@@ -225,7 +235,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   s.ctx.cache = o.cache;
   s.ctx.inspect.isolate = o.isolate_jobs;
   s.ctx.inspect.program = o.job_program;
-  s.ctx.inspect.scratch_dir = o.data_dir + "/scratch";
+  s.ctx.inspect.scratch_dir = scratch;
   s.ctx.inspect.limits = o.job_limits;
   s.ctx.inspect.limits.wall = std::min(o.job_limits.wall, absl::Minutes(2));
   s.blob_service = std::make_unique<BlobServiceImpl>(&s.ctx);
@@ -237,8 +247,12 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
 
   runtime::WorkerPoolOptions wo;
   wo.workers = o.workers;
-  wo.name = absl::StrCat("local-", ::getpid());
-  wo.run.scratch_dir = o.data_dir + "/scratch";
+  // Unique among the servers over one database: containers all run as pid 1.
+  char host[256] = "";
+  ::gethostname(host, sizeof(host) - 1);
+  wo.name = absl::StrCat("local-", host, "-", ::getpid(), "-",
+                         absl::Hex(absl::GetCurrentTimeNanos() & 0xffffff));
+  wo.run.scratch_dir = scratch;
   wo.run.isolate = o.isolate_jobs;
   wo.run.program = o.job_program;
   wo.run.limits = o.job_limits;
@@ -262,7 +276,7 @@ absl::StatusOr<std::string> Server::CollectNow() {
 }
 
 absl::StatusOr<std::string> CollectOnce(const ServerOptions& o) {
-  SM_ASSIGN_OR_RETURN(std::unique_ptr<JobStore> jobs, OpenSqliteJobStore(o.data_dir + "/jobs.db"));
+  SM_ASSIGN_OR_RETURN(std::unique_ptr<JobStore> jobs, OpenJobStore(o));
   SM_ASSIGN_OR_RETURN(std::unique_ptr<BlobStore> blobs, BlobStore::Open(o.data_dir + "/blobs"));
   SM_ASSIGN_OR_RETURN(RetentionReport r,
                       CollectBlobs(*blobs, *jobs, o.blob_retention, o.gc_dry_run));

@@ -23,9 +23,15 @@ namespace sheetmesh::server {
 struct ServerOptions {
   std::string address = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   std::string data_dir;                     // jobs.db, blobs, scratch (required)
-  int workers = 0;                          // in-process workers (0: the number of cores)
-  std::vector<std::string> allowed_roots;   // paths jobs may name (none: only uploads)
-  std::string tls_cert;                     // PEM files; both empty: no TLS
+  // A libpq connection string: the jobs in PostgreSQL, shared by several servers over one
+  // database (and one blob folder), instead of data_dir/jobs.db.
+  std::string postgres;
+  // The workers' scratch (default data_dir/scratch), emptied at start: each server its own
+  // when several share a data folder.
+  std::string scratch_dir;
+  int workers = 0;                         // in-process workers (0: the number of cores)
+  std::vector<std::string> allowed_roots;  // paths jobs may name (none: only uploads)
+  std::string tls_cert;                    // PEM files; both empty: no TLS
   std::string tls_key;
   // Who may call: one bearer token (of the tenant "default"), or a token file with one
   // "TOKEN [TENANT]" per line (server/auth.h). Neither: an open server.

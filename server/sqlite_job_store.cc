@@ -5,6 +5,7 @@
 #include <sqlite3.h>
 
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include "absl/strings/numbers.h"
@@ -12,40 +13,14 @@
 #include "absl/time/clock.h"
 #include "common/random.h"
 #include "common/status_macros.h"
-#include "google/protobuf/util/time_util.h"
 #include "server/job_store.h"
+#include "server/job_store_rows.h"
 #include "server/sqlite_util.h"
 
 namespace sheetmesh::server {
 namespace {
 
-using google::protobuf::util::TimeUtil;
-
 int64_t NowMs() { return absl::ToUnixMillis(absl::Now()); }
-
-google::protobuf::Timestamp NowTs() { return TimeUtil::MillisecondsToTimestamp(NowMs()); }
-
-std::string IdOf(const std::string& name) {
-  return name.rfind("jobs/", 0) == 0 ? name.substr(5) : name;
-}
-
-constexpr const char* kDefaultTenant = "default";
-
-// The request_id column is unique: it holds the tenant and the client's request id, the
-// default tenant's bare (as stores before tenants held them). Request ids hold no control
-// characters (the service refuses them), so the keys of two tenants never meet.
-std::string ScopedRequestId(const std::string& tenant, const std::string& request_id) {
-  if (tenant.empty() || tenant == kDefaultTenant) return request_id;
-  return absl::StrCat("\x1f", tenant, "\x1f", request_id);
-}
-
-// The blobs a job names.
-std::set<std::string> BlobsOf(const v1::Job& job) {
-  std::set<std::string> out;
-  if (job.input().has_volume_digest()) out.insert(job.input().volume_digest().hash());
-  for (const v1::Artifact& a : job.artifacts()) out.insert(a.digest().hash());
-  return out;
-}
 
 class SqliteJobStore : public JobStore {
  public:
@@ -121,30 +96,34 @@ class SqliteJobStore : public JobStore {
     *created = false;
     if (job.tenant().empty()) job.set_tenant(kDefaultTenant);
     const std::string scoped = ScopedRequestId(job.tenant(), job.request_id());
+    // Looked up under the write lock, so that another connection to the file cannot
+    // create the same request in between.
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    std::optional<absl::StatusOr<v1::Job>> found;
     {
       Stmt q(db_, "SELECT job FROM jobs WHERE request_id = ?");
-      SM_RETURN_IF_ERROR(q.ok());
+      if (absl::Status st = q.ok(); !st.ok()) found = st;
       q.Bind(1, scoped);
-      if (q.Step() == SQLITE_ROW) return Parse(q.Blob(0));
+      if (!found && q.Step() == SQLITE_ROW) found = Parse(q.Blob(0));
     }
-    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    if (found) {
+      Exec("ROLLBACK").IgnoreError();
+      return *found;
+    }
     int64_t seq = 1;
     {
       Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
       if (q.Step() == SQLITE_ROW) seq = q.Int(0);
     }
-    // Ids sort by creation; the random tail keeps them unguessable.
-    char id[40];
-    std::snprintf(id, sizeof(id), "%012lld-%08llx", static_cast<long long>(seq),
-                  static_cast<unsigned long long>(rng_.Next() & 0xffffffffULL));
+    const std::string id = NewJobId(seq, rng_.Next());
     job.set_name(absl::StrCat("jobs/", id));
-    *job.mutable_create_time() = NowTs();
+    *job.mutable_create_time() = NowTimestamp();
     if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
     Stmt ins(db_,
              "INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant) "
              "VALUES (?, ?, ?, ?, ?, ?, ?)");
     SM_RETURN_IF_ERROR(ins.ok());
-    ins.Bind(1, std::string(id))
+    ins.Bind(1, id)
         .Bind(2, seq)
         .Bind(3, scoped)
         .Bind(4, int64_t{job.state()})
@@ -164,7 +143,7 @@ class SqliteJobStore : public JobStore {
 
   absl::StatusOr<v1::Job> Get(const std::string& name) override {
     std::lock_guard<std::mutex> lock(mu_);
-    return GetLocked(IdOf(name));
+    return GetLocked(JobIdOf(name));
   }
 
   absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& tenant,
@@ -228,7 +207,7 @@ class SqliteJobStore : public JobStore {
       SM_ASSIGN_OR_RETURN(v1::Job job, Parse(q.Blob(1)));
       job.set_state(v1::RUNNING);
       job.set_attempts(job.attempts() + 1);
-      *job.mutable_start_time() = NowTs();
+      *job.mutable_start_time() = NowTimestamp();
       Stmt u(db_,
              "UPDATE jobs SET state = ?, lease_owner = ?, lease_expires = ?, job = ? WHERE id = ?");
       SM_RETURN_IF_ERROR(u.ok());
@@ -255,7 +234,7 @@ class SqliteJobStore : public JobStore {
     Stmt u(db_, "UPDATE jobs SET lease_expires = ? WHERE id = ? AND state = ? AND lease_owner = ?");
     SM_RETURN_IF_ERROR(u.ok());
     u.Bind(1, NowMs() + absl::ToInt64Milliseconds(lease))
-        .Bind(2, IdOf(name))
+        .Bind(2, JobIdOf(name))
         .Bind(3, int64_t{v1::RUNNING})
         .Bind(4, worker);
     SM_RETURN_IF_ERROR(u.Run());
@@ -268,39 +247,32 @@ class SqliteJobStore : public JobStore {
   absl::Status SetProgress(const std::string& name, const std::string& worker,
                            const v1::JobProgress& p) override {
     std::lock_guard<std::mutex> lock(mu_);
-    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
     if (row.job.state() != v1::RUNNING || row.owner != worker) {
       return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
     }
     *row.job.mutable_progress() = p;
-    return WriteJobLocked(IdOf(name), row.job);
+    return WriteJobLocked(JobIdOf(name), row.job);
   }
 
   absl::StatusOr<v1::Job> Finish(const std::string& name, const std::string& worker,
                                  v1::JobState state, const v1::JobError& error,
                                  const std::vector<v1::Artifact>& artifacts) override {
     std::lock_guard<std::mutex> lock(mu_);
-    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
     if (row.job.state() != v1::RUNNING || row.owner != worker) {
       return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
     }
     v1::Job& job = row.job;
-    job.set_state(state);
-    *job.mutable_end_time() = NowTs();
-    if (state == v1::SUCCEEDED) {
-      job.clear_error();
-      for (const v1::Artifact& a : artifacts) *job.add_artifacts() = a;
-    } else {
-      *job.mutable_error() = error;
-    }
+    ApplyFinish(&job, state, error, artifacts);
     Stmt u(db_,
            "UPDATE jobs SET state = ?, lease_owner = NULL, lease_expires = NULL, job = ? WHERE id "
            "= ?");
     SM_RETURN_IF_ERROR(u.ok());
-    u.Bind(1, int64_t{state}).BindBlob(2, job.SerializeAsString()).Bind(3, IdOf(name));
+    u.Bind(1, int64_t{state}).BindBlob(2, job.SerializeAsString()).Bind(3, JobIdOf(name));
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
     absl::Status st = u.Run();
-    if (st.ok()) st = AddJobBlobsLocked(IdOf(name), job);
+    if (st.ok()) st = AddJobBlobsLocked(JobIdOf(name), job);
     if (!st.ok()) {
       Exec("ROLLBACK").IgnoreError();
       return st;
@@ -311,28 +283,25 @@ class SqliteJobStore : public JobStore {
 
   absl::Status Release(const std::string& name, const std::string& worker) override {
     std::lock_guard<std::mutex> lock(mu_);
-    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
     if (row.job.state() != v1::RUNNING || row.owner != worker) return absl::OkStatus();
     row.job.set_state(v1::QUEUED);
     row.job.set_attempts(std::max(0, row.job.attempts() - 1));
     row.job.clear_progress();
-    return SetStateLocked(IdOf(name), row.job);
+    return SetStateLocked(JobIdOf(name), row.job);
   }
 
   absl::StatusOr<v1::Job> RequestCancel(const std::string& name) override {
     std::lock_guard<std::mutex> lock(mu_);
-    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
     v1::Job& job = row.job;
     if (job.state() == v1::QUEUED) {
-      job.set_state(v1::CANCELLED);
-      *job.mutable_end_time() = NowTs();
-      job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
-      job.mutable_error()->set_message("cancelled before it started");
-      SM_RETURN_IF_ERROR(SetStateLocked(IdOf(name), job));
+      ApplyCancelBeforeStart(&job);
+      SM_RETURN_IF_ERROR(SetStateLocked(JobIdOf(name), job));
     } else if (job.state() == v1::RUNNING) {
       Stmt u(db_, "UPDATE jobs SET cancel_requested = 1 WHERE id = ?");
       SM_RETURN_IF_ERROR(u.ok());
-      u.Bind(1, IdOf(name));
+      u.Bind(1, JobIdOf(name));
       SM_RETURN_IF_ERROR(u.Run());
     }
     return job;
@@ -342,14 +311,14 @@ class SqliteJobStore : public JobStore {
     std::lock_guard<std::mutex> lock(mu_);
     Stmt q(db_, "SELECT cancel_requested, state FROM jobs WHERE id = ?");
     SM_RETURN_IF_ERROR(q.ok());
-    q.Bind(1, IdOf(name));
+    q.Bind(1, JobIdOf(name));
     if (q.Step() != SQLITE_ROW) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
     return q.Int(0) != 0 || q.Int(1) != v1::RUNNING;
   }
 
   absl::Status Delete(const std::string& name) override {
     std::lock_guard<std::mutex> lock(mu_);
-    SM_ASSIGN_OR_RETURN(Row row, RowLocked(IdOf(name)));
+    SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
     if (row.job.state() == v1::QUEUED || row.job.state() == v1::RUNNING) {
       return absl::FailedPreconditionError(absl::StrCat(
           name, " is ", v1::JobState_Name(row.job.state()), "; cancel it before deleting it"));
@@ -360,7 +329,7 @@ class SqliteJobStore : public JobStore {
            {"DELETE FROM jobs WHERE id = ?", "DELETE FROM job_blobs WHERE job_id = ?"}) {
         Stmt d(db_, sql);
         SM_RETURN_IF_ERROR(d.ok());
-        d.Bind(1, IdOf(name));
+        d.Bind(1, JobIdOf(name));
         SM_RETURN_IF_ERROR(d.Run());
       }
       return absl::OkStatus();
@@ -393,23 +362,7 @@ class SqliteJobStore : public JobStore {
         q.Bind(1, id);
         if (q.Step() == SQLITE_ROW) cancel = q.Int(0) != 0;
       }
-      job.clear_progress();
-      if (cancel) {
-        job.set_state(v1::CANCELLED);
-        job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
-        job.mutable_error()->set_message("cancelled while its worker was lost");
-        *job.mutable_end_time() = NowTs();
-      } else if (job.attempts() >= max_attempts) {
-        job.set_state(v1::FAILED);
-        job.mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
-        job.mutable_error()->set_message(absl::StrCat("its worker was lost ", job.attempts(),
-                                                      " times (lease expired or server restarted); "
-                                                      "giving up after max_attempts = ",
-                                                      max_attempts));
-        *job.mutable_end_time() = NowTs();
-      } else {
-        job.set_state(v1::QUEUED);
-      }
+      ApplyLostWorker(&job, cancel, max_attempts);
       SM_RETURN_IF_ERROR(SetStateLocked(id, job));
     }
     return static_cast<int>(expired.size());
@@ -487,12 +440,7 @@ class SqliteJobStore : public JobStore {
     return absl::OkStatus();
   }
 
-  static absl::StatusOr<v1::Job> Parse(const std::string& blob) {
-    v1::Job j;
-    if (!j.ParseFromString(blob)) return absl::DataLossError("a stored job record is corrupt");
-    if (j.tenant().empty()) j.set_tenant(kDefaultTenant);  // stored before tenants
-    return j;
-  }
+  static absl::StatusOr<v1::Job> Parse(const std::string& blob) { return ParseStoredJob(blob); }
 
   absl::StatusOr<Row> RowLocked(const std::string& id) {
     Stmt q(db_, "SELECT job, lease_owner FROM jobs WHERE id = ?");

@@ -15,6 +15,7 @@ packages=(
   zlib1g-dev nlohmann-json3-dev libnanoflann-dev libeigen3-dev tetgen
   # service
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
+  libpq-dev postgresql
   # tests, fuzzing, benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev clang libfuzzer-14-dev
   # Python tooling (always run with /usr/bin/python3)

@@ -1,5 +1,6 @@
 // The server's stores on their own: the content-addressed blob store, the SQLite job
-// store, references under allowed roots, and the job events watchers wait on.
+// store's migration (the rest of the job stores' contract is job_store_conformance_test),
+// references under allowed roots, and the job events watchers wait on.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -220,56 +221,6 @@ v1::Job NewJob(const std::string& request_id) {
   return j;
 }
 
-TEST(JobStoreTest, CreateIsIdempotentByRequestId) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok()) << store.status();
-  bool created = false;
-  auto a = (*store)->Create(NewJob("r1"), "k1", &created);
-  ASSERT_TRUE(a.ok());
-  EXPECT_TRUE(created);
-  EXPECT_EQ(a->state(), v1::QUEUED);
-  EXPECT_THAT(a->name(), ::testing::StartsWith("jobs/"));
-  auto b = (*store)->Create(NewJob("r1"), "k1", &created);
-  ASSERT_TRUE(b.ok());
-  EXPECT_FALSE(created);
-  EXPECT_EQ(a->name(), b->name());
-  auto found = (*store)->FindByRequestId("default", "r1");
-  ASSERT_TRUE(found.ok() && found->has_value());
-  EXPECT_EQ((*found)->name(), a->name());
-  EXPECT_EQ((*store)->Get("jobs/none").status().code(), absl::StatusCode::kNotFound);
-}
-
-TEST(JobStoreTest, TenantsHaveTheirOwnRequestIdsListsAndBlobs) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  bool created = false;
-  v1::Job a = NewJob("same");
-  a.set_tenant("alice");
-  a.mutable_input()->mutable_volume_digest()->set_hash(std::string(64, 'a'));
-  v1::Job b = NewJob("same");
-  b.set_tenant("bob");
-  auto ja = (*store)->Create(a, "k", &created);
-  ASSERT_TRUE(ja.ok() && created);
-  auto jb = (*store)->Create(b, "k", &created);
-  ASSERT_TRUE(jb.ok() && created) << "the same request id in another tenant is another job";
-  EXPECT_NE(ja->name(), jb->name());
-  std::string next;
-  auto alices = (*store)->List("alice", v1::JOB_STATE_UNSPECIFIED, 10, "", &next);
-  ASSERT_TRUE(alices.ok());
-  ASSERT_EQ(alices->size(), 1u);
-  EXPECT_EQ((*alices)[0].name(), ja->name());
-  EXPECT_TRUE(*(*store)->OwnsBlob("alice", std::string(64, 'a'))) << "her job's input";
-  EXPECT_FALSE(*(*store)->OwnsBlob("bob", std::string(64, 'a')));
-  ASSERT_TRUE((*store)->AddUploadedBlob("bob", std::string(64, 'b')).ok());
-  EXPECT_TRUE(*(*store)->OwnsBlob("bob", std::string(64, 'b')));
-  EXPECT_FALSE(*(*store)->OwnsBlob("alice", std::string(64, 'b')));
-  EXPECT_EQ(*(*store)->ReferencedBlobs(), std::set<std::string>{std::string(64, 'a')});
-  ASSERT_TRUE((*store)->ForgetBlob(std::string(64, 'b')).ok());
-  EXPECT_FALSE(*(*store)->OwnsBlob("bob", std::string(64, 'b')));
-}
-
 TEST(JobStoreTest, AStoreFromBeforeTenantsIsTheDefaultTenants) {
   TempDir dir;
   {
@@ -306,132 +257,6 @@ TEST(JobStoreTest, AStoreFromBeforeTenantsIsTheDefaultTenants) {
   std::string next;
   EXPECT_EQ((*store)->List("default", v1::JOB_STATE_UNSPECIFIED, 10, "", &next)->size(), 1u);
   EXPECT_TRUE(*(*store)->OwnsBlob("default", std::string(64, 'c')));
-}
-
-TEST(JobStoreTest, LeaseRenewFinishAndCache) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  bool created;
-  auto first = (*store)->Create(NewJob("r1"), "k1", &created);
-  auto second = (*store)->Create(NewJob("r2"), "k2", &created);
-  ASSERT_TRUE(first.ok() && second.ok());
-  auto l1 = (*store)->LeaseNext("w1", absl::Seconds(30));
-  ASSERT_TRUE(l1.ok() && l1->has_value());
-  EXPECT_EQ((*l1)->name(), first->name());  // oldest first
-  EXPECT_EQ((*l1)->state(), v1::RUNNING);
-  EXPECT_EQ((*l1)->attempts(), 1);
-  EXPECT_TRUE((*store)->Renew(first->name(), "w1", absl::Seconds(30)).ok());
-  EXPECT_EQ((*store)->Renew(first->name(), "w2", absl::Seconds(30)).code(),
-            absl::StatusCode::kFailedPrecondition);
-  v1::JobProgress p;
-  p.set_stage("surface");
-  p.set_stage_index(3);
-  ASSERT_TRUE((*store)->SetProgress(first->name(), "w1", p).ok());
-  EXPECT_EQ((*store)->Get(first->name())->progress().stage(), "surface");
-  v1::Artifact art;
-  art.set_name("report.json");
-  art.mutable_digest()->set_hash(std::string(64, 'b'));
-  auto done = (*store)->Finish(first->name(), "w1", v1::SUCCEEDED, v1::JobError(), {art});
-  ASSERT_TRUE(done.ok());
-  EXPECT_EQ(done->state(), v1::SUCCEEDED);
-  EXPECT_EQ(done->artifacts_size(), 1);
-  auto cached = (*store)->FindCached("k1");
-  ASSERT_TRUE(cached.ok() && cached->has_value());
-  EXPECT_EQ((*cached)->name(), first->name());
-  EXPECT_FALSE((*store)->FindCached("k2")->has_value());
-  EXPECT_EQ(*(*store)->CountInState(v1::QUEUED), 1);
-}
-
-TEST(JobStoreTest, ExpiredLeasesRequeueThenFailAfterMaxAttempts) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  bool created;
-  auto job = (*store)->Create(NewJob("r1"), "k1", &created);
-  ASSERT_TRUE(job.ok());
-  for (int attempt = 1; attempt <= 2; ++attempt) {
-    auto l = (*store)->LeaseNext("w", absl::Milliseconds(1));
-    ASSERT_TRUE(l.ok() && l->has_value());
-    EXPECT_EQ((*l)->attempts(), attempt);
-    absl::SleepFor(absl::Milliseconds(20));
-    EXPECT_EQ(*(*store)->RequeueExpired(2, false), 1);
-  }
-  auto end = (*store)->Get(job->name());
-  ASSERT_TRUE(end.ok());
-  EXPECT_EQ(end->state(), v1::FAILED);
-  EXPECT_THAT(end->error().message(), HasSubstr("2"));
-}
-
-TEST(JobStoreTest, RestartRequeuesRunningJobsAndKeepsEverything) {
-  TempDir dir;
-  std::string name;
-  {
-    auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-    ASSERT_TRUE(store.ok());
-    bool created;
-    name = (*store)->Create(NewJob("r1"), "k1", &created)->name();
-    ASSERT_TRUE((*store)->LeaseNext("w", absl::Hours(1))->has_value());
-  }
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  EXPECT_EQ(*(*store)->RequeueExpired(3, /*all=*/true), 1);
-  auto job = (*store)->Get(name);
-  ASSERT_TRUE(job.ok());
-  EXPECT_EQ(job->state(), v1::QUEUED);
-  EXPECT_EQ(job->attempts(), 1);
-  auto again = (*store)->LeaseNext("w2", absl::Seconds(30));
-  ASSERT_TRUE(again.ok() && again->has_value());
-  EXPECT_EQ((*again)->attempts(), 2);
-}
-
-TEST(JobStoreTest, CancelAndDelete) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  bool created;
-  auto queued = (*store)->Create(NewJob("q"), "kq", &created);
-  auto running = (*store)->Create(NewJob("r"), "kr", &created);
-  ASSERT_TRUE(queued.ok() && running.ok());
-  ASSERT_TRUE((*store)->LeaseNext("w", absl::Seconds(30))->has_value());  // "q" runs
-  // Now "q" is running and "r" queued.
-  auto c1 = (*store)->RequestCancel(running->name());
-  ASSERT_TRUE(c1.ok());
-  EXPECT_EQ(c1->state(), v1::CANCELLED);
-  auto c2 = (*store)->RequestCancel(queued->name());
-  ASSERT_TRUE(c2.ok());
-  EXPECT_EQ(c2->state(), v1::RUNNING);
-  EXPECT_TRUE(*(*store)->CancelRequested(queued->name()));
-  EXPECT_EQ((*store)->Delete(queued->name()).code(), absl::StatusCode::kFailedPrecondition);
-  v1::JobError e;
-  e.set_code(1);
-  ASSERT_TRUE((*store)->Finish(queued->name(), "w", v1::CANCELLED, e, {}).ok());
-  EXPECT_TRUE((*store)->Delete(queued->name()).ok());
-  EXPECT_EQ((*store)->Get(queued->name()).status().code(), absl::StatusCode::kNotFound);
-}
-
-TEST(JobStoreTest, ListPagesNewestFirstByState) {
-  TempDir dir;
-  auto store = OpenSqliteJobStore(dir.File("jobs.db"));
-  ASSERT_TRUE(store.ok());
-  bool created;
-  std::vector<std::string> names;
-  for (int i = 0; i < 7; ++i)
-    names.push_back((*store)->Create(NewJob(absl::StrCat("r", i)), "", &created)->name());
-  std::vector<std::string> seen;
-  std::string token, next;
-  do {
-    auto page = (*store)->List("default", v1::JOB_STATE_UNSPECIFIED, 3, token, &next);
-    ASSERT_TRUE(page.ok());
-    for (const auto& j : *page) seen.push_back(j.name());
-    token = next;
-  } while (!token.empty());
-  EXPECT_EQ(seen, std::vector<std::string>(names.rbegin(), names.rend()));
-  auto running = (*store)->List("default", v1::RUNNING, 10, "", &next);
-  ASSERT_TRUE(running.ok());
-  EXPECT_TRUE(running->empty());
-  EXPECT_EQ((*store)->List("default", v1::QUEUED, 10, "garbage", &next).status().code(),
-            absl::StatusCode::kInvalidArgument);
 }
 
 // ---------------------------------------------------------------------------------------

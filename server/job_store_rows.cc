@@ -1,0 +1,84 @@
+#include "server/job_store_rows.h"
+
+#include <cstdio>
+
+#include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
+#include "google/protobuf/util/time_util.h"
+
+namespace sheetmesh::server {
+
+google::protobuf::Timestamp NowTimestamp() {
+  return google::protobuf::util::TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(absl::Now()));
+}
+
+std::string JobIdOf(const std::string& name) {
+  return name.rfind("jobs/", 0) == 0 ? name.substr(5) : name;
+}
+
+std::string NewJobId(int64_t seq, uint64_t random) {
+  char id[40];
+  std::snprintf(id, sizeof(id), "%012lld-%08llx", static_cast<long long>(seq),
+                static_cast<unsigned long long>(random & 0xffffffffULL));
+  return id;
+}
+
+std::string ScopedRequestId(const std::string& tenant, const std::string& request_id) {
+  if (tenant.empty() || tenant == kDefaultTenant) return request_id;
+  return absl::StrCat("\x1f", tenant, "\x1f", request_id);
+}
+
+std::set<std::string> BlobsOf(const v1::Job& job) {
+  std::set<std::string> out;
+  if (job.input().has_volume_digest()) out.insert(job.input().volume_digest().hash());
+  for (const v1::Artifact& a : job.artifacts()) out.insert(a.digest().hash());
+  return out;
+}
+
+absl::StatusOr<v1::Job> ParseStoredJob(const std::string& bytes) {
+  v1::Job j;
+  if (!j.ParseFromString(bytes)) return absl::DataLossError("a stored job record is corrupt");
+  if (j.tenant().empty()) j.set_tenant(kDefaultTenant);
+  return j;
+}
+
+void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
+                 const std::vector<v1::Artifact>& artifacts) {
+  job->set_state(state);
+  *job->mutable_end_time() = NowTimestamp();
+  if (state == v1::SUCCEEDED) {
+    job->clear_error();
+    for (const v1::Artifact& a : artifacts) *job->add_artifacts() = a;
+  } else {
+    *job->mutable_error() = error;
+  }
+}
+
+void ApplyCancelBeforeStart(v1::Job* job) {
+  job->set_state(v1::CANCELLED);
+  *job->mutable_end_time() = NowTimestamp();
+  job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
+  job->mutable_error()->set_message("cancelled before it started");
+}
+
+void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts) {
+  job->clear_progress();
+  if (cancel_requested) {
+    job->set_state(v1::CANCELLED);
+    job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
+    job->mutable_error()->set_message("cancelled while its worker was lost");
+    *job->mutable_end_time() = NowTimestamp();
+  } else if (job->attempts() >= max_attempts) {
+    job->set_state(v1::FAILED);
+    job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
+    job->mutable_error()->set_message(
+        absl::StrCat("its worker was lost ", job->attempts(),
+                     " times (lease expired or server restarted); giving up after max_attempts = ",
+                     max_attempts));
+    *job->mutable_end_time() = NowTimestamp();
+  } else {
+    job->set_state(v1::QUEUED);
+  }
+}
+
+}  // namespace sheetmesh::server

@@ -1,0 +1,54 @@
+// What every JobStore shares: job ids and names, the request-id key of a tenant, the blobs
+// a job names, parsing a stored record, and what becomes of a job whose worker was lost.
+#ifndef SHEETMESH_SERVER_JOB_STORE_ROWS_H_
+#define SHEETMESH_SERVER_JOB_STORE_ROWS_H_
+
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "google/protobuf/timestamp.pb.h"
+#include "sheetmesh/v1/jobs.pb.h"
+
+namespace sheetmesh::server {
+
+inline constexpr const char* kDefaultTenant = "default";
+
+google::protobuf::Timestamp NowTimestamp();
+
+// "jobs/ID" -> "ID" (an id stays as it is).
+std::string JobIdOf(const std::string& name);
+
+// A new job's id: its sequence number (ids sort by creation) and a random tail that keeps
+// them unguessable.
+std::string NewJobId(int64_t seq, uint64_t random);
+
+// The request_id column is unique: it holds the tenant and the client's request id, the
+// default tenant's bare (as stores before tenants held them). Request ids hold no control
+// characters (the service refuses them), so the keys of two tenants never meet.
+std::string ScopedRequestId(const std::string& tenant, const std::string& request_id);
+
+// The blobs a job names: its input and its artifacts.
+std::set<std::string> BlobsOf(const v1::Job& job);
+
+// A stored record; kDataLoss when it does not parse. Records from before tenants are the
+// default tenant's.
+absl::StatusOr<v1::Job> ParseStoredJob(const std::string& bytes);
+
+// A job's end as its worker reports it: the state, the end time, and the artifacts
+// (SUCCEEDED) or the error.
+void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
+                 const std::vector<v1::Artifact>& artifacts);
+
+// A QUEUED job cancelled: CANCELLED at once.
+void ApplyCancelBeforeStart(v1::Job* job);
+
+// A RUNNING job whose worker was lost (lease expired, server restarted): CANCELLED when a
+// cancel was asked, FAILED after max_attempts, QUEUED again otherwise.
+void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts);
+
+}  // namespace sheetmesh::server
+
+#endif  // SHEETMESH_SERVER_JOB_STORE_ROWS_H_

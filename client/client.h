@@ -49,6 +49,7 @@ class SheetmeshClient {
   v1::JobService::Stub* jobs() { return jobs_.get(); }
   v1::BlobService::Stub* blobs() { return blobs_.get(); }
   v1::VolumeService::Stub* volumes() { return volumes_.get(); }
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   // A context carrying the token.
   std::unique_ptr<grpc::ClientContext> Context() const;
 

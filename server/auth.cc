@@ -77,12 +77,22 @@ absl::StatusOr<Tenants> Tenants::FromFile(const std::string& path) {
 
 grpc::Status Tenants::Authenticate(const grpc::ServerContextBase& context,
                                    std::string* tenant) const {
+  tenant->clear();
+  const auto& md = context.client_metadata();
+  if (!worker_hashes_.empty()) {
+    auto it = md.find("authorization");
+    if (it != md.end()) {
+      absl::string_view value(it->second.data(), it->second.size());
+      if (absl::ConsumePrefix(&value, "Bearer ") && worker_hashes_.count(Sha256Hex(value))) {
+        *tenant = kWorkerTenant;
+        return grpc::Status::OK;
+      }
+    }
+  }
   if (open()) {
     *tenant = kDefaultTenant;
     return grpc::Status::OK;
   }
-  tenant->clear();
-  const auto& md = context.client_metadata();
   auto it = md.find("authorization");
   if (it != md.end()) {
     absl::string_view value(it->second.data(), it->second.size());
@@ -96,6 +106,18 @@ grpc::Status Tenants::Authenticate(const grpc::ServerContextBase& context,
   }
   return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
                       "missing or wrong bearer token (metadata 'authorization: Bearer <token>')");
+}
+
+absl::Status Tenants::AddWorkerToken(const std::string& token, const std::string& where) {
+  if (token.empty())
+    return absl::InvalidArgumentError(absl::StrCat(where, ": the worker token is empty"));
+  const std::string hash = Sha256Hex(token);
+  if (tenant_of_hash_.count(hash)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": the worker token is also a tenant's token; give workers their own"));
+  }
+  worker_hashes_.insert(hash);
+  return absl::OkStatus();
 }
 
 std::string ClientOf(const grpc::ServerContextBase& context, const std::string& tenant) {

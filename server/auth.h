@@ -7,6 +7,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -36,6 +37,13 @@ class Tenants {
   // that is not [A-Za-z0-9._-]+, a token given twice, or a file without tokens.
   static absl::StatusOr<Tenants> FromFile(const std::string& path);
 
+  // The identity of a remote worker's token (not a tenant name: those are [A-Za-z0-9._-]+).
+  static constexpr const char* kWorkerTenant = "@workers";
+  // A token remote workers present (WorkerService, and blob reads of any tenant's inputs).
+  // kInvalidArgument for an empty one or one that is a tenant's too.
+  absl::Status AddWorkerToken(const std::string& token, const std::string& where);
+  bool has_worker_tokens() const { return !worker_hashes_.empty(); }
+
   bool open() const { return tenant_of_hash_.empty(); }
   // The tenant of the call ("default" on an open server). UNAUTHENTICATED without a known
   // token.
@@ -45,6 +53,7 @@ class Tenants {
   absl::Status Add(const std::string& token, const std::string& tenant, const std::string& where);
   // Tokens are kept by their SHA-256: a lookup compares hashes, not the secret itself.
   std::map<std::string, std::string> tenant_of_hash_;
+  std::set<std::string> worker_hashes_;
 };
 
 // "tenant:<name>" for a tenant, else "peer:<address without port>": the unit that limits on

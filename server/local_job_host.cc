@@ -124,9 +124,7 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
   if (in.has_volume_digest()) {
     SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(in.volume_digest()));
     // Readers tell formats by name: give the blob the client's file name through a link.
-    const std::string name = in.file_name().empty()
-                                 ? "volume.raw"
-                                 : std::filesystem::path(in.file_name()).filename().string();
+    const std::string name = runtime::InputFileName(in);
     const std::string dir = absl::StrCat(options_.scratch_dir, "/inputs/",
                                          absl::StrReplaceAll(job.name(), {{"/", "-"}}));
     SM_RETURN_IF_ERROR(MakeDirs(dir));
@@ -160,14 +158,8 @@ absl::StatusOr<v1::Artifact> LocalJobHost::PutArtifact(const std::string& job,
 absl::Status LocalJobHost::Finish(const std::string& job, const std::string& worker,
                                   const absl::Status& result,
                                   const std::vector<v1::Artifact>& artifacts) {
-  v1::JobState state = v1::SUCCEEDED;
-  v1::JobError error;
-  if (!result.ok()) {
-    state = result.code() == absl::StatusCode::kCancelled ? v1::CANCELLED : v1::FAILED;
-    error.set_code(static_cast<int>(result.code()));
-    error.set_message(std::string(result.message()));
-  }
-  absl::StatusOr<v1::Job> done = store_->Finish(job, worker, state, error, artifacts);
+  absl::StatusOr<v1::Job> done =
+      store_->Finish(job, worker, runtime::EndStateOf(result), runtime::ErrorOf(result), artifacts);
   {
     std::lock_guard<std::mutex> lock(mu_);
     live_.erase(job);

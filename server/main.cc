@@ -31,6 +31,8 @@ ABSL_FLAG(
 ABSL_FLAG(std::string, scratch_dir, "",
           "the workers' scratch, emptied at start (default DATA_DIR/scratch; each server its own "
           "when several share a data folder)");
+ABSL_FLAG(bool, local_workers, true,
+          "run jobs in this process's workers (false: only remote sheetmesh-workers run them)");
 ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
 ABSL_FLAG(std::string, allowed_root, "",
           "comma-separated folders whose volumes jobs may name by path");
@@ -39,6 +41,9 @@ ABSL_FLAG(std::string, auth_token, "",
 ABSL_FLAG(std::string, auth_token_file, "",
           "tokens and their tenants, one 'TOKEN [TENANT]' per line ('#' comments); a tenant "
           "sees only its own jobs, uploads and artifacts");
+ABSL_FLAG(std::string, worker_token_file, "",
+          "file with the token remote workers (sheetmesh-worker) present; without it a server "
+          "with tokens takes no remote workers, an open one any");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(int64_t, max_blob_bytes, int64_t{64} << 30, "largest upload accepted, bytes");
@@ -82,8 +87,10 @@ sheetmesh::server::ServerOptions OptionsFromFlags() {
   o.address = absl::GetFlag(FLAGS_address);
   o.data_dir = absl::GetFlag(FLAGS_data_dir);
   o.postgres = absl::GetFlag(FLAGS_postgres);
+  o.worker_token_file = absl::GetFlag(FLAGS_worker_token_file);
   o.scratch_dir = absl::GetFlag(FLAGS_scratch_dir);
   o.workers = absl::GetFlag(FLAGS_workers);
+  o.local_workers = absl::GetFlag(FLAGS_local_workers);
   for (absl::string_view r :
        absl::StrSplit(absl::GetFlag(FLAGS_allowed_root), ',', absl::SkipEmpty())) {
     o.allowed_roots.emplace_back(r);

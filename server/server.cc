@@ -16,6 +16,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
@@ -23,6 +24,7 @@
 #include "server/job_service.h"
 #include "server/retention.h"
 #include "server/volume_service.h"
+#include "server/worker_service.h"
 #include "worker/runtime/worker_pool.h"
 
 namespace sheetmesh::server {
@@ -68,6 +70,7 @@ struct Server::Impl {
   std::unique_ptr<BlobServiceImpl> blob_service;
   std::unique_ptr<JobServiceImpl> job_service;
   std::unique_ptr<VolumeServiceImpl> volume_service;
+  std::unique_ptr<WorkerServiceImpl> worker_service;
   std::unique_ptr<grpc::Server> grpc_server;
   std::unique_ptr<runtime::WorkerPool> pool;
   std::thread housekeeping;  // leases, health, retention
@@ -128,6 +131,7 @@ struct Server::Impl {
     builder.RegisterService(blob_service.get());
     builder.RegisterService(job_service.get());
     builder.RegisterService(volume_service.get());
+    builder.RegisterService(worker_service.get());
     builder.SetMaxReceiveMessageSize(o.max_message_bytes);
     builder.SetMaxSendMessageSize(o.max_message_bytes);
     // Synchronous handlers hold a thread each: uploads (bounded by their limit), reads and
@@ -198,6 +202,11 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   } else {
     SM_ASSIGN_OR_RETURN(s.tenants, Tenants::FromToken(o.auth_token));
   }
+  if (!o.worker_token_file.empty()) {
+    SM_ASSIGN_OR_RETURN(std::string token, ReadFileToString(o.worker_token_file));
+    SM_RETURN_IF_ERROR(s.tenants.AddWorkerToken(std::string(absl::StripAsciiWhitespace(token)),
+                                                o.worker_token_file));
+  }
   SM_RETURN_IF_ERROR(MakeDirs(o.data_dir));
   const std::string scratch = o.scratch_dir.empty() ? o.data_dir + "/scratch" : o.scratch_dir;
   // Nothing runs yet: what the scratch folder holds is left from a previous process (the
@@ -228,6 +237,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   s.ctx.host = s.host.get();
   s.ctx.allowed_roots = o.allowed_roots;
   s.ctx.tenants = &s.tenants;
+  s.ctx.worker_lease = o.lease;
   s.ctx.limits = o.limits;
   s.ctx.upload_streams = s.upload_streams.get();
   s.ctx.watch_streams = s.watch_streams.get();
@@ -241,6 +251,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   s.blob_service = std::make_unique<BlobServiceImpl>(&s.ctx);
   s.job_service = std::make_unique<JobServiceImpl>(&s.ctx);
   s.volume_service = std::make_unique<VolumeServiceImpl>(&s.ctx);
+  s.worker_service = std::make_unique<WorkerServiceImpl>(&s.ctx);
 
   SM_RETURN_IF_ERROR(s.StartGrpc(&server->port_));
   s.grpc_server->GetHealthCheckService()->SetServingStatus(true);
@@ -257,8 +268,10 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   wo.run.program = o.job_program;
   wo.run.limits = o.job_limits;
   wo.renew_interval = o.lease / 3;
-  s.pool = std::make_unique<runtime::WorkerPool>(s.host.get(), wo);
-  s.pool->Start();
+  if (o.local_workers) {
+    s.pool = std::make_unique<runtime::WorkerPool>(s.host.get(), wo);
+    s.pool->Start();
+  }
   s.housekeeping = std::thread([&s] { s.Housekeeping(); });
   return server;
 }

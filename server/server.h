@@ -29,7 +29,8 @@ struct ServerOptions {
   // The workers' scratch (default data_dir/scratch), emptied at start: each server its own
   // when several share a data folder.
   std::string scratch_dir;
-  int workers = 0;                         // in-process workers (0: the number of cores)
+  int workers = 0;            // in-process workers (0: the number of cores)
+  bool local_workers = true;  // false: none here; remote sheetmesh-workers run the jobs
   std::vector<std::string> allowed_roots;  // paths jobs may name (none: only uploads)
   std::string tls_cert;                    // PEM files; both empty: no TLS
   std::string tls_key;
@@ -37,6 +38,8 @@ struct ServerOptions {
   // "TOKEN [TENANT]" per line (server/auth.h). Neither: an open server.
   std::string auth_token;
   std::string auth_token_file;
+  // A file holding the token remote workers (sheetmesh-worker) present.
+  std::string worker_token_file;
   ServiceLimits limits;
   absl::Duration lease = absl::Seconds(30);     // worker lease; renewed every third
   int max_attempts = 3;                         // runs before a job whose workers keep

@@ -28,7 +28,7 @@ protoc -I proto -I /usr/include \
   --go_out=plugins=grpc,$ts:"$gopath/src" \
   --grpc-gateway_out=logtostderr=true,$yaml,$ts:"$gopath/src" \
   --swagger_out=logtostderr=true,allow_merge=true,merge_file_name=sheetmesh,$yaml:"$src/gateway" \
-  proto/sheetmesh/v1/*.proto
+  proto/sheetmesh/v1/{common,blobs,jobs,parameters,volumes}.proto  # workers.proto is internal
 for f in gateway/*.go gateway/openapi_extra.json; do
   cp -p "$f" "$src/gateway/"
 done

@@ -21,17 +21,11 @@ import uuid
 
 import numpy as np
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent / "testing"))
+from ports import wait_port_file  # noqa: E402
+
 SERVER_BIN = GATEWAY_BIN = PIPELINE_BIN = None
 TOKEN = "gateway-test-token"
-
-
-def wait_port(path, proc, what):
-    deadline = time.time() + 60
-    while not (path.exists() and path.read_text().endswith("\n")):
-        if time.time() > deadline or proc.poll() is not None:
-            raise RuntimeError("%s did not start" % what)
-        time.sleep(0.02)
-    return int(path.read_text())
 
 
 def decode_png(data):
@@ -66,12 +60,12 @@ class GatewayTest(unittest.TestCase):
              "--port_file=%s" % (cls.tmp / "port"), "--allowed_root=%s" % cls.root, "--workers=1",
              "--max_queued_jobs=1", "--heartbeat_seconds=1", "--auth_token_file=%s" % (cls.tmp / "token")],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        port = wait_port(cls.tmp / "port", cls.server, "sheetmesh-server")
+        port = wait_port_file(cls.tmp / "port", cls.server, "sheetmesh-server")
         cls.gateway = subprocess.Popen(
             [GATEWAY_BIN, "--listen=127.0.0.1:0", "--server=127.0.0.1:%d" % port,
              "--port_file=%s" % (cls.tmp / "gport"), "--cors_origins=http://front.example", "--max_chunk_mb=1"],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        cls.port = wait_port(cls.tmp / "gport", cls.gateway, "sheetmesh-gateway")
+        cls.port = wait_port_file(cls.tmp / "gport", cls.gateway, "sheetmesh-gateway")
 
     @classmethod
     def tearDownClass(cls):

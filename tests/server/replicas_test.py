@@ -22,6 +22,8 @@ import unittest
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent.parent / "client" / "python"))
+sys.path.insert(0, str(HERE.parent / "testing"))
+from ports import wait_port_file  # noqa: E402
 
 SERVER_BIN = PIPELINE_BIN = None
 CONNINFO = None
@@ -46,11 +48,7 @@ class Replica:
              "--port_file=%s" % self.port_file, "--allowed_root=%s" % root, "--workers=1",
              "--lease_seconds=3", "--heartbeat_seconds=1"],
             stdout=subprocess.DEVNULL, stderr=self.log)
-        deadline = time.time() + 60
-        while not (self.port_file.exists() and self.port_file.read_text().endswith("\n")):
-            if time.time() > deadline or self.proc.poll() is not None:
-                raise RuntimeError("replica %s did not start: %s" % (name, (tmp / ("%s.log" % name)).read_text()))
-            time.sleep(0.02)
+        wait_port_file(self.port_file, self.proc, "replica " + name, log=tmp / ("%s.log" % name))
         from sheetmesh_client import SheetmeshClient
         self.client = SheetmeshClient("127.0.0.1:%s" % self.port_file.read_text().strip())
 

@@ -32,6 +32,25 @@ struct LocalVolume {
   std::vector<std::string> data_file_roots;
 };
 
+// How a run's result ends its job: SUCCEEDED when OK, CANCELLED for kCancelled, FAILED
+// otherwise, with the status as the job's error.
+inline v1::JobState EndStateOf(const absl::Status& result) {
+  if (result.ok()) return v1::SUCCEEDED;
+  return result.code() == absl::StatusCode::kCancelled ? v1::CANCELLED : v1::FAILED;
+}
+inline v1::JobError ErrorOf(const absl::Status& result) {
+  v1::JobError e;
+  if (!result.ok()) {
+    e.set_code(static_cast<int>(result.code()));
+    e.set_message(std::string(result.message()));
+  }
+  return e;
+}
+
+// The name an uploaded input gets on disk (readers tell formats by name): the client's
+// file name without folders, or volume.raw.
+std::string InputFileName(const v1::JobInput& input);
+
 // Implementations must be thread-safe: every worker thread calls them.
 class JobHost {
  public:

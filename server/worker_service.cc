@@ -1,0 +1,156 @@
+#include "server/worker_service.h"
+
+#include "absl/strings/str_cat.h"
+#include "server/auth.h"
+#include "server/job_events.h"
+#include "server/job_store.h"
+#include "server/local_job_host.h"
+#include "server/status_util.h"
+
+namespace sheetmesh::server {
+namespace {
+
+grpc::Status NeedNames(const std::string& name, const std::string& worker) {
+  if (worker.empty()) {
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        "worker is required (the worker's name)");
+  }
+  if (name.rfind("jobs/", 0) != 0) {
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        absl::StrCat("name '", name, "' is not a job name (jobs/ID)"));
+  }
+  return grpc::Status::OK;
+}
+
+}  // namespace
+
+grpc::Status WorkerServiceImpl::Authorize(const grpc::ServerContext& context) const {
+  std::string tenant;
+  grpc::Status st = ctx_->tenants->Authenticate(context, &tenant);
+  if (ctx_->tenants->has_worker_tokens()) {
+    if (st.ok() && tenant == Tenants::kWorkerTenant) return grpc::Status::OK;
+    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
+                        "a worker needs the server's worker token (--worker_token_file)");
+  }
+  if (ctx_->tenants->open()) return grpc::Status::OK;
+  return grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
+                      "this server takes no remote workers: start it with --worker_token_file");
+}
+
+bool WorkerServiceImpl::MustStop(const std::string& job, const std::string& worker) const {
+  absl::StatusOr<bool> stop = ctx_->jobs->CancelRequested(job);
+  return !stop.ok() || *stop;
+}
+
+grpc::Status WorkerServiceImpl::LeaseJob(grpc::ServerContext* context,
+                                         const v1::LeaseJobRequest* request,
+                                         v1::LeaseJobResponse* response) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (request->worker().empty()) {
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        "worker is required (the worker's name)");
+  }
+  absl::StatusOr<std::optional<v1::Job>> job =
+      ctx_->jobs->LeaseNext(request->worker(), ctx_->worker_lease);
+  if (!job.ok()) return ToGrpcStatus(job.status());
+  if (job->has_value()) {
+    *response->mutable_job() = **job;
+    ctx_->events->Notify((*job)->name());
+  }
+  response->set_lease_milliseconds(absl::ToInt64Milliseconds(ctx_->worker_lease));
+  return grpc::Status::OK;
+}
+
+grpc::Status WorkerServiceImpl::RenewLease(grpc::ServerContext* context,
+                                           const v1::RenewLeaseRequest* request,
+                                           v1::RenewLeaseResponse* response) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
+  absl::Status st = ctx_->jobs->Renew(request->name(), request->worker(), ctx_->worker_lease);
+  if (absl::IsFailedPrecondition(st) || absl::IsNotFound(st)) {
+    response->set_stop(true);  // gone elsewhere or ended: the worker stops
+    return grpc::Status::OK;
+  }
+  if (!st.ok()) return ToGrpcStatus(st);
+  response->set_stop(MustStop(request->name(), request->worker()));
+  return grpc::Status::OK;
+}
+
+grpc::Status WorkerServiceImpl::ReportProgress(grpc::ServerContext* context,
+                                               const v1::ReportProgressRequest* request,
+                                               v1::ReportProgressResponse* response) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
+  absl::Status st =
+      ctx_->jobs->SetProgress(request->name(), request->worker(), request->progress());
+  if (absl::IsFailedPrecondition(st) || absl::IsNotFound(st)) {
+    response->set_stop(true);
+    return grpc::Status::OK;
+  }
+  if (!st.ok()) return ToGrpcStatus(st);
+  bool new_stage = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    int& last = stage_[request->name()];
+    new_stage = request->progress().stage_index() != last;
+    last = request->progress().stage_index();
+  }
+  if (new_stage) {
+    ctx_->events->NotifyStage(request->name(), request->progress());
+  } else {
+    ctx_->events->Notify(request->name());
+  }
+  response->set_stop(MustStop(request->name(), request->worker()));
+  return grpc::Status::OK;
+}
+
+grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
+                                          const v1::FinishJobRequest* request, v1::Job* response) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
+  const v1::JobState state = request->state();
+  if (state != v1::SUCCEEDED && state != v1::FAILED && state != v1::CANCELLED) {
+    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                        absl::StrCat("state ", v1::JobState_Name(state),
+                                     " does not end a job (SUCCEEDED, FAILED or CANCELLED)"));
+  }
+  // Every artifact must be stored already.
+  for (const v1::Artifact& a : request->artifacts()) {
+    if (!ctx_->blobs->Contains(a.digest())) {
+      return grpc::Status(
+          grpc::StatusCode::FAILED_PRECONDITION,
+          absl::StrCat("artifact ", a.name(), " (", a.digest().hash(), "/", a.digest().size_bytes(),
+                       ") is not stored: upload it first"));
+    }
+  }
+  absl::StatusOr<v1::Job> done =
+      ctx_->jobs->Finish(request->name(), request->worker(), state, request->error(),
+                         {request->artifacts().begin(), request->artifacts().end()});
+  if (!done.ok()) return ToGrpcStatus(done.status());
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stage_.erase(request->name());
+  }
+  ctx_->events->NotifyFinished(request->name());
+  *response = *done;
+  return grpc::Status::OK;
+}
+
+grpc::Status WorkerServiceImpl::ReleaseJob(grpc::ServerContext* context,
+                                           const v1::ReleaseJobRequest* request,
+                                           v1::ReleaseJobResponse*) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
+  if (absl::Status st = ctx_->jobs->Release(request->name(), request->worker()); !st.ok()) {
+    return ToGrpcStatus(st);
+  }
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stage_.erase(request->name());
+  }
+  ctx_->events->Notify(request->name());
+  if (ctx_->host != nullptr) ctx_->host->WakeWorkers();
+  return grpc::Status::OK;
+}
+
+}  // namespace sheetmesh::server

@@ -1,0 +1,45 @@
+// WorkerService: remote sheetmesh-worker processes lease jobs from the job store through
+// any server, keep their leases, report progress and end the jobs. A server with
+// --worker_token_file takes workers with that token only; an open server (no tokens)
+// takes any; a server with tenant tokens and no worker token takes none.
+#ifndef SHEETMESH_SERVER_WORKER_SERVICE_H_
+#define SHEETMESH_SERVER_WORKER_SERVICE_H_
+
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "server/service_context.h"
+#include "sheetmesh/v1/workers.grpc.pb.h"
+
+namespace sheetmesh::server {
+
+class WorkerServiceImpl final : public v1::WorkerService::Service {
+ public:
+  explicit WorkerServiceImpl(ServiceContext* ctx) : ctx_(ctx) {}
+
+  grpc::Status LeaseJob(grpc::ServerContext* context, const v1::LeaseJobRequest* request,
+                        v1::LeaseJobResponse* response) override;
+  grpc::Status RenewLease(grpc::ServerContext* context, const v1::RenewLeaseRequest* request,
+                          v1::RenewLeaseResponse* response) override;
+  grpc::Status ReportProgress(grpc::ServerContext* context,
+                              const v1::ReportProgressRequest* request,
+                              v1::ReportProgressResponse* response) override;
+  grpc::Status FinishJob(grpc::ServerContext* context, const v1::FinishJobRequest* request,
+                         v1::Job* response) override;
+  grpc::Status ReleaseJob(grpc::ServerContext* context, const v1::ReleaseJobRequest* request,
+                          v1::ReleaseJobResponse* response) override;
+
+ private:
+  grpc::Status Authorize(const grpc::ServerContext& context) const;
+  // Whether the worker must stop `job`: cancelled, or no longer running under it.
+  bool MustStop(const std::string& job, const std::string& worker) const;
+
+  ServiceContext* ctx_;
+  std::mutex mu_;
+  std::map<std::string, int> stage_;  // job -> the last stage told to watchers
+};
+
+}  // namespace sheetmesh::server
+
+#endif  // SHEETMESH_SERVER_WORKER_SERVICE_H_

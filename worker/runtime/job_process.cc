@@ -263,13 +263,17 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
   std::string buffer, stage = "start";
   std::optional<Json> result;
   bool stop = false;
+  double fraction = 0;
+  auto last_report = std::chrono::steady_clock::now();
   auto on_line = [&](absl::string_view line) {
     const Json m = Json::parse(line.begin(), line.end(), nullptr, /*allow_exceptions=*/false);
     if (m.is_discarded()) return;
     if (m.contains("progress")) {
       const Json& p = m["progress"];
       stage = p.value("stage", stage);
-      if (!stop && !progress(stage, p.value("fraction", 0.0), p.value("message", ""))) stop = true;
+      fraction = p.value("fraction", 0.0);
+      last_report = std::chrono::steady_clock::now();
+      if (!stop && !progress(stage, fraction, p.value("message", ""))) stop = true;
     } else if (m.contains("result")) {
       result = m["result"];
     }
@@ -282,6 +286,13 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
     if ((exit = child.Poll())) {
       Drain(child.report_fd(), &buffer, on_line);
       break;
+    }
+    // A stage that reports rarely still lets the host say stop (a cancel, a lost lease):
+    // the last progress again, a few times a second.
+    if (const auto now = std::chrono::steady_clock::now();
+        !stop && now - last_report > std::chrono::milliseconds(250)) {
+      last_report = now;
+      if (!progress(stage, fraction, "")) stop = true;
     }
     if (stop) {
       child.Kill();

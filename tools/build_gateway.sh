@@ -16,7 +16,10 @@ mkdir -p "$src/v1" "$src/gateway"
 web_stamp=$out/web.stamp
 web_sum=$(cd web && find . -path ./node_modules -prune -o -path ./dist -prune -o -type f -print0 |
   sort -z | xargs -0 sha256sum | sha256sum | cut -c1-64)
-if [ ! -f web/dist/index.html ] || [ "$(cat "$web_stamp" 2>/dev/null)" != "$web_sum" ]; then
+# SHEETMESH_WEB_PREBUILT=1 takes web/dist as it is (an image build without Node).
+if [ "${SHEETMESH_WEB_PREBUILT:-0}" = 1 ] && [ -f web/dist/index.html ]; then
+  :
+elif [ ! -f web/dist/index.html ] || [ "$(cat "$web_stamp" 2>/dev/null)" != "$web_sum" ]; then
   (cd web && { [ -d node_modules ] && [ node_modules -nt package-lock.json ] || npm ci --no-audit --no-fund --loglevel=error; } &&
     npm run --silent build)
   echo "$web_sum" > "$web_stamp"

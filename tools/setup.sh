@@ -24,6 +24,8 @@ packages=(
   # the HTTP gateway (Go in GOPATH mode, no module downloads), previews, browser tests
   golang-go golang-grpc-gateway golang-github-grpc-ecosystem-grpc-gateway-dev
   golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev libpng-dev chromium
+  # the image and the compose file (ImageTest)
+  docker.io debootstrap docker-compose
 )
 # Node and npm for the front-end: Debian's, unless the machine has its own.
 command -v npm >/dev/null || packages+=(nodejs npm)

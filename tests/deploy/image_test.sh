@@ -21,6 +21,7 @@ cleanup() {
   if [ -f "$tmp/deploy/compose.yaml" ]; then
     (cd "$tmp/deploy" && docker-compose -p sheetmeshtest down -v > /dev/null 2>&1) || true
   fi
+  docker image prune -f > /dev/null 2>&1 || true  # the build stages left behind
   [ -z "$started_dockerd" ] || kill "$started_dockerd" 2> /dev/null || true
   rm -rf "$tmp"
 }

@@ -4,6 +4,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <condition_variable>
+#include <cstring>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -24,6 +25,38 @@ absl::Status FromGrpc(const grpc::Status& s) {
 constexpr int64_t kPiece = int64_t{1} << 20;
 
 }  // namespace
+
+std::string ConnectionHint(const absl::Status& status, const ClientOptions& o) {
+  if (status.code() != absl::StatusCode::kUnavailable) return "";
+  const std::string m(status.message());
+  const std::string& a = o.address;
+  for (const char* scheme : {"http://", "https://", "grpc://", "grpcs://"}) {
+    if (a.rfind(scheme, 0) == 0) {
+      return absl::StrCat("hint: --server takes HOST:PORT without a scheme (--server=",
+                          a.substr(std::strlen(scheme)), ")");
+    }
+  }
+  auto has = [&](const char* s) { return m.find(s) != std::string::npos; };
+  if (has("wrong version number") || has("WRONG_VERSION_NUMBER") || has("Handshake failed") ||
+      has("handshake")) {
+    return o.tls ? absl::StrCat("hint: the server at ", a,
+                                " does not speak TLS (drop --tls), or its certificate is not "
+                                "trusted (--tls_root_cert)")
+                 : absl::StrCat("hint: the server at ", a, " wants TLS: add --tls");
+  }
+  if (has("Connection refused")) {
+    return absl::StrCat("hint: nothing listens at ", a,
+                        ": is sheetmesh-server running there, on that port?");
+  }
+  if (has("DNS resolution failed") || has("Domain name not found")) {
+    return absl::StrCat("hint: the host in --server=", a, " does not resolve");
+  }
+  if (!o.tls && (has("Socket closed") || has("Connection reset"))) {
+    return absl::StrCat("hint: the server at ", a,
+                        " closed the connection: if it serves TLS, add --tls");
+  }
+  return absl::StrCat("hint: the server at ", a, " cannot be reached");
+}
 
 std::string JobName(const std::string& n) { return n.rfind("jobs/", 0) == 0 ? n : "jobs/" + n; }
 

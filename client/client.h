@@ -23,6 +23,11 @@ struct ClientOptions {
   int upload_retries = 5;     // broken upload streams resumed this many times
 };
 
+// A one-line hint for an error that says the server could not be reached ("" for any
+// other): the address with a scheme it does not take, nothing listening there, a name that
+// does not resolve, or TLS on one side only.
+std::string ConnectionHint(const absl::Status& status, const ClientOptions& options);
+
 // Thread-compatible: one client per thread, or guard it.
 class SheetmeshClient {
  public:

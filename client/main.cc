@@ -338,6 +338,7 @@ int Main(int argc, char** argv) {
   if (!st.ok()) {
     std::cerr << "sheetmesh " << command << ": " << absl::StatusCodeToString(st.code()) << ": "
               << st.message() << "\n";
+    if (const std::string hint = ConnectionHint(st, o); !hint.empty()) std::cerr << hint << "\n";
     return ExitCodeOf(st);
   }
   return 0;

@@ -29,6 +29,18 @@ for _ in $(seq 300); do [ -s "$tmp/port" ] && break; sleep 0.05; done
 [ -s "$tmp/port" ] || fail "the server did not start"
 s="--server=127.0.0.1:$(cat "$tmp/port")"
 
+# Servers that cannot be reached: the error, then a one-line hint.
+hint() {
+  local pattern=$1; shift
+  local out
+  if out=$("$cli" health "$@" 2>&1); then fail "health $* succeeded"; fi
+  grep -qE -- "$pattern" <<< "$out" || fail "health $*: no hint matching '$pattern' in: $out"
+}
+hint "^hint: nothing listens at 127.0.0.1:1:" --server=127.0.0.1:1
+hint "^hint: --server takes HOST:PORT without a scheme \(--server=127.0.0.1:5\)" --server=http://127.0.0.1:5
+hint "^hint: the host in --server=nohost.invalid:5 does not resolve" --server=nohost.invalid:5
+hint "^hint: the server at 127.0.0.1:[0-9]+ does not speak TLS" "$s" --tls
+
 outputs '^SERVING$' "$cli" health $s || fail health
 # --help lists each program's own flags.
 outputs '--data_dir' "$server_bin" --help || fail "sheetmesh-server --help lists no flags"

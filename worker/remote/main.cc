@@ -80,6 +80,10 @@ int main(int argc, char** argv) {
   auto host = sheetmesh::remote::RemoteJobHost::Connect(ho);
   if (!host.ok()) {
     std::cerr << "sheetmesh-worker: " << host.status() << "\n";
+    if (const std::string hint = sheetmesh::client::ConnectionHint(host.status(), ho.server);
+        !hint.empty()) {
+      std::cerr << hint << "\n";
+    }
     return 2;
   }
   sheetmesh::runtime::WorkerPoolOptions wo;

@@ -57,16 +57,20 @@ def main():
             print(line, flush=True)
             last[0] = line
 
+    client = SheetmeshClient(args.server, token=args.token)
     try:
-        with SheetmeshClient(args.server, token=args.token) as client:
-            job = client.mesh(args.volume, args.out_dir, reference=args.reference, on_update=show,
-                              volume_format=volume_format, **parameters)
+        job = client.mesh(args.volume, args.out_dir, reference=args.reference, on_update=show,
+                          volume_format=volume_format, **parameters)
     except grpc.RpcError as e:
         print("error: %s: %s" % (e.code().name, e.details()), file=sys.stderr)
+        if client.hint(e):
+            print(client.hint(e), file=sys.stderr)
         return 1
     except SheetmeshError as e:
         print("error: %s" % e, file=sys.stderr)
         return 1
+    finally:
+        client.close()
     for a in job.artifacts:
         print("  %-28s %10d bytes  %s" % (a.name, a.digest.size_bytes, a.media_type))
     report = json.loads((pathlib.Path(args.out_dir) / "report.json").read_text())

@@ -75,6 +75,28 @@ def state_name(state):
     return jobs_pb2.JobState.Name(state)
 
 
+def connection_hint(error, address, tls=False):
+    """A one-line hint for a grpc.RpcError that says the server at `address` could not be
+    reached ("" for any other error), as the C++ client gives: a scheme in the address,
+    nothing listening, a name that does not resolve, TLS on one side only."""
+    if not isinstance(error, grpc.RpcError) or error.code() != grpc.StatusCode.UNAVAILABLE:
+        return ""
+    details = error.details() or ""
+    for scheme in ("http://", "https://", "grpc://", "grpcs://"):
+        if address.startswith(scheme):
+            return "hint: the address takes HOST:PORT without a scheme (%s)" % address[len(scheme):]
+    if any(s in details for s in ("wrong version number", "WRONG_VERSION_NUMBER", "andshake")):
+        if tls:
+            return ("hint: the server at %s does not speak TLS (drop tls), or its certificate is not "
+                    "trusted (root_cert)" % address)
+        return "hint: the server at %s wants TLS: tls=True" % address
+    if "Connection refused" in details:
+        return "hint: nothing listens at %s: is sheetmesh-server running there, on that port?" % address
+    if "DNS resolution failed" in details or "Domain name not found" in details:
+        return "hint: the host in %s does not resolve" % address
+    return "hint: the server at %s cannot be reached" % address
+
+
 class SheetmeshClient:
     """The service's blobs, jobs and volumes from Python."""
 
@@ -85,12 +107,17 @@ class SheetmeshClient:
         else:
             self._channel = grpc.insecure_channel(address)
         self._metadata = [("authorization", "Bearer " + token)] if token else []
+        self.address, self.tls = address, bool(tls or root_cert)
         self.blobs = blobs_pb2_grpc.BlobServiceStub(self._channel)
         self.jobs = jobs_pb2_grpc.JobServiceStub(self._channel)
         self.volumes = volumes_pb2_grpc.VolumeServiceStub(self._channel)
 
     def close(self):
         self._channel.close()
+
+    def hint(self, error):
+        """connection_hint for this client's address: "" unless the server was unreachable."""
+        return connection_hint(error, self.address, self.tls)
 
     def __enter__(self):
         return self

@@ -60,6 +60,22 @@ class PythonClientTest(unittest.TestCase):
     def test_health(self):
         self.assertEqual(self.client.health(), "SERVING")
 
+    def test_an_unreachable_server_gets_a_hint(self):
+        for address, hint in (("127.0.0.1:1", "hint: nothing listens at 127.0.0.1:1"),
+                              ("http://127.0.0.1:1", "hint: the address takes HOST:PORT without a scheme"),
+                              ("nohost.invalid:5", "hint: the host in nohost.invalid:5 does not resolve")):
+            with SheetmeshClient(address) as c:
+                with self.assertRaises(grpc.RpcError) as e:
+                    c.jobs.ListJobs(jobs_pb2.ListJobsRequest(), timeout=10)
+                self.assertTrue(c.hint(e.exception).startswith(hint), (address, c.hint(e.exception)))
+        with SheetmeshClient(self.address, tls=True) as c:
+            with self.assertRaises(grpc.RpcError) as e:
+                c.jobs.ListJobs(jobs_pb2.ListJobsRequest(), timeout=10)
+            self.assertIn("does not speak TLS", c.hint(e.exception))
+        with self.assertRaises(grpc.RpcError) as e:
+            self.client.get_job("jobs/none")
+        self.assertEqual(self.client.hint(e.exception), "", "only unreachable servers get a hint")
+
     def test_mesh_uploads_runs_and_downloads_verified_files(self):
         out = self.tmp / "mesh_out"
         stages = []

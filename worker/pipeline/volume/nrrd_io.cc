@@ -178,7 +178,7 @@ absl::Status CheckRequired(const RequiredFields& seen, const NrrdHeader& h,
 }  // namespace
 
 absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_view path,
-                                           const VolumeLimits& limits) {
+                                           const VolumeLimits& limits, bool text_is_whole_file) {
   NrrdHeader h;
   if (text.size() < 8 || text.substr(0, 7) != "NRRD000" || !absl::ascii_isdigit(text[7])) {
     return absl::InvalidArgumentError(
@@ -188,10 +188,13 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
   size_t pos = text.find('\n') + 1;  // past the magic line
   bool closed = false;
   while (pos > 0 && pos < text.size() && pos < static_cast<size_t>(kMaxHeaderBytes)) {
-    const size_t nl = text.find('\n', pos);
-    if (nl == absl::string_view::npos) break;
+    size_t nl = text.find('\n', pos);
+    if (nl == absl::string_view::npos) {
+      if (!text_is_whole_file) break;
+      nl = text.size();  // the file's last line, without a newline
+    }
     absl::string_view line = text.substr(pos, nl - pos);
-    pos = nl + 1;
+    pos = std::min(nl + 1, text.size());
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty()) {
       closed = true;
@@ -211,7 +214,9 @@ absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_
     // Other fields (kinds, labels, min, max, ...) do not change how voxels are read, and
     // unknown ones are tolerated, as the format asks of readers.
   }
-  if (!closed) {
+  // A detached header that ends with its file needs no closing blank line.
+  const bool ended_with_file = text_is_whole_file && pos >= text.size() && !h.data_file.empty();
+  if (!closed && !ended_with_file) {
     if (pos >= static_cast<size_t>(kMaxHeaderBytes)) {
       return absl::InvalidArgumentError(
           absl::StrCat(path, ": NRRD header is longer than ", kMaxHeaderBytes, " bytes"));
@@ -447,7 +452,9 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
   std::string head(static_cast<size_t>(std::min<int64_t>(file_size, kMaxHeaderBytes)), '\0');
   SM_RETURN_IF_ERROR(
       AsInputError(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
-  SM_ASSIGN_OR_RETURN(NrrdHeader h, ParseNrrdHeader(head, path, limits));
+  SM_ASSIGN_OR_RETURN(NrrdHeader h, ParseNrrdHeader(head, path, limits,
+                                                    /*text_is_whole_file=*/file_size <=
+                                                        static_cast<int64_t>(head.size())));
 
   ScopedFd data_fd;
   std::string data_path = path;

@@ -31,9 +31,12 @@ struct NrrdHeader {
 // Parses a NRRD header from the start of `text` (which may continue with data). `path`
 // names the file in messages. kInvalidArgument naming the field and value for a malformed
 // or unsupported header (magic, dimension, type, encoding, sizes, spacing); kOutOfRange
-// when `text` ends before the blank line that closes the header.
+// when `text` ends before the blank line that closes the header — unless `text` is the
+// whole file and the header names a data file: a detached header may end with the file
+// (teem and Slicer write them so), its last line with or without a newline.
 absl::StatusOr<NrrdHeader> ParseNrrdHeader(absl::string_view text, absl::string_view path,
-                                           const VolumeLimits& limits = {});
+                                           const VolumeLimits& limits = {},
+                                           bool text_is_whole_file = false);
 
 // Opens a .nrrd or .nhdr volume.
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& path,

@@ -430,6 +430,25 @@ TEST(NrrdIoTest, DetachedHeaderReadsItsDataFile) {
   SM_ASSERT_OK_AND_ASSIGN(auto source, OpenVolume(tmp.File("h.nhdr")));
   SM_ASSERT_OK_AND_ASSIGN(DenseVolume out, ReadDense(*source));
   ExpectSameVoxels(in, out);
+  // Detached headers that end with their file (as teem and Slicer write them): no closing
+  // blank line, and none with no newline after the last line either.
+  for (const char* ending : {"data file: data.raw\n", "data file: data.raw"}) {
+    ASSERT_THAT(WriteFileAtomically(tmp.File("open.nhdr"),
+                                    std::string("NRRD0004\ntype: ushort\ndimension: 3\nsizes: 7 5 "
+                                                "4\nendian: little\nencoding: raw\n") +
+                                        ending),
+                IsOk());
+    SM_ASSERT_OK_AND_ASSIGN(auto open, OpenVolume(tmp.File("open.nhdr")));
+    SM_ASSERT_OK_AND_ASSIGN(DenseVolume read, ReadDense(*open));
+    ExpectSameVoxels(in, read);
+  }
+  // An attached header still needs its blank line: the data cannot be told from it.
+  ASSERT_THAT(WriteFileAtomically(tmp.File("attached.nrrd"),
+                                  "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\nencoding: "
+                                  "raw\n"),
+              IsOk());
+  EXPECT_THAT(OpenVolume(tmp.File("attached.nrrd")),
+              StatusIs(absl::StatusCode::kOutOfRange, HasSubstr("no closing blank line")));
 }
 
 TEST(VdbIoTest, VoxelSetAndLabelsReadBack) {

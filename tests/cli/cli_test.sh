@@ -14,7 +14,18 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 /usr/bin/python3 -c "import json,sys; j=json.load(open('$tmp/info.json')); sys.exit(0 if j['dims']==[128,112,96] and j['sheet_voxels']>0 else 1)" || fail "info json"
 "$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip | grep -q wrote || fail convert
 "$cli" surface "$tmp/s.nrrd" --r 7 -o "$tmp/surf" --similarity_hausdorff=false | grep -q "similarity" || fail surface
-for f in surface.ply surface.vtp surface.obj report.json; do [ -f "$tmp/surf/$f" ] || fail "surface wrote no $f"; done
+for f in surface.ply surface.vtp surface.vtu surface.obj report.json; do [ -f "$tmp/surf/$f" ] || fail "surface wrote no $f"; done
+# meshio (which reads no PolyData) takes the surface .vtu with its thickness per triangle.
+/usr/bin/python3 - "$tmp/surf/surface.vtu" <<'PY' || fail "meshio cannot read surface.vtu with its cell data"
+import sys
+import meshio
+m = meshio.read(sys.argv[1])
+tri = m.get_cells_type("triangle")
+assert len(tri) > 0, "no triangles"
+for name in ("thickness", "thickness_voxels", "piece"):
+    assert name in m.cell_data and len(m.cell_data[name][0]) == len(tri), name
+assert (m.cell_data["thickness_voxels"][0] >= 0).all()
+PY
 "$cli" score "$tmp/s.nrrd" "$tmp/surf/surface.ply" --similarity_hausdorff=false | grep -q "similarity" || fail score
 cat > "$tmp/cfg.json" <<'JSON'
 {"separate": {"D_ang": 140}, "r": 8, "volume_mesh": true}

@@ -72,13 +72,18 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
   return WriteFileAtomically(path, out);
 }
 
-absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
-                      const Placement& placement) {
+namespace {
+
+// The surface as VTK XML: PolyData (.vtp) or UnstructuredGrid (.vtu, for readers such as
+// meshio that take no PolyData), the same arrays in both.
+std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, bool unstructured) {
+  const char* kind = unstructured ? "UnstructuredGrid" : "PolyData";
   std::string out;
-  absl::StrAppend(&out,
-                  "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "
-                  "byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"",
-                  mesh.vertices.size(), "\" NumberOfPolys=\"", mesh.faces.size(), "\">\n");
+  absl::StrAppend(&out, "<?xml version=\"1.0\"?>\n<VTKFile type=\"", kind,
+                  "\" version=\"1.0\" byte_order=\"LittleEndian\">\n<", kind,
+                  ">\n<Piece NumberOfPoints=\"", mesh.vertices.size(),
+                  unstructured ? "\" NumberOfCells=\"" : "\" NumberOfPolys=\"", mesh.faces.size(),
+                  "\">\n");
   out += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
   for (const Vec3& v : mesh.vertices) {
     const Vec3 p = placement.ToPhysical(v);
@@ -108,13 +113,32 @@ absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
     for (int32_t p : mesh.face_piece) absl::StrAppend(&out, p, "\n");
     out += "</DataArray>\n";
   }
-  out +=
-      "</CellData>\n<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  absl::StrAppend(&out, "</CellData>\n", unstructured ? "<Cells>\n" : "<Polys>\n",
+                  "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
   for (const Face& f : mesh.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
   out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
   for (size_t f = 0; f < mesh.faces.size(); ++f) absl::StrAppend(&out, 3 * (f + 1), "\n");
-  out += "</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
-  return WriteFileAtomically(path, out);
+  out += "</DataArray>\n";
+  if (unstructured) {
+    out += "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (size_t f = 0; f < mesh.faces.size(); ++f) out += "5\n";  // VTK_TRIANGLE
+    out += "</DataArray>\n";
+  }
+  absl::StrAppend(&out, unstructured ? "</Cells>\n" : "</Polys>\n", "</Piece>\n</", kind,
+                  ">\n</VTKFile>\n");
+  return out;
+}
+
+}  // namespace
+
+absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
+                      const Placement& placement) {
+  return WriteFileAtomically(path, SurfaceVtkXml(mesh, placement, /*unstructured=*/false));
+}
+
+absl::Status WriteSurfaceVtu(const std::string& path, const TriangleMesh& mesh,
+                             const Placement& placement) {
+  return WriteFileAtomically(path, SurfaceVtkXml(mesh, placement, /*unstructured=*/true));
 }
 
 absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,

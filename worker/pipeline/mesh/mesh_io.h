@@ -27,6 +27,11 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
 absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
 // Wavefront OBJ, faces grouped by piece ("g piece_3"). Atomic.
+// The same as an UnstructuredGrid of triangles (.vtu), for readers without PolyData
+// (meshio): cell data thickness, thickness_voxels, piece.
+absl::Status WriteSurfaceVtu(const std::string& path, const TriangleMesh& mesh,
+                             const Placement& placement);
+
 absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
 

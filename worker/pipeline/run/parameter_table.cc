@@ -400,10 +400,12 @@ std::vector<ParamRow> VolumeMeshRows() {
 
 std::vector<ParamRow> OutputRows() {
   std::vector<ParamRow> rows;
-  rows.push_back(Formats(
-      "output.formats",
-      {{"ply", &OutputOptions::ply}, {"vtp", &OutputOptions::vtp}, {"obj", &OutputOptions::obj}},
-      "surface mesh files to write"));
+  rows.push_back(Formats("output.formats",
+                         {{"ply", &OutputOptions::ply},
+                          {"vtp", &OutputOptions::vtp},
+                          {"vtu", &OutputOptions::surface_vtu},
+                          {"obj", &OutputOptions::obj}},
+                         "surface mesh files to write"));
   rows.push_back(Bool("output.model", SM_MEMBER(output.model),
                       "with extraction: the model (model.vdb, a label volume, pieces.csv)"));
   rows.push_back(Bool("output.dropped", SM_MEMBER(output.dropped),

@@ -32,18 +32,19 @@ struct ScoreOptions {
 };
 
 struct OutputOptions {
-  std::string dir;       // where files go (created); empty: write nothing
-  bool ply = true;       // surface.ply
-  bool vtp = true;       // surface.vtp
-  bool obj = true;       // surface.obj
-  bool model = true;     // with extraction: model.vdb (mask + labels) and
-                         // model_labels_<dims>_u16.raw, and pieces.csv
-  bool dropped = false;  // with extraction: dropped_labels_<dims>_u16.raw, the voxels of
-                         // the phase the model lacks labelled by why (DroppedBy)
-  bool vtu = true;       // with a volume mesh: volume.vtu
-  bool msh = true;       // volume.msh (Gmsh 4.1)
-  bool inp = true;       // volume.inp (Abaqus)
-  bool previews = true;  // preview_slice_{x,y,z}.png, preview_thickness.png
+  std::string dir;          // where files go (created); empty: write nothing
+  bool ply = true;          // surface.ply
+  bool vtp = true;          // surface.vtp
+  bool surface_vtu = true;  // surface.vtu (the same as an unstructured grid)
+  bool obj = true;          // surface.obj
+  bool model = true;        // with extraction: model.vdb (mask + labels) and
+                            // model_labels_<dims>_u16.raw, and pieces.csv
+  bool dropped = false;     // with extraction: dropped_labels_<dims>_u16.raw, the voxels of
+                            // the phase the model lacks labelled by why (DroppedBy)
+  bool vtu = true;          // with a volume mesh: volume.vtu
+  bool msh = true;          // volume.msh (Gmsh 4.1)
+  bool inp = true;          // volume.inp (Abaqus)
+  bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
 };
 
 struct PipelineOptions {
@@ -102,7 +103,7 @@ struct PipelineReport {
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
   std::vector<StageTime> timings;
-  std::vector<std::string> files;  // written, relative to output.dir
+  std::vector<std::string> files;     // written, relative to output.dir
   std::vector<std::string> previews;  // each preview's description, as JSON text
 
   // The report as JSON (the report.json artifact): the sections this report has.

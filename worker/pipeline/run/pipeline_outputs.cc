@@ -26,6 +26,10 @@ absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
     SM_RETURN_IF_ERROR(WriteVtp(In(dir, "surface.vtp"), mesh, placement));
     files->push_back("surface.vtp");
   }
+  if (output.surface_vtu) {
+    SM_RETURN_IF_ERROR(WriteSurfaceVtu(In(dir, "surface.vtu"), mesh, placement));
+    files->push_back("surface.vtu");
+  }
   if (output.obj) {
     SM_RETURN_IF_ERROR(WriteObj(In(dir, "surface.obj"), mesh, placement));
     files->push_back("surface.obj");

@@ -264,7 +264,7 @@ TEST(ParametersTest, MistakesNameTheFileTheKeyAndTheValue) {
        "'volume_mesh.min_dihedral' is now 'tet.min_dihedral'"},
       {R"({"volume_mesh": {"enabled": true}})", "'volume_mesh.enabled' is now 'volume_mesh'"},
       {R"({"similarity": {"grid_rates": [0]}})", "'similarity.grid_rates' = [0]"},
-      {R"({"output": {"formats": ["stl"]}})", "names from ply, vtp, obj"},
+      {R"({"output": {"formats": ["stl"]}})", "names from ply, vtp, vtu, obj"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

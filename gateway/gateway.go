@@ -53,20 +53,22 @@ func newGateway(ctx context.Context, conn *grpc.ClientConn, o options) (http.Han
 	return g, nil
 }
 
-// outgoing is the request's context with its bearer token for the server: the
-// Authorization header, or ?access_token= where a browser cannot set headers (a link, an
-// EventSource).
-func outgoing(r *http.Request) context.Context {
-	auth := r.Header.Get("Authorization")
-	if auth == "" {
+// tokenFromQuery makes ?access_token= the request's Authorization header where it has
+// none: a browser cannot set headers on a link or an EventSource.
+func tokenFromQuery(r *http.Request) {
+	if r.Header.Get("Authorization") == "" {
 		if t := r.URL.Query().Get("access_token"); t != "" {
-			auth = "Bearer " + t
+			r.Header.Set("Authorization", "Bearer "+t)
 		}
 	}
-	if auth == "" {
-		return r.Context()
+}
+
+// outgoing is the request's context with its bearer token for the server.
+func outgoing(r *http.Request) context.Context {
+	if auth := r.Header.Get("Authorization"); auth != "" {
+		return metadata.AppendToOutgoingContext(r.Context(), "authorization", auth)
 	}
-	return metadata.AppendToOutgoingContext(r.Context(), "authorization", auth)
+	return r.Context()
 }
 
 func (g *gateway) ServeHTTP(w http.ResponseWriter, r *http.Request) {
@@ -82,6 +84,7 @@ func (g *gateway) ServeHTTP(w http.ResponseWriter, r *http.Request) {
 		w.Header().Set("Content-Type", "text/plain")
 		w.Write([]byte("ok\n"))
 	case strings.HasPrefix(p, "/v1/"):
+		tokenFromQuery(r)
 		if m := artifactRoute.FindStringSubmatch(p); m != nil {
 			if onlyMethods(w, r, http.MethodGet, http.MethodHead) {
 				g.download(w, r, "jobs/"+m[1], m[2])
@@ -99,11 +102,6 @@ func (g *gateway) ServeHTTP(w http.ResponseWriter, r *http.Request) {
 				g.upload(w, r, m[1], m[2], m[3])
 			}
 			return
-		}
-		if r.Header.Get("Authorization") == "" {
-			if t := r.URL.Query().Get("access_token"); t != "" {
-				r.Header.Set("Authorization", "Bearer "+t)
-			}
 		}
 		g.api.ServeHTTP(w, r)
 	default:

@@ -258,11 +258,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
 
   runtime::WorkerPoolOptions wo;
   wo.workers = o.workers;
-  // Unique among the servers over one database: containers all run as pid 1.
-  char host[256] = "";
-  ::gethostname(host, sizeof(host) - 1);
-  wo.name = absl::StrCat("local-", host, "-", ::getpid(), "-",
-                         absl::Hex(absl::GetCurrentTimeNanos() & 0xffffff));
+  wo.name = runtime::UniqueWorkerName("local");
   wo.run.scratch_dir = scratch;
   wo.run.isolate = o.isolate_jobs;
   wo.run.program = o.job_program;

@@ -50,9 +50,9 @@ struct ServiceContext {
   ServiceLimits limits;
   StreamLimits* upload_streams = nullptr;
   StreamLimits* watch_streams = nullptr;
-  absl::Duration heartbeat = absl::Seconds(5);  // WatchJob sends at least this often
+  absl::Duration heartbeat = absl::Seconds(5);      // WatchJob sends at least this often
   absl::Duration worker_lease = absl::Seconds(30);  // a remote worker's lease
-  bool cache = true;                            // reuse results of identical work
+  bool cache = true;                                // reuse results of identical work
   InspectOptions inspect;
 };
 

@@ -37,7 +37,7 @@ grpc::Status WorkerServiceImpl::Authorize(const grpc::ServerContext& context) co
                       "this server takes no remote workers: start it with --worker_token_file");
 }
 
-bool WorkerServiceImpl::MustStop(const std::string& job, const std::string& worker) const {
+bool WorkerServiceImpl::MustStop(const std::string& job) const {
   absl::StatusOr<bool> stop = ctx_->jobs->CancelRequested(job);
   return !stop.ok() || *stop;
 }
@@ -72,7 +72,7 @@ grpc::Status WorkerServiceImpl::RenewLease(grpc::ServerContext* context,
     return grpc::Status::OK;
   }
   if (!st.ok()) return ToGrpcStatus(st);
-  response->set_stop(MustStop(request->name(), request->worker()));
+  response->set_stop(MustStop(request->name()));
   return grpc::Status::OK;
 }
 
@@ -100,7 +100,7 @@ grpc::Status WorkerServiceImpl::ReportProgress(grpc::ServerContext* context,
   } else {
     ctx_->events->Notify(request->name());
   }
-  response->set_stop(MustStop(request->name(), request->worker()));
+  response->set_stop(MustStop(request->name()));
   return grpc::Status::OK;
 }
 

@@ -32,8 +32,8 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
 
  private:
   grpc::Status Authorize(const grpc::ServerContext& context) const;
-  // Whether the worker must stop `job`: cancelled, or no longer running under it.
-  bool MustStop(const std::string& job, const std::string& worker) const;
+  // Whether the worker must stop `job`: a cancel was asked, or it no longer runs.
+  bool MustStop(const std::string& job) const;
 
   ServiceContext* ctx_;
   std::mutex mu_;

@@ -88,12 +88,8 @@ int main(int argc, char** argv) {
   }
   sheetmesh::runtime::WorkerPoolOptions wo;
   wo.workers = absl::GetFlag(FLAGS_workers);
-  char hostname[256] = "";
-  ::gethostname(hostname, sizeof(hostname) - 1);
-  wo.name = absl::GetFlag(FLAGS_name).empty()
-                ? absl::StrCat("remote-", hostname, "-", ::getpid(), "-",
-                               absl::Hex(absl::GetCurrentTimeNanos() & 0xffffff))
-                : absl::GetFlag(FLAGS_name);
+  wo.name = absl::GetFlag(FLAGS_name).empty() ? sheetmesh::runtime::UniqueWorkerName("remote")
+                                              : absl::GetFlag(FLAGS_name);
   wo.run.scratch_dir = ho.scratch_dir + "/jobs";
   wo.run.isolate = absl::GetFlag(FLAGS_isolate_jobs);
   const double gb = absl::GetFlag(FLAGS_job_memory_gb);

@@ -1,12 +1,22 @@
 #include "worker/runtime/worker_pool.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <condition_variable>
 
 #include "absl/strings/str_cat.h"
+#include "absl/time/clock.h"
 #include "worker/runtime/job_runner.h"
 
 namespace sheetmesh::runtime {
+
+std::string UniqueWorkerName(const std::string& prefix) {
+  char host[256] = "";
+  ::gethostname(host, sizeof(host) - 1);
+  return absl::StrCat(prefix, "-", host, "-", ::getpid(), "-",
+                      absl::Hex(absl::GetCurrentTimeNanos() & 0xffffff));
+}
 
 // The host as the running job sees it: progress reports also answer "stop" when the pool
 // aborts (draining past its timeout) or the lease was lost.

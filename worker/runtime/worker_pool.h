@@ -25,6 +25,10 @@ struct WorkerPoolOptions {
   absl::Duration lease_poll = absl::Milliseconds(500);  // Lease() wait per attempt
 };
 
+// A lease name unique among all workers over one job store: `prefix`, the host, the pid
+// (containers all run as pid 1) and a random tail.
+std::string UniqueWorkerName(const std::string& prefix);
+
 // Thread-safe. Start() once; Drain() or Stop() before destruction.
 class WorkerPool {
  public:

@@ -26,6 +26,10 @@ packages=(
   golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev libpng-dev chromium
   # the image and the compose file (ImageTest)
   docker.io debootstrap docker-compose
+  # the formats labs and simulators use: readers (HDF5, DICOM, PNG/JPEG stacks), Exodus II,
+  # and the tools the tests load the outputs with
+  libhdf5-dev libgdcm-dev libjpeg-dev libexodusii-dev calculix-ccx gmsh python3-h5py
+  python3-netcdf4 python3-openvdb python3-nibabel python3-pydicom python3-pil
 )
 # Node and npm for the front-end: Debian's, unless the machine has its own.
 command -v npm >/dev/null || packages+=(nodejs npm)

@@ -1,6 +1,7 @@
 #include "worker/pipeline/mesh/mesh_io.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -17,32 +18,35 @@
 #include "common/version.h"
 
 namespace sheetmesh {
-namespace {
-
-template <class T>
-void Put(std::string* out, T v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if constexpr (sizeof(T) > 1) {
-    if (!NativeIsLittleEndian()) std::reverse(b, b + sizeof(T));
-  }
-  out->append(b, sizeof(T));
-}
-
-}  // namespace
+namespace {}  // namespace
 
 double PhysicalLength(double voxels, const Placement& p) {
   return voxels * std::cbrt(std::abs(p.spacing.x * p.spacing.y * p.spacing.z));
 }
+
+namespace {
+
+// A face's colour for its thickness: blue (thinnest) through green to red (thickest) over
+// [lo, hi], for readers that keep only colours (VTK's and ParaView's PLY reader).
+std::array<int, 3> ThicknessColour(float t, float lo, float hi) {
+  const double s = hi > lo ? std::clamp((t - lo) / (hi - lo), 0.0f, 1.0f) : 0.5;
+  const double r = std::clamp(2 * s - 1, 0.0, 1.0), b = std::clamp(1 - 2 * s, 0.0, 1.0);
+  const double g = 1 - r - b;
+  return {static_cast<int>(std::lround(255 * r)), static_cast<int>(std::lround(255 * g)),
+          static_cast<int>(std::lround(255 * b))};
+}
+
+}  // namespace
 
 absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement) {
   const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
   const bool fthick = mesh.face_thickness.size() == mesh.faces.size();
   const bool fpiece = mesh.face_piece.size() == mesh.faces.size();
-  std::string out = absl::StrCat("ply\nformat binary_little_endian 1.0\ncomment sheetmesh ",
-                                 SHEETMESH_VERSION, "\n");
+  std::string out =
+      absl::StrCat("ply\nformat ascii 1.0\ncomment sheetmesh ", SHEETMESH_VERSION, "\n");
   if (!placement.unit.empty()) absl::StrAppend(&out, "comment unit ", placement.unit, "\n");
+  if (fthick) out += "comment red, green, blue: thickness from blue (thinnest) to red\n";
   absl::StrAppend(&out, "element vertex ", mesh.vertices.size(),
                   "\nproperty float x\nproperty float y\nproperty float z\n");
   if (vthick) out += "property float thickness\n";
@@ -50,24 +54,40 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                   "\nproperty list uchar int vertex_indices\n");
   if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
   if (fpiece) out += "property int piece\n";
+  if (fthick) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   out += "end_header\n";
-  out.reserve(out.size() + mesh.vertices.size() * 16 + mesh.faces.size() * 25);
+  out.reserve(out.size() + mesh.vertices.size() * 40 + mesh.faces.size() * 48);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const Vec3 p = placement.ToPhysical(mesh.vertices[v]);
-    Put<float>(&out, static_cast<float>(p.x));
-    Put<float>(&out, static_cast<float>(p.y));
-    Put<float>(&out, static_cast<float>(p.z));
-    if (vthick)
-      Put<float>(&out, static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
+    absl::StrAppendFormat(&out, "%.9g %.9g %.9g", static_cast<float>(p.x), static_cast<float>(p.y),
+                          static_cast<float>(p.z));
+    if (vthick) {
+      absl::StrAppendFormat(
+          &out, " %.7g", static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
+    }
+    out += '\n';
+  }
+  float lo = 0, hi = 0;
+  if (fthick && !mesh.faces.empty()) {
+    const auto [mn, mx] =
+        std::minmax_element(mesh.face_thickness.begin(), mesh.face_thickness.end());
+    lo = *mn;
+    hi = *mx;
   }
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    Put<uint8_t>(&out, 3);
-    for (uint32_t v : mesh.faces[f]) Put<int32_t>(&out, static_cast<int32_t>(v));
+    const Face& t = mesh.faces[f];
+    absl::StrAppend(&out, "3 ", t[0], " ", t[1], " ", t[2]);
     if (fthick) {
-      Put<float>(&out, static_cast<float>(PhysicalLength(mesh.face_thickness[f], placement)));
-      Put<float>(&out, mesh.face_thickness[f]);
+      absl::StrAppendFormat(&out, " %.7g %.7g",
+                            static_cast<float>(PhysicalLength(mesh.face_thickness[f], placement)),
+                            mesh.face_thickness[f]);
     }
-    if (fpiece) Put<int32_t>(&out, mesh.face_piece[f]);
+    if (fpiece) absl::StrAppend(&out, " ", mesh.face_piece[f]);
+    if (fthick) {
+      const std::array<int, 3> c = ThicknessColour(mesh.face_thickness[f], lo, hi);
+      absl::StrAppend(&out, " ", c[0], " ", c[1], " ", c[2]);
+    }
+    out += '\n';
   }
   return WriteFileAtomically(path, out);
 }
@@ -150,6 +170,14 @@ absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
     const Vec3 p = placement.ToPhysical(v);
     absl::StrAppendFormat(&out, "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
   }
+  // OBJ has no per-face values: the thickness at each vertex travels as its texture
+  // coordinate (u physical, v in voxels), which meshio reads as point data "obj:vt".
+  const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
+  if (vthick) {
+    out += "# vt u v: the thickness at the vertex (u physical, v in voxels)\n";
+    for (float t : mesh.vertex_thickness)
+      absl::StrAppendFormat(&out, "vt %.7g %.7g\n", PhysicalLength(t, placement), t);
+  }
   const bool pieces = mesh.face_piece.size() == mesh.faces.size();
   std::vector<size_t> order(mesh.faces.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -164,7 +192,12 @@ absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
       absl::StrAppend(&out, "g piece_", group, "\n");
     }
     const Face& t = mesh.faces[f];
-    absl::StrAppend(&out, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
+    if (vthick) {
+      absl::StrAppend(&out, "f ", t[0] + 1, "/", t[0] + 1, " ", t[1] + 1, "/", t[1] + 1, " ",
+                      t[2] + 1, "/", t[2] + 1, "\n");
+    } else {
+      absl::StrAppend(&out, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
+    }
   }
   return WriteFileAtomically(path, out);
 }

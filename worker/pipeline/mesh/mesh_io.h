@@ -1,4 +1,4 @@
-// Surface mesh files: binary PLY with face properties thickness and piece, VTP for
+// Surface mesh files: ASCII PLY with face properties thickness and piece, VTP for
 // ParaView with the same attributes, OBJ grouped by piece; coordinates in physical units.
 // Readers for PLY and OBJ, so that other tools' meshes can be scored.
 #ifndef SHEETMESH_WORKER_PIPELINE_MESH_MESH_IO_H_
@@ -17,21 +17,23 @@ namespace sheetmesh {
 // isotropic voxels).
 double PhysicalLength(double voxels, const Placement& placement);
 
-// Binary little-endian PLY. Vertices x, y, z (float, physical) and, when present,
-// thickness; faces vertex_indices, thickness (physical), thickness_voxels, piece.
-// The file appears atomically.
+// ASCII PLY (meshio 5's binary PLY reader takes no face properties; its ASCII one does).
+// Vertices x, y, z (physical) and, when present, thickness; faces vertex_indices, thickness
+// (physical), thickness_voxels, piece, and red/green/blue from the thickness for readers
+// that keep only colours (VTK's). The file appears atomically.
 absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
 // VTK XML PolyData (.vtp) with cell data thickness, thickness_voxels, piece and point data
 // thickness. Atomic.
 absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
-// Wavefront OBJ, faces grouped by piece ("g piece_3"). Atomic.
 // The same as an UnstructuredGrid of triangles (.vtu), for readers without PolyData
 // (meshio): cell data thickness, thickness_voxels, piece.
 absl::Status WriteSurfaceVtu(const std::string& path, const TriangleMesh& mesh,
                              const Placement& placement);
 
+// Wavefront OBJ, faces grouped by piece ("g piece_3"); the vertex thickness as texture
+// coordinates "vt PHYSICAL VOXELS" (OBJ has no per-face values). Atomic.
 absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
 

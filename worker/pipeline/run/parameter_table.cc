@@ -415,10 +415,12 @@ std::vector<ParamRow> OutputRows() {
   rows.push_back(Bool("output.previews", SM_MEMBER(output.previews),
                       "PNG previews: three slices through the middle with the phase and the "
                       "mesh's cross-section, and the largest sheet's thickness map"));
-  rows.push_back(Formats(
-      "output.volume_formats",
-      {{"vtu", &OutputOptions::vtu}, {"msh", &OutputOptions::msh}, {"inp", &OutputOptions::inp}},
-      "volume mesh files to write"));
+  rows.push_back(Formats("output.volume_formats",
+                         {{"vtu", &OutputOptions::vtu},
+                          {"msh", &OutputOptions::msh},
+                          {"inp", &OutputOptions::inp},
+                          {"exo", &OutputOptions::exo}},
+                         "volume mesh files to write"));
   rows.push_back(Number("time_limit_seconds", SM_MEMBER(time_limit_seconds), "0 | (0, 2592000]",
                         "seconds",
                         "wall-clock limit of the run (0: none of its own; a server's "

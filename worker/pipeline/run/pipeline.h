@@ -43,7 +43,8 @@ struct OutputOptions {
                             // the phase the model lacks labelled by why (DroppedBy)
   bool vtu = true;          // with a volume mesh: volume.vtu
   bool msh = true;          // volume.msh (Gmsh 4.1)
-  bool inp = true;          // volume.inp (Abaqus)
+  bool inp = true;          // volume.inp (Abaqus/CalculiX)
+  bool exo = true;          // volume.exo (Exodus II)
   bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
 };
 

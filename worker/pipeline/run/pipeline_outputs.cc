@@ -51,6 +51,10 @@ absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
     SM_RETURN_IF_ERROR(WriteAbaqus(In(dir, "volume.inp"), mesh));
     files->push_back("volume.inp");
   }
+  if (output.exo) {
+    SM_RETURN_IF_ERROR(WriteExodus(In(dir, "volume.exo"), mesh));
+    files->push_back("volume.exo");
+  }
   return absl::OkStatus();
 }
 

@@ -20,6 +20,7 @@ struct TetMesh {
   std::vector<int32_t> face_marker;            // per face: 1 = box, >= 10 sheet triangle
   std::vector<int32_t> face_piece;             // per face: sheet piece, -1 on the box
   std::vector<float> face_thickness;           // per face: sheet thickness (physical), 0 on the box
+  double voxel_length = 1.0;  // one voxel in physical units: thickness in voxels = physical / it
 
   size_t num_sheet_faces() const;
 };

@@ -20,7 +20,50 @@ std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& m) {
   return groups;
 }
 
+// Appends one VTU cell array: `tet` for every tetrahedron, then value(f) per face.
+template <class F>
+void AppendCellArray(std::string* out, const char* type, const char* name, const TetMesh& m,
+                     const char* tet, F value) {
+  absl::StrAppend(out, "<DataArray type=\"", type, "\" Name=\"", name, "\" format=\"ascii\">\n");
+  for (size_t i = 0; i < m.tets.size(); ++i) absl::StrAppend(out, tet, "\n");
+  for (size_t f = 0; f < m.faces.size(); ++f) absl::StrAppend(out, value(f), "\n");
+  *out += "</DataArray>\n";
+}
+
+std::string G7(double v) { return absl::StrFormat("%.7g", v); }
+
 }  // namespace
+
+std::vector<int> BoxSides(const TetMesh& m) {
+  Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
+  for (const Vec3& p : m.nodes)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+    }
+  std::vector<int> side(m.faces.size(), -1);
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_piece[f] >= 0) continue;
+    for (int k = 0; k < 3 && side[f] < 0; ++k) {
+      const double tol = 1e-9 * std::max(1.0, hi[k] - lo[k]);
+      bool at_lo = true, at_hi = true;
+      for (uint32_t v : m.faces[f]) {
+        at_lo = at_lo && std::abs(m.nodes[v][k] - lo[k]) <= tol;
+        at_hi = at_hi && std::abs(m.nodes[v][k] - hi[k]) <= tol;
+      }
+      if (at_lo) side[f] = 2 * k;
+      if (at_hi) side[f] = 2 * k + 1;
+    }
+  }
+  return side;
+}
+
+std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
+  std::map<int32_t, std::vector<size_t>> groups;
+  for (size_t f = 0; f < m.faces.size(); ++f)
+    if (m.face_piece[f] >= 0) groups[m.face_piece[f]].push_back(f);
+  return groups;
+}
 
 absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   const size_t cells = m.tets.size() + m.faces.size();
@@ -43,18 +86,31 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   out += "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
   for (size_t i = 0; i < m.tets.size(); ++i) out += "10\n";
   for (size_t i = 0; i < m.faces.size(); ++i) out += "5\n";
-  out +=
-      "</DataArray>\n</Cells>\n<CellData Scalars=\"kind\">\n"
-      "<DataArray type=\"Int32\" Name=\"kind\" format=\"ascii\">\n";
-  for (size_t i = 0; i < m.tets.size(); ++i) out += "0\n";
-  for (size_t f = 0; f < m.faces.size(); ++f) out += m.face_piece[f] >= 0 ? "1\n" : "2\n";
-  out += "</DataArray>\n<DataArray type=\"Int32\" Name=\"piece\" format=\"ascii\">\n";
-  for (size_t i = 0; i < m.tets.size(); ++i) out += "-1\n";
-  for (int32_t p : m.face_piece) absl::StrAppend(&out, p, "\n");
-  out += "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
-  for (size_t i = 0; i < m.tets.size(); ++i) out += "0\n";
-  for (float t : m.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", t);
-  out += "</DataArray>\n</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  out += "</DataArray>\n</Cells>\n<CellData Scalars=\"MaterialIDs\">\n";
+  int32_t top_piece = -1;
+  for (int32_t p : m.face_piece) top_piece = std::max(top_piece, p);
+  const int32_t box_id = top_piece + 2;
+  const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
+  AppendCellArray(&out, "Int32", "kind", m, "0",
+                  [&](size_t f) { return m.face_piece[f] >= 0 ? 1 : 2; });
+  AppendCellArray(&out, "Int32", "piece", m, "-1", [&](size_t f) { return m.face_piece[f]; });
+  AppendCellArray(&out, "Int32", "MaterialIDs", m, "0",
+                  [&](size_t f) { return m.face_piece[f] >= 0 ? m.face_piece[f] + 1 : box_id; });
+  AppendCellArray(&out, "Float32", "thickness", m, "0",
+                  [&](size_t f) { return G7(m.face_thickness[f]); });
+  AppendCellArray(&out, "Float32", "thickness_voxels", m, "0",
+                  [&](size_t f) { return G7(m.face_thickness[f] / vox); });
+  AppendCellArray(&out, "Float32", "aperture", m, "0",
+                  [&](size_t f) { return G7(m.face_thickness[f]); });
+  AppendCellArray(&out, "Float64", "permeability", m, "0", [&](size_t f) {
+    const double a = m.face_thickness[f];
+    return absl::StrFormat("%.9g", a * a / 12);
+  });
+  AppendCellArray(&out, "Float64", "transmissivity", m, "0", [&](size_t f) {
+    const double a = m.face_thickness[f];
+    return absl::StrFormat("%.9g", a * a * a / 12);
+  });
+  out += "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
   return WriteFileAtomically(path, out);
 }
 
@@ -103,11 +159,26 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
     }
   }
   out += "$EndElements\n";
+  // The thickness of every element (meshio takes element data only when every element has
+  // it): 0 on the tetrahedra and the box, the sheet's on its triangles. Tags follow the
+  // order written above.
+  std::vector<double> thickness(total, 0.0);
+  tag = m.tets.size();
+  for (const auto& [piece, faces] : groups)
+    for (size_t f : faces) thickness[tag++] = m.face_thickness[f];
+  const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
+  for (const bool voxels : {false, true}) {
+    absl::StrAppend(&out, "$ElementData\n1\n\"", voxels ? "thickness_voxels" : "thickness",
+                    "\"\n1\n0\n3\n0\n1\n", total, "\n");
+    for (size_t e = 0; e < total; ++e)
+      absl::StrAppendFormat(&out, "%d %.7g\n", e + 1, voxels ? thickness[e] / vox : thickness[e]);
+    out += "$EndElementData\n";
+  }
   return WriteFileAtomically(path, out);
 }
 
 absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
-  const auto groups = FaceGroups(m);
+  const auto sheets = SheetFacesByPiece(m);
   std::string out = absl::StrCat("*HEADING\nsheetmesh ", SHEETMESH_VERSION,
                                  " volume mesh: rock tetrahedra with sheet faces\n*NODE\n");
   for (size_t i = 0; i < m.nodes.size(); ++i) {
@@ -120,15 +191,27 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
     absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1,
                     "\n");
   }
-  auto name = [](int32_t piece) {
-    return piece < 0 ? std::string("BOUNDARY") : absl::StrCat("SHEET_", piece);
-  };
-  for (const auto& [piece, faces] : groups) {
-    absl::StrAppend(&out, "*ELEMENT, TYPE=S3, ELSET=", name(piece), "\n");
+  for (const auto& [piece, faces] : sheets) {
+    absl::StrAppend(&out, "*ELEMENT, TYPE=S3, ELSET=SHEET_", piece, "\n");
     for (size_t f : faces) {
       const auto& t = m.faces[f];
       absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, "\n");
     }
+  }
+  // Node sets on the box's sides, for boundary conditions.
+  static const char* kSide[6] = {"XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"};
+  const std::vector<int> side = BoxSides(m);
+  std::set<uint32_t> box_nodes;
+  for (int k = 0; k < 6; ++k) {
+    std::set<uint32_t> nodes;
+    for (size_t f = 0; f < m.faces.size(); ++f)
+      if (side[f] == k) nodes.insert(m.faces[f].begin(), m.faces[f].end());
+    if (nodes.empty()) continue;
+    box_nodes.insert(nodes.begin(), nodes.end());
+    absl::StrAppend(&out, "*NSET, NSET=BOX_", kSide[k], "\n");
+    int n = 0;
+    for (uint32_t v : nodes) absl::StrAppend(&out, v + 1, ++n % 16 == 0 ? "\n" : ", ");
+    if (n % 16 != 0) out += "\n";
   }
   // Surfaces on the tetrahedra's faces. C3D4 face numbering: S1 = (1,2,3), S2 = (1,4,2),
   // S3 = (2,4,3), S4 = (3,4,1).
@@ -142,8 +225,9 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
       owner.emplace(key, std::make_pair(t + 1, k + 1));
     }
   }
-  for (const auto& [piece, faces] : groups) {
-    absl::StrAppend(&out, "*SURFACE, TYPE=ELEMENT, NAME=SURF_", name(piece), "\n");
+  for (const auto& [piece, faces] : FaceGroups(m)) {
+    absl::StrAppend(&out, "*SURFACE, TYPE=ELEMENT, NAME=SURF_",
+                    piece < 0 ? std::string("BOUNDARY") : absl::StrCat("SHEET_", piece), "\n");
     for (size_t f : faces) {
       std::array<uint32_t, 3> key = m.faces[f];
       std::sort(key.begin(), key.end());
@@ -153,6 +237,24 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
       }
       absl::StrAppend(&out, it->second.first, ", S", it->second.second, "\n");
     }
+  }
+  // Materials and sections: without a section CalculiX refuses the elements. The elastic
+  // constants are placeholders in the mesh's units; replace them for a real analysis.
+  out +=
+      "** Materials: placeholder elastic constants (Young's modulus, Poisson's ratio);\n"
+      "** replace them with the rock's and the fill's in the mesh's units.\n"
+      "*MATERIAL, NAME=ROCK\n*ELASTIC\n30000., 0.25\n"
+      "*MATERIAL, NAME=FRACTURE\n*ELASTIC\n3000., 0.3\n"
+      "*SOLID SECTION, ELSET=ROCK, MATERIAL=ROCK\n";
+  for (const auto& [piece, faces] : sheets) {
+    double sum = 0;
+    for (size_t f : faces) sum += m.face_thickness[f];
+    const double mean = faces.empty() ? 0 : sum / faces.size();
+    const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
+    absl::StrAppendFormat(&out,
+                          "** sheet %d: mean thickness %.7g (%.4g voxels) over %d triangles\n"
+                          "*SHELL SECTION, ELSET=SHEET_%d, MATERIAL=FRACTURE\n%.7g\n",
+                          piece, mean, mean / vox, faces.size(), piece, mean > 0 ? mean : vox);
   }
   return WriteFileAtomically(path, out);
 }

@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 
 namespace sheetmesh {
@@ -186,6 +187,9 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
         r.conformity.missing.empty() ? -1 : static_cast<int64_t>(r.conformity.missing[0]),
         ", area error ", r.conformity.worst_area_error, ")"));
   }
+  // The sheets' thickness came in voxels: the mesh is physical.
+  r.mesh.voxel_length = PhysicalLength(1.0, placement);
+  for (float& t : r.mesh.face_thickness) t = static_cast<float>(t * r.mesh.voxel_length);
   r.quality = MeasureQuality(r.mesh);
   r.nodes = r.mesh.nodes.size();
   r.tetrahedra = r.mesh.tets.size();

@@ -306,9 +306,11 @@ absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,
   }
   openvdb::GridPtrVec grids;
   try {
-    auto mask = openvdb::MaskGrid::create();
-    openvdb::Int32Grid::Ptr label_grid;
-    if (!labels.empty()) label_grid = openvdb::Int32Grid::create(-1);
+    // A BoolGrid and a FloatGrid (labels exact below 2^24): the grid types python3-openvdb
+    // reads; it refuses a file with a MaskGrid or an Int32Grid in it altogether.
+    auto mask = openvdb::BoolGrid::create(false);
+    openvdb::FloatGrid::Ptr label_grid;
+    if (!labels.empty()) label_grid = openvdb::FloatGrid::create(-1.0f);
     uint64_t first = 0;
     for (const SparseRun& run : runs) {
       mask->tree().sparseFill(openvdb::CoordBBox(openvdb::Coord(run.x0, run.y, run.z),
@@ -317,7 +319,8 @@ absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,
       if (label_grid) {
         auto lacc = label_grid->getAccessor();
         for (int32_t x = run.x0; x < run.x1; ++x) {
-          lacc.setValue(openvdb::Coord(x, run.y, run.z), labels[first + (x - run.x0)]);
+          lacc.setValue(openvdb::Coord(x, run.y, run.z),
+                        static_cast<float>(labels[first + (x - run.x0)]));
         }
       }
       first += static_cast<uint64_t>(run.x1 - run.x0);

@@ -33,8 +33,9 @@ struct SparseRun {
   int32_t x0 = 0, x1 = 0, y = 0, z = 0;
 };
 
-// Writes the voxels of `runs` (a box of `dims`) as a mask grid named `grid_name`, and,
-// when `labels` is not empty (one per voxel, in run order), an Int32 grid
+// Writes the voxels of `runs` (a box of `dims`) as a Bool grid named `grid_name`, and,
+// when `labels` is not empty (one per voxel, in run order), a Float grid (python3-openvdb reads no
+// Int32 grid)
 // "<grid_name>_labels". kInvalidArgument when the label count differs from the voxel count;
 // kInternal when OpenVDB fails. Atomic.
 absl::Status WriteSparseVdb(const std::string& path, const Dims& dims,

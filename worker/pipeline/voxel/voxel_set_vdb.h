@@ -13,8 +13,8 @@
 
 namespace sheetmesh {
 
-// Writes `set` as a mask grid named `grid_name`, and, when `labels` is not empty (one per
-// voxel of `set`), an Int32 grid "<grid_name>_labels". kInvalidArgument when the label
+// Writes `set` as a Bool grid named `grid_name`, and, when `labels` is not empty (one per
+// voxel of `set`), a Float grid "<grid_name>_labels". kInvalidArgument when the label
 // count differs from the voxel count; kInternal when OpenVDB fails. Atomic.
 absl::Status WriteVoxelSetVdb(const std::string& path, const VoxelSet& set,
                               std::span<const int32_t> labels, const Placement& placement,

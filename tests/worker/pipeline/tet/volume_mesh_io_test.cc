@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
 #include "tests/testing/status_matchers.h"
@@ -34,7 +36,7 @@ std::optional<std::string> Python(const std::string& script) {
 }
 
 // A box with two sheets (pieces 0 and 3).
-TetMesh SampleMesh() {
+TetMesh SampleMesh(const Placement& placement = {}) {
   TriangleMesh sheets;
   for (int s = 0; s < 2; ++s) {
     const double z = s == 0 ? 6 : 13;
@@ -45,7 +47,7 @@ TetMesh SampleMesh() {
     sheets.face_piece.insert(sheets.face_piece.end(), {s == 0 ? 0 : 3, s == 0 ? 0 : 3});
     sheets.face_thickness.insert(sheets.face_thickness.end(), {2.5f, 2.5f});
   }
-  auto r = BuildVolumeMesh(sheets, {20, 20, 20}, {}, {});
+  auto r = BuildVolumeMesh(sheets, {20, 20, 20}, placement, {});
   EXPECT_TRUE(r.ok()) << r.status();
   return r->mesh;
 }
@@ -116,17 +118,56 @@ TEST(VolumeMeshIoTest, AbaqusReadsBackInMeshioWithElementSets) {
       tmp.File("m.inp") +
       "\")\n"
       "sizes = {k: sum(len(x) for x in v) for k, v in m.cell_sets.items()}\n"
+      "zmin = m.points[m.point_sets[\"BOX_ZMIN\"], 2]\n"
       "print(len(m.points), m.cells_dict[\"tetra\"].shape[0], m.cells_dict[\"triangle\"].shape[0], "
       "sizes.get(\"ROCK\"), sizes.get(\"SHEET_0\"), sizes.get(\"SHEET_3\"), "
-      "sizes.get(\"BOUNDARY\"))");
+      "len(m.point_sets), float(zmin.max() - m.points[:, 2].min()))");
   if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
   const Counts c = Expected(m);
-  EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", m.faces.size(), " ", c.tets, " ",
-                               c.sheet0, " ", c.sheet3, " ", c.boundary, "\n"));
+  // The sheets are shells; the box is node sets and a surface, not elements.
+  EXPECT_EQ(*out, absl::StrCat(m.nodes.size(), " ", c.tets, " ", c.sheet0 + c.sheet3, " ", c.tets,
+                               " ", c.sheet0, " ", c.sheet3, " 6 0.0\n"));
   // The surfaces name a tetrahedron face for every sheet face.
   const std::string inp = *ReadFileToString(tmp.File("m.inp"));
   EXPECT_THAT(inp, ::testing::HasSubstr("*SURFACE, TYPE=ELEMENT, NAME=SURF_SHEET_3"));
   EXPECT_THAT(inp, ::testing::HasSubstr("*SURFACE, TYPE=ELEMENT, NAME=SURF_BOUNDARY"));
+  // A section for every element set: CalculiX refuses elements without one.
+  EXPECT_THAT(inp, ::testing::HasSubstr("*SOLID SECTION, ELSET=ROCK, MATERIAL=ROCK\n"));
+  EXPECT_THAT(inp, ::testing::HasSubstr("*SHELL SECTION, ELSET=SHEET_3, MATERIAL=FRACTURE\n2.5\n"));
+}
+
+// Spacing 0.5 x 0.5 x 2: one voxel of thickness is cbrt(0.5) physical, in every array.
+TEST(VolumeMeshIoTest, ThicknessIsPhysicalWithAnisotropicSpacing) {
+  TempDir tmp;
+  Placement pl;
+  pl.spacing = {0.5, 0.5, 2.0};
+  const TetMesh m = SampleMesh(pl);
+  const double t = 2.5 * std::cbrt(0.5);
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    EXPECT_NEAR(m.face_thickness[f], m.face_piece[f] >= 0 ? t : 0.0, 1e-5);
+  }
+  ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
+  ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
+  ASSERT_THAT(WriteAbaqus(tmp.File("m.inp"), m), IsOk());
+  const auto out = Python(
+      "import meshio, numpy as np\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.vtu") +
+      "\")\n"
+      "d = {k: np.concatenate(v) for k, v in m.cell_data.items()}\n"
+      "s = d[\"kind\"] == 1\n"
+      "print(\"%.4f %.4f %.6f %.6f %d %d\" % (d[\"thickness\"][s].mean(), "
+      "d[\"thickness_voxels\"][s].mean(), d[\"permeability\"][s].mean(), "
+      "d[\"transmissivity\"][s].mean(), d[\"MaterialIDs\"][s].max(), "
+      "d[\"MaterialIDs\"][d[\"kind\"] == 2].min()))");
+  if (!out) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  EXPECT_EQ(*out, absl::StrFormat("%.4f 2.5000 %.6f %.6f 4 5\n", t, t * t / 12, t * t * t / 12));
+  const std::string msh = *ReadFileToString(tmp.File("m.msh"));
+  EXPECT_THAT(msh, ::testing::HasSubstr(absl::StrFormat("$ElementData\n1\n\"thickness\"")));
+  EXPECT_THAT(msh, ::testing::HasSubstr(absl::StrFormat(" %.7g\n$EndElementData", t)));
+  const std::string inp = *ReadFileToString(tmp.File("m.inp"));
+  EXPECT_THAT(inp, ::testing::HasSubstr(absl::StrFormat(
+                       "*SHELL SECTION, ELSET=SHEET_0, MATERIAL=FRACTURE\n%.7g\n", t)));
 }
 
 }  // namespace

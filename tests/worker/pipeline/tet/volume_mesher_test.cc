@@ -72,7 +72,7 @@ TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
   for (size_t f = 0; f < r.mesh.faces.size(); ++f) {
     if (r.mesh.face_marker[f] < kFirstSheetMarker) continue;
     EXPECT_EQ(r.mesh.face_piece[f], 0);
-    EXPECT_FLOAT_EQ(r.mesh.face_thickness[f], 3.0f);
+    EXPECT_FLOAT_EQ(r.mesh.face_thickness[f], 1.5f);  // 3 voxels of 0.5: physical
     EXPECT_NEAR(r.mesh.nodes[r.mesh.faces[f][0]].z, 3 + 10 * 0.5, 1e-12);
   }
   // The angle asked for holds.

@@ -1,0 +1,202 @@
+// Exodus II output through the Exodus library (netCDF underneath). Kept apart from the
+// text writers so that only this file sees exodusII.h.
+#include <exodusII.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "absl/strings/str_cat.h"
+#include "common/file_util.h"
+#include "common/status_macros.h"
+#include "common/version.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
+
+namespace sheetmesh {
+namespace {
+
+// An open Exodus file, closed (and its partial file removed unless committed) on
+// destruction.
+class ExodusFile {
+ public:
+  explicit ExodusFile(std::string part) : part_(std::move(part)) {}
+  ~ExodusFile() {
+    if (id_ >= 0) ex_close(id_);
+    if (!committed_) std::filesystem::remove(part_);
+  }
+  absl::Status Create() {
+    int cpu_ws = sizeof(double), io_ws = sizeof(double);
+    id_ = ex_create(part_.c_str(), EX_CLOBBER, &cpu_ws, &io_ws);
+    if (id_ < 0) return absl::InternalError(absl::StrCat(part_, ": Exodus cannot create the file"));
+    return absl::OkStatus();
+  }
+  // kInternal naming the call when the library reports an error.
+  absl::Status Check(int rc, const char* call) const {
+    if (rc >= 0) return absl::OkStatus();
+    return absl::InternalError(absl::StrCat(part_, ": Exodus ", call, " failed (", rc, ")"));
+  }
+  int id() const { return id_; }
+  absl::Status Commit(const std::string& path) {
+    SM_RETURN_IF_ERROR(Check(ex_close(id_), "ex_close"));
+    id_ = -1;
+    std::error_code ec;
+    std::filesystem::rename(part_, path, ec);
+    if (ec) return absl::InternalError(absl::StrCat(path, ": ", ec.message()));
+    committed_ = true;
+    return absl::OkStatus();
+  }
+
+ private:
+  std::string part_;
+  int id_ = -1;
+  bool committed_ = false;
+};
+
+// The tetrahedron face on each face of the box: (element number from 1, Exodus side).
+// TETRA4 sides: 1 = (1,2,4), 2 = (2,3,4), 3 = (1,4,3), 4 = (1,3,2).
+std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m) {
+  static const int kSide[4][3] = {{0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 2, 1}};
+  std::map<FaceKey, std::pair<int, int>> owner;
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      const Tet& q = m.tets[t];
+      owner.emplace(SortedFace(q[kSide[k][0]], q[kSide[k][1]], q[kSide[k][2]]),
+                    std::make_pair(static_cast<int>(t + 1), k + 1));
+    }
+  }
+  const std::vector<int> side = BoxSides(m);
+  std::vector<std::vector<std::pair<int, int>>> sets(6);
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (side[f] < 0) continue;
+    const auto it = owner.find(SortedFace(m.faces[f][0], m.faces[f][1], m.faces[f][2]));
+    if (it != owner.end()) sets[side[f]].push_back(it->second);
+  }
+  return sets;
+}
+
+}  // namespace
+
+absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
+  const auto sheets = SheetFacesByPiece(m);
+  const auto side_sets = BoxSideSets(m);
+  static const char* kSideName[6] = {"box_xmin", "box_xmax", "box_ymin",
+                                     "box_ymax", "box_zmin", "box_zmax"};
+  size_t sheet_elems = 0;
+  for (const auto& [p, faces] : sheets) sheet_elems += faces.size();
+  ExodusFile file(path + ".part");
+  SM_RETURN_IF_ERROR(file.Create());
+  const int ex = file.id();
+  const std::string title = absl::StrCat("sheetmesh ", SHEETMESH_VERSION, " volume mesh");
+  SM_RETURN_IF_ERROR(
+      file.Check(ex_put_init(ex, title.c_str(), 3, static_cast<int64_t>(m.nodes.size()),
+                             static_cast<int64_t>(m.tets.size() + sheet_elems),
+                             static_cast<int64_t>(1 + sheets.size()), 6, 6),
+                 "ex_put_init"));
+  std::vector<double> x(m.nodes.size()), y(m.nodes.size()), z(m.nodes.size());
+  for (size_t i = 0; i < m.nodes.size(); ++i) {
+    x[i] = m.nodes[i].x;
+    y[i] = m.nodes[i].y;
+    z[i] = m.nodes[i].z;
+  }
+  SM_RETURN_IF_ERROR(file.Check(ex_put_coord(ex, x.data(), y.data(), z.data()), "ex_put_coord"));
+  char cx[] = "x", cy[] = "y", cz[] = "z";
+  char* coord_names[3] = {cx, cy, cz};
+  SM_RETURN_IF_ERROR(file.Check(ex_put_coord_names(ex, coord_names), "ex_put_coord_names"));
+
+  // Element blocks: the rock, then each sheet.
+  SM_RETURN_IF_ERROR(
+      file.Check(ex_put_elem_block(ex, 1, "TETRA", static_cast<int64_t>(m.tets.size()), 4, 0),
+                 "ex_put_elem_block"));
+  std::vector<int> conn;
+  conn.reserve(m.tets.size() * 4);
+  for (const Tet& t : m.tets)
+    for (uint32_t v : t) conn.push_back(static_cast<int>(v + 1));
+  SM_RETURN_IF_ERROR(file.Check(ex_put_elem_conn(ex, 1, conn.data()), "ex_put_elem_conn"));
+  std::vector<std::string> block_names = {"rock"};
+  for (const auto& [piece, faces] : sheets) {
+    const int id = 100 + piece;
+    SM_RETURN_IF_ERROR(
+        file.Check(ex_put_elem_block(ex, id, "TRI3", static_cast<int64_t>(faces.size()), 3, 0),
+                   "ex_put_elem_block"));
+    conn.clear();
+    for (size_t f : faces)
+      for (uint32_t v : m.faces[f]) conn.push_back(static_cast<int>(v + 1));
+    SM_RETURN_IF_ERROR(file.Check(ex_put_elem_conn(ex, id, conn.data()), "ex_put_elem_conn"));
+    block_names.push_back(absl::StrCat("sheet_", piece));
+  }
+  std::vector<char*> names;
+  for (std::string& n : block_names) names.push_back(n.data());
+  SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_ELEM_BLOCK, names.data()), "ex_put_names"));
+
+  // Side sets and node sets on the box's six faces.
+  const std::vector<int> side = BoxSides(m);
+  std::vector<char*> set_names;
+  for (int k = 0; k < 6; ++k) {
+    set_names.push_back(const_cast<char*>(kSideName[k]));
+    std::vector<int> elems, sides;
+    for (const auto& [e, s] : side_sets[k]) {
+      elems.push_back(e);
+      sides.push_back(s);
+    }
+    SM_RETURN_IF_ERROR(
+        file.Check(ex_put_side_set_param(ex, k + 1, static_cast<int64_t>(elems.size()), 0),
+                   "ex_put_side_set_param"));
+    if (!elems.empty()) {
+      SM_RETURN_IF_ERROR(
+          file.Check(ex_put_side_set(ex, k + 1, elems.data(), sides.data()), "ex_put_side_set"));
+    }
+    std::set<int> nodes;
+    for (size_t f = 0; f < m.faces.size(); ++f)
+      if (side[f] == k)
+        for (uint32_t v : m.faces[f]) nodes.insert(static_cast<int>(v + 1));
+    std::vector<int> node_list(nodes.begin(), nodes.end());
+    SM_RETURN_IF_ERROR(
+        file.Check(ex_put_node_set_param(ex, k + 1, static_cast<int64_t>(node_list.size()), 0),
+                   "ex_put_node_set_param"));
+    if (!node_list.empty()) {
+      SM_RETURN_IF_ERROR(
+          file.Check(ex_put_node_set(ex, k + 1, node_list.data()), "ex_put_node_set"));
+    }
+  }
+  SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_SIDE_SET, set_names.data()), "ex_put_names"));
+  SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_NODE_SET, set_names.data()), "ex_put_names"));
+
+  // Element variables: the aperture and the cubic law on the sheets.
+  if (!sheets.empty()) {
+    char v0[] = "aperture", v1[] = "permeability", v2[] = "transmissivity";
+    char* var_names[3] = {v0, v1, v2};
+    SM_RETURN_IF_ERROR(file.Check(ex_put_var_param(ex, "e", 3), "ex_put_var_param"));
+    SM_RETURN_IF_ERROR(file.Check(ex_put_var_names(ex, "e", 3, var_names), "ex_put_var_names"));
+    // On every block (0 on the rock): readers such as meshio take element variables only
+    // when every block has them.
+    const int blocks = static_cast<int>(1 + sheets.size());
+    std::vector<int> truth(static_cast<size_t>(blocks) * 3, 1);
+    SM_RETURN_IF_ERROR(
+        file.Check(ex_put_elem_var_tab(ex, blocks, 3, truth.data()), "ex_put_elem_var_tab"));
+    const double time = 0;
+    SM_RETURN_IF_ERROR(file.Check(ex_put_time(ex, 1, &time), "ex_put_time"));
+    const std::vector<double> zeros(m.tets.size(), 0.0);
+    for (int v = 0; v < 3; ++v) {
+      SM_RETURN_IF_ERROR(file.Check(
+          ex_put_elem_var(ex, 1, v + 1, 1, static_cast<int64_t>(zeros.size()), zeros.data()),
+          "ex_put_elem_var"));
+    }
+    for (const auto& [piece, faces] : sheets) {
+      for (int v = 0; v < 3; ++v) {
+        std::vector<double> values;
+        for (size_t f : faces) {
+          const double a = m.face_thickness[f];
+          values.push_back(v == 0 ? a : v == 1 ? a * a / 12 : a * a * a / 12);
+        }
+        SM_RETURN_IF_ERROR(
+            file.Check(ex_put_elem_var(ex, 1, v + 1, 100 + piece,
+                                       static_cast<int64_t>(values.size()), values.data()),
+                       "ex_put_elem_var"));
+      }
+    }
+  }
+  return file.Commit(path);
+}
+
+}  // namespace sheetmesh

@@ -106,8 +106,9 @@ std::string SetCandidate(const ParamSpec& s, const pb::FieldDescriptor* f, pb::M
     }
     case ParamType::kChoice:
     case ParamType::kText: {
-      if (k > 0) return "";
-      std::string v = "x";
+      if (k > 1) return "";
+      // A word, then a number for the fields that take numbers as text (input.threshold).
+      std::string v = k == 0 ? "x" : "1";
       for (const std::string& c : s.choices) {
         if (!d || std::get<std::string>(*d) != c) v = c;
       }

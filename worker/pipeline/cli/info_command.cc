@@ -39,7 +39,12 @@ absl::Status RunInfo(const InfoOptions& options, std::ostream& out) {
     j["origin"] = {p.origin.x, p.origin.y, p.origin.z};
     j["unit"] = p.unit;
     j["value_range"] = {phase.stats.min_value, phase.stats.max_value};
-    j["selection"] = options.input.selection.ToString();
+    j["selection"] = phase.selection.ToString();
+    if (phase.threshold) {
+      j["threshold"] = {{"value", *phase.threshold},
+                        {"method", options.input.threshold == "otsu" ? "otsu" : "given"},
+                        {"phase", options.input.threshold_above ? "above" : "below"}};
+    }
     j["sheet_voxels"] = phase.sheet.size();
     j["sheet_fraction"] = fraction;
     if (phase.mask) j["mask_voxels"] = phase.mask->size();
@@ -67,8 +72,14 @@ absl::Status RunInfo(const InfoOptions& options, std::ostream& out) {
                          p.spacing.z, p.unit.empty() ? "(unit unknown)" : p.unit, p.origin.x,
                          p.origin.y, p.origin.z);
   out << absl::StrFormat("values      %g .. %g\n", phase.stats.min_value, phase.stats.max_value);
-  out << absl::StrFormat("sheet       %s: %d voxels (%.3f%% of the box)\n",
-                         options.input.selection.ToString(), phase.sheet.size(), 100 * fraction);
+  const std::string selected =
+      phase.threshold
+          ? absl::StrFormat("%s %s threshold %g",
+                            options.input.threshold_above ? "at or above the" : "below the",
+                            options.input.threshold == "otsu" ? "Otsu" : "given", *phase.threshold)
+          : phase.selection.ToString();
+  out << absl::StrFormat("sheet       %s: %d voxels (%.3f%% of the box)\n", selected,
+                         phase.sheet.size(), 100 * fraction);
   if (phase.mask) out << absl::StrFormat("rock mask   %d voxels\n", phase.mask->size());
   out << absl::StrFormat("thickness   mean %.3f, median %g, min %d, max %d voxels\n", ts.mean,
                          ts.median, ts.min, ts.max);

@@ -1,6 +1,7 @@
 // The table of parameters: one row per setting of PipelineOptions. Adding a parameter is
 // one row here (and its proto field; the tests check that both exist and agree).
 #include "worker/pipeline/run/parameter_row_helpers.h"
+#include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
 namespace {
@@ -9,10 +10,18 @@ using namespace parameter_rows;  // NOLINT: the table's own vocabulary
 
 std::vector<ParamRow> InputRows() {
   std::vector<ParamRow> rows;
-  rows.push_back(
-      Choice("input.format", SM_MEMBER(input.open.format),
-             {{"auto", ""}, {"raw", "raw"}, {"tiff", "tiff"}, {"nrrd", "nrrd"}, {"vdb", "vdb"}},
-             "volume format; auto: by the file's extension (a folder: TIFF slices)"));
+  rows.push_back(Choice("input.format", SM_MEMBER(input.open.format),
+                        {{"auto", ""},
+                         {"raw", "raw"},
+                         {"tiff", "tiff"},
+                         {"nrrd", "nrrd"},
+                         {"vdb", "vdb"},
+                         {"npy", "npy"},
+                         {"mrc", "mrc"},
+                         {"nifti", "nifti"},
+                         {"hdf5", "hdf5"}},
+                        "volume format; auto: by the file's extension (a folder: TIFF slices; "
+                        "file.h5:/dataset: HDF5)"));
   {
     ParamRow r = Row("input.dims", ParamType::kIntegers, "[1, 1048576]", "voxels",
                      "raw volumes: NX, NY, NZ (default: from a name like a_64x64x32_u8.raw)");
@@ -61,6 +70,26 @@ std::vector<ParamRow> InputRows() {
                                   "sheet phase: these voxel values (default: every non-zero "
                                   "voxel)"),
                            "selection"));
+  {
+    ParamRow r = Exclusive(Text("input.threshold", SM_MEMBER(input.threshold),
+                                "sheet phase of a grayscale scan: otsu (Otsu's threshold of "
+                                "the volume) or a value; the voxels below it (dark: open "
+                                "fractures) unless input.threshold_above"),
+                           "selection");
+    // Unset when empty: only a threshold given excludes the labels and the window.
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      if (o.input.threshold.empty()) return std::nullopt;
+      return ParamValue(o.input.threshold);
+    };
+    r.check = [](const ParamValue& v) -> std::string {
+      const std::string& t = std::get<std::string>(v);
+      return t.empty() || ParseThreshold(t).ok() ? "" : "must be otsu or a number";
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Bool("input.threshold_above", SM_MEMBER(input.threshold_above),
+                      "with input.threshold: the voxels at or above it (bright: mineral "
+                      "veins)"));
   {
     ParamRow r = Row("input.window", ParamType::kNumbers, "[-1e300, 1e300]", "",
                      "sheet phase: values in [LO, HI] (--window=LO:HI)");

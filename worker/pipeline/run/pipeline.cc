@@ -195,6 +195,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_ASSIGN_OR_RETURN(phase, LoadSheetPhase(options.input, progress.Stage("read")));
   }
   report.volume = phase.info;
+  report.selection = phase.selection;
+  report.threshold = phase.threshold;
   report.sheet_voxels = phase.sheet.size();
   // The set that is meshed: the extracted model, or the input's sheet phase as it is.
   VoxelSet meshed = phase.sheet;

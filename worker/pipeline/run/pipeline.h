@@ -94,6 +94,8 @@ struct SimilarityReport {
 struct PipelineReport {
   PipelineOptions options;  // as run (r as chosen)
   VolumeInfo volume;
+  PhaseSelection selection;         // the sheet phase as selected (a threshold's window)
+  std::optional<double> threshold;  // with input.threshold: the value used (Otsu's)
   uint64_t sheet_voxels = 0;
   ThicknessStats thickness;  // of the meshed set
   uint32_t components = 0;

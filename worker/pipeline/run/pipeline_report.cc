@@ -43,7 +43,13 @@ std::string PipelineReport::ToJson() const {
                 {"spacing", Vec(pl.spacing)},
                 {"origin", Vec(pl.origin)},
                 {"unit", pl.unit},
-                {"selection", options.input.selection.ToString()}};
+                {"selection", options.input.threshold.empty() ? options.input.selection.ToString()
+                                                              : selection.ToString()}};
+  if (threshold) {
+    j["input"]["threshold"] = {{"value", *threshold},
+                               {"method", options.input.threshold == "otsu" ? "otsu" : "given"},
+                               {"phase", options.input.threshold_above ? "above" : "below"}};
+  }
   if (sheet_voxels > 0) {
     j["input"]["sheet_voxels"] = sheet_voxels;
     j["input"]["components"] = components;

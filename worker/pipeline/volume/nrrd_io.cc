@@ -329,11 +329,7 @@ class NrrdSource : public VolumeSource {
     const Dims& d = info_.dims;
     const int bpv = BytesPerVoxel(info_.dtype);
     const int64_t slice_bytes = d.nx * d.ny * bpv;
-    if (z0 < 0 || count < 0 || z0 + count > d.nz ||
-        out.size() != static_cast<size_t>(count * slice_bytes)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
-    }
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
     if (gzip_ == nullptr) {
       SM_RETURN_IF_ERROR(
           AsInputError(ReadFullyAt(fd_.get(), data_start_ + z0 * slice_bytes, out, info_.path)));

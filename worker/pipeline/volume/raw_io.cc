@@ -28,11 +28,7 @@ class RawSource : public VolumeSource {
     const Dims& d = info_.dims;
     const int bpv = BytesPerVoxel(info_.dtype);
     const int64_t slice_bytes = d.nx * d.ny * bpv;
-    if (z0 < 0 || count < 0 || z0 + count > d.nz ||
-        out.size() != static_cast<size_t>(count * slice_bytes)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
-    }
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
     SM_RETURN_IF_ERROR(AsInputError(
         ReadFullyAt(fd_.get(), options_.header_bytes + z0 * slice_bytes, out, info_.path)));
     if (NeedsSwap(options_.byte_order)) SwapBytes(out, bpv);

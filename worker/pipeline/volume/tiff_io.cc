@@ -257,10 +257,7 @@ class MultiPageSource : public VolumeSource {
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     const size_t page_bytes =
         static_cast<size_t>(format_.width) * format_.height * BytesPerVoxel(format_.dtype);
-    if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
-    }
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
     for (int64_t k = 0; k < count; ++k) {
       const int64_t z = z0 + k;
       const std::string where = absl::StrCat(info_.path, " page ", z);
@@ -295,10 +292,7 @@ class FolderSource : public VolumeSource {
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     const size_t page_bytes =
         static_cast<size_t>(format_.width) * format_.height * BytesPerVoxel(format_.dtype);
-    if (z0 < 0 || count < 0 || z0 + count > info_.dims.nz || out.size() != count * page_bytes) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
-    }
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
     for (int64_t k = 0; k < count; ++k) {
       const std::string& file = files_[z0 + k];
       SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));

@@ -74,11 +74,7 @@ class VdbSource : public VolumeSource {
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     const Dims& d = info_.dims;
-    if (z0 < 0 || count < 0 || z0 + count > d.nz ||
-        out.size() != static_cast<size_t>(count * d.nx * d.ny * BytesPerVoxel(info_.dtype))) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
-    }
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
     const openvdb::CoordBBox bbox(
         origin_ + openvdb::Coord(0, 0, static_cast<int>(z0)),
         origin_ + openvdb::Coord(static_cast<int>(d.nx - 1), static_cast<int>(d.ny - 1),

@@ -5,9 +5,12 @@
 #include <regex>
 
 #include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/volume/array_io.h"
+#include "worker/pipeline/volume/hdf5_io.h"
 #include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
@@ -86,9 +89,20 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   std::error_code ec;
   const bool is_dir = std::filesystem::is_directory(path, ec);
   std::string format = absl::AsciiStrToLower(options.format);
+  // "scan.h5:/entry/data": a dataset inside an HDF5 file.
+  const auto hdf5 = SplitHdf5Path(path);
   if (format.empty()) {
     const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
-    if (is_dir) {
+    const std::string name = absl::AsciiStrToLower(std::filesystem::path(path).filename().string());
+    if (hdf5 || HasHdf5Extension(path)) {
+      format = "hdf5";
+    } else if (ext == ".npy") {
+      format = "npy";
+    } else if (ext == ".mrc" || ext == ".map" || ext == ".ccp4" || ext == ".rec") {
+      format = "mrc";
+    } else if (ext == ".nii" || absl::EndsWith(name, ".nii.gz")) {
+      format = "nifti";
+    } else if (is_dir) {
       format = "tiff";
     } else if (ext == ".raw" || ext == ".bin" || ext == ".dat" || ext == ".img") {
       format = "raw";
@@ -103,7 +117,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     } else {
       return absl::InvalidArgumentError(
           absl::StrCat(path, ": cannot tell the format from the extension '", ext,
-                       "'; use .raw/.tif/.nrrd/.nhdr/.vdb or give the format (raw needs dims)"));
+                       "'; use .raw/.tif/.nrrd/.nhdr/.vdb/.npy/.mrc/.nii/.h5 or give the format "
+                       "(raw needs dims)"));
     }
   }
   std::unique_ptr<VolumeSource> source;
@@ -139,9 +154,19 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     SM_ASSIGN_OR_RETURN(source, OpenNrrdVolume(path, options.limits));
   } else if (format == "vdb") {
     SM_ASSIGN_OR_RETURN(source, OpenVdbVolume(path, options.vdb_grid, options.limits));
+  } else if (format == "npy") {
+    SM_ASSIGN_OR_RETURN(source, OpenNpyVolume(path, options.limits));
+  } else if (format == "mrc") {
+    SM_ASSIGN_OR_RETURN(source, OpenMrcVolume(path, options.limits));
+  } else if (format == "nifti") {
+    SM_ASSIGN_OR_RETURN(source, OpenNiftiVolume(path, options.limits));
+  } else if (format == "hdf5") {
+    SM_ASSIGN_OR_RETURN(source, OpenHdf5Volume(hdf5 ? hdf5->first : path, hdf5 ? hdf5->second : "",
+                                               options.limits));
   } else {
-    return absl::InvalidArgumentError(absl::StrCat(
-        path, ": format '", options.format, "' is not supported; use raw, tiff, nrrd or vdb"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": format '", options.format,
+                     "' is not supported; use raw, tiff, nrrd, vdb, npy, mrc, nifti or hdf5"));
   }
   if (options.spacing) {
     for (int k = 0; k < 3; ++k) {

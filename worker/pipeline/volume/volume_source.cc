@@ -69,6 +69,16 @@ absl::StatusOr<ByteOrder> ParseByteOrder(absl::string_view name) {
       absl::StrCat("byte order '", name, "' is not supported; use little or big"));
 }
 
+absl::Status VolumeSource::CheckSliceRequest(int64_t z0, int64_t count, size_t out_bytes) const {
+  const Dims& d = info_.dims;
+  if (z0 < 0 || count < 0 || z0 + count > d.nz ||
+      out_bytes != static_cast<size_t>(count * d.nx * d.ny * BytesPerVoxel(info_.dtype))) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(info_.path, ": bad slice request z0=", z0, " count=", count));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckDims(const Dims& dims, DType dtype, const VolumeLimits& limits,
                        absl::string_view what) {
   if (dims.nx <= 0 || dims.ny <= 0 || dims.nz <= 0) {

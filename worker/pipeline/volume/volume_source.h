@@ -113,6 +113,10 @@ class VolumeSource {
   virtual absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) = 0;
 
  protected:
+  // kInvalidArgument unless [z0, z0 + count) lies in the volume and `out_bytes` is what
+  // those slices take: the shared precondition of every ReadSlices.
+  absl::Status CheckSliceRequest(int64_t z0, int64_t count, size_t out_bytes) const;
+
   VolumeInfo info_;
 };
 

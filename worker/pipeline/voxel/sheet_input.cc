@@ -3,6 +3,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
 namespace {
@@ -11,22 +12,19 @@ namespace {
 // read that way whose "sheet" is most of the box is a grayscale scan that needed its phase
 // given: refused, rather than meshed as one block.
 absl::Status CheckNotGrayscale(const SheetInput& input, const SheetPhase& phase) {
-  if (phase.info.dtype != DType::kFloat32 ||
-      input.selection.mode != PhaseSelection::Mode::kNonZero) {
-    return absl::OkStatus();
-  }
+  if (phase.selection.mode != PhaseSelection::Mode::kNonZero) return absl::OkStatus();
   const int64_t voxels = phase.info.dims.num_voxels();
   if (voxels <= 0 || 2 * static_cast<int64_t>(phase.stats.selected) <= voxels) {
     return absl::OkStatus();
   }
   return absl::InvalidArgumentError(absl::StrCat(
-      input.path,
-      ": a float32 volume read with the default sheet phase (every non-zero voxel) "
-      "makes ",
+      input.path, ": a ", DTypeName(phase.info.dtype),
+      " volume read with the default sheet phase (every non-zero voxel) makes ",
       std::llround(100.0 * phase.stats.selected / voxels), "% of its ", voxels,
       " voxels sheet (values ", phase.stats.min_value, " to ", phase.stats.max_value,
-      "); a grayscale volume needs its sheet phase given: input.labels or input.window "
-      "(--labels=V or --window=LO:HI)"));
+      "); a grayscale scan needs its sheet phase given: input.threshold, input.labels or "
+      "input.window (--threshold=otsu for the dark phase, with --threshold_above for the "
+      "bright; --threshold=V; --labels=V; --window=LO:HI)"));
 }
 
 }  // namespace
@@ -46,10 +44,21 @@ absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progres
   }
   SM_ASSIGN_OR_RETURN(auto source, OpenVolume(input.path, input.open));
   out.info = source->info();
-  SM_ASSIGN_OR_RETURN(
-      out.sheet, SelectPhase(*source, input.selection, out.mask ? &*out.mask : nullptr, &out.stats,
-                             has_mask ? progress.Sub(0.5, 1) : progress));
-  SM_RETURN_IF_ERROR(CheckNotEmpty(out.sheet, out.info, input.selection, out.stats));
+  out.selection = input.selection;
+  Progress select = has_mask ? progress.Sub(0.5, 1) : progress;
+  if (!input.threshold.empty()) {
+    SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(input.threshold));
+    double t = spec.value;
+    if (spec.otsu) {
+      SM_ASSIGN_OR_RETURN(t, OtsuThreshold(*source, select.Sub(0, 0.5)));
+      select = select.Sub(0.5, 1);
+    }
+    out.threshold = t;
+    out.selection = SideOfThreshold(t, input.threshold_above);
+  }
+  SM_ASSIGN_OR_RETURN(out.sheet, SelectPhase(*source, out.selection,
+                                             out.mask ? &*out.mask : nullptr, &out.stats, select));
+  SM_RETURN_IF_ERROR(CheckNotEmpty(out.sheet, out.info, out.selection, out.stats));
   SM_RETURN_IF_ERROR(CheckNotGrayscale(input, out));
   out.read_seconds = absl::ToDoubleSeconds(absl::Now() - start);
   return out;

@@ -15,23 +15,29 @@
 namespace sheetmesh {
 
 struct SheetInput {
-  std::string path;                  // the volume (file or TIFF folder)
-  OpenOptions open;                  // format, raw dims, placement overrides, limits
-  PhaseSelection selection;          // the sheet phase S (default: non-zero voxels)
-  std::string mask_path;             // optional rock mask volume ("" = none)
-  PhaseSelection mask_selection;     // rock voxels of the mask volume (default: non-zero)
-  bool mask_from_volume = false;     // take the mask from `path` itself with mask_selection
+  std::string path;          // the volume (file or TIFF folder)
+  OpenOptions open;          // format, raw dims, placement overrides, limits
+  PhaseSelection selection;  // the sheet phase S (default: non-zero voxels)
+  std::string threshold;     // grayscale: "otsu" or a number ("" = none); the phase
+                             // is the voxels below it (above with threshold_above)
+  bool threshold_above = false;
+  std::string mask_path;          // optional rock mask volume ("" = none)
+  PhaseSelection mask_selection;  // rock voxels of the mask volume (default: non-zero)
+  bool mask_from_volume = false;  // take the mask from `path` itself with mask_selection
 };
 
 struct SheetPhase {
-  VolumeInfo info;                   // of the volume (placement included)
-  VoxelSet sheet;                    // S, restricted to the mask when there is one
-  std::optional<VoxelSet> mask;      // rock voxels, when a mask was given
+  VolumeInfo info;               // of the volume (placement included)
+  VoxelSet sheet;                // S, restricted to the mask when there is one
+  std::optional<VoxelSet> mask;  // rock voxels, when a mask was given
   SelectionStats stats;
-  double read_seconds = 0;           // wall time of reading and selecting
+  PhaseSelection selection;         // the selection used (the threshold's, when one)
+  std::optional<double> threshold;  // the threshold used (Otsu's value when "otsu")
+  double read_seconds = 0;          // wall time of reading and selecting
 };
 
-// Opens the volume (and mask), selects S slab by slab. kInvalidArgument when S is empty
+// Opens the volume (and mask), selects S slab by slab (after a pass for Otsu's threshold
+// when asked). kInvalidArgument when S is empty
 // (the message names the file, the selection and the value range) or the mask's dims
 // differ; reader errors pass through; kCancelled if asked.
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});

@@ -71,7 +71,8 @@ ParamValue SomeOtherValue(const ParamSpec& s, const std::optional<ParamValue>& a
       }
       return s.choices[0];
     case ParamType::kText:
-      return std::string("x");
+      // input.threshold takes otsu or a number.
+      return std::string(s.key == "input.threshold" ? "otsu" : "x");
     case ParamType::kNumbers: {
       const int n = s.count > 0 ? s.count : 2;
       std::vector<double> v;

@@ -55,7 +55,8 @@ class ExodusFile {
 
 // The tetrahedron face on each face of the box: (element number from 1, Exodus side).
 // TETRA4 sides: 1 = (1,2,4), 2 = (2,3,4), 3 = (1,4,3), 4 = (1,3,2).
-std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m) {
+std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m,
+                                                          const std::vector<int>& side) {
   static const int kSide[4][3] = {{0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 2, 1}};
   std::map<FaceKey, std::pair<int, int>> owner;
   for (size_t t = 0; t < m.tets.size(); ++t) {
@@ -65,7 +66,6 @@ std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m) {
                     std::make_pair(static_cast<int>(t + 1), k + 1));
     }
   }
-  const std::vector<int> side = BoxSides(m);
   std::vector<std::vector<std::pair<int, int>>> sets(6);
   for (size_t f = 0; f < m.faces.size(); ++f) {
     if (side[f] < 0) continue;
@@ -79,7 +79,8 @@ std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m) {
 
 absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   const auto sheets = SheetFacesByPiece(m);
-  const auto side_sets = BoxSideSets(m);
+  const std::vector<int> side = BoxSides(m);
+  const auto side_sets = BoxSideSets(m, side);
   static const char* kSideName[6] = {"box_xmin", "box_xmax", "box_ymin",
                                      "box_ymax", "box_zmin", "box_zmax"};
   size_t sheet_elems = 0;
@@ -130,7 +131,6 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_ELEM_BLOCK, names.data()), "ex_put_names"));
 
   // Side sets and node sets on the box's six faces.
-  const std::vector<int> side = BoxSides(m);
   std::vector<char*> set_names;
   for (int k = 0; k < 6; ++k) {
     set_names.push_back(const_cast<char*>(kSideName[k]));

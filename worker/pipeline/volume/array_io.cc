@@ -65,26 +65,34 @@ T Load(const std::byte* p) {
   return v;
 }
 
-double StoredValue(Stored s, const std::byte* p) {
+// Converts `n` stored values of type T to float32 (value * slope + inter).
+template <class T>
+void ConvertRun(const std::byte* in, int64_t n, double slope, double inter, float* out) {
+  for (int64_t i = 0; i < n; ++i) {
+    out[i] = static_cast<float>(Load<T>(in + i * int64_t{sizeof(T)}) * slope + inter);
+  }
+}
+
+// The type is chosen once per slice, not per voxel.
+void Convert(Stored s, const std::byte* in, int64_t n, double slope, double inter, float* out) {
   switch (s) {
     case Stored::kU8:
-      return Load<uint8_t>(p);
+      return ConvertRun<uint8_t>(in, n, slope, inter, out);
     case Stored::kI8:
-      return Load<int8_t>(p);
+      return ConvertRun<int8_t>(in, n, slope, inter, out);
     case Stored::kU16:
-      return Load<uint16_t>(p);
+      return ConvertRun<uint16_t>(in, n, slope, inter, out);
     case Stored::kI16:
-      return Load<int16_t>(p);
+      return ConvertRun<int16_t>(in, n, slope, inter, out);
     case Stored::kU32:
-      return Load<uint32_t>(p);
+      return ConvertRun<uint32_t>(in, n, slope, inter, out);
     case Stored::kI32:
-      return Load<int32_t>(p);
+      return ConvertRun<int32_t>(in, n, slope, inter, out);
     case Stored::kF32:
-      return Load<float>(p);
+      return ConvertRun<float>(in, n, slope, inter, out);
     case Stored::kF64:
-      return Load<double>(p);
+      return ConvertRun<double>(in, n, slope, inter, out);
   }
-  return 0;
 }
 
 class ArraySource : public VolumeSource {
@@ -125,10 +133,8 @@ class ArraySource : public VolumeSource {
       SM_RETURN_IF_ERROR(AsInputError(
           ReadFullyAt(fd_.get(), a_.offset + z * slice_voxels * width, buffer_, info_.path)));
       if (swap && width > 1) SwapBytes(buffer_, width);
-      for (int64_t i = 0; i < slice_voxels; ++i) {
-        *dst++ = static_cast<float>(StoredValue(a_.type, buffer_.data() + i * width) * a_.slope +
-                                    a_.inter);
-      }
+      Convert(a_.type, buffer_.data(), slice_voxels, a_.slope, a_.inter, dst);
+      dst += slice_voxels;
     }
     return absl::OkStatus();
   }
@@ -350,10 +356,10 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNiftiVolume(const std::string&
   }
   if (magic != "n+1") return Bad(path, "magic", absl::StrCat("'", magic, "' is not 'n+1'"));
   auto get = [&](int offset, int width) {
-    std::byte w[8];
-    std::memcpy(w, b + offset, width);
-    if (swap) std::reverse(w, w + width);
-    return std::array<std::byte, 8>{w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]};
+    std::array<std::byte, 8> w{};
+    std::memcpy(w.data(), b + offset, width);
+    if (swap) std::reverse(w.begin(), w.begin() + width);
+    return w;
   };
   auto i16 = [&](int o) { return Load<int16_t>(get(o, 2).data()); };
   auto f32 = [&](int o) { return Load<float>(get(o, 4).data()); };

@@ -13,7 +13,7 @@ RUN apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq 
       libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev libabsl-dev libtiff-dev \
       zlib1g-dev nlohmann-json3-dev libnanoflann-dev libeigen3-dev libpng-dev \
       libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev \
-      libssl-dev libpq-dev libjpeg-dev libhdf5-dev libexodusii-dev \
+      libssl-dev libpq-dev libjpeg-dev libhdf5-dev libgdcm-dev libexodusii-dev \
       golang-go golang-grpc-gateway golang-github-grpc-ecosystem-grpc-gateway-dev \
       golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev > /dev/null
 WORKDIR /src
@@ -33,7 +33,7 @@ FROM debian:bookworm-slim
 RUN apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
       libopenvdb10.0 libtbb12 libabsl20220623 libtiff6 libpng16-16 libgrpc++1.51 libgrpc29 \
       libprotobuf32 libsqlite3-0 libssl3 libpq5 libblosc1 libboost-iostreams1.74.0 zlib1g tetgen \
-      libjpeg62-turbo libhdf5-103-1 libexodusii5 libnetcdf19 \
+      libjpeg62-turbo libgdcm3.0 libhdf5-103-1 libexodusii5 libnetcdf19 \
       python3 python3-grpcio python3-protobuf > /dev/null \
     && rm -rf /var/lib/apt/lists/* \
     && useradd --system --uid 10001 --home-dir /data sheetmesh \

@@ -14,14 +14,18 @@ std::vector<ParamRow> InputRows() {
                         {{"auto", ""},
                          {"raw", "raw"},
                          {"tiff", "tiff"},
+                         {"png", "png"},
+                         {"jpeg", "jpeg"},
+                         {"dicom", "dicom"},
+                         {"folder", "folder"},
                          {"nrrd", "nrrd"},
                          {"vdb", "vdb"},
                          {"npy", "npy"},
                          {"mrc", "mrc"},
                          {"nifti", "nifti"},
                          {"hdf5", "hdf5"}},
-                        "volume format; auto: by the file's extension (a folder: TIFF slices; "
-                        "file.h5:/dataset: HDF5)"));
+                        "volume format; auto: by the file's extension (a folder: its TIFF, PNG, "
+                        "JPEG or DICOM slices; file.h5:/dataset: HDF5)"));
   {
     ParamRow r = Row("input.dims", ParamType::kIntegers, "[1, 1048576]", "voxels",
                      "raw volumes: NX, NY, NZ (default: from a name like a_64x64x32_u8.raw)");

@@ -18,6 +18,7 @@
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/volume/slice_stack.h"
 #include "worker/pipeline/volume/tiff_internal.h"
 
 namespace sheetmesh {
@@ -282,58 +283,42 @@ class MultiPageSource : public VolumeSource {
   int64_t current_ = 0;  // the directory libtiff is on
 };
 
-class FolderSource : public VolumeSource {
+// One single-page TIFF as a slice of a folder.
+class TiffSliceCodec : public SliceCodec {
  public:
-  FolderSource(std::vector<std::string> files, PageFormat format, VolumeInfo info)
-      : files_(std::move(files)), format_(format) {
-    info_ = std::move(info);
+  std::string name() const override { return "tiff"; }
+  bool Claims(const std::string& file) const override {
+    const std::string ext = absl::AsciiStrToLower(std::filesystem::path(file).extension().string());
+    return ext == ".tif" || ext == ".tiff";
   }
-
-  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
-    const size_t page_bytes =
-        static_cast<size_t>(format_.width) * format_.height * BytesPerVoxel(format_.dtype);
-    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
-    for (int64_t k = 0; k < count; ++k) {
-      const std::string& file = files_[z0 + k];
-      SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));
-      SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), file));
-      if (!(f == format_)) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            file, ": slice is ", FormatName(f), " but the first slice is ", FormatName(format_)));
-      }
-      SM_RETURN_IF_ERROR(ReadPage(tif.get(), f, out.subspan(k * page_bytes, page_bytes), file));
+  absl::StatusOr<SliceHeader> ReadHeader(const std::string& file,
+                                         const VolumeLimits& limits) const override {
+    SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));
+    SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), file));
+    SM_ASSIGN_OR_RETURN(const int64_t size, FileSize(file));
+    SM_RETURN_IF_ERROR(CheckPageData(tif.get(), f, size, limits, file));
+    SliceHeader h;
+    h.width = f.width;
+    h.height = f.height;
+    h.dtype = f.dtype;
+    h.kind = std::string(DTypeName(f.dtype));
+    Placement p;
+    ReadPlacement(tif.get(), &p);
+    h.placement = p;
+    return h;
+  }
+  absl::Status ReadSlice(const std::string& file, const SliceHeader& expected, DType dtype,
+                         std::span<std::byte> out) const override {
+    SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(file));
+    SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(tif.get(), file));
+    if (f.width != expected.width || f.height != expected.height || f.dtype != dtype) {
+      return absl::InvalidArgumentError(absl::StrCat(file, ": slice is ", FormatName(f),
+                                                     " but the first slice is ", expected.width,
+                                                     "x", expected.height, " ", DTypeName(dtype)));
     }
-    return absl::OkStatus();
+    return ReadPage(tif.get(), f, out, file);
   }
-
- private:
-  std::vector<std::string> files_;
-  PageFormat format_;
 };
-
-// Orders names by their digit runs read as numbers, so "s2" < "s10".
-bool NaturalLess(const std::string& a, const std::string& b) {
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (absl::ascii_isdigit(a[i]) && absl::ascii_isdigit(b[j])) {
-      size_t ie = i, je = j;
-      while (ie < a.size() && absl::ascii_isdigit(a[ie])) ++ie;
-      while (je < b.size() && absl::ascii_isdigit(b[je])) ++je;
-      absl::string_view da(a.data() + i, ie - i), db(b.data() + j, je - j);
-      while (da.size() > 1 && da[0] == '0') da.remove_prefix(1);
-      while (db.size() > 1 && db[0] == '0') db.remove_prefix(1);
-      if (da.size() != db.size()) return da.size() < db.size();
-      if (da != db) return da < db;
-      i = ie;
-      j = je;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i;
-      ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
 
 }  // namespace
 
@@ -378,44 +363,11 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffVolume(const std::string& 
   return std::make_unique<MultiPageSource>(std::move(tif), first, std::move(info));
 }
 
+std::unique_ptr<SliceCodec> MakeTiffSliceCodec() { return std::make_unique<TiffSliceCodec>(); }
+
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffFolder(const std::string& folder,
                                                              const VolumeLimits& limits) {
-  std::error_code ec;
-  std::vector<std::string> files;
-  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
-    const std::string ext = absl::AsciiStrToLower(entry.path().extension().string());
-    if (entry.is_regular_file() && (ext == ".tif" || ext == ".tiff")) {
-      files.push_back(entry.path().string());
-    }
-  }
-  if (ec) return ErrnoStatus(ec.value(), folder);
-  if (files.empty()) {
-    return absl::NotFoundError(absl::StrCat(folder, ": the folder holds no .tif/.tiff slices"));
-  }
-  std::sort(files.begin(), files.end(), NaturalLess);
-  SM_ASSIGN_OR_RETURN(TiffPtr tif, OpenTiff(files[0]));
-  SM_ASSIGN_OR_RETURN(PageFormat first, ReadPageFormat(tif.get(), files[0]));
-  VolumeInfo info;
-  info.path = folder;
-  info.format = "tiff-folder";
-  info.dtype = first.dtype;
-  ReadPlacement(tif.get(), &info.placement);
-  info.dims = {first.width, first.height, static_cast<int64_t>(files.size())};
-  SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, folder));
-  SM_ASSIGN_OR_RETURN(const int64_t first_size, FileSize(files[0]));
-  SM_RETURN_IF_ERROR(CheckPageData(tif.get(), first, first_size, limits, files[0]));
-  // Check every slice's header up front so that a mismatch fails before any work.
-  for (size_t i = 1; i < files.size(); ++i) {
-    SM_ASSIGN_OR_RETURN(TiffPtr t, OpenTiff(files[i]));
-    SM_ASSIGN_OR_RETURN(PageFormat f, ReadPageFormat(t.get(), files[i]));
-    if (!(f.width == first.width && f.height == first.height && f.dtype == first.dtype)) {
-      return absl::InvalidArgumentError(absl::StrCat(files[i], " is ", FormatName(f), " but ",
-                                                     files[0], " is ", FormatName(first)));
-    }
-    SM_ASSIGN_OR_RETURN(const int64_t size, FileSize(files[i]));
-    SM_RETURN_IF_ERROR(CheckPageData(t.get(), f, size, limits, files[i]));
-  }
-  return std::make_unique<FolderSource>(std::move(files), first, std::move(info));
+  return OpenSliceFolderOf(folder, "tiff", limits);
 }
 
 }  // namespace sheetmesh

@@ -19,9 +19,10 @@ namespace sheetmesh {
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffVolume(const std::string& path,
                                                              const VolumeLimits& limits = {});
 
-// Opens a folder of single-page TIFF slices (*.tif, *.tiff), ordered by the numbers in
-// their names ("s2.tif" before "s10.tif"). kNotFound when the folder holds no TIFF;
-// kInvalidArgument when slices differ in size or type (naming both files).
+// Opens a folder of single-page TIFF slices (*.tif, *.tiff) through OpenSliceFolderOf
+// (slice_stack.h), ordered by the numbers in their names ("s2.tif" before "s10.tif"). kNotFound
+// when the folder holds no TIFF; kInvalidArgument when slices differ in size or type (naming both
+// files).
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenTiffFolder(const std::string& folder,
                                                              const VolumeLimits& limits = {});
 

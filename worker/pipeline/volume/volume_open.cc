@@ -12,6 +12,7 @@
 #include "worker/pipeline/volume/array_io.h"
 #include "worker/pipeline/volume/hdf5_io.h"
 #include "worker/pipeline/volume/nrrd_io.h"
+#include "worker/pipeline/volume/slice_stack.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
 
@@ -103,11 +104,17 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     } else if (ext == ".nii" || absl::EndsWith(name, ".nii.gz")) {
       format = "nifti";
     } else if (is_dir) {
-      format = "tiff";
+      format = "folder";
     } else if (ext == ".raw" || ext == ".bin" || ext == ".dat" || ext == ".img") {
       format = "raw";
     } else if (ext == ".tif" || ext == ".tiff") {
       format = "tiff";
+    } else if (ext == ".png") {
+      format = "png";
+    } else if (ext == ".jpg" || ext == ".jpeg") {
+      format = "jpeg";
+    } else if (ext == ".dcm") {
+      format = "dicom";
     } else if (ext == ".nrrd" || ext == ".nhdr") {
       format = "nrrd";
     } else if (ext == ".vdb") {
@@ -117,7 +124,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     } else {
       return absl::InvalidArgumentError(
           absl::StrCat(path, ": cannot tell the format from the extension '", ext,
-                       "'; use .raw/.tif/.nrrd/.nhdr/.vdb/.npy/.mrc/.nii/.h5 or give the format "
+                       "'; use .raw/.tif/.png/.jpg/.dcm/.nrrd/.nhdr/.vdb/.npy/.mrc/.nii/.h5, a "
+                       "folder of slices, or give the format "
                        "(raw needs dims)"));
     }
   }
@@ -144,12 +152,18 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
     raw.byte_order = options.raw_byte_order;
     raw.header_bytes = options.raw_header_bytes;
     SM_ASSIGN_OR_RETURN(source, OpenRawVolume(path, raw, options.limits));
-  } else if (format == "tiff") {
-    if (is_dir) {
-      SM_ASSIGN_OR_RETURN(source, OpenTiffFolder(path, options.limits));
-    } else {
-      SM_ASSIGN_OR_RETURN(source, OpenTiffVolume(path, options.limits));
+  } else if (format == "folder" || (is_dir && (format == "tiff" || format == "png" ||
+                                               format == "jpeg" || format == "dicom"))) {
+    // A folder of slices: of the format given, or of whatever format its files are.
+    if (!is_dir) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": format 'folder' needs a folder"));
     }
+    SM_ASSIGN_OR_RETURN(source,
+                        OpenSliceFolderOf(path, format == "folder" ? "" : format, options.limits));
+  } else if (format == "tiff") {
+    SM_ASSIGN_OR_RETURN(source, OpenTiffVolume(path, options.limits));
+  } else if (format == "png" || format == "jpeg" || format == "dicom") {
+    SM_ASSIGN_OR_RETURN(source, OpenSingleSlice(path, format, options.limits));
   } else if (format == "nrrd") {
     SM_ASSIGN_OR_RETURN(source, OpenNrrdVolume(path, options.limits));
   } else if (format == "vdb") {
@@ -166,7 +180,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   } else {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": format '", options.format,
-                     "' is not supported; use raw, tiff, nrrd, vdb, npy, mrc, nifti or hdf5"));
+                     "' is not supported; use raw, tiff, png, jpeg, dicom, folder, nrrd, vdb, npy, "
+                     "mrc, nifti or hdf5"));
   }
   if (options.spacing) {
     for (int k = 0; k < 3; ++k) {

@@ -33,7 +33,7 @@ absl::StatusOr<ByteOrder> ParseByteOrder(absl::string_view name);  // "little"/"
 // What a reader knows about its volume before reading voxels.
 struct VolumeInfo {
   std::string path;    // the file or folder, for messages
-  std::string format;  // "raw", "tiff", "tiff-folder", "nrrd", "vdb"
+  std::string format;  // "raw", "tiff", "tiff-folder", "png-folder", "dicom-series", ...
   Dims dims;
   DType dtype = DType::kUInt8;
   Placement placement;

@@ -1,0 +1,305 @@
+// DICOM slices through GDCM: one image per file (a CT or micro-CT series), any transfer
+// syntax GDCM decodes. Headers are read up to the pixel data; values are the stored ones
+// times RescaleSlope plus RescaleIntercept (Hounsfield units for CT), as float32 unless
+// the stored type is unsigned 8- or 16-bit and the rescale is the identity.
+#include <gdcmImage.h>
+#include <gdcmImageReader.h>
+#include <gdcmReader.h>
+#include <gdcmStringFilter.h>
+#include <gdcmTrace.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "common/status_macros.h"
+#include "worker/pipeline/volume/slice_stack.h"
+
+namespace sheetmesh {
+namespace {
+
+const gdcm::Tag kRows(0x0028, 0x0010);
+const gdcm::Tag kColumns(0x0028, 0x0011);
+const gdcm::Tag kSamplesPerPixel(0x0028, 0x0002);
+const gdcm::Tag kBitsAllocated(0x0028, 0x0100);
+const gdcm::Tag kPixelRepresentation(0x0028, 0x0103);
+const gdcm::Tag kNumberOfFrames(0x0028, 0x0008);
+const gdcm::Tag kPixelSpacing(0x0028, 0x0030);
+const gdcm::Tag kRescaleIntercept(0x0028, 0x1052);
+const gdcm::Tag kRescaleSlope(0x0028, 0x1053);
+const gdcm::Tag kImagePosition(0x0020, 0x0032);
+const gdcm::Tag kImageOrientation(0x0020, 0x0037);
+const gdcm::Tag kSeriesInstanceUid(0x0020, 0x000e);
+const gdcm::Tag kInstanceNumber(0x0020, 0x0013);
+const gdcm::Tag kPixelData(0x7fe0, 0x0010);
+
+// The numbers of a multi-valued DICOM string ("0.5\0.5"); nullopt when absent or when
+// there are not `count` of them.
+std::optional<std::vector<double>> Numbers(const gdcm::StringFilter& sf, const gdcm::DataSet& ds,
+                                           const gdcm::Tag& tag, size_t count) {
+  if (!ds.FindDataElement(tag) || ds.GetDataElement(tag).IsEmpty()) return std::nullopt;
+  std::vector<double> out;
+  for (absl::string_view part : absl::StrSplit(sf.ToString(tag), '\\')) {
+    double v = 0;
+    if (!absl::SimpleAtod(absl::StripAsciiWhitespace(part), &v)) return std::nullopt;
+    out.push_back(v);
+  }
+  if (out.size() != count) return std::nullopt;
+  return out;
+}
+
+struct StoredFormat {
+  uint32_t width = 0, height = 0;
+  int bits = 0;
+  bool is_signed = false;
+  double slope = 1, intercept = 0;
+};
+
+std::string Kind(const StoredFormat& f) {
+  std::string k = absl::StrCat(f.is_signed ? "int" : "uint", f.bits);
+  if (f.slope != 1 || f.intercept != 0) absl::StrAppend(&k, " rescaled");
+  return k;
+}
+
+DType NativeType(const StoredFormat& f) {
+  if (f.slope == 1 && f.intercept == 0 && !f.is_signed) {
+    if (f.bits == 8) return DType::kUInt8;
+    if (f.bits == 16) return DType::kUInt16;
+  }
+  return DType::kFloat32;
+}
+
+// GDCM prints its warnings and errors to stderr; the reader reports through its statuses.
+void QuietGdcm() {
+  static const bool once = [] {
+    gdcm::Trace::SetWarning(false);
+    gdcm::Trace::SetError(false);
+    gdcm::Trace::SetDebug(false);
+    return true;
+  }();
+  (void)once;
+}
+
+// Reads and checks the fields that say how the pixels are stored.
+absl::StatusOr<StoredFormat> ReadStoredFormat(const std::string& file, const gdcm::File& f) {
+  gdcm::StringFilter sf;
+  sf.SetFile(f);
+  const gdcm::DataSet& ds = f.GetDataSet();
+  auto number = [&](const gdcm::Tag& tag, const char* field,
+                    std::optional<double> fallback) -> absl::StatusOr<double> {
+    std::optional<std::vector<double>> v = Numbers(sf, ds, tag, 1);
+    if (v) return (*v)[0];
+    if (fallback) return *fallback;
+    return absl::InvalidArgumentError(
+        absl::StrCat(file, ": DICOM field ", field, " is missing or not a number"));
+  };
+  StoredFormat s;
+  SM_ASSIGN_OR_RETURN(const double rows, number(kRows, "Rows (0028,0010)", std::nullopt));
+  SM_ASSIGN_OR_RETURN(const double cols, number(kColumns, "Columns (0028,0011)", std::nullopt));
+  SM_ASSIGN_OR_RETURN(const double spp, number(kSamplesPerPixel, "SamplesPerPixel", 1.0));
+  SM_ASSIGN_OR_RETURN(const double bits,
+                      number(kBitsAllocated, "BitsAllocated (0028,0100)", std::nullopt));
+  SM_ASSIGN_OR_RETURN(const double repr, number(kPixelRepresentation, "PixelRepresentation", 0.0));
+  SM_ASSIGN_OR_RETURN(const double frames, number(kNumberOfFrames, "NumberOfFrames", 1.0));
+  SM_ASSIGN_OR_RETURN(s.slope, number(kRescaleSlope, "RescaleSlope", 1.0));
+  SM_ASSIGN_OR_RETURN(s.intercept, number(kRescaleIntercept, "RescaleIntercept", 0.0));
+  if (!(rows >= 1 && cols >= 1 && rows <= 1 << 20 && cols <= 1 << 20)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(file, ": DICOM image of ", cols, "x", rows, " (Columns x Rows)"));
+  }
+  if (spp != 1) {
+    return absl::InvalidArgumentError(absl::StrCat(file, ": DICOM SamplesPerPixel ", spp,
+                                                   "; only single-channel (grey) images are read"));
+  }
+  if (frames != 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(file, ": multi-frame DICOM (NumberOfFrames ", frames,
+                     ") is not read; export the series as one file per slice"));
+  }
+  if (bits != 8 && bits != 16 && bits != 32) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(file, ": DICOM BitsAllocated ", bits, " (8, 16 or 32 are read)"));
+  }
+  if (!(s.slope != 0 && std::isfinite(s.slope) && std::isfinite(s.intercept))) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(file, ": DICOM RescaleSlope ", s.slope, " / RescaleIntercept ", s.intercept));
+  }
+  s.width = static_cast<uint32_t>(cols);
+  s.height = static_cast<uint32_t>(rows);
+  s.bits = static_cast<int>(bits);
+  s.is_signed = repr == 1;
+  return s;
+}
+
+template <typename T>
+void Rescale(const char* in, size_t n, double slope, double intercept, float* out) {
+  for (size_t i = 0; i < n; ++i) {
+    T v;
+    std::memcpy(&v, in + i * sizeof(T), sizeof(T));
+    out[i] = static_cast<float>(static_cast<double>(v) * slope + intercept);
+  }
+}
+
+class DicomSliceCodec : public SliceCodec {
+ public:
+  std::string name() const override { return "dicom"; }
+
+  bool Claims(const std::string& file) const override {
+    const std::string ext = absl::AsciiStrToLower(std::filesystem::path(file).extension().string());
+    if (ext == ".dcm" || ext == ".dicom" || ext == ".dic" || ext == ".ima") return true;
+    // Series often come as files without an extension: the Part 10 preamble says.
+    char head[132];
+    std::ifstream in(file, std::ios::binary);
+    return in.read(head, sizeof(head)) && std::memcmp(head + 128, "DICM", 4) == 0;
+  }
+
+  absl::StatusOr<SliceHeader> ReadHeader(const std::string& file,
+                                         const VolumeLimits& limits) const override {
+    QuietGdcm();
+    gdcm::Reader reader;
+    reader.SetFileName(file.c_str());
+    // Skipping the pixel data leaves the stream where its value starts.
+    if (!reader.ReadUpToTag(kPixelData, {kPixelData})) {
+      return absl::InvalidArgumentError(absl::StrCat(file, ": not a readable DICOM file"));
+    }
+    const gdcm::File& f = reader.GetFile();
+    SM_ASSIGN_OR_RETURN(StoredFormat s, ReadStoredFormat(file, f));
+    // Uncompressed pixels lie from there on: a file cut short in them would read (GDCM
+    // fills the rest with zeros), so it is measured here.
+    const gdcm::TransferSyntax& ts = f.GetHeader().GetDataSetTransferSyntax();
+    if (!ts.IsEncapsulated()) {
+      std::error_code ec;
+      const uint64_t size = std::filesystem::file_size(file, ec);
+      const uint64_t need =
+          reader.GetStreamCurrentPosition() + uint64_t{s.width} * s.height * (s.bits / 8);
+      if (!ec && size < need) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            file, ": DICOM file has ", size, " bytes but its PixelData (7FE0,0010) for ", s.width,
+            "x", s.height, " pixels of ", s.bits, " bits ends at byte ", need, " (cut short?)"));
+      }
+    }
+    SliceHeader h;
+    h.width = s.width;
+    h.height = s.height;
+    h.dtype = NativeType(s);
+    h.kind = Kind(s);
+    gdcm::StringFilter sf;
+    sf.SetFile(f);
+    const gdcm::DataSet& ds = f.GetDataSet();
+    Placement p;
+    p.unit = "mm";
+    if (auto ps = Numbers(sf, ds, kPixelSpacing, 2); ps && (*ps)[0] > 0 && (*ps)[1] > 0) {
+      p.spacing.y = (*ps)[0];  // between rows
+      p.spacing.x = (*ps)[1];  // between columns
+    }
+    h.placement = p;
+    if (auto pos = Numbers(sf, ds, kImagePosition, 3))
+      h.position = Vec3{(*pos)[0], (*pos)[1], (*pos)[2]};
+    if (auto o = Numbers(sf, ds, kImageOrientation, 6)) {
+      std::array<double, 6> a;
+      std::copy(o->begin(), o->end(), a.begin());
+      h.orientation = a;
+    }
+    if (ds.FindDataElement(kSeriesInstanceUid)) {
+      h.series = std::string(absl::StripAsciiWhitespace(sf.ToString(kSeriesInstanceUid)));
+      while (!h.series.empty() && h.series.back() == '\0') h.series.pop_back();
+    }
+    if (auto n = Numbers(sf, ds, kInstanceNumber, 1)) h.instance = static_cast<int64_t>((*n)[0]);
+    SM_RETURN_IF_ERROR(
+        CheckAllocation(int64_t{h.width} * h.height * 4 * 2, limits,
+                        absl::StrCat(file, " (", h.width, "x", h.height, " ", h.kind, ")")));
+    return h;
+  }
+
+  absl::Status ReadSlice(const std::string& file, const SliceHeader& expected, DType dtype,
+                         std::span<std::byte> out) const override {
+    QuietGdcm();
+    gdcm::ImageReader reader;
+    reader.SetFileName(file.c_str());
+    if (!reader.Read()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          file, ": DICOM image cannot be decoded (cut short, or a compression GDCM lacks)"));
+    }
+    SM_ASSIGN_OR_RETURN(StoredFormat s, ReadStoredFormat(file, reader.GetFile()));
+    if (s.width != expected.width || s.height != expected.height) {
+      return absl::InvalidArgumentError(absl::StrCat(file, ": slice is ", s.width, "x", s.height,
+                                                     " but the first slice is ", expected.width,
+                                                     "x", expected.height));
+    }
+    const gdcm::Image& image = reader.GetImage();
+    const size_t n = static_cast<size_t>(s.width) * s.height;
+    const unsigned long length = image.GetBufferLength();
+    const gdcm::PixelFormat::ScalarType type = image.GetPixelFormat().GetScalarType();
+    const size_t stored_bytes = image.GetPixelFormat().GetPixelSize();
+    if (stored_bytes == 0 || length < n * stored_bytes) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(file, ": DICOM pixel data holds ", length, " bytes for ", n, " pixels"));
+    }
+    // A file cut short inside uncompressed pixel data still "reads" (GDCM warns and keeps
+    // what there is): its pixel element must hold every pixel.
+    const gdcm::DataSet& ds = reader.GetFile().GetDataSet();
+    if (ds.FindDataElement(kPixelData)) {
+      const gdcm::ByteValue* bv = ds.GetDataElement(kPixelData).GetByteValue();
+      if (bv != nullptr && static_cast<size_t>(bv->GetLength()) < n * stored_bytes) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(file, ": DICOM PixelData (7FE0,0010) holds ",
+                         static_cast<size_t>(bv->GetLength()), " bytes but ", s.width, "x",
+                         s.height, " pixels need ", n * stored_bytes, " (cut short?)"));
+      }
+    }
+    std::vector<char> buffer(length);
+    if (!image.GetBuffer(buffer.data())) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(file, ": DICOM pixel data cannot be decoded (corrupt or cut short?)"));
+    }
+    if (dtype == NativeType(s) && dtype != DType::kFloat32) {
+      std::memcpy(out.data(), buffer.data(), out.size());
+      return absl::OkStatus();
+    }
+    if (dtype != DType::kFloat32) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(file, ": slice is ", Kind(s), " but the first slice is ", expected.kind));
+    }
+    float* f = reinterpret_cast<float*>(out.data());
+    switch (type) {
+      case gdcm::PixelFormat::UINT8:
+        Rescale<uint8_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::INT8:
+        Rescale<int8_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::UINT16:
+        Rescale<uint16_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::INT16:
+        Rescale<int16_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::UINT32:
+        Rescale<uint32_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::INT32:
+        Rescale<int32_t>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      case gdcm::PixelFormat::FLOAT32:
+        Rescale<float>(buffer.data(), n, s.slope, s.intercept, f);
+        break;
+      default:
+        return absl::InvalidArgumentError(
+            absl::StrCat(file, ": DICOM pixels of type ",
+                         image.GetPixelFormat().GetScalarTypeAsString(), " are not read"));
+    }
+    return absl::OkStatus();
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<SliceCodec> MakeDicomSliceCodec() { return std::make_unique<DicomSliceCodec>(); }
+
+}  // namespace sheetmesh

@@ -1,13 +1,15 @@
 // PNG (libpng) and JPEG (libjpeg) slices. Both libraries report errors by longjmp: the
 // functions that set the jump hold no C++ object with a destructor, and every buffer they
 // fill is allocated before they are called.
-// jpeglib.h needs size_t and FILE declared before it.
+// clang-format off: jpeglib.h needs size_t and FILE declared before it.
 #include <jpeglib.h>
+
+#include <cstddef>
+#include <cstdio>
+// clang-format on
 #include <png.h>
 
 #include <csetjmp>
-#include <cstddef>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <vector>

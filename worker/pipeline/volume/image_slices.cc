@@ -1,11 +1,11 @@
 // PNG (libpng) and JPEG (libjpeg) slices. Both libraries report errors by longjmp: the
 // functions that set the jump hold no C++ object with a destructor, and every buffer they
 // fill is allocated before they are called.
-// clang-format off: jpeglib.h needs size_t and FILE declared before it.
-#include <jpeglib.h>
-
+// jpeglib.h needs size_t and FILE declared before it.
+// clang-format off
 #include <cstddef>
 #include <cstdio>
+#include <jpeglib.h>
 // clang-format on
 #include <png.h>
 

@@ -3,13 +3,20 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
+#include <algorithm>
 #include <condition_variable>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
+#include <set>
 #include <thread>
 #include <vector>
 
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
 #include "common/file_util.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
@@ -105,6 +112,16 @@ absl::StatusOr<v1::Digest> SheetmeshClient::Upload(
       return digest;
     }
   }
+  return WriteBlob(path, digest, progress);
+}
+
+absl::StatusOr<v1::Digest> SheetmeshClient::WriteBlob(
+    const std::string& path, const v1::Digest& digest,
+    const std::function<void(int64_t, int64_t)>& progress) {
+  struct {
+    std::string hex;
+    int64_t size;
+  } h{digest.hash(), digest.size_bytes()};
   // The upload is named by the content, so that running the upload again resumes it.
   const std::string resource =
       absl::StrCat("uploads/u", h.hex.substr(0, 32), "/blobs/", h.hex, "/", h.size);
@@ -151,6 +168,127 @@ absl::StatusOr<v1::Digest> SheetmeshClient::Upload(
   return absl::UnavailableError(absl::StrCat("upload of ", path, " did not complete after ",
                                              options_.upload_retries + 1,
                                              " attempts: ", last.message()));
+}
+
+namespace {
+
+// The data file a detached NRRD header names, as written ("" when the header names none).
+absl::StatusOr<std::string> NrrdDataFileField(const std::string& header) {
+  SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(header));
+  bool first = true;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    if (absl::EndsWith(line, "\r")) line.remove_suffix(1);
+    if (first) {
+      if (!absl::StartsWith(line, "NRRD")) {
+        return absl::InvalidArgumentError(absl::StrCat(header, ": not a NRRD header"));
+      }
+      first = false;
+      continue;
+    }
+    if (line.empty()) break;  // the blank line that closes the header
+    if (line[0] == '#') continue;
+    const size_t colon = line.find(':');
+    if (colon == absl::string_view::npos) continue;
+    const std::string key = absl::AsciiStrToLower(line.substr(0, colon));
+    if (key != "data file" && key != "datafile") continue;
+    absl::string_view value = line.substr(colon + 1);
+    if (absl::StartsWith(value, "=")) value.remove_prefix(1);
+    return std::string(absl::StripAsciiWhitespace(value));
+  }
+  return std::string();
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeOnDisk> VolumeFilesOf(const std::string& path) {
+  namespace fs = std::filesystem;
+  VolumeOnDisk v;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    for (const auto& entry : fs::directory_iterator(path, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.empty() || name[0] == '.' || !entry.is_regular_file()) continue;
+      v.files.push_back({name, entry.path().string()});
+    }
+    if (ec) return ErrnoStatus(ec.value(), path);
+    if (v.files.empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": the folder holds no files"));
+    }
+    std::sort(v.files.begin(), v.files.end(),
+              [](const LocalVolumeFile& a, const LocalVolumeFile& b) { return a.name < b.name; });
+    return v;
+  }
+  const std::string name = fs::path(path).filename().string();
+  v.files.push_back({name, path});
+  v.main = name;
+  if (absl::AsciiStrToLower(fs::path(path).extension().string()) != ".nhdr") return v;
+  SM_ASSIGN_OR_RETURN(const std::string data, NrrdDataFileField(path));
+  if (data.empty()) return v;
+  if (absl::StartsWith(data, "LIST") || data.find('%') != std::string::npos) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": field 'data file' = '", data,
+                                                   "' lists several files; only one is read"));
+  }
+  fs::path rel = fs::path(data).lexically_normal();
+  const std::string r = rel.generic_string();
+  if (rel.is_absolute() || r == "." || r == ".." || absl::StartsWith(r, "../")) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        path, ": field 'data file' = '", data,
+        "' lies outside the header's folder; an upload carries files beside the header only "
+        "(name the data file relative to it)"));
+  }
+  const fs::path file = fs::path(path).parent_path() / rel;
+  if (!fs::is_regular_file(file, ec)) {
+    return absl::NotFoundError(absl::StrCat(path, ": field 'data file' = '", data,
+                                            "': ", file.string(), " is not a file"));
+  }
+  if (r != name) v.files.push_back({r, file.string()});
+  return v;
+}
+
+absl::StatusOr<VolumeUpload> SheetmeshClient::UploadVolumeFiles(
+    const std::vector<LocalVolumeFile>& files,
+    const std::function<void(int64_t, int64_t)>& progress) {
+  VolumeUpload out;
+  std::vector<std::string> paths;
+  for (const LocalVolumeFile& f : files) {
+    SM_ASSIGN_OR_RETURN(FileHash h, HashFile(f.path));
+    v1::VolumeFiles::File* e = out.files.add_files();
+    e->set_name(f.name);
+    e->mutable_digest()->set_hash(h.hex);
+    e->mutable_digest()->set_size_bytes(h.size);
+    paths.push_back(f.path);
+    out.total_bytes += h.size;
+  }
+  // Ask which the server lacks, a thousand digests at a time; send only those.
+  std::set<std::string> missing;
+  constexpr int kBatch = 1000;
+  for (int i = 0; i < out.files.files_size(); i += kBatch) {
+    v1::FindMissingBlobsRequest req;
+    for (int k = i; k < std::min(i + kBatch, out.files.files_size()); ++k) {
+      *req.add_digests() = out.files.files(k).digest();
+    }
+    v1::FindMissingBlobsResponse resp;
+    SM_RETURN_IF_ERROR(FromGrpc(blobs_->FindMissingBlobs(Context().get(), req, &resp)));
+    for (const v1::Digest& d : resp.missing()) missing.insert(d.hash());
+  }
+  int64_t to_send = 0;
+  for (const v1::VolumeFiles::File& f : out.files.files()) {
+    if (missing.count(f.digest().hash())) to_send += f.digest().size_bytes();
+  }
+  int64_t sent = 0;
+  std::set<std::string> done;
+  for (int i = 0; i < out.files.files_size(); ++i) {
+    const v1::Digest& d = out.files.files(i).digest();
+    if (!missing.count(d.hash()) || !done.insert(d.hash()).second) continue;
+    SM_RETURN_IF_ERROR(WriteBlob(paths[i], d, [&](int64_t n, int64_t) {
+                         if (progress) progress(sent + n, to_send);
+                       }).status());
+    sent += d.size_bytes();
+    ++out.files_sent;
+    out.bytes_sent += d.size_bytes();
+  }
+  if (progress) progress(to_send, to_send);
+  return out;
 }
 
 absl::StatusOr<v1::Job> SheetmeshClient::CreateJob(const v1::CreateJobRequest& request) {

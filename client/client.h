@@ -28,6 +28,30 @@ struct ClientOptions {
 // does not resolve, or TLS on one side only.
 std::string ConnectionHint(const absl::Status& status, const ClientOptions& options);
 
+// One file of a volume on the client's disk, and its name in the volume.
+struct LocalVolumeFile {
+  std::string name;  // "slice_0001.tif", "scan.raw"
+  std::string path;
+};
+
+// The files that make one volume: every visible regular file of a folder (its slices),
+// or a detached NRRD header (.nhdr) and the data file it names; `main` is the file to
+// open ("" for a folder). kInvalidArgument naming the header and field for a data file
+// the upload cannot carry beside it (an absolute path, "..", a list of files).
+struct VolumeOnDisk {
+  std::vector<LocalVolumeFile> files;
+  std::string main;
+};
+absl::StatusOr<VolumeOnDisk> VolumeFilesOf(const std::string& path);
+
+// What UploadVolumeFiles sent.
+struct VolumeUpload {
+  v1::VolumeFiles files;  // the manifest for JobInput.volume_files
+  int64_t total_bytes = 0;
+  int files_sent = 0;  // the rest were stored already
+  int64_t bytes_sent = 0;
+};
+
 // Thread-compatible: one client per thread, or guard it.
 class SheetmeshClient {
  public:
@@ -37,6 +61,12 @@ class SheetmeshClient {
   // the same file. `progress(sent, total)` is called as pieces go.
   absl::StatusOr<v1::Digest> Upload(const std::string& path,
                                     const std::function<void(int64_t, int64_t)>& progress = {});
+  // Uploads the files of one volume, sending only those the server lacks (one
+  // FindMissingBlobs per thousand files); `progress(sent, total)` counts the bytes that
+  // travel.
+  absl::StatusOr<VolumeUpload> UploadVolumeFiles(
+      const std::vector<LocalVolumeFile>& files,
+      const std::function<void(int64_t, int64_t)>& progress = {});
   absl::StatusOr<v1::Job> CreateJob(const v1::CreateJobRequest& request);
   absl::StatusOr<v1::Job> GetJob(const std::string& name);
   absl::StatusOr<v1::ListJobsResponse> ListJobs(const v1::ListJobsRequest& request);
@@ -59,6 +89,10 @@ class SheetmeshClient {
   std::unique_ptr<grpc::ClientContext> Context() const;
 
  private:
+  // Writes a blob the server lacks, resuming where an earlier write stopped.
+  absl::StatusOr<v1::Digest> WriteBlob(const std::string& path, const v1::Digest& digest,
+                                       const std::function<void(int64_t, int64_t)>& progress);
+
   ClientOptions options_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::JobService::Stub> jobs_;

@@ -14,6 +14,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/cord.h"
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
@@ -177,6 +178,31 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
   in.set_file_name(std::filesystem::path(args[0]).filename().string());
   if (absl::GetFlag(FLAGS_reference)) {
     in.set_volume_path(std::filesystem::absolute(args[0]).string());
+  } else if (std::filesystem::is_directory(args[0]) ||
+             absl::AsciiStrToLower(std::filesystem::path(args[0]).extension().string()) ==
+                 ".nhdr") {
+    // A folder of slices, or a detached header and its data file: one volume of files,
+    // of which only those the server lacks travel.
+    in.set_file_name(std::filesystem::path(args[0]).lexically_normal().filename().string());
+    if (in.file_name().empty()) {
+      in.set_file_name(std::filesystem::absolute(args[0]).parent_path().filename().string());
+    }
+    SM_ASSIGN_OR_RETURN(VolumeOnDisk files, VolumeFilesOf(args[0]));
+    const bool tty = ::isatty(1);
+    SM_ASSIGN_OR_RETURN(
+        VolumeUpload up, c.UploadVolumeFiles(files.files, [tty](int64_t sent, int64_t total) {
+          if (tty)
+            std::cout << absl::StrFormat("\rupload %5.1f%% of %d bytes",
+                                         100.0 * sent / std::max<int64_t>(1, total), total)
+                      << std::flush;
+        }));
+    if (tty) std::cout << "\n";
+    std::cout << absl::StrFormat(
+        "volume of %d files (%d bytes): sent %d (%d bytes), %d stored already\n",
+        up.files.files_size(), up.total_bytes, up.files_sent, up.bytes_sent,
+        up.files.files_size() - up.files_sent);
+    *in.mutable_volume_files() = std::move(up.files);
+    in.mutable_volume_files()->set_main(files.main);
   } else {
     const bool tty = ::isatty(1);
     SM_ASSIGN_OR_RETURN(v1::Digest d, c.Upload(args[0], [tty](int64_t sent, int64_t total) {

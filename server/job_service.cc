@@ -6,12 +6,15 @@
 #include <climits>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
 #include "common/version.h"
 #include "server/references.h"
 #include "server/status_util.h"
 #include "server/watch_job.h"
+#include "worker/pipeline/volume/hdf5_io.h"
+#include "worker/runtime/job_host.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::server {
@@ -46,10 +49,22 @@ absl::StatusOr<std::string> CacheKey(const std::string& tenant, const v1::Create
   std::string identity;
   if (r.input().has_volume_digest()) {
     identity = absl::StrCat("digest:", DigestString(r.input().volume_digest()));
+  } else if (r.input().has_volume_files()) {
+    // The files by name and content, in name order: a manifest listed in another order
+    // is the same volume.
+    std::vector<std::string> lines;
+    for (const v1::VolumeFiles::File& f : r.input().volume_files().files()) {
+      lines.push_back(absl::StrCat(f.name(), "\t", DigestString(f.digest())));
+    }
+    std::sort(lines.begin(), lines.end());
+    identity = absl::StrCat("files:", r.input().volume_files().main(), "\n",
+                            Sha256Hex(absl::StrJoin(lines, "\n")));
   } else {
+    // "scan.h5:/entry/data": the file's state, the dataset by name.
+    const auto hdf5 = SplitHdf5Path(resolved);
+    const std::string file = hdf5 ? hdf5->first : resolved;
     struct stat st;
-    if (::stat(resolved.c_str(), &st) != 0)
-      return absl::NotFoundError(absl::StrCat(resolved, " vanished"));
+    if (::stat(file.c_str(), &st) != 0) return absl::NotFoundError(absl::StrCat(file, " vanished"));
     identity = absl::StrCat("path:", resolved, ":", st.st_size, ":", st.st_mtim.tv_sec, ".",
                             st.st_mtim.tv_nsec);
   }
@@ -83,6 +98,13 @@ grpc::ServerWriteReactor<v1::WatchJobResponse>* JobServiceImpl::WatchJob(
   return hub_->Watch(context, *request);
 }
 
+absl::StatusOr<bool> JobServiceImpl::Usable(const std::string& tenant, const v1::Digest& digest) {
+  // Another tenant's blob is, to this one, not stored.
+  if (!ctx_->blobs->Contains(digest)) return false;
+  if (ctx_->tenants->open()) return true;
+  return ctx_->jobs->OwnsBlob(tenant, digest.hash());
+}
+
 absl::Status JobServiceImpl::CheckInput(const std::string& tenant, const v1::JobInput& in,
                                         std::string* resolved) {
   if (!in.file_name().empty()) {
@@ -97,11 +119,7 @@ absl::Status JobServiceImpl::CheckInput(const std::string& tenant, const v1::Job
     if (absl::Status st = CheckDigest(in.volume_digest()); !st.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("input.volume_digest: ", st.message()));
     }
-    // Another tenant's blob is, to this one, not stored.
-    bool usable = ctx_->blobs->Contains(in.volume_digest());
-    if (usable && !ctx_->tenants->open()) {
-      SM_ASSIGN_OR_RETURN(usable, ctx_->jobs->OwnsBlob(tenant, in.volume_digest().hash()));
-    }
+    SM_ASSIGN_OR_RETURN(const bool usable, Usable(tenant, in.volume_digest()));
     if (!usable) {
       return absl::FailedPreconditionError(absl::StrCat("input.volume_digest ",
                                                         DigestString(in.volume_digest()),
@@ -110,11 +128,36 @@ absl::Status JobServiceImpl::CheckInput(const std::string& tenant, const v1::Job
     ctx_->blobs->Touch(in.volume_digest());
     return absl::OkStatus();
   }
+  if (in.has_volume_files()) {
+    const v1::VolumeFiles& files = in.volume_files();
+    SM_RETURN_IF_ERROR(runtime::CheckVolumeFiles(files, "input.volume_files"));
+    std::vector<std::string> missing;
+    for (int i = 0; i < files.files_size(); ++i) {
+      const v1::Digest& d = files.files(i).digest();
+      if (absl::Status st = CheckDigest(d); !st.ok()) {
+        return absl::InvalidArgumentError(absl::StrCat("input.volume_files.files[", i, "] ('",
+                                                       files.files(i).name(),
+                                                       "').digest: ", st.message()));
+      }
+      SM_ASSIGN_OR_RETURN(const bool usable, Usable(tenant, d));
+      if (!usable) missing.push_back(files.files(i).name());
+    }
+    if (!missing.empty()) {
+      return absl::FailedPreconditionError(
+          absl::StrCat("input.volume_files: ", missing.size(), " of ", files.files_size(),
+                       " files are not stored (",
+                       absl::StrJoin(missing.begin(),
+                                     missing.begin() + std::min<size_t>(5, missing.size()), ", "),
+                       missing.size() > 5 ? ", ..." : "", "); upload them first"));
+    }
+    for (const v1::VolumeFiles::File& f : files.files()) ctx_->blobs->Touch(f.digest());
+    return absl::OkStatus();
+  }
   if (!in.volume_path().empty()) {
     SM_ASSIGN_OR_RETURN(*resolved, ResolveReference(in.volume_path(), ctx_->allowed_roots));
     return absl::OkStatus();
   }
-  return absl::InvalidArgumentError("input needs volume_digest or volume_path");
+  return absl::InvalidArgumentError("input needs volume_digest, volume_files or volume_path");
 }
 
 grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::CreateJobRequest* r,

@@ -56,6 +56,8 @@ class JobServiceImpl final
  private:
   absl::Status CheckInput(const std::string& tenant, const v1::JobInput& in,
                           std::string* resolved_path);
+  // Whether `digest` is stored and, unless tenants are open, this tenant's.
+  absl::StatusOr<bool> Usable(const std::string& tenant, const v1::Digest& digest);
 
   const ServiceContext* ctx_;
   std::unique_ptr<WatchHub> hub_;

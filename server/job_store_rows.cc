@@ -31,6 +31,9 @@ std::string ScopedRequestId(const std::string& tenant, const std::string& reques
 std::set<std::string> BlobsOf(const v1::Job& job) {
   std::set<std::string> out;
   if (job.input().has_volume_digest()) out.insert(job.input().volume_digest().hash());
+  for (const v1::VolumeFiles::File& f : job.input().volume_files().files()) {
+    out.insert(f.digest().hash());
+  }
   for (const v1::Artifact& a : job.artifacts()) out.insert(a.digest().hash());
   return out;
 }

@@ -134,6 +134,29 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
     v.display_name = in.file_name().empty() ? DigestString(in.volume_digest()) : in.file_name();
     return v;
   }
+  if (in.has_volume_files()) {
+    // Hard links (a copy across file systems): the job's sandbox reads beneath its folder,
+    // and a symbolic link would lead out of it into the blob store.
+    const std::string dir = absl::StrCat(options_.scratch_dir, "/inputs/",
+                                         absl::StrReplaceAll(job.name(), {{"/", "-"}}), "/",
+                                         runtime::InputFolderName(in));
+    SM_ASSIGN_OR_RETURN(v.path,
+                        runtime::LayOutVolumeFiles(
+                            in.volume_files(), dir,
+                            [&](const v1::Digest& d, const std::string& path) -> absl::Status {
+                              SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(d));
+                              ::unlink(path.c_str());
+                              if (::link(blob.c_str(), path.c_str()) == 0) return absl::OkStatus();
+                              std::error_code ec;
+                              std::filesystem::copy_file(blob, path, ec);
+                              return ec ? ErrnoStatus(ec.value(), path) : absl::OkStatus();
+                            }));
+    v.display_name = runtime::InputFolderName(in);
+    // A detached header's data file must be one of the volume's own files.
+    v.data_files = true;
+    v.data_file_roots = {dir};
+    return v;
+  }
   if (!in.volume_path().empty()) {
     SM_ASSIGN_OR_RETURN(v.path, ResolveReference(in.volume_path(), options_.allowed_roots));
     v.display_name = in.volume_path();

@@ -157,6 +157,32 @@ class SheetmeshClient:
         raise SheetmeshError("upload of %s did not complete after %d attempts: %s"
                              % (path, retries + 1, last.details() if last else ""))
 
+    def upload_volume_files(self, files, main=""):
+        """Uploads the files of one volume and returns the ``VolumeFiles`` manifest for
+        ``create_job(volume_files=...)``. ``files`` is a folder (its visible files: a stack
+        of slices) or a dict from each file's name in the volume ("data/scan.raw") to its
+        path; ``main`` names the file to open (a detached header), "" for slices. Only the
+        files the server lacks are sent (one FindMissingBlobs per thousand)."""
+        if isinstance(files, (str, os.PathLike)):
+            folder = pathlib.Path(files)
+            files = {p.name: p for p in sorted(folder.iterdir())
+                     if p.is_file() and not p.name.startswith(".")}
+        manifest = jobs_pb2.VolumeFiles(main=main)
+        paths = {}
+        for name, path in files.items():
+            entry = manifest.files.add(name=name)
+            entry.digest.CopyFrom(file_digest(path))
+            paths[entry.digest.hash] = path
+        missing = set()
+        entries = list(manifest.files)
+        for i in range(0, len(entries), 1000):
+            req = blobs_pb2.FindMissingBlobsRequest(digests=[e.digest for e in entries[i:i + 1000]])
+            missing.update(d.hash for d in self.blobs.FindMissingBlobs(req, metadata=self._metadata).missing)
+        for h in sorted(missing):
+            self.upload(paths[h])
+        self.last_files_sent = len(missing)
+        return manifest
+
     @staticmethod
     def _pieces(path, resource, offset, size, progress):
         with open(path, "rb") as f:
@@ -210,17 +236,20 @@ class SheetmeshClient:
     # -- jobs ------------------------------------------------------------------------------
 
     def create_job(self, volume_digest=None, volume_path=None, file_name="", parameters=None,
-                   volume_format=None, request_id=None, no_cache=False):
-        """Creates a job on an uploaded volume (``volume_digest``) or one on the server's
-        storage (``volume_path``). ``parameters`` is a PipelineParameters or a dict of its
-        fields, e.g. ``{"r": 5, "extract": True}``."""
-        if (volume_digest is None) == (volume_path is None):
-            raise ValueError("give exactly one of volume_digest and volume_path")
+                   volume_format=None, request_id=None, no_cache=False, volume_files=None):
+        """Creates a job on an uploaded volume (``volume_digest``), on uploaded files
+        (``volume_files``, from upload_volume_files) or on one on the server's storage
+        (``volume_path``). ``parameters`` is a PipelineParameters or a dict of its fields,
+        e.g. ``{"r": 5, "extract": True}``."""
+        if sum(x is not None for x in (volume_digest, volume_path, volume_files)) != 1:
+            raise ValueError("give exactly one of volume_digest, volume_files and volume_path")
         if isinstance(parameters, dict):
             parameters = parameters_pb2.PipelineParameters(**parameters)
         job_input = jobs_pb2.JobInput(file_name=file_name, format=volume_format)
         if volume_digest is not None:
             job_input.volume_digest.CopyFrom(volume_digest)
+        elif volume_files is not None:
+            job_input.volume_files.CopyFrom(volume_files)
         else:
             job_input.volume_path = volume_path
         request = jobs_pb2.CreateJobRequest(request_id=request_id or str(uuid.uuid4()), input=job_input,

@@ -65,6 +65,26 @@ grep -q "identical work" "$tmp/mesh3.txt" && fail "no_cache"
 job3=$(sed -n 's/^job \(jobs\/[^ ]*\).*/\1/p' "$tmp/mesh3.txt")
 cmp "$tmp/out/surface.ply" "$tmp/out3/surface.ply" || fail "the same job gave other bytes"
 
+# A folder of slices and a detached NRRD upload as one volume each; a second upload of the
+# folder with one slice changed sends that slice only.
+"$pipeline" convert "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/slices" --out_format=tiff-folder > /dev/null
+"$cli" mesh "$tmp/slices" -o "$tmp/folder" --r=5 $s > "$tmp/folder.txt" || fail "mesh of a folder: $(cat "$tmp/folder.txt")"
+grep -q "volume of 64 files .*: sent 64 " "$tmp/folder.txt" || fail "folder upload: $(cat "$tmp/folder.txt")"
+cmp -s <(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['similarity'])" "$tmp/folder/report.json") \
+       <(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['similarity'])" "$tmp/out/report.json") \
+  || fail "the folder of slices meshed differently from the raw file"
+"$pipeline" phantom --dims=64x64x64 --seed=9 -o "$tmp/other_64x64x64_u8.raw" > /dev/null
+"$pipeline" convert "$tmp/other_64x64x64_u8.raw" -o "$tmp/other" --out_format=tiff-folder > /dev/null
+cp "$tmp/other/slice_00031.tif" "$tmp/slices/slice_00031.tif"
+"$cli" mesh "$tmp/slices" -o "$tmp/folder2" --r=5 $s > "$tmp/folder2.txt" || fail "second folder mesh: $(cat "$tmp/folder2.txt")"
+grep -q "sent 1 (.*), 63 stored already" "$tmp/folder2.txt" || fail "changed folder upload: $(cat "$tmp/folder2.txt")"
+mkdir -p "$tmp/nhdr"
+cp "$tmp/root/rock_64x64x64_u8.raw" "$tmp/nhdr/rock.raw"
+printf 'NRRD0004\ntype: uint8\ndimension: 3\nsizes: 64 64 64\nencoding: raw\ndata file: rock.raw' > "$tmp/nhdr/rock.nhdr"
+"$cli" mesh "$tmp/nhdr/rock.nhdr" -o "$tmp/nhdrout" --r=5 $s > "$tmp/nhdr.txt" || fail "mesh of a detached NRRD: $(cat "$tmp/nhdr.txt")"
+grep -q "volume of 2 files" "$tmp/nhdr.txt" || fail "nhdr upload: $(cat "$tmp/nhdr.txt")"
+[ -f "$tmp/nhdrout/report.json" ] || fail "detached NRRD mesh wrote no report"
+
 # mesh by reference.
 "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" --reference -o "$tmp/ref" $s > /dev/null || fail "mesh --reference"
 [ -f "$tmp/ref/report.json" ] || fail "reference mesh wrote no report"

@@ -121,6 +121,34 @@ class PythonClientTest(unittest.TestCase):
         info = self.client.inspect_volume(str(self.volume))
         self.assertEqual(list(info.dims), [64, 64, 64])
 
+    def test_hdf5_dataset_by_reference(self):
+        try:
+            import h5py
+        except ImportError:
+            self.skipTest("/usr/bin/python3 has no h5py")
+        import numpy as np
+        voxels = np.fromfile(self.volume, dtype=np.uint8).reshape(64, 64, 64)
+        scan = self.root / "scan.h5"
+        with h5py.File(scan, "w") as f:
+            d = f.create_dataset("entry/data/data", data=voxels, chunks=(8, 32, 32), compression="gzip")
+            d.attrs["element_size_um"] = [2.0, 1.0, 1.0]  # z, y, x
+        info = self.client.inspect_volume("%s:/entry/data/data" % scan)
+        self.assertEqual(list(info.dims), [64, 64, 64])
+        self.assertEqual(list(info.spacing), [1.0, 1.0, 2.0])
+        job = self.client.watch(self.client.create_job(volume_path="%s:/entry/data/data" % scan,
+                                                       parameters={"r": 5}, no_cache=True).name)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED, job.error.message)
+        # A dataset the file lacks is the reader's NOT_FOUND listing what it has; a file
+        # outside the roots is refused before its dataset is looked at.
+        job = self.client.watch(self.client.create_job(volume_path="%s:/entry/nope" % scan,
+                                                       no_cache=True).name)
+        self.assertEqual(job.state, jobs_pb2.FAILED)
+        self.assertIn("/entry/data/data", job.error.message)
+        shutil.copy(scan, self.tmp / "scan.h5")
+        with self.assertRaises(grpc.RpcError) as e:
+            self.client.create_job(volume_path="%s:/entry/data/data" % (self.tmp / "scan.h5"))
+        self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
+
     def test_bad_parameters_name_the_field(self):
         digest = self.client.upload(self.volume)
         with self.assertRaises(grpc.RpcError) as e:

@@ -10,6 +10,7 @@ without the lease are refused.
 """
 
 import hashlib
+import json
 import os
 import pathlib
 import shutil
@@ -117,6 +118,36 @@ class RemoteWorkersTest(unittest.TestCase):
                 out = self.tmp / "download.bin"
                 self.client.download(a.digest, str(out))
                 self.assertEqual(hashlib.sha256(out.read_bytes()).hexdigest(), a.digest.hash, a.name)
+
+    def test_a_files_of_one_volume_are_laid_out_on_the_worker(self):
+        # A folder of TIFF slices and a detached NRRD header with its data file, uploaded
+        # as manifests: the remote worker downloads each file into a folder of its own.
+        slices = self.tmp / "slices"
+        subprocess.run([PIPELINE_BIN, "convert", str(self.sample), "-o", str(slices), "--out_format=tiff-folder"],
+                       check=True, capture_output=True)
+        folder = self.client.upload_volume_files(slices)
+        self.assertEqual(len(folder.files), 96)
+        # Slices alike (empty ones) are one blob.
+        self.assertEqual(self.client.last_files_sent, len({f.digest.hash for f in folder.files}))
+        self.client.upload_volume_files(slices)
+        self.assertEqual(self.client.last_files_sent, 0, "stored slices were sent again")
+        header = self.tmp / "rock.nhdr"
+        header.write_text("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 128 112 96\nencoding: raw\n"
+                          "data file: data/rock.raw\n")
+        nrrd = self.client.upload_volume_files({"rock.nhdr": header, "data/rock.raw": self.sample},
+                                               main="rock.nhdr")
+        reports = []
+        for files, name in ((folder, "slices"), (nrrd, "rock.nhdr")):
+            job = self.client.create_job(volume_files=files, file_name=name,
+                                         parameters={"r": 5, "labels": [255]}, no_cache=True)
+            done = self.client.watch(job.name)
+            self.assertEqual(done.state, self.pb.SUCCEEDED, done.error.message)
+            report = next(a for a in done.artifacts if a.name == "report.json")
+            out = self.tmp / ("%s.json" % name)
+            self.client.download(report.digest, str(out))
+            reports.append(json.loads(out.read_text()))
+        self.assertEqual(reports[0]["input"]["format"], "tiff-folder")
+        self.assertEqual(reports[0]["similarity"], reports[1]["similarity"])
 
     def test_b_a_cancel_stops_the_remote_job(self):
         job = self.client.create_job(volume_path=str(self.slow), parameters={"extract": True}, no_cache=True)

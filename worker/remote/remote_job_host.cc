@@ -143,6 +143,20 @@ absl::StatusOr<runtime::LocalVolume> RemoteJobHost::ResolveInput(const v1::Job& 
     v.display_name = in.file_name().empty() ? in.volume_digest().hash() : in.file_name();
     return v;
   }
+  if (in.has_volume_files()) {
+    const std::string dir = InputDir(job.name()) + "/" + runtime::InputFolderName(in);
+    SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(options_.server));
+    SM_ASSIGN_OR_RETURN(
+        v.path, runtime::LayOutVolumeFiles(in.volume_files(), dir,
+                                           [&](const v1::Digest& d, const std::string& path) {
+                                             return c->Download(d, path);
+                                           }));
+    v.display_name = runtime::InputFolderName(in);
+    // A detached header's data file must be one of the volume's own files.
+    v.data_files = true;
+    v.data_file_roots = {dir};
+    return v;
+  }
   if (!in.volume_path().empty()) {
     // A path names shared storage: this worker must see it under its own roots.
     SM_ASSIGN_OR_RETURN(v.path, ResolveUnderRoots(in.volume_path(), options_.allowed_roots,

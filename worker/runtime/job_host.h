@@ -3,6 +3,7 @@
 #ifndef SHEETMESH_WORKER_RUNTIME_JOB_HOST_H_
 #define SHEETMESH_WORKER_RUNTIME_JOB_HOST_H_
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,24 @@ inline v1::JobError ErrorOf(const absl::Status& result) {
 // The name an uploaded input gets on disk (readers tell formats by name): the client's
 // file name without folders, or volume.raw.
 std::string InputFileName(const v1::JobInput& input);
+// The folder an input of several files is laid out in: the client's file name (the
+// folder's or the header's name) without folders, or "volume".
+std::string InputFolderName(const v1::JobInput& input);
+
+// The most files one volume may have (a stack of slices).
+inline constexpr int kMaxVolumeFiles = 1 << 17;
+
+// kInvalidArgument naming `field` ("input.volume_files") and the entry unless every name is
+// a relative path of plain parts, no two alike, at most kMaxVolumeFiles of them, and
+// `main` is empty or one of them. Digests are the caller's to check.
+absl::Status CheckVolumeFiles(const v1::VolumeFiles& files, const std::string& field);
+
+// Lays out a checked manifest's files in `dir` (created; each by `place(digest, path)`,
+// with the folders of its name made first) and returns the path to open: dir/main, or
+// `dir` for a folder of slices.
+absl::StatusOr<std::string> LayOutVolumeFiles(
+    const v1::VolumeFiles& files, const std::string& dir,
+    const std::function<absl::Status(const v1::Digest&, const std::string&)>& place);
 
 // Implementations must be thread-safe: every worker thread calls them.
 class JobHost {

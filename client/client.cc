@@ -118,13 +118,11 @@ absl::StatusOr<v1::Digest> SheetmeshClient::Upload(
 absl::StatusOr<v1::Digest> SheetmeshClient::WriteBlob(
     const std::string& path, const v1::Digest& digest,
     const std::function<void(int64_t, int64_t)>& progress) {
-  struct {
-    std::string hex;
-    int64_t size;
-  } h{digest.hash(), digest.size_bytes()};
+  const std::string& hex = digest.hash();
+  const int64_t size = digest.size_bytes();
   // The upload is named by the content, so that running the upload again resumes it.
   const std::string resource =
-      absl::StrCat("uploads/u", h.hex.substr(0, 32), "/blobs/", h.hex, "/", h.size);
+      absl::StrCat("uploads/u", hex.substr(0, 32), "/blobs/", hex, "/", size);
   SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
   std::vector<std::byte> buf(kPiece);
   absl::Status last;
@@ -142,19 +140,19 @@ absl::StatusOr<v1::Digest> SheetmeshClient::WriteBlob(
     v1::WriteRequest req;
     req.set_resource_name(resource);
     do {
-      const int64_t n = std::min(kPiece, h.size - offset);
+      const int64_t n = std::min(kPiece, size - offset);
       SM_RETURN_IF_ERROR(ReadFullyAt(fd.get(), offset, std::span<std::byte>(buf.data(), n), path));
       req.set_write_offset(offset);
       req.set_data(reinterpret_cast<const char*>(buf.data()), n);
-      req.set_finish_write(offset + n == h.size);
+      req.set_finish_write(offset + n == size);
       if (!writer->Write(req)) {
         broken = true;
         break;
       }
       req.clear_resource_name();
       offset += n;
-      if (progress) progress(offset, h.size);
-    } while (offset < h.size);
+      if (progress) progress(offset, size);
+    } while (offset < size);
     writer->WritesDone();
     last = FromGrpc(writer->Finish());
     if (last.ok() && !broken) return digest;

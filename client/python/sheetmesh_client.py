@@ -137,6 +137,10 @@ class SheetmeshClient:
             if progress:
                 progress(digest.size_bytes, digest.size_bytes)
             return digest
+        return self._write_blob(path, digest, progress, retries)
+
+    def _write_blob(self, path, digest, progress=None, retries=5):
+        """Writes a blob the server lacks, resuming where an earlier write stopped."""
         # Named by the content (as the C++ client does), so that uploading again resumes.
         resource = "uploads/u%s/blobs/%s/%d" % (digest.hash[:32], digest.hash, digest.size_bytes)
         last = None
@@ -172,14 +176,14 @@ class SheetmeshClient:
         for name, path in files.items():
             entry = manifest.files.add(name=name)
             entry.digest.CopyFrom(file_digest(path))
-            paths[entry.digest.hash] = path
+            paths[entry.digest.hash] = (path, entry.digest)
         missing = set()
         entries = list(manifest.files)
         for i in range(0, len(entries), 1000):
             req = blobs_pb2.FindMissingBlobsRequest(digests=[e.digest for e in entries[i:i + 1000]])
             missing.update(d.hash for d in self.blobs.FindMissingBlobs(req, metadata=self._metadata).missing)
-        for h in sorted(missing):
-            self.upload(paths[h])
+        for h in sorted(missing):  # FindMissingBlobs said these: write them without asking again
+            self._write_blob(*paths[h])
         self.last_files_sent = len(missing)
         return manifest
 

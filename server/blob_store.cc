@@ -2,11 +2,13 @@
 
 #include <fcntl.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <future>
+#include <random>
 #include <set>
 #include <span>
 #include <vector>
@@ -31,6 +33,25 @@ void SyncDir(const std::string& dir) {
   }
 }
 
+// Names this process's private upload files: replicas may share the folder (and a host).
+const std::string& ProcessTag() {
+  static const std::string tag = [] {
+    std::random_device rd;
+    return absl::StrCat(::getpid(), "-", absl::Hex(uint64_t{rd()} << 32 | rd(), absl::kZeroPad16));
+  }();
+  return tag;
+}
+
+// Removes a .part file unless another process holds its lock (a replica writing it). The
+// lock is held while unlinking: a writer that takes it next finds the path gone and starts
+// a new file.
+bool UnlinkUnlessHeld(const std::string& path) {
+  ScopedFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (!fd.valid()) return errno == ENOENT;
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) return false;
+  return ::unlink(path.c_str()) == 0;
+}
+
 }  // namespace
 
 // The file of an upload in progress. Pieces are gathered in an aligned buffer and written
@@ -47,14 +68,46 @@ class PartFile {
 
   ~PartFile() { (void)WaitForWrite(); }
 
-  absl::Status Open(const std::string& path, int64_t* size) {
+  // With `lock`, opens (creating) the file for writing and takes its lock: the servers
+  // sharing a blob folder (replicas) write one .part file one at a time. `*busy` says
+  // another process holds it (nothing is opened then). The lock is taken on the file the
+  // path names when it is held: a file the holder renamed into the store meanwhile is not
+  // this upload's any more. Without, opens it for reading; a missing file is empty.
+  absl::Status Open(const std::string& path, bool lock, int64_t* size, bool* busy) {
     path_ = path;
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd < 0) return ErrnoStatus(errno, path);
-    fd_ = ScopedFd(fd);
-    const int dfd = ::open(path.c_str(), O_WRONLY | O_DIRECT | O_CLOEXEC);
+    *busy = false;
+    for (int tries = 0;; ++tries) {
+      const int fd =
+          ::open(path.c_str(), lock ? O_RDWR | O_CREAT | O_CLOEXEC : O_RDONLY | O_CLOEXEC, 0644);
+      if (fd < 0 && !lock && errno == ENOENT) {
+        *size = end_ = 0;
+        return absl::OkStatus();
+      }
+      if (fd < 0) return ErrnoStatus(errno, path);
+      fd_ = ScopedFd(fd);
+      if (!lock) break;
+      if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        fd_ = ScopedFd();
+        if (errno == EWOULDBLOCK) {
+          *busy = true;
+          return absl::OkStatus();
+        }
+        return ErrnoStatus(errno, path);
+      }
+      struct stat held, named;
+      if (::fstat(fd, &held) != 0) return ErrnoStatus(errno, path);
+      if (::stat(path.c_str(), &named) == 0 && named.st_ino == held.st_ino &&
+          named.st_dev == held.st_dev) {
+        break;
+      }
+      fd_ = ScopedFd();
+      if (tries == 8) {
+        return absl::UnavailableError(absl::StrCat(path, " keeps being replaced; retry"));
+      }
+    }
+    const int dfd = lock ? ::open(path.c_str(), O_WRONLY | O_DIRECT | O_CLOEXEC) : -1;
     if (dfd >= 0) direct_ = ScopedFd(dfd);
-    SM_ASSIGN_OR_RETURN(*size, FileSizeOf(fd, path));
+    SM_ASSIGN_OR_RETURN(*size, FileSizeOf(fd_.get(), path));
     end_ = *size;
     return absl::OkStatus();
   }
@@ -186,6 +239,8 @@ struct BlobStore::Upload {
   int64_t written = 0;
   int64_t committed = 0;  // durable (the stream ended, or a restart found it on disk)
   bool complete = false;
+  // Another server sharing the folder held the upload's file: this one writes its own copy.
+  bool private_copy = false;
   absl::Time last_write = absl::Now();
 };
 
@@ -309,27 +364,44 @@ absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const st
   const bool exists = ::stat(up->part_path.c_str(), &st) == 0;
   if (!exists && !create) return up;
   SM_RETURN_IF_ERROR(MakeDirs(std::filesystem::path(up->part_path).parent_path().string()));
-  SM_RETURN_IF_ERROR(OpenPart(*up));
+  SM_RETURN_IF_ERROR(OpenPart(*up, /*lock=*/create, nullptr));
   // Only a stream keeps the files open (a status query found this upload on disk).
   if (!create) up->file.reset();
   uploads_[key] = up;
   return up;
 }
 
-// Opens the upload's .part file. An upload from before a restart (or whose file changed
-// under it) resumes from its length on disk: that prefix is hashed again.
-absl::Status BlobStore::OpenPart(Upload& up) {
-  up.file = std::make_unique<PartFile>();
+// Opens the upload's .part file, for writing when `lock`. An upload from before a restart,
+// or whose file changed under it (a replica sharing the folder wrote it, or stored it),
+// resumes from its length on disk: that prefix is hashed again, and `*moved` says the
+// upload is not where its last state said. A file another replica is writing is left to
+// it: this server writes a private copy beside it (the same bytes; whichever is stored
+// last replaces the other with itself).
+absl::Status BlobStore::OpenPart(Upload& up, bool lock, bool* moved) {
+  auto file = std::make_unique<PartFile>();
   int64_t have = 0;
-  SM_RETURN_IF_ERROR(up.file->Open(up.part_path, &have));
-  if (up.sha != nullptr && have == up.written) return absl::OkStatus();
-  if (have > up.expected.size_bytes()) {  // not this upload's bytes: start again
-    if (::ftruncate(up.file->fd(), 0) != 0) return ErrnoStatus(errno, up.part_path);
-    have = 0;
+  bool busy = false;
+  const int64_t before = up.sha != nullptr ? up.written : 0;
+  SM_RETURN_IF_ERROR(file->Open(up.part_path, lock, &have, &busy));
+  if (busy) {
+    up.part_path =
+        absl::StrCat(up.part_path.substr(0, up.part_path.size() - 5), ".", ProcessTag(), ".part");
+    up.private_copy = true;
+    up.sha.reset();
+    SM_RETURN_IF_ERROR(file->Open(up.part_path, lock, &have, &busy));
+    if (busy) return absl::UnavailableError(absl::StrCat(up.part_path, " is busy; retry"));
   }
-  up.sha = std::make_unique<Sha256>();
-  SM_RETURN_IF_ERROR(HashFilePrefix(up.file->fd(), have, up.sha.get(), up.part_path));
-  up.written = up.committed = have;
+  up.file = std::move(file);
+  if (up.sha == nullptr || have != up.written) {
+    if (have > up.expected.size_bytes()) {  // not this upload's bytes: start again
+      if (lock && ::ftruncate(up.file->fd(), 0) != 0) return ErrnoStatus(errno, up.part_path);
+      have = 0;
+    }
+    up.sha = std::make_unique<Sha256>();
+    SM_RETURN_IF_ERROR(HashFilePrefix(up.file->fd(), have, up.sha.get(), up.part_path));
+    up.written = up.committed = have;
+  }
+  if (moved != nullptr) *moved = busy || have != before;
   return absl::OkStatus();
 }
 
@@ -343,7 +415,18 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& tena
   std::lock_guard<std::mutex> lock(up->mu);
   if (up->complete) return UploadState{up->expected.size_bytes(), true};
   up->last_write = absl::Now();
-  if (up->file == nullptr) SM_RETURN_IF_ERROR(OpenPart(*up));
+  bool moved = false;
+  if (up->file == nullptr) {
+    if (stored_counts && Contains(up->expected)) return Stored(*up);  // by a replica
+    SM_RETURN_IF_ERROR(OpenPart(*up, /*lock=*/true, &moved));
+  }
+  if (offset > up->written && (moved || up->private_copy)) {
+    // The writer's offset came from a state this server no longer holds: a replica sharing
+    // the folder has the upload's file, or stored it. The writer asks again and resumes.
+    return absl::UnavailableError(absl::StrCat(
+        "upload ", resource, " holds ", up->written, " bytes here, not the ", offset,
+        " the write starts at (another server shares it); query the status and resume"));
+  }
   if (offset < 0 || offset > up->written) {
     return absl::InvalidArgumentError(absl::StrCat("write_offset ", offset, " for ", resource,
                                                    " must be at most the committed size ",
@@ -370,31 +453,36 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& tena
     const std::string why =
         absl::StrCat("upload ", resource, " has ", up->written, " bytes of SHA-256 ", got,
                      ", not the declared ", DigestString(up->expected), "; it is discarded");
+    ::unlink(up->part_path.c_str());  // before its lock goes with the file
     up->file->Close();
     up->file.reset();
-    ::unlink(up->part_path.c_str());
     std::lock_guard<std::mutex> l(mu_);
     uploads_.erase(up->key);
     return absl::InvalidArgumentError(why);
   }
   SM_RETURN_IF_ERROR(up->file->Flush());
   if (::fsync(up->file->fd()) != 0) return ErrnoStatus(errno, up->part_path);
-  up->file.reset();
   const std::string dest = CasPath(up->expected.hash());
   SM_RETURN_IF_ERROR(MakeDirs(std::filesystem::path(dest).parent_path().string()));
   // The same bytes may be stored already (a tenant that did not own them sent them): the
   // rename replaces them with themselves.
   if (::rename(up->part_path.c_str(), dest.c_str()) != 0) return ErrnoStatus(errno, dest);
   SyncDir(std::filesystem::path(dest).parent_path().string());
-  up->complete = true;
-  up->committed = up->written;
-  up->sha.reset();
-  {
-    // Done: later calls find the blob itself.
-    std::lock_guard<std::mutex> l(mu_);
-    uploads_.erase(up->key);
-  }
-  return UploadState{up->committed, true};
+  up->file.reset();  // its lock kept the file this server's until it was renamed
+  return Stored(*up);
+}
+
+// The upload's blob is stored (by this server or a replica): later calls find the blob.
+// Its file (a private copy, or one a status query reopened) goes unless a replica is
+// writing it.
+BlobStore::UploadState BlobStore::Stored(Upload& up) {
+  UnlinkUnlessHeld(up.part_path);
+  up.complete = true;
+  up.committed = up.written = up.expected.size_bytes();
+  up.sha.reset();
+  std::lock_guard<std::mutex> l(mu_);
+  uploads_.erase(up.key);
+  return UploadState{up.committed, true};
 }
 
 absl::Status BlobStore::EndStream(const std::string& tenant, const std::string& resource) {
@@ -417,6 +505,19 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Status(const std::string& tena
   SM_ASSIGN_OR_RETURN(std::shared_ptr<Upload> up,
                       GetUpload(tenant, resource, false, stored_counts, INT64_MAX));
   std::lock_guard<std::mutex> lock(up->mu);
+  if (!up->complete && up->file == nullptr) {
+    // No stream writes it here: a replica sharing the folder may have written or stored it
+    // since. The state is read again from the disk.
+    if (stored_counts && Contains(up->expected)) return Stored(*up);
+    struct stat st;
+    if (::stat(up->part_path.c_str(), &st) != 0) {
+      up->written = up->committed = 0;
+      up->sha.reset();
+    } else if (st.st_size != up->committed || up->sha == nullptr) {
+      SM_RETURN_IF_ERROR(OpenPart(*up, /*lock=*/false, nullptr));
+      up->file.reset();
+    }
+  }
   return UploadState{up->complete ? up->expected.size_bytes() : up->committed, up->complete};
 }
 
@@ -427,8 +528,9 @@ int BlobStore::ExpireUploads(absl::Duration max_age) {
   for (auto it = uploads_.begin(); it != uploads_.end();) {
     Upload& up = *it->second;
     std::unique_lock<std::mutex> l(up.mu, std::try_to_lock);
-    if (l.owns_lock() && up.file == nullptr && up.last_write < cutoff) {
-      ::unlink(up.part_path.c_str());
+    // A replica sharing the folder may be writing the file: it is left to it.
+    if (l.owns_lock() && up.file == nullptr && up.last_write < cutoff &&
+        UnlinkUnlessHeld(up.part_path)) {
       it = uploads_.erase(it);
       ++removed;
     } else {
@@ -445,7 +547,7 @@ int BlobStore::ExpireUploads(absl::Duration max_age) {
     if (!e->is_regular_file(ec) || e->path().extension() != ".part" || known.count(path)) continue;
     struct stat st;
     if (::stat(path.c_str(), &st) != 0) continue;
-    if (absl::FromUnixSeconds(st.st_mtim.tv_sec) < cutoff && ::unlink(path.c_str()) == 0) {
+    if (absl::FromUnixSeconds(st.st_mtim.tv_sec) < cutoff && UnlinkUnlessHeld(path)) {
       ++removed;
     }
   }

@@ -4,6 +4,10 @@
 // out (fsync, then rename), so a half-written blob is never visible. Uploads resume from
 // their durable committed size, even after a restart; an upload holds file descriptors only
 // while a stream writes it, and one left alone past an expiry is removed.
+// Servers may share the folder (replicas over one database): a .part file is locked
+// (flock) while a stream writes it, a server that finds it locked writes a private copy
+// of the same content beside it, and a state that a replica changed is read again from
+// the disk (Status, and a write that reopens the file).
 #ifndef SHEETMESH_SERVER_BLOB_STORE_H_
 #define SHEETMESH_SERVER_BLOB_STORE_H_
 
@@ -95,7 +99,8 @@ class BlobStore {
   absl::StatusOr<std::shared_ptr<Upload>> GetUpload(const std::string& tenant,
                                                     const std::string& resource, bool create,
                                                     bool stored_counts, int64_t max_bytes);
-  absl::Status OpenPart(Upload& up);
+  absl::Status OpenPart(Upload& up, bool lock, bool* moved);
+  UploadState Stored(Upload& up);
 
   std::string root_;
   mutable std::mutex mu_;

@@ -210,6 +210,142 @@ TEST(BlobStoreTest, PutFileAndConcurrentWritersOfTheSameContent) {
   EXPECT_EQ(*ReadFileToString(*(*store)->PathOf(d)), bytes);
 }
 
+// Replicas over one database share one blob folder: two stores on the same root.
+int PartFiles(const std::string& root) {
+  int n = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(root)) {
+    n += e.is_regular_file() && e.path().extension() == ".part";
+  }
+  return n;
+}
+
+class SharedBlobFolderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto sa = BlobStore::Open(dir.File("blobs"));
+    auto sb = BlobStore::Open(dir.File("blobs"));
+    ASSERT_TRUE(sa.ok() && sb.ok());
+    a = std::move(*sa);
+    b = std::move(*sb);
+  }
+  TempDir dir;
+  std::unique_ptr<BlobStore> a, b;
+};
+
+TEST_F(SharedBlobFolderTest, ReplicasWritingOneUploadAtOnceBothStoreIt) {
+  std::string bytes;
+  for (int i = 0; i < 30000; ++i) bytes += static_cast<char>('A' + i % 23);
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("same", d);  // two writers of one content name it alike
+  ASSERT_TRUE(Append(*a, r, 0, bytes.substr(0, 10000), false, 1 << 20).ok());
+  // A's stream holds the file: B writes a copy of its own, from where its writer is.
+  auto b1 = Append(*b, r, 0, bytes.substr(0, 5000), false, 1 << 20);
+  ASSERT_TRUE(b1.ok()) << b1.status();
+  EXPECT_EQ(PartFiles(dir.File("blobs")), 2);
+  // A writer that learnt A's state and resumes at B is told to ask again, not refused.
+  auto ahead = Append(*b, r, 20000, bytes.substr(20000), true, 1 << 20);
+  EXPECT_EQ(ahead.status().code(), absl::StatusCode::kUnavailable) << ahead.status();
+  EXPECT_THAT(ahead.status().message(), HasSubstr("query the status"));
+  // Expiry at B leaves the file A is writing.
+  EXPECT_EQ(b->ExpireUploads(absl::ZeroDuration()), 0);
+  auto a2 = Append(*a, r, 10000, bytes.substr(10000), true, 1 << 20);
+  ASSERT_TRUE(a2.ok()) << a2.status();
+  EXPECT_TRUE(a2->complete);
+  auto b2 = Append(*b, r, 5000, bytes.substr(5000), true, 1 << 20);
+  ASSERT_TRUE(b2.ok()) << b2.status();
+  EXPECT_TRUE(b2->complete);
+  EXPECT_EQ(*ReadFileToString(*a->PathOf(d)), bytes);
+  EXPECT_EQ(PartFiles(dir.File("blobs")), 0);
+}
+
+TEST_F(SharedBlobFolderTest, AReplicaSeesWhatAnotherWroteOrStored) {
+  const std::string bytes = std::string(7000, 'x') + std::string(7000, 'y');
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("moved", d);
+  // B knew the upload at 1000 bytes; A's stream took it to 6000 since.
+  ASSERT_TRUE(Append(*b, r, 0, bytes.substr(0, 1000), false, 1 << 20).ok());
+  ASSERT_TRUE(b->EndStream("t", r).ok());
+  ASSERT_TRUE(Append(*a, r, 1000, bytes.substr(1000, 5000), false, 1 << 20).ok());
+  ASSERT_TRUE(a->EndStream("t", r).ok());
+  EXPECT_EQ(Status(*b, r)->committed, 6000);
+  // B resumes the same file (A's stream ended, so its lock is free) and stores the blob.
+  auto b2 = Append(*b, r, 6000, bytes.substr(6000), true, 1 << 20);
+  ASSERT_TRUE(b2.ok()) << b2.status();
+  EXPECT_TRUE(b2->complete);
+  EXPECT_EQ(PartFiles(dir.File("blobs")), 0) << "one file, no copy";
+  // A's upload entry is stale: its status and a write both find the stored blob.
+  auto as = Status(*a, r);
+  ASSERT_TRUE(as.ok());
+  EXPECT_TRUE(as->complete);
+  auto a3 = Append(*a, r, 6000, bytes.substr(6000), true, 1 << 20);
+  ASSERT_TRUE(a3.ok()) << a3.status();
+  EXPECT_TRUE(a3->complete);
+  EXPECT_EQ(*ReadFileToString(*a->PathOf(d)), bytes);
+
+  // A stale entry whose file a replica removed (expired) starts again from nothing.
+  const std::string other = std::string(5000, 'z');
+  const std::string r2 = Resource("gone", DigestOf(other));
+  ASSERT_TRUE(Append(*a, r2, 0, other.substr(0, 3000), false, 1 << 20).ok());
+  ASSERT_TRUE(a->EndStream("t", r2).ok());
+  EXPECT_EQ(Status(*b, r2)->committed, 3000);
+  EXPECT_EQ(a->ExpireUploads(absl::ZeroDuration()), 1);
+  EXPECT_EQ(Status(*b, r2)->committed, 0);
+  auto resumed = Append(*b, r2, 3000, other.substr(3000), true, 1 << 20);
+  EXPECT_EQ(resumed.status().code(), absl::StatusCode::kInvalidArgument) << resumed.status();
+  auto again = Append(*b, r2, 0, other, true, 1 << 20);
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_TRUE(again->complete);
+}
+
+TEST_F(SharedBlobFolderTest, ConcurrentWritersAtTwoReplicasAllSucceed) {
+  std::string bytes;
+  for (int i = 0; i < 200000; ++i) bytes += static_cast<char>(i * 7919 % 251);
+  const v1::Digest d = DigestOf(bytes);
+  const std::string r = Resource("race", d);
+  // Each writer sends the whole blob in pieces as a client does: on kUnavailable it asks
+  // for the status and resumes from there. Any other error fails the test.
+  std::vector<absl::Status> errors(4);
+  std::vector<std::thread> writers;
+  for (int w = 0; w < 4; ++w) {
+    writers.emplace_back([&, w] {
+      BlobStore& s = w % 2 ? *b : *a;
+      int64_t off = 0;
+      for (int step = 0; step < 10000; ++step) {
+        const int64_t n = std::min<int64_t>(7000, bytes.size() - off);
+        auto st = Append(s, r, off, absl::string_view(bytes).substr(off, n),
+                         off + n == static_cast<int64_t>(bytes.size()), 1 << 20);
+        if (st.ok() && st->complete) return;
+        if (st.ok()) {
+          off += n;
+          if (step % 5 == 4) {  // the stream breaks now and then
+            errors[w].Update(s.EndStream("t", r));
+            off = Status(s, r)->committed;
+          }
+          continue;
+        }
+        if (st.status().code() != absl::StatusCode::kUnavailable) {
+          errors[w] = st.status();
+          return;
+        }
+        errors[w].Update(s.EndStream("t", r));
+        auto now = Status(s, r);
+        if (!now.ok()) {
+          errors[w] = now.status();
+          return;
+        }
+        if (now->complete) return;
+        off = now->committed;
+      }
+      errors[w] = absl::DeadlineExceededError("no end");
+    });
+  }
+  for (auto& t : writers) t.join();
+  for (const absl::Status& e : errors) EXPECT_TRUE(e.ok()) << e;
+  ASSERT_TRUE(a->Contains(d));
+  EXPECT_EQ(*ReadFileToString(*b->PathOf(d)), bytes);
+  EXPECT_EQ(PartFiles(dir.File("blobs")), 0);
+}
+
 // ---------------------------------------------------------------------------------------
 // SQLite job store
 

@@ -18,6 +18,7 @@ TetMeshEditor::TetMeshEditor(TetMesh* mesh) : m_(*mesh) {
   q_.resize(m_.tets.size());
   dead_.assign(m_.tets.size(), 0);
   failed_.assign(m_.tets.size(), 0);
+  neighbor_.assign(m_.tets.size(), {kUnknown, kUnknown, kUnknown, kUnknown});
   for (uint32_t t = 0; t < m_.tets.size(); ++t) {
     for (uint32_t v : m_.tets[t]) star_[v].push_back(t);
     q_[t] = Quality(m_.tets[t]);
@@ -68,12 +69,14 @@ void TetMeshEditor::Add(const Tet& tet) {
     m_.tets[t] = tet;
     dead_[t] = 0;
     failed_[t] = 0;
+    neighbor_[t] = {kUnknown, kUnknown, kUnknown, kUnknown};
     q_[t] = Quality(tet);
   } else {
     t = static_cast<uint32_t>(m_.tets.size());
     m_.tets.push_back(tet);
     dead_.push_back(0);
     failed_.push_back(0);
+    neighbor_.push_back({kUnknown, kUnknown, kUnknown, kUnknown});
     q_.push_back(Quality(tet));
   }
   for (uint32_t v : tet) star_[v].push_back(t);
@@ -87,8 +90,21 @@ const uint32_t* TetMeshEditor::FacetFaceIndex(const FaceKey& face) const {
 uint32_t TetMeshEditor::Neighbor(uint32_t t, int f) const {
   const Tet& tet = m_.tets[t];
   const uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
+  const uint32_t known = neighbor_[t][f];
+  if (known != kUnknown && known != t && !dead_[known]) {
+    const Tet& k = m_.tets[known];
+    if (Has(k, a) && Has(k, b) && Has(k, c)) return known;
+  }
   for (uint32_t s : star_[a]) {
-    if (s != t && Has(m_.tets[s], b) && Has(m_.tets[s], c)) return s;
+    if (s != t && Has(m_.tets[s], b) && Has(m_.tets[s], c)) {
+      neighbor_[t][f] = s;
+      // And t is s's neighbour across the same face (the corner of s not on it).
+      const Tet& st = m_.tets[s];
+      for (int g = 0; g < 4; ++g) {
+        if (st[g] != a && st[g] != b && st[g] != c) neighbor_[s][g] = t;
+      }
+      return s;
+    }
   }
   return UINT32_MAX;
 }

@@ -69,6 +69,8 @@ class TetMeshEditor {
   const std::vector<uint32_t>& sheet_faces_of(uint32_t v) const { return sheet_faces_of_[v]; }
 
   // The tetrahedron sharing face f (opposite tet[f]) of t, or UINT32_MAX on the boundary.
+  // Remembered once found: a remembered neighbour is checked (alive, holding the face) and
+  // looked up again in the star only when an edit replaced it.
   uint32_t Neighbor(uint32_t t, int f) const;
   // Face f of t oriented so that the tetrahedron's inside is on its positive side.
   std::array<uint32_t, 3> InwardFace(uint32_t t, int f) const;
@@ -90,6 +92,11 @@ class TetMeshEditor {
   std::vector<uint8_t> dead_;
   std::vector<uint8_t> failed_;  // per tetrahedron: insertion tried and failed, unchanged since
   std::vector<uint32_t> free_;   // dead slots to reuse
+  // Per tetrahedron and face: the neighbour last found there (kUnknown: none yet). A face
+  // shared by two live tetrahedra has no third, so a remembered one that is alive and
+  // holds the face is the neighbour.
+  static constexpr uint32_t kUnknown = UINT32_MAX;
+  mutable std::vector<std::array<uint32_t, 4>> neighbor_;
   absl::flat_hash_map<FaceKey, uint32_t> constrained_;  // facets' faces -> index in m_.faces
   std::vector<std::vector<uint32_t>> sheet_faces_of_;   // vertex -> its sheet faces
 };

@@ -17,6 +17,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/sha256.h"
@@ -385,7 +386,7 @@ absl::Status BlobStore::OpenPart(Upload& up, bool lock, bool* moved) {
   SM_RETURN_IF_ERROR(file->Open(up.part_path, lock, &have, &busy));
   if (busy) {
     up.part_path =
-        absl::StrCat(up.part_path.substr(0, up.part_path.size() - 5), ".", ProcessTag(), ".part");
+        absl::StrCat(absl::StripSuffix(up.part_path, ".part"), ".", ProcessTag(), ".part");
     up.private_copy = true;
     up.sha.reset();
     SM_RETURN_IF_ERROR(file->Open(up.part_path, lock, &have, &busy));
@@ -510,11 +511,9 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Status(const std::string& tena
     // since. The state is read again from the disk.
     if (stored_counts && Contains(up->expected)) return Stored(*up);
     struct stat st;
-    if (::stat(up->part_path.c_str(), &st) != 0) {
-      up->written = up->committed = 0;
-      up->sha.reset();
-    } else if (st.st_size != up->committed || up->sha == nullptr) {
-      SM_RETURN_IF_ERROR(OpenPart(*up, /*lock=*/false, nullptr));
+    if (up->sha == nullptr || ::stat(up->part_path.c_str(), &st) != 0 ||
+        st.st_size != up->committed) {
+      SM_RETURN_IF_ERROR(OpenPart(*up, /*lock=*/false, nullptr));  // a missing file is empty
       up->file.reset();
     }
   }

@@ -91,7 +91,7 @@ uint32_t TetMeshEditor::Neighbor(uint32_t t, int f) const {
   const Tet& tet = m_.tets[t];
   const uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
   const uint32_t known = neighbor_[t][f];
-  if (known != kUnknown && known != t && !dead_[known]) {
+  if (known != kUnknown && !dead_[known]) {
     const Tet& k = m_.tets[known];
     if (Has(k, a) && Has(k, b) && Has(k, c)) return known;
   }

@@ -9,25 +9,14 @@ its four faces whether it is a sheet face (S) and its widest corner angle in deg
 Coordinates are the mesh's (physical units; voxels when the placement is the default).
 """
 import argparse
+import os
+import sys
 
 import meshio
 import numpy as np
 
-
-def smallest_dihedral(points, tets):
-    corners = [points[tets[:, i]] for i in range(4)]
-    normals = []
-    for skip in range(4):
-        a, b, c = [corners[i] for i in range(4) if i != skip]
-        n = np.cross(b - a, c - a)
-        n /= np.linalg.norm(n, axis=1)[:, None]
-        # Outward: away from the corner the face does not hold.
-        n *= -np.sign(np.einsum("ij,ij->i", n, corners[skip] - a))[:, None]
-        normals.append(n)
-    angles = [180 - np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", normals[i], normals[j]),
-                                                 -1, 1)))
-              for i in range(4) for j in range(i + 1, 4)]
-    return np.min(angles, axis=0)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from volume_mesh import quality  # noqa: E402  (the per-tetrahedron dihedral angle)
 
 
 def widest_corner(p):
@@ -48,7 +37,7 @@ def main():
     sheet_faces = {tuple(sorted(f)) for f in sheet.tolist()}
     on_sheet = np.zeros(len(points), bool)
     on_sheet[sheet.ravel()] = True
-    angle = smallest_dihedral(points, tets)
+    angle = quality(points, tets)[0]
     print(f"{args.mesh}: {len(tets)} tetrahedra, min {angle.min():.2f}°, mean {angle.mean():.2f}°, "
           f"{(angle < args.below).sum()} below {args.below}°, {(angle < 8).sum()} below 8°")
     for t in np.argsort(angle)[: (angle < args.below).sum()]:

@@ -365,6 +365,9 @@ std::vector<ParamRow> VolumeMeshRows() {
   std::vector<ParamRow> rows;
   rows.push_back(Bool("volume_mesh", SM_MEMBER(volume_mesh),
                       "also tetrahedralize the box with the sheets as internal faces (TetGen)"));
+  rows.push_back(Integer("max_tetrahedra", SM_MEMBER(volume.max_tetrahedra), "[0, 1e12]", "",
+                         "at most this many tetrahedra: the lattice coarsens, the improvement "
+                         "stops inserting (0: no bound)"));
   rows.push_back(Number("tet.radius_edge_ratio", SM_MEMBER(volume.tetgen.max_radius_edge_ratio),
                         "0 | [1, 10]", "", "TetGen's radius-edge ratio bound (-q; 0: none)"));
   rows.push_back(Number("tet.min_dihedral", SM_MEMBER(volume.tetgen.min_dihedral_degrees),
@@ -404,9 +407,16 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "(0: never)"));
   rows.push_back(Number("plc.wedge_voxels", SM_MEMBER(volume.plc.wedge_voxels), "[0, 5]", "voxels",
                         "the farthest a vertex moves to open a wedge"));
+  rows.push_back(Number("plc.contact_voxels", SM_MEMBER(volume.plc.contact_voxels), "[0, 3]",
+                        "voxels",
+                        "a sheet vertex this near another sheet moves onto it, joining the two "
+                        "(0: none)"));
   rows.push_back(Number("plc.lattice", SM_MEMBER(volume.plc.lattice), "0 | [0.25, 8]", "",
                         "seed a graded lattice off the sheets, spaced this many median sheet "
                         "edges (0: none)"));
+  rows.push_back(Number("plc.grading", SM_MEMBER(volume.plc.grading), "[0.1, 2]", "",
+                        "how fast the lattice's spacing grows away from the sheets (it doubles "
+                        "every 1 / grading spacings)"));
   rows.push_back(Integer("improve.passes", SM_MEMBER(volume.improve.passes), "[0, 100]", "",
                          "rounds of flips, smoothing and insertion on TetGen's output (0: none)"));
   rows.push_back(Number("improve.target_degrees", SM_MEMBER(volume.improve.target_degrees),

@@ -129,6 +129,7 @@ nlohmann::json TetImproveReport::Fields() const {
           {"inserted_vertices", inserted_vertices},
           {"sheet_face_splits", sheet_face_splits},
           {"sheet_edge_splits", sheet_edge_splits},
+          {"over_budget", over_budget},
           {"movable_vertices", movable_vertices},
           {"sliding_vertices", sliding_vertices},
           {"min_dihedral_before", min_dihedral_before},
@@ -139,6 +140,8 @@ nlohmann::json TetImproveReport::Fields() const {
 }
 
 nlohmann::json PlcStats::Fields() const {
+  nlohmann::json places = nlohmann::json::array();
+  for (const Vec3& p : contact_places) places.push_back({p.x, p.y, p.z});
   return {{"snapped_vertices", snapped_vertices},
           {"snap_held_vertices", snap_held_vertices},
           {"merged_vertices", merged_vertices},
@@ -149,6 +152,9 @@ nlohmann::json PlcStats::Fields() const {
           {"dropped_overlaps", dropped_overlaps},
           {"closed_slits", closed_slits},
           {"opened_wedges", opened_wedges},
+          {"mended_contacts", mended_contacts},
+          {"unmended_contacts", unmended_contacts},
+          {"contact_places", places},
           {"box_points", box_points},
           {"seed_points", seed_points},
           {"lattice_spacing", lattice_spacing}};
@@ -169,6 +175,16 @@ nlohmann::json VolumeMeshStats::Fields() const {
   j["volume"] = quality.volume;
   j["tetgen_switches"] = tetgen_switches;
   j["tetgen_seconds"] = tetgen_seconds;
+  j["tetgen_tetrahedra"] = tetgen_tetrahedra;
+  // The sizing used: the lattice (in median sheet edges and physical units, finest and
+  // coarsest level), its grading, and the budget with the TetGen runs it took.
+  j["sizing"] = {{"lattice", lattice},
+                 {"grading", grading},
+                 {"finest_spacing", lattice_spacing},
+                 {"coarsest_spacing", lattice_coarsest},
+                 {"levels", lattice_levels},
+                 {"max_tetrahedra", max_tetrahedra},
+                 {"attempts", sizing_attempts}};
   j["rederived_facets"] = rederived_facets;
   j["conformity"] = conformity.Fields();
   j["quality"] = quality.Fields();

@@ -12,6 +12,8 @@
 namespace sheetmesh {
 namespace {
 
+constexpr size_t kContactPlaces = 10;  // unmended contacts the report names
+
 // The sheets' median edge sets the spacing of the seeded points, so that the tetrahedra
 // off the sheets are about as large as those on them. 0 without sheets.
 double MedianEdge(const Plc& plc) {
@@ -161,6 +163,14 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   if (options.overlap_voxels > 0) {
     plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
   }
+  if (options.contact_voxels > 0) {
+    std::vector<Vec3> unmended;
+    plc.mended_contacts = MendContacts(st, v, on_face, options.contact_voxels, &unmended);
+    plc.unmended_contacts = static_cast<uint32_t>(unmended.size());
+    for (size_t i = 0; i < unmended.size() && i < kContactPlaces; ++i) {
+      plc.contact_places.push_back(placement.ToPhysical(unmended[i]));
+    }
+  }
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
     plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }
@@ -189,8 +199,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   // Points of the box's surface, when TetGen may add none there.
   std::vector<BoxPoint> box_points;
   const uint32_t first_box_point = static_cast<uint32_t>(plc.vertices.size());
-  if (options.seed_box && median_edge > 0) {
-    box_points = SeedBox(plc, (options.lattice > 0 ? options.lattice : 1.0) * median_edge);
+  const LatticeLevels levels =
+      GradeLattice(plc.box_lo, plc.box_hi,
+                   (options.lattice > 0 ? options.lattice : 1.0) * median_edge, options.grading);
+  if (options.seed_box && !levels.spacing.empty()) {
+    box_points = SeedBox(plc, levels);
     for (const BoxPoint& b : box_points) plc.vertices.push_back(b.p);
     plc.box_points = static_cast<uint32_t>(box_points.size());
   }
@@ -202,9 +215,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     const Face& f = plc.sheet_triangles[t];
     plc.facets.push_back({{{f[0], f[1], f[2]}}, kFirstSheetMarker + static_cast<int32_t>(t)});
   }
-  if (options.lattice > 0 && median_edge > 0) {
-    plc.lattice_spacing = options.lattice * median_edge;
-    const std::vector<Vec3> seeds = SeedLattice(plc, plc.lattice_spacing);
+  if (options.lattice > 0 && !levels.spacing.empty()) {
+    plc.lattice_spacing = levels.spacing.front();
+    plc.lattice_levels = static_cast<uint32_t>(levels.spacing.size());
+    plc.lattice_coarsest = levels.spacing.back();
+    const std::vector<Vec3> seeds = SeedLattice(plc, levels);
     plc.seed_points = static_cast<uint32_t>(seeds.size());
     plc.vertices.insert(plc.vertices.end(), seeds.begin(), seeds.end());
   }

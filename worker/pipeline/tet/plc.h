@@ -6,10 +6,9 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_PLC_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/types.h"
@@ -29,24 +28,32 @@ inline constexpr int32_t kFirstSheetMarker = 10;  // sheet triangle t has marker
 
 // What building the PLC changed, for the report.
 struct PlcStats {
-  uint32_t snapped_vertices = 0;       // moved onto a box face
-  uint32_t snap_held_vertices = 0;     // within snap_clear_voxels of a box face, left off
-                                       // it since snapping them made a clash
-  uint32_t merged_vertices = 0;        // merged into a near-duplicate
-  uint32_t dropped_triangles = 0;      // degenerate after snapping, or lying in a box face
-  uint32_t repaired_triangles = 0;     // removed because they clashed (repair mode)
-  uint32_t flipped_edges = 0;          // sheet edges flipped for better triangles
-  uint32_t dropped_caps = 0;           // flat rim triangles dropped
-  uint32_t dropped_overlaps = 0;       // rim triangles dropped for lying on another sheet
-  uint32_t closed_slits = 0;           // slits framed by three rim edges closed by
-                                       // splitting a face (PlcOptions::cap_degrees)
-  uint32_t opened_wedges = 0;          // sheet vertices moved off a sheet face's plane
-                                       // to open a narrow wedge (PlcOptions::wedge_degrees)
-  uint32_t box_points = 0;             // points seeded on the box's edges and faces
-                                       // (PlcOptions::seed_box), after the sheets' vertices
-  uint32_t seed_points = 0;            // lattice points seeded off the sheets (the last
-                                       // vertices, on no facet)
-  double lattice_spacing = 0;          // physical units; 0 without seeding
+  uint32_t snapped_vertices = 0;     // moved onto a box face
+  uint32_t snap_held_vertices = 0;   // within snap_clear_voxels of a box face, left off
+                                     // it since snapping them made a clash
+  uint32_t merged_vertices = 0;      // merged into a near-duplicate
+  uint32_t dropped_triangles = 0;    // degenerate after snapping, or lying in a box face
+  uint32_t repaired_triangles = 0;   // removed because they clashed (repair mode)
+  uint32_t flipped_edges = 0;        // sheet edges flipped for better triangles
+  uint32_t dropped_caps = 0;         // flat rim triangles dropped
+  uint32_t dropped_overlaps = 0;     // rim triangles dropped for lying on another sheet
+  uint32_t closed_slits = 0;         // slits framed by three rim edges closed by
+                                     // splitting a face (PlcOptions::cap_degrees)
+  uint32_t opened_wedges = 0;        // sheet vertices moved off a sheet face's plane
+                                     // to open a narrow wedge (PlcOptions::wedge_degrees)
+  uint32_t mended_contacts = 0;      // sheet vertices moved onto another sheet they
+                                     // nearly touched (PlcOptions::contact_voxels)
+  uint32_t unmended_contacts = 0;    // such vertices left where they are: the move made
+                                     // a clash
+  std::vector<Vec3> contact_places;  // where the first of those are, physical units
+  uint32_t box_points = 0;           // points seeded on the box's edges and faces
+                                     // (PlcOptions::seed_box), after the sheets' vertices
+  uint32_t seed_points = 0;          // lattice points seeded off the sheets (the last
+                                     // vertices, on no facet)
+  double lattice_spacing = 0;        // physical units, the finest level's; 0 without
+                                     // seeding
+  uint32_t lattice_levels = 0;       // levels of the graded lattice used
+  double lattice_coarsest = 0;       // the last level's spacing, physical units
 
   // The figures by name (snapped_vertices, ..., lattice_spacing), for the report.
   nlohmann::json Fields() const;
@@ -100,12 +107,23 @@ struct PlcOptions {
   // vertices on the box stay (bench/RESULTS.md). 0 for either: no moves.
   double wedge_degrees = 12.0;
   double wedge_voxels = 1.0;
+  // A sheet vertex within this many voxels of another sheet's triangle (off its own) moves
+  // onto it: onto its corner, merging the two; onto its edge or into it, splitting the
+  // triangles there. Left apart, the two sheets pin a layer of tetrahedra as flat as the
+  // gap is narrow that nothing after can mend. A move that makes triangles clash is not
+  // made, and the report names the place. 0: none.
+  double contact_voxels = 0.75;
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
-  // spacing this many times the sheets' median edge, doubling every 2.5 spacings outward
-  // (up to 8 times; never past a quarter of the box's thinnest side). The lattice's tetrahedra are
-  // near-ideal (60° smallest dihedral angle), so the mean quality rises (bench/RESULTS.md). 0:
-  // none, TetGen places all points.
+  // spacing this many times the sheets' median edge next to them, growing outward at
+  // `grading` (never past a quarter of the box's thinnest side). The lattice's tetrahedra
+  // are near-ideal (60° smallest dihedral angle), so the mean quality rises
+  // (bench/RESULTS.md). 0: none, TetGen places all points.
   double lattice = 0.85;
+  // How fast the lattice's spacing grows with the distance from the sheets: each level
+  // doubles the spacing after 1 / grading spacings of its own (0.4: every 2.5). Higher
+  // grades faster, with fewer tetrahedra and a wider layer of worse ones where two levels
+  // meet.
+  double grading = 0.4;
   // Seeds the box's edges and faces with points, graded like the lattice (its spacing, or
   // the median edge without one), embedded in the box facets. For a TetGen that may add
   // no points on facets (-Y), which would otherwise keep each box face as two triangles.

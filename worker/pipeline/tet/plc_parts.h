@@ -76,10 +76,27 @@ struct BoxPoint {
   uint8_t on_face = 0;
 };
 
+// Moves each sheet vertex (off the box) that lies within gap of a triangle not its own onto
+// it: onto its corner (merging the two), its edge or its interior (splitting the triangles
+// there), nearest first, leaving out moves that make triangles clash. Returns the number
+// mended; the vertices left for a clash go into *unmended (when not null).
+uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
+                      double gap, std::vector<Vec3>* unmended);
+
+// The graded lattice's levels: level l has spacing spacing · 2^l and fills the distances
+// from the sheets in [inner[l], outer[l]) (the last level: out to infinity).
+struct LatticeLevels {
+  std::vector<double> spacing, inner, outer;
+  // The spacing at distance d from the sheets (0 nearer than the first level's inner edge,
+  // where TetGen places the points).
+  double SpacingAt(double d) const;
+};
+LatticeLevels GradeLattice(const Vec3& box_lo, const Vec3& box_hi, double spacing, double grading);
+
 // Seed points off the sheets, a graded lattice (plc_seeding.cc).
-std::vector<Vec3> SeedLattice(const Plc& plc, double spacing);
+std::vector<Vec3> SeedLattice(const Plc& plc, const LatticeLevels& levels);
 // Points on the box's edges and faces, graded like the lattice.
-std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing);
+std::vector<BoxPoint> SeedBox(const Plc& plc, const LatticeLevels& levels);
 
 }  // namespace sheetmesh
 

@@ -12,45 +12,41 @@ namespace {
 // Seed points for TetGen: a body-centred cubic (BCC) lattice, whose Delaunay
 // tetrahedra all have dihedral angles of 60° and 90° and a radius aspect of 0.95, far
 // better than the Delaunay refinement makes on its own. Level 0 has the given spacing
-// and fills the space between kLatticeKeep spacings and kLatticeWidth further spacings
+// and fills the space between kLatticeKeep spacings and 1 / grading further spacings
 // from the sheets; each further level doubles the spacing and the band, so the mesh
 // grades away from the sheets; the last level fills the rest. Points keep kLatticeKeep
 // spacings of their level off the box faces. Near the sheets TetGen places the points,
 // as the sheet triangles and their refinement decide.
 //
 // Each change of level leaves a layer of worse tetrahedra where the two spacings meet,
-// and so does each box face, where the face's points meet the lattice's rows. The band
-// is 2.5 spacings wide, not 2, so fewer levels meet within the box (radius aspect mean,
-// DPM, `volume` path: 0.832 -> 0.845 for 11% more tetrahedra; bench/RESULTS.md). A level
-// whose spacing is over a quarter of the box's thinnest side is not used (its finer
-// neighbour fills the rest): between the margins on both sides it would have room for a
-// row or two only, and the box's points and those rows, far apart, make poor tetrahedra
-// across the whole thin side (NETL, 42 voxels thick: 0.826 -> 0.843).
+// and so does each box face, where the face's points meet the lattice's rows. At the
+// default grading the band is 2.5 spacings wide, not 2, so fewer levels meet within the
+// box (radius aspect mean, DPM, `volume` path: 0.832 -> 0.845 for 11% more tetrahedra;
+// bench/RESULTS.md). A level whose spacing is over a quarter of the box's thinnest side is
+// not used (its finer neighbour fills the rest): between the margins on both sides it
+// would have room for a row or two only, and the box's points and those rows, far apart,
+// make poor tetrahedra across the whole thin side (NETL, 42 voxels thick: 0.826 -> 0.843).
+// Otherwise the levels go on to the box's scale.
 constexpr double kLatticeKeep = 0.6;
-constexpr double kLatticeWidth = 2.5;
-constexpr int kLatticeLevels = 4;
+constexpr int kLatticeMaxLevels = 20;
 constexpr double kLatticeFit = 4;  // a level's spacing fits this many times in the box
 
 // Walks the seeding's levels, finest first: calls candidates(h, in_band) with level l's
-// spacing h = spacing · 2^l, where in_band(p) tells whether p's distance to the sheets
-// lies in that level's band.
+// spacing h, where in_band(p) tells whether p's distance to the sheets lies in that
+// level's band.
 template <class Candidates>
-void ForEachLevel(const Plc& plc, double spacing, Candidates&& candidates) {
+void ForEachLevel(const Plc& plc, const LatticeLevels& levels, Candidates&& candidates) {
   std::vector<Triangle> tris;
   std::vector<Vec3> box_lo, box_hi;
   for (const Face& f : plc.sheet_triangles) {
     tris.push_back({plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]});
     TriangleBox(tris.back(), 0.0, &box_lo.emplace_back(), &box_hi.emplace_back());
   }
-  double inner = kLatticeKeep * spacing;  // where this level starts
-  const Vec3 extent = plc.box_hi - plc.box_lo;
-  const double thinnest = std::min({extent.x, extent.y, extent.z});
-  int levels = kLatticeLevels;
-  while (levels > 1 && kLatticeFit * spacing * std::ldexp(1.0, levels - 1) > thinnest) --levels;
-  for (int level = 0; level < levels; ++level) {
-    const double h = spacing * std::ldexp(1.0, level);
-    const bool last = level + 1 == levels;
-    const double outer = inner + kLatticeWidth * h;  // where it ends (not for the last)
+  const size_t n = levels.spacing.size();
+  for (size_t level = 0; level < n; ++level) {
+    const double inner = levels.inner[level];
+    const bool last = level + 1 == n;
+    const double outer = levels.outer[level];  // not for the last
     // Triangles near a point are found in a grid whose cells are as wide as the band's
     // outer edge, so a query touches at most 27 cells.
     SpatialGrid grid(outer);
@@ -62,22 +58,48 @@ void ForEachLevel(const Plc& plc, double spacing, Candidates&& candidates) {
       grid.Query(p - r, p + r, [&](uint32_t t) {
         if (too_close) return;
         near2 = std::min(near2, PointTriangleDistance2(p, tris[t]));
-        too_close = near2 <= inner * inner;
+        too_close = near2 < inner * inner;
       });
-      if (too_close) return false;            // a finer level's, or TetGen's
-      return last || near2 <= outer * outer;  // else a coarser level's
+      if (too_close) return false;           // a finer level's, or TetGen's
+      return last || near2 < outer * outer;  // else a coarser level's
     };
-    candidates(h, in_band);
-    inner = outer;
+    candidates(levels.spacing[level], in_band);
   }
 }
 
 }  // namespace
 
-std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
+LatticeLevels GradeLattice(const Vec3& box_lo, const Vec3& box_hi, double spacing, double grading) {
+  LatticeLevels levels;
+  if (!(spacing > 0) || !(grading > 0)) return levels;
+  const Vec3 extent = box_hi - box_lo;
+  const double thinnest = std::min({std::abs(extent.x), std::abs(extent.y), std::abs(extent.z)});
+  int n = 1;
+  while (n < kLatticeMaxLevels && kLatticeFit * spacing * std::ldexp(1.0, n) <= thinnest) ++n;
+  double inner = kLatticeKeep * spacing;  // where level 0 starts
+  for (int level = 0; level < n; ++level) {
+    const double h = spacing * std::ldexp(1.0, level);
+    const double outer = inner + h / grading;
+    levels.spacing.push_back(h);
+    levels.inner.push_back(inner);
+    levels.outer.push_back(outer);
+    inner = outer;
+  }
+  return levels;
+}
+
+double LatticeLevels::SpacingAt(double d) const {
+  if (spacing.empty() || d < inner[0]) return 0;
+  for (size_t l = 0; l + 1 < spacing.size(); ++l) {
+    if (d < outer[l]) return spacing[l];
+  }
+  return spacing.back();
+}
+
+std::vector<Vec3> SeedLattice(const Plc& plc, const LatticeLevels& levels) {
   std::vector<Vec3> seeds;
   const Vec3 lo = plc.box_lo, hi = plc.box_hi;
-  ForEachLevel(plc, spacing, [&](double h, const auto& in_band) {
+  ForEachLevel(plc, levels, [&](double h, const auto& in_band) {
     const double margin = kLatticeKeep * h;
     auto take = [&](const Vec3& p) {
       for (int k = 0; k < 3; ++k) {
@@ -105,10 +127,10 @@ std::vector<Vec3> SeedLattice(const Plc& plc, double spacing) {
 // apart with every other row shifted by h/2 (triangles of angles near 63°, 63° and 53°),
 // kept kLatticeKeep · h off the face's edges. Sheet traces keep their band free, as for
 // the lattice.
-std::vector<BoxPoint> SeedBox(const Plc& plc, double spacing) {
+std::vector<BoxPoint> SeedBox(const Plc& plc, const LatticeLevels& levels) {
   std::vector<BoxPoint> points;
   const Vec3 lo = plc.box_lo, hi = plc.box_hi;
-  ForEachLevel(plc, spacing, [&](double h, const auto& in_band) {
+  ForEachLevel(plc, levels, [&](double h, const auto& in_band) {
     const double margin = kLatticeKeep * h;
     for (int k = 0; k < 3; ++k) {
       const int a = (k + 1) % 3, b = (k + 2) % 3;

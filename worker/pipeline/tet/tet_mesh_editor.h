@@ -45,6 +45,8 @@ class TetMeshEditor {
 
   const Tet& tet(uint32_t t) const { return m_.tets[t]; }
   bool alive(uint32_t t) const { return !dead_[t]; }
+  // The number of live tetrahedra.
+  uint64_t live() const { return m_.tets.size() - free_.size(); }
   double quality(uint32_t t) const { return q_[t]; }
   // Measures t again after its vertices moved, and clears its failed mark.
   void Remeasure(uint32_t t);

@@ -15,6 +15,11 @@
 namespace sheetmesh {
 namespace {
 
+// Under a tetrahedron budget, TetGen's mesh may use this much of it; the rest is the
+// improvement's room to insert vertices (at the paper's scale it adds 40%).
+constexpr double kBudgetRoom = 0.75;
+constexpr double kMaxLattice = 8.0;  // the coarsest lattice plc.lattice allows
+
 absl::flat_hash_set<FaceKey> TetFaces(const TetMesh& mesh) {
   absl::flat_hash_set<FaceKey> faces;
   for (const Tet& t : mesh.tets) {
@@ -160,18 +165,43 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   // stay two triangles each.
   PlcOptions plc_options = options.plc;
   plc_options.seed_box = plc_options.seed_box || !options.tetgen.steiner_on_sheets;
-  SM_ASSIGN_OR_RETURN(Plc plc, BuildPlc(sheets, dims, placement, plc_options));
-  static_cast<PlcStats&>(r) = plc;
+  r.max_tetrahedra = options.max_tetrahedra;
   r.tetgen_switches = TetgenSwitches(options.tetgen);
-  const Vec3 ext = plc.box_hi - plc.box_lo;
-  r.box_volume = std::abs(ext.x * ext.y * ext.z);
-  SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r.box_volume, dims));
-  const absl::Time start = absl::Now();
-  SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
-  r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  Plc plc;
+  for (;;) {
+    SM_ASSIGN_OR_RETURN(plc, BuildPlc(sheets, dims, placement, plc_options));
+    const Vec3 ext = plc.box_hi - plc.box_lo;
+    r.box_volume = std::abs(ext.x * ext.y * ext.z);
+    SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r.box_volume, dims));
+    const absl::Time start = absl::Now();
+    ++r.sizing_attempts;
+    SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
+    r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+    const uint64_t made = r.mesh.tets.size();
+    const uint64_t budget = options.max_tetrahedra;
+    if (budget == 0 || made <= kBudgetRoom * budget) break;
+    if (plc.seed_points == 0) {
+      if (made <= budget) break;
+      return absl::InvalidArgumentError(absl::StrCat(
+          "max_tetrahedra = ", budget, " is below the least this volume's sheets need: ", made,
+          " tetrahedra (TetGen ", r.tetgen_switches,
+          " on the sheets without seeded points); raise it to at least ", made));
+    }
+    // Coarsen the lattice for the count to come within the room, assuming the seeded
+    // points' share scales with the spacing cubed; after two tries, drop it.
+    const double scale = std::cbrt(double(made) / (kBudgetRoom * budget));
+    plc_options.lattice = r.sizing_attempts >= 3 ? 0.0 : plc_options.lattice * scale * 1.1;
+    if (plc_options.lattice > kMaxLattice) plc_options.lattice = 0;
+  }
+  static_cast<PlcStats&>(r) = plc;
+  r.lattice = plc_options.lattice;
+  r.grading = plc_options.grading;
+  r.tetgen_tetrahedra = r.mesh.tets.size();
   r.rederived_facets = RederiveFacetFaces(plc, &r.mesh);
+  TetImproveOptions improve = options.improve;
+  improve.max_tetrahedra = options.max_tetrahedra;
   SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi,
-                                    static_cast<uint32_t>(plc.vertices.size()), options.improve,
+                                    static_cast<uint32_t>(plc.vertices.size()), improve,
                                     &r.improvement, progress.Sub(0.9, 0.98)));
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.orphan_faces > 0) {

@@ -5,10 +5,9 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESHER_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -24,6 +23,12 @@ struct VolumeMeshOptions {
   PlcOptions plc;
   TetgenOptions tetgen;
   TetImproveOptions improve;  // the clean-up of TetGen's output
+  // A solver's budget: the mesh has at most this many tetrahedra (0: no bound). Where
+  // TetGen's mesh of the seeded PLC leaves the improvement too little room (it takes over
+  // three quarters of it), the lattice is coarsened and then dropped; the improvement adds
+  // no more than the budget allows. The least possible is TetGen's refinement of the PLC
+  // without seeded points: a budget below that is kInvalidArgument naming it.
+  uint64_t max_tetrahedra = 0;
 };
 
 struct Conformity {
@@ -42,15 +47,21 @@ struct Conformity {
 struct VolumeMeshStats : PlcStats {
   uint64_t nodes = 0;
   uint64_t tetrahedra = 0;
-  uint64_t sheet_faces = 0;       // tetrahedron faces on the sheets
-  double voxels_per_tet = 0;      // the box's voxels per tetrahedron (the paper's 1 : 6704)
+  uint64_t sheet_faces = 0;   // tetrahedron faces on the sheets
+  double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;
-  double box_volume = 0;          // physical units^3
-  std::string tetgen_switches;    // as TetGen ran
-  double tetgen_seconds = 0;
-  uint32_t rederived_facets = 0;  // sheet facets whose faces TetGen listed wrongly (taken
-                                  // again from the tetrahedra)
+  double box_volume = 0;           // physical units^3
+  std::string tetgen_switches;     // as TetGen ran
+  double tetgen_seconds = 0;       // the last TetGen run's
+  uint64_t tetgen_tetrahedra = 0;  // TetGen's, before the improvement
+  uint64_t max_tetrahedra = 0;     // the budget asked for (0: none)
+  uint32_t sizing_attempts = 0;    // TetGen runs: more than one when the budget coarsened
+                                   // the lattice
+  double lattice = 0;              // the lattice's spacing in median sheet edges, as used
+  double grading = 0;              // PlcOptions::grading, as used
+  uint32_t rederived_facets = 0;   // sheet facets whose faces TetGen listed wrongly (taken
+                                   // again from the tetrahedra)
   TetImproveReport improvement;
 
   // Every figure by name, the quality and conformity nested, for the report.

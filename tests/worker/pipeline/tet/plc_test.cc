@@ -3,15 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <cmath>
-#include <filesystem>
 #include <numbers>
-#include <set>
 
-#include "common/file_util.h"
 #include "tests/testing/status_matchers.h"
-#include "tests/testing/temp_dir.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/tetgen_runner.h"
@@ -21,12 +16,7 @@ namespace sheetmesh {
 namespace {
 
 using ::sheetmesh::testing::Append;
-using ::sheetmesh::testing::ClosestPair;
-using ::sheetmesh::testing::DistanceToSheets;
 using ::sheetmesh::testing::Square;
-using ::sheetmesh::testing::StatusIs;
-using ::sheetmesh::testing::TempDir;
-using ::testing::HasSubstr;
 
 // Two triangles of a flat quad split along its long diagonal a-b (a thin pair), with the
 // fourth corner d lifted by `lift` out of the plane; pieces and thicknesses given. c lies
@@ -97,69 +87,6 @@ TriangleMesh Slit() {
   m.face_piece.assign(4, 0);
   m.face_thickness.assign(4, 1);
   return m;
-}
-
-TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
-  // The 40 x 40 sheet of the lattice test below in a 60^3 box [-0.5, 59.5]^3, spacing 5:
-  // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33.
-  const TriangleMesh sheet = Square(10, 50, 30, 8);
-  PlcOptions o;
-  o.lattice = 1.0;
-  o.seed_box = true;
-  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
-  ASSERT_GT(plc.box_points, 0u);
-  const uint32_t first = 8 + 81, end = first + plc.box_points;
-  ASSERT_EQ(plc.vertices.size(), end + plc.seed_points);
-  auto faces_of = [](const Vec3& p) {
-    int bits = 0;
-    for (int k = 0; k < 3; ++k) {
-      if (std::abs(p[k] + 0.5) < 1e-12) bits |= 1 << (2 * k);
-      if (std::abs(p[k] - 59.5) < 1e-12) bits |= 1 << (2 * k + 1);
-    }
-    return bits;
-  };
-  // Each box point is on the box, in the facet of each face it lies on, and nowhere else:
-  // points inside a face as a point of its facet, points on an edge in both faces' outlines.
-  std::vector<int> seen(plc.vertices.size(), 0);
-  for (size_t f = 0; f < plc.facets.size(); ++f) {
-    for (const auto& poly : plc.facets[f].polygons) {
-      for (uint32_t v : poly) {
-        if (v < first || v >= end) continue;
-        ASSERT_LT(f, 6u) << "box point " << v << " on a sheet facet";
-        EXPECT_TRUE(faces_of(plc.vertices[v]) & (1 << f)) << "box point " << v << " facet " << f;
-        EXPECT_EQ(poly.size() == 1,
-                  std::popcount(static_cast<unsigned>(faces_of(plc.vertices[v]))) == 1);
-        seen[v] |= 1 << f;
-      }
-    }
-  }
-  std::vector<Vec3> near;
-  for (uint32_t v = first; v < end; ++v) {
-    const Vec3& p = plc.vertices[v];
-    const int bits = faces_of(p);
-    ASSERT_NE(bits, 0) << "box point " << v << " off the box";
-    EXPECT_EQ(seen[v], bits) << "box point " << v;
-    // 3 off the box's corners and edges of its own level, and off the sheet.
-    const double d = DistanceToSheets(plc, p);
-    EXPECT_GT(d, 3.0 - 1e-9);
-    if (d < 13.0) near.push_back(p);
-  }
-  // Each outline runs once round its face, in order: its length is the face's perimeter.
-  for (int f = 0; f < 6; ++f) {
-    const auto& outline = plc.facets[f].polygons[0];
-    double length = 0;
-    for (size_t i = 0; i < outline.size(); ++i) {
-      length += Norm(plc.vertices[outline[(i + 1) % outline.size()]] - plc.vertices[outline[i]]);
-    }
-    EXPECT_NEAR(length, 4 * 60.0, 1e-9) << "face " << f;
-  }
-  // Level 0 points are 5 apart along rows and edges.
-  ASSERT_GT(near.size(), 1u);
-  EXPECT_NEAR(ClosestPair(near), 5.0, 1e-9);
-  // Not seeded unless asked.
-  o.seed_box = false;
-  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, o));
-  EXPECT_EQ(plain.box_points, 0u);
 }
 
 TEST(PlcTest, AThinPairOfCoplanarTrianglesIsFlipped) {
@@ -251,79 +178,6 @@ TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
   EXPECT_EQ(r.conformity.conforming, 1u);
 }
 
-TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
-  // A 40 x 40 square sheet of 8 x 8 quads (edges 5 and 7.07 voxels: median 5) in a 60^3
-  // box; the lattice at 1 x the median edge has spacing 5 next to the sheet.
-  const TriangleMesh sheet = Square(10, 50, 30, 8);
-  PlcOptions o;
-  o.lattice = 1.0;
-  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
-  EXPECT_NEAR(plc.lattice_spacing, 5.0, 1e-9);
-  ASSERT_GT(plc.seed_points, 0u);
-  const size_t first_seed = plc.vertices.size() - plc.seed_points;
-  EXPECT_EQ(first_seed, 8u + 81u);  // box corners, sheet vertices, then the seeds
-  for (const PlcFacet& f : plc.facets) {
-    for (const auto& poly : f.polygons) {
-      for (uint32_t v : poly) EXPECT_LT(v, first_seed) << "a seed on a facet";
-    }
-  }
-  // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
-  // 5) reaches 0.6 * 5 + 2.5 * 5 = 15.5 from the sheet, level 1 (spacing 10) fills the rest
-  // (level 2's spacing, 20, is over a quarter of the box's 60).
-  std::vector<Vec3> near, far;
-  for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
-    const Vec3& p = plc.vertices[i];
-    const double d = DistanceToSheets(plc, p);
-    EXPECT_GT(d, 3.0 - 1e-9);
-    for (int k = 0; k < 3; ++k) {
-      EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
-      EXPECT_LE(p[k], 59.5 - 3.0 + 1e-9);
-    }
-    (d <= 15.5 ? near : far).push_back(p);
-  }
-  ASSERT_FALSE(near.empty());
-  ASSERT_FALSE(far.empty());
-  // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
-  EXPECT_NEAR(ClosestPair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
-  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
-  // None at 0.
-  PlcOptions off;
-  off.lattice = 0;
-  SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, off));
-  EXPECT_EQ(plain.seed_points, 0u);
-  EXPECT_EQ(plain.vertices.size(), first_seed);
-}
-
-TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
-  // The same sheet at z = 10 in a box 80 x 80 x 20 ([-0.5, 19.5] in z): level 1's spacing,
-  // 10, is over a quarter of 20, so level 0 (spacing 5) fills the whole box, out to 27
-  // voxels from the sheet, where the box 40 thick below has level 1's spacing 10.
-  PlcOptions o;
-  o.lattice = 1.0;
-  // The seeds beyond level 0's band (15.5 from the sheet).
-  auto far_seeds = [](const Plc& plc) {
-    std::vector<Vec3> far;
-    for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
-      if (DistanceToSheets(plc, plc.vertices[i]) > 15.5) far.push_back(plc.vertices[i]);
-    }
-    return far;
-  };
-  SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
-  ASSERT_GT(thin.seed_points, 0u);
-  for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
-    EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - 1e-9);
-    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + 1e-9);
-  }
-  std::vector<Vec3> far = far_seeds(thin);
-  ASSERT_GE(far.size(), 2u);
-  EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, 1e-9);
-  // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
-  SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
-  far = far_seeds(thick);
-  ASSERT_GE(far.size(), 2u);
-  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
-}
-
 TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   // A 4 x 4 square sheet at z = 10 and a lone triangle 0.2 voxel above it, tilted by ~2
   // degrees: TetGen would fill the 0.2-voxel wedge between them with slivers.
@@ -340,6 +194,7 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   // Off: kept (and TetGen meshes the wedge).
   PlcOptions keep;
   keep.overlap_voxels = 0;
+  keep.contact_voxels = 0;
   SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(m, {20, 20, 20}, {}, keep));
   EXPECT_EQ(kept.dropped_overlaps, 0u);
   EXPECT_EQ(kept.sheet_triangles.size(), 33u);
@@ -350,6 +205,7 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult with, BuildVolumeMesh(m, {20, 20, 20}, {}, [] {
                             VolumeMeshOptions o;
                             o.plc.overlap_voxels = 0;
+                            o.plc.contact_voxels = 0;
                             return o;
                           }()));
   EXPECT_EQ(with.conformity.conforming, 33u);

@@ -25,6 +25,7 @@ using ::sheetmesh::testing::DistanceToSheets;
 using ::sheetmesh::testing::Square;
 using ::sheetmesh::testing::StatusIs;
 using ::sheetmesh::testing::TempDir;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 // The 36 sheet triangles (24 vertices, voxel coordinates) around the worst tetrahedron
@@ -232,7 +233,10 @@ TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakes
   clash.face_piece = {0, 1};
   clash.face_thickness = {1, 1};
   const Dims dims{16, 20, 20};
-  SM_ASSERT_OK_AND_ASSIGN(const Plc held, BuildPlc(clash, dims, {}, wide));
+  // (P, held 1 voxel off the box, is also within 0.75 of B: not mended here.)
+  PlcOptions wide_apart = wide;
+  wide_apart.contact_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc held, BuildPlc(clash, dims, {}, wide_apart));
   EXPECT_EQ(held.snap_held_vertices, 1u);
   EXPECT_EQ(held.snapped_vertices, 2u);  // B's two
   EXPECT_EQ(held.sheet_triangles.size(), 2u);
@@ -280,6 +284,43 @@ TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {
   EXPECT_GT(b.quality.min_dihedral.mean, a.quality.min_dihedral.mean + 1.0)
       << a.mesh.tets.size() << " vs " << b.mesh.tets.size() << " tets";
   EXPECT_GT(b.quality.radius_aspect.mean, a.quality.radius_aspect.mean);
+}
+
+TEST(VolumeMesherTest, ATetrahedronBudgetCoarsensTheLatticeAndOneTooSmallNamesTheLeast) {
+  const TriangleMesh sheet = Square(20, 60, 40, 8);  // edges 5 voxels, in an 80^3 box
+  const Dims dims{80, 80, 80};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult full, BuildVolumeMesh(sheet, dims, {}, {}));
+  EXPECT_EQ(full.sizing_attempts, 1u);
+  EXPECT_DOUBLE_EQ(full.lattice, 0.85);
+  const uint64_t n = full.mesh.tets.size();
+  // Half the tetrahedra: the lattice coarsens (or goes) until TetGen leaves room.
+  VolumeMeshOptions half;
+  half.max_tetrahedra = n / 2;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, dims, {}, half));
+  EXPECT_LE(r.mesh.tets.size(), n / 2);
+  EXPECT_GT(r.sizing_attempts, 1u);
+  EXPECT_TRUE(r.lattice == 0 || r.lattice > 0.85) << r.lattice;
+  EXPECT_EQ(r.max_tetrahedra, n / 2);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
+  // The least possible: TetGen's refinement of the sheets with no seeded points.
+  VolumeMeshOptions bare;
+  bare.plc.lattice = 0;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult least, BuildVolumeMesh(sheet, dims, {}, bare));
+  const uint64_t m = least.tetgen_tetrahedra;
+  VolumeMeshOptions tiny;
+  tiny.max_tetrahedra = m - 1;
+  EXPECT_THAT(BuildVolumeMesh(sheet, dims, {}, tiny),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr("max_tetrahedra = " + std::to_string(m - 1)),
+                             HasSubstr("at least " + std::to_string(m)))));
+  // Exactly the least is met, and the improvement adds nothing past it.
+  VolumeMeshOptions exact;
+  exact.max_tetrahedra = m;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult e, BuildVolumeMesh(sheet, dims, {}, exact));
+  EXPECT_LE(e.mesh.tets.size(), m);
+  EXPECT_EQ(e.conformity.conforming, e.conformity.sheet_triangles);
 }
 
 TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {

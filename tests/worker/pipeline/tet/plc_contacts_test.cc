@@ -1,0 +1,120 @@
+// A sheet vertex nearly touching another sheet is moved onto it in the PLC.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "tests/testing/status_matchers.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::Append;
+using ::sheetmesh::testing::Square;
+
+// Sheet A, 40 x 40 in the plane z = 20 (edges 5; its vertices at multiples of 5, its
+// quads split along x = y).
+TriangleMesh SheetA() { return Square(10, 50, 20, 8, 0); }
+
+// Sheet B, a diamond upright in the plane x = 34 whose lowest corner lies 0.5 voxel over
+// the inside of one of A's triangles, (34, 32.5, 20.5), a voxel or more from its edges.
+TriangleMesh Diamond() {
+  TriangleMesh b;
+  b.vertices = {{34, 32.5, 20.5}, {34, 37.5, 25.5}, {34, 32.5, 30.5}, {34, 27.5, 25.5}};
+  b.faces = {{0, 1, 2}, {0, 2, 3}};
+  b.face_piece = {1, 1};
+  b.face_thickness = {3, 3};
+  return Append(SheetA(), b);
+}
+
+TEST(PlcContactsTest, AVertexHalfAVoxelOffAnotherSheetsFaceMovesOntoItSplittingTheFace) {
+  const Dims dims{60, 60, 60};
+  PlcOptions off;
+  off.contact_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc apart, BuildPlc(Diamond(), dims, {}, off));
+  EXPECT_EQ(apart.mended_contacts, 0u);
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(Diamond(), dims, {}, {}));
+  EXPECT_EQ(plc.mended_contacts, 1u);
+  EXPECT_EQ(plc.unmended_contacts, 0u);
+  EXPECT_TRUE(plc.contact_places.empty());
+  // A's triangle under the corner is split in three there.
+  EXPECT_EQ(plc.sheet_triangles.size(), apart.sheet_triangles.size() + 2u);
+  const Vec3 corner(34, 32.5, 20);
+  int a_faces = 0, b_faces = 0;
+  double area_a = 0;
+  for (size_t f = 0; f < plc.sheet_triangles.size(); ++f) {
+    const Face& t = plc.sheet_triangles[f];
+    const Triangle c = {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]};
+    int at = 0;
+    for (const Vec3& p : c) {
+      EXPECT_GT(Norm(p - Vec3(34, 32.5, 20.5)), 0.1) << "the corner left where it was";
+      at += Norm(p - corner) < 1e-9;
+    }
+    (plc.sheet_piece[f] == 0 ? a_faces : b_faces) += at;
+    if (plc.sheet_piece[f] == 0) area_a += Area(c);
+  }
+  EXPECT_EQ(a_faces, 3);
+  EXPECT_EQ(b_faces, 2);
+  EXPECT_NEAR(area_a, 40.0 * 40, 1e-6);  // A keeps its shape
+}
+
+TEST(PlcContactsTest, TheMendedContactMeshesWithoutSplittingASheet) {
+  // Left apart, TetGen fills the half-voxel gap under the corner with slivers (A's face
+  // there may not be split, -Y) that the improvement mends by splitting A; joined, there is
+  // no gap.
+  VolumeMeshOptions joined, apart;
+  apart.plc.contact_voxels = 0;
+  const Dims dims{60, 60, 60};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Diamond(), dims, {}, joined));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(Diamond(), dims, {}, apart));
+  EXPECT_EQ(r.mended_contacts, 1u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_EQ(r.conformity.orphan_faces, 0u);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
+  // Joined, the corner is a vertex of A: no tetrahedron has to be mended by splitting a
+  // sheet face or edge, as the improvement must apart (one edge split here), so the sheets
+  // stay as the PLC made them.
+  EXPECT_EQ(r.improvement.sheet_face_splits + r.improvement.sheet_edge_splits, 0u);
+  EXPECT_GT(s.improvement.sheet_face_splits + s.improvement.sheet_edge_splits, 0u);
+  EXPECT_GE(s.quality.min_dihedral.min, 10.0 - 1e-6);
+}
+
+TEST(PlcContactsTest, ARimRunningHalfAVoxelOverAnotherSheetIsNamedNotMoved) {
+  // B upright in the plane x = 34, 25 x 25, its lower rim 0.5 voxel over A (6 vertices at
+  // z = 20.5): moving them onto A would lay B's rim edges across A's triangles, so they
+  // stay, and the report names where.
+  TriangleMesh b = Square(22.5, 47.5, 34, 5, 1, 3, 0);
+  for (Vec3& p : b.vertices) p.z -= 2;
+  Placement pl;
+  pl.spacing = {0.5, 0.5, 0.5};
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(Append(SheetA(), b), {60, 60, 60}, pl, {}));
+  EXPECT_EQ(plc.mended_contacts, 0u);
+  EXPECT_EQ(plc.unmended_contacts, 6u);
+  ASSERT_EQ(plc.contact_places.size(), 6u);
+  for (const Vec3& p : plc.contact_places) {  // physical units
+    EXPECT_NEAR(p.x, 34 * 0.5, 1e-9);
+    EXPECT_NEAR(p.z, 20.5 * 0.5, 1e-9);
+  }
+}
+
+TEST(PlcContactsTest, AVertexNearAnotherSheetsVertexMergesIntoIt) {
+  // B's lower rim runs along A's vertex row x = 30, 0.4 voxel above A: each rim vertex
+  // (y = 25 ... 45) is over one of A's vertices and merges into it.
+  const TriangleMesh sheets = Append(Square(10, 50, 20, 8, 0), Square(25, 45, 30, 4, 1, 3, 0));
+  TriangleMesh lifted = sheets;
+  for (size_t i = 81; i < lifted.vertices.size(); ++i) lifted.vertices[i].z += 0.4 - 25 + 20;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(lifted, {60, 60, 60}, {}, {}));
+  EXPECT_EQ(plc.mended_contacts, 5u);
+  // 81 + 25 sheet vertices less the 5 merged, and the 8 box corners.
+  EXPECT_EQ(plc.vertices.size() - plc.box_points - plc.seed_points, 8u + 81u + 20u);
+  EXPECT_EQ(plc.sheet_triangles.size(), 128u + 32u);
+}
+
+}  // namespace
+}  // namespace sheetmesh

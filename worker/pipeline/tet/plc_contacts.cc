@@ -1,0 +1,302 @@
+// Mends contacts between sheets: a sheet vertex within a voxel or so of another sheet's
+// face, edge or vertex without being joined to it. TetGen must fill the gap, a fraction of
+// a voxel wide, with tetrahedra as flat as the gap is narrow; nothing after can mend them,
+// since every point it could add lands as close. In the image the two sheets touch.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "absl/container/flat_hash_set.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/spatial_grid.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/plc_parts.h"
+
+namespace sheetmesh {
+namespace {
+
+// Where a vertex touches a triangle: onto its corner k, onto its edge k (corners k and
+// k + 1) at `at`, or into its interior at `at`.
+struct Contact {
+  enum Kind { kCorner, kEdge, kInterior } kind = kInterior;
+  uint32_t vertex = 0;  // the sheet vertex that moves
+  uint32_t face = 0;    // the triangle it touches
+  int k = 0;            // the corner or edge
+  Vec3 at;              // where the vertex goes
+  double distance = 0;  // how far that is
+};
+
+Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double len2 = Norm2(d);
+  const double t = len2 > 0 ? std::clamp(Dot(p - a, d) / len2, 0.0, 1.0) : 0.0;
+  return a + d * t;
+}
+
+// The contact of p with triangle t, if p lies within gap of it: a corner within gap of p's
+// nearest point goes first, then an edge, else the interior.
+bool FindContact(const Vec3& p, const Triangle& t, double gap, Contact* c) {
+  double u, w, x;
+  Vec3 q;
+  if (ProjectBarycentric(p, t, &u, &w, &x) && u > 0 && w > 0 && x > 0) {
+    q = t[0] * u + t[1] * w + t[2] * x;
+  } else {
+    double best = 1e300;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = ClosestOnSegment(p, t[k], t[(k + 1) % 3]);
+      if (Norm2(e - p) < best) best = Norm2(e - p), q = e;
+    }
+  }
+  if (!(Norm2(q - p) < gap * gap)) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (Norm2(t[k] - q) < gap * gap) {
+      c->kind = Contact::kCorner, c->k = k, c->at = t[k];
+      c->distance = Norm(t[k] - p);
+      return true;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 e = ClosestOnSegment(q, t[k], t[(k + 1) % 3]);
+    if (Norm2(e - q) < gap * gap) {
+      c->kind = Contact::kEdge, c->k = k, c->at = e;
+      c->distance = Norm(e - p);
+      return true;
+    }
+  }
+  c->kind = Contact::kInterior, c->at = q;
+  c->distance = Norm(q - p);
+  return true;
+}
+
+// Appends a copy of face f's attributes for a new face.
+void AddFace(SheetTriangles& s, uint32_t f, const Face& face) {
+  s.faces.push_back(face);
+  s.source.push_back(s.source[f]);
+  s.piece.push_back(s.piece[f]);
+  s.thickness.push_back(s.thickness[f]);
+}
+
+// Applies the contacts to copies of s and v: the vertex moves onto the corner (merging into
+// it), the edge (splitting the faces on it in two) or the interior (splitting the face in
+// three). Faces that collapse in a merge go. `owner` gets, per output face, the contact
+// that made or moved it (-1: none).
+void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<Vec3>& v,
+           std::vector<int>& owner) {
+  owner.assign(s.faces.size(), -1);
+  std::vector<uint32_t> into(v.size());
+  for (uint32_t i = 0; i < v.size(); ++i) into[i] = i;
+  std::vector<int> contact_of(v.size(), -1);  // the contact a vertex moves in
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& c = contacts[i];
+    contact_of[c.vertex] = static_cast<int>(i);
+    if (c.kind == Contact::kCorner) into[c.vertex] = s.faces[c.face][c.k];
+  }
+  std::vector<uint8_t> drop(s.faces.size(), 0);
+  auto add = [&](uint32_t f, const Face& face, int by) {
+    AddFace(s, f, face);
+    owner.push_back(by);
+    drop.push_back(0);
+  };
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& c = contacts[i];
+    const int by = static_cast<int>(i);
+    const Face t = s.faces[c.face];
+    if (c.kind == Contact::kCorner) continue;
+    v[c.vertex] = c.at;
+    if (c.kind == Contact::kInterior) {
+      // (a, b, c) -> (a, b, u), (b, c, u), (c, a, u): the same orientation.
+      s.faces[c.face] = {t[0], t[1], c.vertex};
+      owner[c.face] = by;
+      add(c.face, {t[1], t[2], c.vertex}, by);
+      add(c.face, {t[2], t[0], c.vertex}, by);
+      continue;
+    }
+    // Every face on edge (a, b) splits at u into (..a, u..) and (..u, b..).
+    const uint32_t a = t[c.k], b = t[(c.k + 1) % 3];
+    const size_t n = s.faces.size();
+    for (uint32_t f = 0; f < n; ++f) {
+      const Face g = s.faces[f];
+      const int ia = g[0] == a ? 0 : g[1] == a ? 1 : g[2] == a ? 2 : -1;
+      const int ib = g[0] == b ? 0 : g[1] == b ? 1 : g[2] == b ? 2 : -1;
+      if (ia < 0 || ib < 0) continue;
+      Face first = g, second = g;
+      first[ib] = c.vertex;
+      second[ia] = c.vertex;
+      s.faces[f] = first;
+      owner[f] = by;
+      add(f, second, by);
+    }
+  }
+  // Merges re-point the faces; those left with a repeated corner, or repeating another
+  // face, go. The faces of a moved vertex belong to its contact.
+  absl::flat_hash_set<std::array<uint32_t, 3>> seen;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    Face& g = s.faces[f];
+    for (uint32_t& x : g) {
+      if (contact_of[x] >= 0 && owner[f] < 0) owner[f] = contact_of[x];
+      x = into[x];
+    }
+    std::array<uint32_t, 3> key = {g[0], g[1], g[2]};
+    std::sort(key.begin(), key.end());
+    if (g[0] == g[1] || g[1] == g[2] || g[0] == g[2] || !seen.insert(key).second) drop[f] = 1;
+  }
+  std::vector<int> kept;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    if (!drop[f]) kept.push_back(owner[f]);
+  }
+  s = Without(s, drop);
+  owner = std::move(kept);
+}
+
+}  // namespace
+
+uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
+                      double gap, std::vector<Vec3>* unmended) {
+  if (!(gap > 0) || s.faces.empty()) return 0;
+  uint32_t mended = 0;
+  std::vector<uint8_t> failed(v.size(), 0);
+  for (int round = 0; round < 4; ++round) {
+    // The triangles in a grid; each vertex's faces and neighbours.
+    std::vector<std::vector<uint32_t>> faces_of(v.size());
+    absl::flat_hash_set<uint64_t> edge;
+    double longest = gap;
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
+        faces_of[a].push_back(f);
+        edge.insert((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
+        longest = std::max(longest, Norm(v[a] - v[b]));
+      }
+    }
+    SpatialGrid grid(longest);
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      Vec3 lo, hi;
+      TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, gap, &lo, &hi);
+      grid.Insert(f, lo, hi);
+    }
+    auto joined = [&](uint32_t a, uint32_t b) {
+      return edge.contains((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
+    };
+    // Each free vertex's nearest contact with a triangle not its own.
+    std::vector<Contact> found;
+    for (uint32_t u = 0; u < v.size(); ++u) {
+      if (faces_of[u].empty() || on_face[u] != 0 || failed[u]) continue;
+      Contact best;
+      best.distance = 1e300;
+      grid.Query(v[u] - Vec3(gap, gap, gap), v[u] + Vec3(gap, gap, gap), [&](uint32_t f) {
+        const Face& t = s.faces[f];
+        if (t[0] == u || t[1] == u || t[2] == u) return;
+        Contact c;
+        if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, gap, &c) ||
+            !(c.distance < best.distance))
+          return;
+        // Not onto a neighbour's corner (that collapses an edge of u's own sheet).
+        if (c.kind == Contact::kCorner && joined(u, t[c.k])) return;
+        // Not onto an edge of u's own triangle (a flat one: the flips' business).
+        if (c.kind == Contact::kEdge && joined(u, t[c.k]) && joined(u, t[(c.k + 1) % 3])) return;
+        c.vertex = u, c.face = f;
+        best = c;
+      });
+      if (best.distance < 1e300) found.push_back(best);
+    }
+    if (found.empty()) break;
+    // A contact along a line, u and a neighbour both near the other sheet (a rim running
+    // over it), is not a point's: moving u would lay its edges on that sheet, or leave
+    // them in a wedge over it. It stays, and is reported. Neighbours that both land on
+    // corners lay their edge onto the other sheet's edge, or across it (the clash check
+    // tells).
+    {
+      std::vector<int8_t> kind(v.size(), -1);
+      for (const Contact& c : found) kind[c.vertex] = static_cast<int8_t>(c.kind);
+      std::vector<Contact> points;
+      for (const Contact& c : found) {
+        bool line = false;
+        for (uint32_t f : faces_of[c.vertex]) {
+          for (uint32_t x : s.faces[f]) {
+            if (x == c.vertex || kind[x] < 0) continue;
+            line = line || c.kind != Contact::kCorner || kind[x] != Contact::kCorner;
+          }
+        }
+        if (line) {
+          failed[c.vertex] = 1;
+        } else {
+          points.push_back(c);
+        }
+      }
+      found = std::move(points);
+    }
+    // Nearest first; each vertex and face takes part in one contact a round.
+    std::sort(found.begin(), found.end(),
+              [](const Contact& a, const Contact& b) { return a.distance < b.distance; });
+    std::vector<uint8_t> busy_vertex(v.size(), 0), busy_face(s.faces.size(), 0);
+    std::vector<Contact> round_contacts;
+    for (const Contact& c : found) {
+      const Face& t = s.faces[c.face];
+      bool busy = busy_vertex[c.vertex] || busy_face[c.face] || busy_vertex[t[0]] ||
+                  busy_vertex[t[1]] || busy_vertex[t[2]];
+      for (uint32_t f : faces_of[c.vertex]) busy = busy || busy_face[f];
+      if (c.kind == Contact::kEdge) {
+        // The faces on the edge split too.
+        for (uint32_t f : faces_of[t[c.k]]) busy = busy || busy_face[f];
+      }
+      if (busy) continue;
+      busy_vertex[c.vertex] = 1;
+      for (uint32_t x : t) busy_vertex[x] = 1;
+      busy_face[c.face] = 1;
+      for (uint32_t f : faces_of[c.vertex]) busy_face[f] = 1;
+      if (c.kind == Contact::kEdge) {
+        for (uint32_t f : faces_of[t[c.k]]) busy_face[f] = 1;
+      }
+      round_contacts.push_back(c);
+    }
+    // Apply; contacts whose faces then clash are left out, until none do.
+    SheetTriangles out;
+    std::vector<Vec3> moved;
+    for (int attempt = 0; attempt < 6 && !round_contacts.empty(); ++attempt) {
+      out = s;
+      moved = v;
+      std::vector<int> owner;
+      Apply(round_contacts, out, moved, owner);
+      TriangleMesh check;
+      check.vertices = moved;
+      check.faces = out.faces;
+      const auto clashes = FindSelfIntersections(check, 100000, 1.0);
+      std::vector<uint8_t> bad(round_contacts.size(), 0);
+      bool any = false;
+      for (const auto& [f, g] : clashes) {
+        for (const uint32_t x : {f, g}) {
+          if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
+        }
+      }
+      if (clashes.empty()) break;
+      if (!any) {  // clashes no contact made: leave them to the clash check
+        round_contacts.clear();
+        break;
+      }
+      std::vector<Contact> keep;
+      for (size_t i = 0; i < round_contacts.size(); ++i) {
+        if (bad[i]) {
+          failed[round_contacts[i].vertex] = 1;
+        } else {
+          keep.push_back(round_contacts[i]);
+        }
+      }
+      round_contacts = std::move(keep);
+      if (round_contacts.empty() || attempt == 5) round_contacts.clear();
+    }
+    if (round_contacts.empty()) continue;
+    s = std::move(out);
+    v = std::move(moved);
+    mended += static_cast<uint32_t>(round_contacts.size());
+  }
+  // What is left: vertices still within gap of a triangle not their own.
+  if (unmended != nullptr) {
+    for (uint32_t u = 0; u < v.size(); ++u) {
+      if (failed[u]) unmended->push_back(v[u]);
+    }
+  }
+  return mended;
+}
+
+}  // namespace sheetmesh

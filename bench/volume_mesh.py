@@ -10,7 +10,14 @@ meshes it with the same quality bound (`-pzQq1.5/10O2/3`, free to refine its fac
 are scored by sheetmesh's scorer; the peer's tet quality is computed here with the same
 formulas (ALGORITHM §11).
 
-Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--flags "--plc_lattice=0" --tag NAME]
+The volume-stage seconds stand beside TetGen's own on the same PLC (the report's
+tetgen_seconds), and the peak RSS of the whole run is read with /usr/bin/time -v. With
+--paper the paper-scale phantom (1012 x 1024 x 931, `phantom --preset=paper`) is added at
+r = 15, the radius the paper meshed its rock at; the peer is not run there (marching cubes of
+1e9 voxels does not fit the benchmark's budget).
+
+Usage: /usr/bin/python3 bench/volume_mesh.py [BUILD_DIR] [--r 7] [--paper] [--only NAME]
+    [--flags "--plc_lattice=0" --tag NAME]
 Writes bench/out/volume_mesh.md and prints the table. With --flags (extra sheetmesh-pipeline
 flags, e.g. the 0.3 defaults "--plc_lattice=0 --tet_steiner_on_sheets=true"), the peer (which does not
 depend on them) is left out and the table goes to bench/out/volume_mesh_NAME.md.
@@ -34,14 +41,22 @@ PEER_SWITCHES = "-pzQq1.5/10O2/3"
 
 
 def ours(cli, raw, value, r, out_dir, flags=(), tag=""):
+    """The run's report, wall seconds and peak RSS (MiB)."""
     d = os.path.join(out_dir, "ours_vol_r%g%s" % (r, "_" + tag if tag else ""))
     t = time.perf_counter()
-    fidelity.run([cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r, "-o", d, "--output_formats=ply",
-                  "--similarity_hausdorff=false", "--similarity_grid_rates=", "--volume_mesh", "--output_volume_formats=vtu"]
-                 + list(flags))
+    res = subprocess.run(["/usr/bin/time", "-v", cli, "surface", raw, "--labels=%g" % value, "--r=%g" % r,
+                          "-o", d, "--output_formats=ply", "--similarity_hausdorff=false",
+                          "--similarity_grid_rates=", "--volume_mesh", "--output_volume_formats=vtu"]
+                         + list(flags), capture_output=True, text=True)
     wall = time.perf_counter() - t
+    if res.returncode != 0:
+        raise subprocess.CalledProcessError(res.returncode, res.args, res.stdout, res.stderr)
+    rss = 0.0
+    for line in res.stderr.splitlines():
+        if "Maximum resident set size" in line:
+            rss = int(line.split(":")[1]) / 1024.0
     rep = json.load(open(os.path.join(d, "report.json")))
-    return rep, wall
+    return rep, wall, rss
 
 
 def read_ply_triangles(path):
@@ -148,21 +163,32 @@ def main():
     ap.add_argument("--r", type=float, default=7)
     ap.add_argument("--flags", default="", help="extra sheetmesh-pipeline flags (peer left out)")
     ap.add_argument("--tag", default="variant", help="names the output table with --flags")
+    ap.add_argument("--paper", action="store_true", help="add the paper-scale phantom at r = 15")
+    ap.add_argument("--only", default="", help="only the volumes whose name contains this")
     args = ap.parse_args()
     cli = os.path.join(args.build, "worker", "pipeline", "sheetmesh-pipeline")
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
     os.makedirs(out_root, exist_ok=True)
     lines = ["| volume | voxels | sheetmesh: triangles, similarity | nodes | tets (voxels per tet) | "
-             "min dihedral min / mean | gamma mean | radius aspect mean | volume stage s / total s | "
+             "min dihedral min / mean | gamma mean | radius aspect mean | edge aspect mean | "
+             "volume stage s / TetGen s / total s | peak RSS MiB | "
              "peer: triangles, similarity | peer nodes | peer tets | peer min dihedral min / mean | "
              "peer radius aspect mean | peer TetGen s |",
-             "|" + "---|" * 15]
-    for name, raw, dims, value in fidelity.volumes(cli, out_root):
+             "|" + "---|" * 17]
+    vols = [(name, raw, dims, value, args.r) for name, raw, dims, value in fidelity.volumes(cli, out_root)]
+    if args.paper:
+        raw = os.path.join(out_root, "paper_1012x1024x931_u8.raw")
+        if not os.path.exists(raw):
+            fidelity.run([cli, "phantom", "--preset=paper", "-o", raw])
+        vols.append(("preset paper", raw, (1012, 1024, 931), 255, 15.0))
+    for name, raw, dims, value, r in vols:
+        if args.only and args.only not in name:
+            continue
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
         try:
-            rep, wall = ours(cli, raw, value, args.r, vdir, args.flags.split(),
-                             args.tag if args.flags else "")
+            rep, wall, rss = ours(cli, raw, value, r, vdir, args.flags.split(),
+                                  args.tag if args.flags else "")
         except subprocess.CalledProcessError as e:
             line = "| %s | %d | volume stage failed: %s |" % (name, dims[0] * dims[1] * dims[2],
                                                            (e.stderr or "").strip().splitlines()[-1])
@@ -174,6 +200,7 @@ def main():
         tri = rep["surface"]["triangles"]
         vox = dims[0] * dims[1] * dims[2]
         p = ({"error": ["not run (--flags)"]} if args.flags else
+             {"error": ["not run at this scale"]} if name == "preset paper" else
              peer(cli, raw, dims, value, tri, sim, PEER_SWITCHES, vdir))
         if "error" in p:
             peer_cols = "%s | | | | |" % "; ".join(p["error"])
@@ -181,10 +208,12 @@ def main():
             peer_cols = "%d, %.4f%s | %d | %d | %.2f° / %.2f° | %.3f | %.1f" % (
                 p["triangles"], p["similarity"], "".join(" (after %s)" % f for f in p["failed"]), p["nodes"],
                 p["tets"], p["dmin_min"], p["dmin_mean"], p["rasp_mean"], p["seconds"])
-        line = "| %s | %d | %d, %.4f | %d | %d (1 : %.0f) | %.2f° / %.2f° | %.3f | %.3f | %.1f / %.1f | %s |" % (
-            name, vox, tri, sim, vm["nodes"], vm["tetrahedra"], vm["voxels_per_tetrahedron"],
-            q["min_dihedral_degrees"]["min"], q["min_dihedral_degrees"]["mean"], q["gamma"]["mean"],
-            q["radius_aspect"]["mean"], rep["seconds"]["volume"], wall, peer_cols)
+        line = ("| %s | %d | %d, %.4f | %d | %d (1 : %.0f) | %.2f° / %.2f° | %.3f | %.3f | %.3f | "
+                "%.1f / %.1f / %.1f | %.0f | %s |") % (
+            name + ("" if r == args.r else " (r %g)" % r), vox, tri, sim, vm["nodes"], vm["tetrahedra"],
+            vm["voxels_per_tetrahedron"], q["min_dihedral_degrees"]["min"], q["min_dihedral_degrees"]["mean"],
+            q["gamma"]["mean"], q["radius_aspect"]["mean"], q["edge_aspect"]["mean"], rep["seconds"]["volume"],
+            vm["tetgen_seconds"], wall, rss, peer_cols)
         print(line, flush=True)
         lines.append(line)
     name = "volume_mesh_%s.md" % args.tag if args.flags else "volume_mesh.md"

@@ -60,6 +60,15 @@ EXPECT="--r (r) is not used by 'info'" expect_error "$cli" info "$tmp/s_128x112x
 echo '{"surface": {"radius": 7}}' > "$tmp/bad.json"
 EXPECT="unknown key 'surface.radius'" expect_error "$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/bad.json" -o "$tmp/x"
 EXPECT="unknown command" expect_error "$cli" mesh-it
+# A tetrahedron budget: met by `volume`, or refused naming the least possible.
+"$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol_budget" \
+  --output_volume_formats=vtu --max_tetrahedra=20000 > /dev/null || fail "volume with a budget"
+/usr/bin/python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['volume_mesh']
+sys.exit(0 if v['tetrahedra'] <= 20000 and v['sizing']['max_tetrahedra'] == 20000 else 1)" \
+  "$tmp/vol_budget/volume_report.json" || fail "the budget of 20000 tetrahedra was not kept"
+EXPECT="max_tetrahedra = 10 is below the least this volume's sheets need" \
+  expect_error "$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" \
+  --max_tetrahedra=10
 # --help lists the parameters and the commands' own flags, and exits 0.
 "$cli" --help > "$tmp/help.txt" || fail "--help exited non-zero"
 grep -q -- "--separate_r (separate.r)" "$tmp/help.txt" || fail "--help lists no parameters"

@@ -85,7 +85,8 @@ std::function<bool(const ParamSpec&)> Accepts(const std::string& command) {
   if (command == "volume") {
     return [](const ParamSpec& s) {
       return IsInput(s) || absl::StartsWith(s.key, "tet.") || absl::StartsWith(s.key, "plc.") ||
-             absl::StartsWith(s.key, "improve.") || s.key == "output.volume_formats";
+             absl::StartsWith(s.key, "improve.") || s.key == "max_tetrahedra" ||
+             s.key == "output.volume_formats";
     };
   }
   if (command == "score") {

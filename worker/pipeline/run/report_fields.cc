@@ -184,6 +184,8 @@ nlohmann::json VolumeMeshStats::Fields() const {
                  {"coarsest_spacing", lattice_coarsest},
                  {"levels", lattice_levels},
                  {"max_tetrahedra", max_tetrahedra},
+                 {"predicted_tetrahedra", predicted_tetrahedra},
+                 {"predictions", sizing_predictions},
                  {"attempts", sizing_attempts}};
   j["rederived_facets"] = rederived_facets;
   j["conformity"] = conformity.Fields();

@@ -19,6 +19,11 @@ namespace {
 // improvement's room to insert vertices (at the paper's scale it adds 40%).
 constexpr double kBudgetRoom = 0.75;
 constexpr double kMaxLattice = 8.0;  // the coarsest lattice plc.lattice allows
+// The sizing's prediction: TetGen's Delaunay mesh of well-spaced points has about 6
+// tetrahedra per point (a BCC lattice's exactly 6; measured 5.97 on a planar sheet at the
+// default lattice, 6.46 at grading 2). Where the lattice is sparse or off, TetGen's own
+// refinement adds points and the count comes out higher (12 per PLC point with no lattice).
+constexpr double kTetsPerPoint = 6.0;
 
 absl::flat_hash_set<FaceKey> TetFaces(const TetMesh& mesh) {
   absl::flat_hash_set<FaceKey> faces;
@@ -170,6 +175,16 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   Plc plc;
   for (;;) {
     SM_ASSIGN_OR_RETURN(plc, BuildPlc(sheets, dims, placement, plc_options));
+    const uint64_t budget = options.max_tetrahedra;
+    r.predicted_tetrahedra = static_cast<uint64_t>(kTetsPerPoint * plc.vertices.size());
+    // Coarsen by the prediction before running TetGen (a few rounds), then by the count.
+    if (budget > 0 && plc.seed_points > 0 && r.predicted_tetrahedra > kBudgetRoom * budget &&
+        ++r.sizing_predictions < 4) {
+      plc_options.lattice = std::min(
+          kMaxLattice,
+          plc_options.lattice * std::cbrt(r.predicted_tetrahedra / (kBudgetRoom * budget)) * 1.05);
+      continue;
+    }
     const Vec3 ext = plc.box_hi - plc.box_lo;
     r.box_volume = std::abs(ext.x * ext.y * ext.z);
     SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r.box_volume, dims));
@@ -178,20 +193,23 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
     SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
     r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
     const uint64_t made = r.mesh.tets.size();
-    const uint64_t budget = options.max_tetrahedra;
     if (budget == 0 || made <= kBudgetRoom * budget) break;
-    if (plc.seed_points == 0) {
+    // At the coarsest sizing (or with no lattice, as asked) the count is the least there is.
+    if (plc_options.lattice == 0 || plc_options.lattice >= kMaxLattice) {
       if (made <= budget) break;
       return absl::InvalidArgumentError(absl::StrCat(
           "max_tetrahedra = ", budget, " is below the least this volume's sheets need: ", made,
-          " tetrahedra (TetGen ", r.tetgen_switches,
-          " on the sheets without seeded points); raise it to at least ", made));
+          " tetrahedra (TetGen ", r.tetgen_switches, " with ",
+          plc_options.lattice == 0 ? "no lattice, as plc.lattice = 0 asks"
+                                   : "the coarsest lattice, plc.lattice = 8",
+          "); raise it to at least ", made));
     }
     // Coarsen the lattice for the count to come within the room, assuming the seeded
-    // points' share scales with the spacing cubed; after two tries, drop it.
+    // points' share scales with the spacing cubed; the third try takes the coarsest.
     const double scale = std::cbrt(double(made) / (kBudgetRoom * budget));
-    plc_options.lattice = r.sizing_attempts >= 3 ? 0.0 : plc_options.lattice * scale * 1.1;
-    if (plc_options.lattice > kMaxLattice) plc_options.lattice = 0;
+    plc_options.lattice = r.sizing_attempts >= 2
+                              ? kMaxLattice
+                              : std::min(kMaxLattice, plc_options.lattice * scale * 1.1);
   }
   static_cast<PlcStats&>(r) = plc;
   r.lattice = plc_options.lattice;

@@ -25,9 +25,10 @@ struct VolumeMeshOptions {
   TetImproveOptions improve;  // the clean-up of TetGen's output
   // A solver's budget: the mesh has at most this many tetrahedra (0: no bound). Where
   // TetGen's mesh of the seeded PLC leaves the improvement too little room (it takes over
-  // three quarters of it), the lattice is coarsened and then dropped; the improvement adds
-  // no more than the budget allows. The least possible is TetGen's refinement of the PLC
-  // without seeded points: a budget below that is kInvalidArgument naming it.
+  // three quarters of it), the lattice is coarsened, by the prediction (6 tetrahedra per PLC
+  // point) and then by TetGen's count, up to 8 median edges; the improvement adds no more
+  // than the budget allows. The least possible is TetGen's mesh at that coarsest lattice
+  // (or with none, when plc.lattice is 0): a budget below it is kInvalidArgument naming it.
   uint64_t max_tetrahedra = 0;
 };
 
@@ -51,17 +52,19 @@ struct VolumeMeshStats : PlcStats {
   double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;
-  double box_volume = 0;           // physical units^3
-  std::string tetgen_switches;     // as TetGen ran
-  double tetgen_seconds = 0;       // the last TetGen run's
-  uint64_t tetgen_tetrahedra = 0;  // TetGen's, before the improvement
-  uint64_t max_tetrahedra = 0;     // the budget asked for (0: none)
-  uint32_t sizing_attempts = 0;    // TetGen runs: more than one when the budget coarsened
-                                   // the lattice
-  double lattice = 0;              // the lattice's spacing in median sheet edges, as used
-  double grading = 0;              // PlcOptions::grading, as used
-  uint32_t rederived_facets = 0;   // sheet facets whose faces TetGen listed wrongly (taken
-                                   // again from the tetrahedra)
+  double box_volume = 0;              // physical units^3
+  std::string tetgen_switches;        // as TetGen ran
+  double tetgen_seconds = 0;          // the last TetGen run's
+  uint64_t tetgen_tetrahedra = 0;     // TetGen's, before the improvement
+  uint64_t max_tetrahedra = 0;        // the budget asked for (0: none)
+  uint64_t predicted_tetrahedra = 0;  // 6 per PLC point: TetGen's count on a lattice
+  uint32_t sizing_predictions = 0;    // PLCs built to bring the prediction within a budget
+  uint32_t sizing_attempts = 0;       // TetGen runs: more than one when the budget coarsened
+                                      // the lattice
+  double lattice = 0;                 // the lattice's spacing in median sheet edges, as used
+  double grading = 0;                 // PlcOptions::grading, as used
+  uint32_t rederived_facets = 0;      // sheet facets whose faces TetGen listed wrongly (taken
+                                      // again from the tetrahedra)
   TetImproveReport improvement;
 
   // Every figure by name, the quality and conformity nested, for the report.

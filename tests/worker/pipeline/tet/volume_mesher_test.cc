@@ -286,6 +286,49 @@ TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {
   EXPECT_GT(b.quality.radius_aspect.mean, a.quality.radius_aspect.mean);
 }
 
+TEST(VolumeMesherTest, APlanarSheetsMeshHasTheCountAndSizesItsSizingPredicts) {
+  // A 60 x 60 sheet of 12 x 12 quads (median edge 5) across a 120^3 box: the lattice's
+  // spacing is 4.25 next to it and 17 from 15.3 voxels off it at grading 1 (bands 4.25 and
+  // 8.5 wide; 34 is over a quarter of the box). TetGen makes about 6 tetrahedra per PLC
+  // point.
+  const TriangleMesh sheet = Square(30, 90, 60, 12);
+  const Dims dims{120, 120, 120};
+  for (const double grading : {0.4, 1.0}) {
+    VolumeMeshOptions o;
+    o.plc.grading = grading;
+    SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, dims, {}, o));
+    SCOPED_TRACE(::testing::Message() << "grading " << grading);
+    EXPECT_EQ(r.predicted_tetrahedra, 6 * (8 + 169 + r.box_points + r.seed_points));
+    EXPECT_NEAR(double(r.tetgen_tetrahedra) / r.predicted_tetrahedra, 1.0, 0.1);
+    EXPECT_NEAR(double(r.mesh.tets.size()) / r.predicted_tetrahedra, 1.05, 0.15);
+    EXPECT_EQ(r.lattice_levels, 3u);
+    EXPECT_DOUBLE_EQ(r.lattice_coarsest, 17);
+    EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+    EXPECT_GE(r.quality.min_dihedral.min, 10.0);
+    EXPECT_GT(r.quality.min_dihedral.mean, 50.0);
+    if (grading != 1.0) continue;
+    // Far from the sheet the edges are the coarsest level's: a BCC lattice's are h and
+    // sqrt(3)/2 h long (17 and 14.7).
+    std::vector<double> far_edges;
+    for (const Tet& t : r.mesh.tets) {
+      Vec3 c;
+      for (uint32_t v : t) c = c + r.mesh.nodes[v] * 0.25;
+      const double dx = std::max({30 - c.x, c.x - 90, 0.0});
+      const double dy = std::max({30 - c.y, c.y - 90, 0.0});
+      if (std::sqrt(dx * dx + dy * dy + (c.z - 60) * (c.z - 60)) < 25) continue;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          far_edges.push_back(Norm(r.mesh.nodes[t[i]] - r.mesh.nodes[t[j]]));
+        }
+    }
+    ASSERT_GT(far_edges.size(), 100u);
+    std::nth_element(far_edges.begin(), far_edges.begin() + far_edges.size() / 2, far_edges.end());
+    const double median = far_edges[far_edges.size() / 2];
+    EXPECT_GT(median, 0.9 * 14.7);
+    EXPECT_LT(median, 1.1 * 17);
+  }
+}
+
 TEST(VolumeMesherTest, ATetrahedronBudgetCoarsensTheLatticeAndOneTooSmallNamesTheLeast) {
   const TriangleMesh sheet = Square(20, 60, 40, 8);  // edges 5 voxels, in an 80^3 box
   const Dims dims{80, 80, 80};
@@ -298,15 +341,15 @@ TEST(VolumeMesherTest, ATetrahedronBudgetCoarsensTheLatticeAndOneTooSmallNamesTh
   half.max_tetrahedra = n / 2;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, dims, {}, half));
   EXPECT_LE(r.mesh.tets.size(), n / 2);
-  EXPECT_GT(r.sizing_attempts, 1u);
-  EXPECT_TRUE(r.lattice == 0 || r.lattice > 0.85) << r.lattice;
+  EXPECT_GT(r.sizing_predictions + r.sizing_attempts, 1u);
+  EXPECT_GT(r.lattice, 0.85);
   EXPECT_EQ(r.max_tetrahedra, n / 2);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
   EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
-  // The least possible: TetGen's refinement of the sheets with no seeded points.
+  // The least possible: TetGen's mesh at the coarsest lattice, 8 median edges.
   VolumeMeshOptions bare;
-  bare.plc.lattice = 0;
+  bare.plc.lattice = 8;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult least, BuildVolumeMesh(sheet, dims, {}, bare));
   const uint64_t m = least.tetgen_tetrahedra;
   VolumeMeshOptions tiny;

@@ -159,6 +159,58 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
       ") holds (about ", std::llround(room), "); raise it to at least ", box_volume / room));
 }
 
+// Builds the PLC and runs TetGen into r->mesh, sizing the lattice for the budget, if any:
+// the lattice coarsens by the prediction (up to three PLCs), then by TetGen's count (two
+// runs); then no lattice, which gives the improvement the best start (kept if within the
+// budget); then the coarsest lattice, the least count there is. The first that leaves the
+// improvement its room is kept; past the least the budget is refused, naming it.
+absl::Status MeshWithinBudget(const TriangleMesh& sheets, const Dims& dims,
+                              const Placement& placement, const VolumeMeshOptions& options,
+                              const Progress& progress, PlcOptions* plc_options, Plc* plc,
+                              VolumeMeshResult* r) {
+  const uint64_t budget = options.max_tetrahedra;
+  const double room = kBudgetRoom * static_cast<double>(budget);
+  for (;;) {
+    SM_ASSIGN_OR_RETURN(*plc, BuildPlc(sheets, dims, placement, *plc_options));
+    r->predicted_tetrahedra = static_cast<uint64_t>(kTetsPerPoint * plc->vertices.size());
+    if (budget > 0 && plc->seed_points > 0 && r->predicted_tetrahedra > room &&
+        plc_options->lattice < kMaxLattice && ++r->sizing_predictions < 4) {
+      plc_options->lattice = std::min(
+          kMaxLattice, plc_options->lattice * std::cbrt(r->predicted_tetrahedra / room) * 1.05);
+      continue;
+    }
+    const Vec3 ext = plc->box_hi - plc->box_lo;
+    r->box_volume = std::abs(ext.x * ext.y * ext.z);
+    SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r->box_volume, dims));
+    const absl::Time start = absl::Now();
+    ++r->sizing_attempts;
+    SM_ASSIGN_OR_RETURN(r->mesh, RunTetgen(*plc, options.tetgen, progress.Sub(0, 0.9)));
+    r->tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+    const uint64_t made = r->mesh.tets.size();
+    if (budget == 0 || made <= room) return absl::OkStatus();
+    const bool asked_none = options.plc.lattice == 0;
+    if (asked_none || plc_options->lattice >= kMaxLattice) {
+      if (made <= budget) return absl::OkStatus();
+      return absl::InvalidArgumentError(absl::StrCat(
+          "max_tetrahedra = ", budget, " is below the least this volume's sheets need: ", made,
+          " tetrahedra (TetGen ", r->tetgen_switches, " with ",
+          asked_none ? "no lattice, as plc.lattice = 0 asks"
+                     : "the coarsest lattice, plc.lattice = 8",
+          "); raise it to at least ", made));
+    }
+    if (plc_options->lattice == 0) {
+      if (made <= budget) return absl::OkStatus();  // less room, the better start
+      plc_options->lattice = kMaxLattice;
+    } else if (r->sizing_attempts >= 2) {
+      plc_options->lattice = 0;
+    } else {
+      // Assuming the seeded points' share scales with the spacing cubed.
+      plc_options->lattice =
+          std::min(kMaxLattice, plc_options->lattice * std::cbrt(made / room) * 1.1);
+    }
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
@@ -173,44 +225,8 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   r.max_tetrahedra = options.max_tetrahedra;
   r.tetgen_switches = TetgenSwitches(options.tetgen);
   Plc plc;
-  for (;;) {
-    SM_ASSIGN_OR_RETURN(plc, BuildPlc(sheets, dims, placement, plc_options));
-    const uint64_t budget = options.max_tetrahedra;
-    r.predicted_tetrahedra = static_cast<uint64_t>(kTetsPerPoint * plc.vertices.size());
-    // Coarsen by the prediction before running TetGen (a few rounds), then by the count.
-    if (budget > 0 && plc.seed_points > 0 && r.predicted_tetrahedra > kBudgetRoom * budget &&
-        ++r.sizing_predictions < 4) {
-      plc_options.lattice = std::min(
-          kMaxLattice,
-          plc_options.lattice * std::cbrt(r.predicted_tetrahedra / (kBudgetRoom * budget)) * 1.05);
-      continue;
-    }
-    const Vec3 ext = plc.box_hi - plc.box_lo;
-    r.box_volume = std::abs(ext.x * ext.y * ext.z);
-    SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r.box_volume, dims));
-    const absl::Time start = absl::Now();
-    ++r.sizing_attempts;
-    SM_ASSIGN_OR_RETURN(r.mesh, RunTetgen(plc, options.tetgen, progress.Sub(0, 0.9)));
-    r.tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
-    const uint64_t made = r.mesh.tets.size();
-    if (budget == 0 || made <= kBudgetRoom * budget) break;
-    // At the coarsest sizing (or with no lattice, as asked) the count is the least there is.
-    if (plc_options.lattice == 0 || plc_options.lattice >= kMaxLattice) {
-      if (made <= budget) break;
-      return absl::InvalidArgumentError(absl::StrCat(
-          "max_tetrahedra = ", budget, " is below the least this volume's sheets need: ", made,
-          " tetrahedra (TetGen ", r.tetgen_switches, " with ",
-          plc_options.lattice == 0 ? "no lattice, as plc.lattice = 0 asks"
-                                   : "the coarsest lattice, plc.lattice = 8",
-          "); raise it to at least ", made));
-    }
-    // Coarsen the lattice for the count to come within the room, assuming the seeded
-    // points' share scales with the spacing cubed; the third try takes the coarsest.
-    const double scale = std::cbrt(double(made) / (kBudgetRoom * budget));
-    plc_options.lattice = r.sizing_attempts >= 2
-                              ? kMaxLattice
-                              : std::min(kMaxLattice, plc_options.lattice * scale * 1.1);
-  }
+  SM_RETURN_IF_ERROR(
+      MeshWithinBudget(sheets, dims, placement, options, progress, &plc_options, &plc, &r));
   static_cast<PlcStats&>(r) = plc;
   r.lattice = plc_options.lattice;
   r.grading = plc_options.grading;

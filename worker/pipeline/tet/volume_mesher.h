@@ -26,9 +26,10 @@ struct VolumeMeshOptions {
   // A solver's budget: the mesh has at most this many tetrahedra (0: no bound). Where
   // TetGen's mesh of the seeded PLC leaves the improvement too little room (it takes over
   // three quarters of it), the lattice is coarsened, by the prediction (6 tetrahedra per PLC
-  // point) and then by TetGen's count, up to 8 median edges; the improvement adds no more
-  // than the budget allows. The least possible is TetGen's mesh at that coarsest lattice
-  // (or with none, when plc.lattice is 0): a budget below it is kInvalidArgument naming it.
+  // point) and then by TetGen's count, then goes (TetGen's own sizing gives the improvement
+  // the best start), and last is 8 median edges; the improvement adds no more than the
+  // budget allows. The least possible is TetGen's mesh at that coarsest lattice (or with
+  // none, when plc.lattice is 0): a budget below it is kInvalidArgument naming it.
   uint64_t max_tetrahedra = 0;
 };
 

@@ -14,7 +14,7 @@ constexpr int kMaxRing = 7;  // edge removal looks at rings of 3..7 tetrahedra
 
 }  // namespace
 
-bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean) {
+bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean, int max_added) {
   std::array<uint32_t, kMaxRing> ids;
   size_t m = 0;
   for (uint32_t t : ed.star(u)) {
@@ -22,7 +22,7 @@ bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean) {
     if (m == kMaxRing) return false;
     ids[m++] = t;
   }
-  if (m < 3) return false;
+  if (m < 3 || static_cast<int>(m) - 4 > max_added) return false;
   // Each tetrahedron (u, v, x, y) gives the ring edge x -> y, directed so that the
   // tetrahedron is positive; the edges of an interior edge's ring form one cycle.
   std::array<std::pair<uint32_t, uint32_t>, kMaxRing> edges;
@@ -109,7 +109,8 @@ bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean) {
   return true;
 }
 
-bool RemoveFace(TetMeshEditor& ed, uint32_t t, int f, double mean) {
+bool RemoveFace(TetMeshEditor& ed, uint32_t t, int f, double mean, int max_added) {
+  if (max_added < 1) return false;
   const Tet tet = ed.tet(t);
   const uint32_t d = tet[f];
   uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
@@ -142,14 +143,14 @@ bool RemoveFace(TetMeshEditor& ed, uint32_t t, int f, double mean) {
   return true;
 }
 
-Flip FlipAround(TetMeshEditor& ed, uint32_t t, double mean) {
+Flip FlipAround(TetMeshEditor& ed, uint32_t t, double mean, int max_added) {
   const Tet tet = ed.tet(t);
   for (int a = 0; a < 4; ++a)
     for (int b = a + 1; b < 4; ++b) {
-      if (RemoveEdge(ed, tet[a], tet[b], mean)) return Flip::kEdge;
+      if (RemoveEdge(ed, tet[a], tet[b], mean, max_added)) return Flip::kEdge;
     }
   for (int f = 0; f < 4; ++f) {
-    if (RemoveFace(ed, t, f, mean)) return Flip::kFace;
+    if (RemoveFace(ed, t, f, mean, max_added)) return Flip::kFace;
   }
   return Flip::kNone;
 }

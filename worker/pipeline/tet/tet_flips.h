@@ -15,17 +15,20 @@ namespace sheetmesh {
 // Replaces the tetrahedra around the edge (u, v) by the best triangulation of the ring of
 // their other vertices, each triangle joined to u and to v (Shewchuk's edge removal).
 // False (nothing changed) when no triangulation is better, the edge lies on a facet or the
-// boundary, or more than 7 tetrahedra share it.
-bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean = -1);
+// boundary, more than 7 tetrahedra share it, or the m tetrahedra around it would become
+// 2m - 4, more than m + max_added.
+bool RemoveEdge(TetMeshEditor& ed, uint32_t u, uint32_t v, double mean = -1, int max_added = 3);
 
-// The 2-3 flip of the face of tetrahedron t opposite its vertex `f`.
-bool RemoveFace(TetMeshEditor& ed, uint32_t t, int f, double mean = -1);
+// The 2-3 flip of the face of tetrahedron t opposite its vertex `f` (one more
+// tetrahedron: not when max_added < 1).
+bool RemoveFace(TetMeshEditor& ed, uint32_t t, int f, double mean = -1, int max_added = 1);
 
 enum class Flip { kNone, kEdge, kFace };
 
 // One flip around tetrahedron t: the first of its six edges, then of its four faces, that
-// flips. Returns which kind flipped.
-Flip FlipAround(TetMeshEditor& ed, uint32_t t, double mean);
+// flips, adding at most max_added tetrahedra (a budget's room; 3 is any flip). Returns
+// which kind flipped.
+Flip FlipAround(TetMeshEditor& ed, uint32_t t, double mean, int max_added = 3);
 
 }  // namespace sheetmesh
 

@@ -47,18 +47,24 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
   report->sliding_vertices = freedom.sliding();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = ed.MinMean();
   absl::Status status;
-  // Whether an operation that adds at most `added` tetrahedra fits the budget. An edge
-  // removal of up to 7 tetrahedra adds at most 3; an insertion into a cavity of k adds at
-  // most k + 2, and cavities hold at most 128 (tet_cavity.cc).
+  // Under a budget: whether an insertion fits (into a cavity of k it adds at most k + 2,
+  // and cavities hold at most 128, tet_cavity.cc), and how many tetrahedra a flip may add
+  // (3 is any flip; at the budget only those that add none, 3-2 and 4-4, are tried).
+  constexpr uint64_t kInsertAdds = 130;
   auto fits = [&](uint64_t added) {
     if (options.max_tetrahedra == 0 || ed.live() + added <= options.max_tetrahedra) return true;
     ++report->over_budget;
     return false;
   };
-  constexpr uint64_t kFlipAdds = 3, kInsertAdds = 130;
+  auto flip_room = [&]() -> int {
+    if (options.max_tetrahedra == 0) return 3;
+    const uint64_t live = ed.live();
+    const uint64_t room = live < options.max_tetrahedra ? options.max_tetrahedra - live : 0;
+    return static_cast<int>(std::min<uint64_t>(room, 3));
+  };
   // One flip on tetrahedron t, for its worst (mean < 0) or for the mesh's mean; counts it.
   auto flip = [&](uint32_t t, double mean) {
-    switch (FlipAround(ed, t, mean)) {
+    switch (FlipAround(ed, t, mean, flip_room())) {
       case Flip::kEdge:
         ++report->edge_removals;
         return true;
@@ -77,7 +83,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       status = progress.Tick(i, bad.size(), 4096);
       const uint32_t t = bad[i];
       if (!ed.alive(t) || ed.quality(t) >= options.target_degrees) continue;
-      if (fits(kFlipAdds) && flip(t, -1)) {
+      if (flip(t, -1)) {
         ++changes;
       } else if (ed.quality(t) < options.insert_below_degrees && fits(kInsertAdds) &&
                  inserter.InsertNear(t)) {
@@ -90,7 +96,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     bad = ed.Bad(options.target_degrees);
     for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
       status = progress.Tick(i, bad.size(), 4096);
-      if (ed.alive(bad[i]) && fits(kFlipAdds) && flip(bad[i], mean)) ++changes;
+      if (ed.alive(bad[i]) && flip(bad[i], mean)) ++changes;
     }
     for (uint32_t v = 0; v < ed.num_nodes() && status.ok(); ++v) {
       if (!freedom.may_move(v) || ed.StarMin(v) >= options.target_degrees) continue;

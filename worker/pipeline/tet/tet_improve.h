@@ -64,7 +64,7 @@ struct TetImproveOptions {
   // insert_below_degrees get a new vertex at all, so the lower of the two applies.
   double split_sheets_below_degrees = 15.0;
   // A budget: no flip or insertion that could take the mesh past this many tetrahedra
-  // (0: none). The caller sets it from VolumeMeshOptions::max_tetrahedra.
+  // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from VolumeMeshOptions::max_tetrahedra.
   uint64_t max_tetrahedra = 0;
 };
 
@@ -76,7 +76,7 @@ struct TetImproveReport {
   uint64_t inserted_vertices = 0;  // new vertices (off slivers, or on sheets next to them)
   uint64_t sheet_face_splits = 0;  // of those, on a sheet face (splitting it in three)
   uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
-  uint64_t over_budget = 0;        // operations not tried for TetImproveOptions::max_tetrahedra
+  uint64_t over_budget = 0;        // insertions not tried for TetImproveOptions::max_tetrahedra
   uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)
   uint32_t sliding_vertices = 0;   // sheet vertices TetGen added, free within their sheet
                                    // triangle or along their sheet edge

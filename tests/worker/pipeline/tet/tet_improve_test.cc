@@ -97,6 +97,33 @@ TEST(TetImproveTest, AnEdgeOnAFacetFaceIsNeverRemoved) {
   EXPECT_EQ(report.edge_removals, 0u);
 }
 
+TEST(TetImproveTest, AtTheBudgetOnlyFlipsThatAddNoTetrahedronRun) {
+  // A flat bipyramid (u, v 0.2 off the ring's plane) as the two tetrahedra sharing a-b-c:
+  // the three around u-v are the better (a 2-3 flip), one more tetrahedron.
+  TetMesh m = Bipyramid();
+  m.nodes[3].z = -0.2;
+  m.nodes[4].z = 0.2;
+  m.tets = {{0, 1, 2, 4}, {1, 0, 2, 3}};
+  for (const Tet& t : m.tets) {
+    ASSERT_GT(TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]), 0);
+  }
+  TetImproveOptions at_budget;
+  at_budget.max_tetrahedra = 2;
+  TetMesh kept = m;
+  TetImproveReport report;
+  ASSERT_TRUE(ImproveTetMesh(&kept, {-0.5, -1, -0.2}, {1, 1, 0.2}, 5, at_budget, &report).ok());
+  EXPECT_EQ(kept.tets.size(), 2u);
+  EXPECT_EQ(report.face_removals, 0u);
+  // One more allowed: the flip, and no insertion past it.
+  TetImproveOptions room = at_budget;
+  room.max_tetrahedra = 3;
+  ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.2}, {1, 1, 0.2}, 5, room, &report).ok());
+  EXPECT_EQ(m.tets.size(), 3u);
+  EXPECT_EQ(report.face_removals, 1u);
+  EXPECT_EQ(report.inserted_vertices, 0u);
+  EXPECT_GT(report.min_dihedral_after, report.min_dihedral_before);
+}
+
 // A square sheet of n x n quads at height z over [a, b] in x and y, voxel coordinates, its
 // vertices lifted by `wave` alternately (nearly coplanar: the source of slivers).
 TriangleMesh WavySquare(double a, double b, double z, int n, double wave) {

@@ -407,6 +407,10 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "(0: never)"));
   rows.push_back(Number("plc.wedge_voxels", SM_MEMBER(volume.plc.wedge_voxels), "[0, 5]", "voxels",
                         "the farthest a vertex moves to open a wedge"));
+  rows.push_back(Number("plc.short_edge_voxels", SM_MEMBER(volume.plc.short_edge_voxels), "[0, 5]",
+                        "voxels",
+                        "collapse sheet edges shorter than this where that makes no fold or "
+                        "clash (0: none)"));
   rows.push_back(Number("plc.contact_voxels", SM_MEMBER(volume.plc.contact_voxels), "[0, 3]",
                         "voxels",
                         "a sheet vertex this near another sheet moves onto it, joining the two "

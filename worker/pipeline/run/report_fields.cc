@@ -152,6 +152,7 @@ nlohmann::json PlcStats::Fields() const {
           {"dropped_overlaps", dropped_overlaps},
           {"closed_slits", closed_slits},
           {"opened_wedges", opened_wedges},
+          {"collapsed_edges", collapsed_edges},
           {"mended_contacts", mended_contacts},
           {"unmended_contacts", unmended_contacts},
           {"contact_places", places},

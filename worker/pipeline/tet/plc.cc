@@ -159,6 +159,9 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   // Facets must not cut through each other: check before TetGen, and name the clashes.
   SM_RETURN_IF_ERROR(
       ResolveClashes(v, snapped.checked_clean, placement, options, &st, &plc, clashes));
+  if (options.short_edge_voxels > 0) {
+    plc.collapsed_edges = CollapseShortEdges(st, v, on_face, options.short_edge_voxels);
+  }
   if (options.cap_degrees < 180) plc.closed_slits = CloseSlits(st, v, options.cap_degrees);
   if (options.overlap_voxels > 0) {
     plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);

@@ -41,6 +41,8 @@ struct PlcStats {
                                      // splitting a face (PlcOptions::cap_degrees)
   uint32_t opened_wedges = 0;        // sheet vertices moved off a sheet face's plane
                                      // to open a narrow wedge (PlcOptions::wedge_degrees)
+  uint32_t collapsed_edges = 0;      // sheet edges shorter than
+                                     // PlcOptions::short_edge_voxels, collapsed
   uint32_t mended_contacts = 0;      // sheet vertices moved onto another sheet they
                                      // nearly touched (PlcOptions::contact_voxels)
   uint32_t unmended_contacts = 0;    // such vertices left where they are: the move made
@@ -115,6 +117,10 @@ struct PlcOptions {
   // at 0.75 the 192^3 phantom kept 8.12° and the rough network 7.59°, at 1.5 11.03° and
   // 10.00° (bench/RESULTS.md). 0: none.
   double contact_voxels = 1.5;
+  // Sheet edges shorter than this many voxels collapse to their midpoint, where that makes
+  // no fold, hole or clash: TetGen must keep every sheet edge, and one of 1.7 voxels among
+  // edges of 25 (the paper phantom at r = 15) pins a tetrahedron of 5.55°. 0: none.
+  double short_edge_voxels = 2.0;
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
   // spacing this many times the sheets' median edge next to them, growing outward at
   // `grading` (never past a quarter of the box's thinnest side). The lattice's tetrahedra

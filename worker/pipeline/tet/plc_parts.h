@@ -83,6 +83,12 @@ struct BoxPoint {
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
                       double gap, std::vector<Vec3>* unmended);
 
+// Collapses sheet edges shorter than max_length (voxels), shortest first, each to its
+// midpoint (or onto its end on the box), where that makes no fold or hole and turns no
+// face by over 30 degrees; a round that makes a clash is undone. Returns the number.
+uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
+                            const std::vector<uint8_t>& on_face, double max_length);
+
 // The graded lattice's levels: level l has spacing spacing · 2^l and fills the distances
 // from the sheets in [inner[l], outer[l]) (the last level: out to infinity).
 struct LatticeLevels {

@@ -1,4 +1,5 @@
-// A sheet vertex nearly touching another sheet is moved onto it in the PLC.
+// A sheet vertex nearly touching another sheet is moved onto it in the PLC, and a sheet
+// edge far shorter than the rest collapses.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -113,6 +114,40 @@ TEST(PlcContactsTest, AVertexNearAnotherSheetsVertexMergesIntoIt) {
   // 81 + 25 sheet vertices less the 5 merged, and the 8 box corners.
   EXPECT_EQ(plc.vertices.size() - plc.box_points - plc.seed_points, 8u + 81u + 20u);
   EXPECT_EQ(plc.sheet_triangles.size(), 128u + 32u);
+}
+
+TEST(PlcContactsTest, AnEdgeOfAVoxelCollapsesToItsMidpoint) {
+  // Sheet A with its vertex (30, 30) moved to (34, 30), 1 voxel from (35, 30) (still inside
+  // its star, so the sheet stays flat and unfolded).
+  TriangleMesh a = SheetA();
+  const uint32_t moved = 4 * 9 + 4;
+  ASSERT_NEAR(Norm(a.vertices[moved] - Vec3(30, 30, 20)), 0, 1e-12);
+  a.vertices[moved] = {34, 30, 20};
+  PlcOptions off;
+  off.short_edge_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(a, {60, 60, 60}, {}, off));
+  EXPECT_EQ(kept.collapsed_edges, 0u);
+  EXPECT_EQ(kept.sheet_triangles.size(), 128u);
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(a, {60, 60, 60}, {}, {}));
+  EXPECT_EQ(plc.collapsed_edges, 1u);
+  EXPECT_EQ(plc.sheet_triangles.size(), 126u);  // the two on the edge go
+  bool mid = false;
+  for (const Vec3& p : plc.vertices) {
+    EXPECT_GT(Norm(p - Vec3(34, 30, 20)), 1e-9);
+    EXPECT_GT(Norm(p - Vec3(35, 30, 20)), 1e-9);
+    mid = mid || Norm(p - Vec3(34.5, 30, 20)) < 1e-9;
+  }
+  EXPECT_TRUE(mid);
+  double area = 0;
+  for (const Face& t : plc.sheet_triangles) {
+    area += Area({plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]});
+  }
+  EXPECT_NEAR(area, 40.0 * 40, 1e-6);  // still the whole flat sheet, no hole or fold
+  // And it meshes, conforming.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(a, {60, 60, 60}, {}, {}));
+  EXPECT_EQ(r.collapsed_edges, 1u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
 }
 
 }  // namespace

@@ -20,11 +20,12 @@ namespace {
 // k + 1) at `at`, or into its interior at `at`.
 struct Contact {
   enum Kind { kCorner, kEdge, kInterior } kind = kInterior;
-  uint32_t vertex = 0;  // the sheet vertex that moves
-  uint32_t face = 0;    // the triangle it touches
-  int k = 0;            // the corner or edge
-  Vec3 at;              // where the vertex goes
-  double distance = 0;  // how far that is
+  uint32_t vertex = 0;               // the sheet vertex that moves
+  uint32_t face = 0;                 // the triangle it touches
+  int k = 0;                         // the corner or edge
+  Vec3 at;                           // where the vertex goes
+  double distance = 0;               // how far that is
+  std::vector<uint32_t> edge_faces;  // kEdge: the faces on that edge, which split too
 };
 
 Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
@@ -101,6 +102,7 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
   for (size_t i = 0; i < contacts.size(); ++i) {
     const Contact& c = contacts[i];
     const int by = static_cast<int>(i);
+    // (No other contact of the round touches c's faces, so they are as found.)
     const Face t = s.faces[c.face];
     if (c.kind == Contact::kCorner) continue;
     v[c.vertex] = c.at;
@@ -114,12 +116,10 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
     }
     // Every face on edge (a, b) splits at u into (..a, u..) and (..u, b..).
     const uint32_t a = t[c.k], b = t[(c.k + 1) % 3];
-    const size_t n = s.faces.size();
-    for (uint32_t f = 0; f < n; ++f) {
+    for (uint32_t f : c.edge_faces) {
       const Face g = s.faces[f];
-      const int ia = g[0] == a ? 0 : g[1] == a ? 1 : g[2] == a ? 2 : -1;
-      const int ib = g[0] == b ? 0 : g[1] == b ? 1 : g[2] == b ? 2 : -1;
-      if (ia < 0 || ib < 0) continue;
+      const int ia = g[0] == a ? 0 : g[1] == a ? 1 : 2;
+      const int ib = g[0] == b ? 0 : g[1] == b ? 1 : 2;
       Face first = g, second = g;
       first[ib] = c.vertex;
       second[ia] = c.vertex;
@@ -231,7 +231,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
               [](const Contact& a, const Contact& b) { return a.distance < b.distance; });
     std::vector<uint8_t> busy_vertex(v.size(), 0), busy_face(s.faces.size(), 0);
     std::vector<Contact> round_contacts;
-    for (const Contact& c : found) {
+    for (Contact& c : found) {
       const Face& t = s.faces[c.face];
       bool busy = busy_vertex[c.vertex] || busy_face[c.face] || busy_vertex[t[0]] ||
                   busy_vertex[t[1]] || busy_vertex[t[2]];
@@ -246,7 +246,12 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
       busy_face[c.face] = 1;
       for (uint32_t f : faces_of[c.vertex]) busy_face[f] = 1;
       if (c.kind == Contact::kEdge) {
-        for (uint32_t f : faces_of[t[c.k]]) busy_face[f] = 1;
+        const uint32_t b = t[(c.k + 1) % 3];
+        for (uint32_t f : faces_of[t[c.k]]) {
+          busy_face[f] = 1;
+          const Face& g = s.faces[f];
+          if (g[0] == b || g[1] == b || g[2] == b) c.edge_faces.push_back(f);
+        }
       }
       round_contacts.push_back(c);
     }

@@ -3,6 +3,7 @@
 // tetrahedron as flat as the edge is short, with all four corners on the sheet.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
@@ -15,6 +16,7 @@ namespace sheetmesh {
 uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
                             const std::vector<uint8_t>& on_face, double max_length) {
   if (!(max_length > 0)) return 0;
+  const double max_turn_cos = std::cos(30 * std::numbers::pi / 180);
   uint32_t collapsed = 0;
   for (int round = 0; round < 3; ++round) {
     std::vector<std::vector<uint32_t>> faces_of(v.size());
@@ -84,7 +86,7 @@ uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
             if (t[k] == a || t[k] == b) now[k] = to;
           }
           const Vec3 n0 = AreaVector(old), n1 = AreaVector(now);
-          ok = ok && Dot(n0, n1) > std::cos(30 * 3.14159265358979 / 180) * Norm(n0) * Norm(n1) &&
+          ok = ok && Dot(n0, n1) > max_turn_cos * Norm(n0) * Norm(n1) &&
                AngleRangeDegrees(now).second < 170;
         }
       }

@@ -64,7 +64,8 @@ struct TetImproveOptions {
   // insert_below_degrees get a new vertex at all, so the lower of the two applies.
   double split_sheets_below_degrees = 15.0;
   // A budget: no flip or insertion that could take the mesh past this many tetrahedra
-  // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from VolumeMeshOptions::max_tetrahedra.
+  // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from
+  // VolumeMeshOptions::max_tetrahedra.
   uint64_t max_tetrahedra = 0;
 };
 

@@ -130,6 +130,7 @@ nlohmann::json TetImproveReport::Fields() const {
           {"sheet_face_splits", sheet_face_splits},
           {"sheet_edge_splits", sheet_edge_splits},
           {"over_budget", over_budget},
+          {"retries_skipped", retries_skipped},
           {"movable_vertices", movable_vertices},
           {"sliding_vertices", sliding_vertices},
           {"min_dihedral_before", min_dihedral_before},

@@ -5,6 +5,47 @@
 namespace sheetmesh {
 namespace {
 
+// A set of tetrahedron ids for one cavity: membership is a mark per id (this epoch's
+// number), so a test costs no hashing and starting a new set costs nothing. Each thread
+// keeps its own two (the cavity and the tetrahedra dropped from it).
+class IdSet {
+ public:
+  void Clear() {
+    members_.clear();
+    if (++epoch_ == 0) {  // wrapped: forget every old mark
+      std::fill(mark_.begin(), mark_.end(), 0);
+      epoch_ = 1;
+    }
+  }
+  bool contains(uint32_t id) const { return id < mark_.size() && mark_[id] == epoch_; }
+  void insert(uint32_t id) {
+    if (id >= mark_.size()) mark_.resize(id + 1 + id / 4, 0);
+    if (mark_[id] == epoch_) return;
+    mark_[id] = epoch_;
+    members_.push_back(id);
+  }
+  void erase(uint32_t id) {
+    if (contains(id)) mark_[id] = 0;
+  }
+  // The members in increasing order (an erased id is left out, a re-inserted one counted
+  // once).
+  std::vector<uint32_t> Sorted() const {
+    std::vector<uint32_t> v;
+    v.reserve(members_.size());
+    for (uint32_t id : members_) {
+      if (contains(id)) v.push_back(id);
+    }
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    return v;
+  }
+
+ private:
+  std::vector<uint32_t> mark_;
+  std::vector<uint32_t> members_;
+  uint32_t epoch_ = 0;
+};
+
 // Whether `face` is a facet face the cavity may not cross (one the new vertex does not
 // split).
 bool Blocks(const TetMeshEditor& ed, const FaceKey& face,
@@ -17,8 +58,8 @@ bool Blocks(const TetMeshEditor& ed, const FaceKey& face,
 // a face must stay, so it bounds the cavity on both sides and one side then fails to see
 // the new vertex). Facets in `opened` are the ones the new vertex splits: they do not
 // bound the cavity.
-bool OnCavityBoundary(const TetMeshEditor& ed, const absl::flat_hash_set<uint32_t>& in, uint32_t x,
-                      int f, const absl::flat_hash_set<FaceKey>& opened) {
+bool OnCavityBoundary(const TetMeshEditor& ed, const IdSet& in, uint32_t x, int f,
+                      const absl::flat_hash_set<FaceKey>& opened) {
   const uint32_t y = ed.Neighbor(x, f);
   if (y == UINT32_MAX || !in.contains(y)) return true;
   return Blocks(ed, TetFace(ed.tet(x), f), opened);
@@ -69,33 +110,42 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
                 const std::vector<std::pair<uint32_t, uint32_t>>& keep,
                 std::vector<uint32_t>* cavity, std::vector<Tet>* fill) {
   constexpr size_t kMaxCavity = 128;
-  absl::flat_hash_set<uint32_t> in(seeds.begin(), seeds.end());
+  thread_local IdSet in, dropped;
+  in.Clear();
+  dropped.Clear();
+  size_t size = 0;  // of `in`
+  auto add = [&](uint32_t y) {
+    if (in.contains(y)) return;
+    in.insert(y);
+    ++size;
+  };
+  for (uint32_t s : seeds) add(s);
   std::vector<uint32_t> queue(seeds.begin(), seeds.end());
-  while (!queue.empty() && in.size() < kMaxCavity) {
+  while (!queue.empty() && size < kMaxCavity) {
     const uint32_t x = queue.back();
     queue.pop_back();
     for (int f = 0; f < 4; ++f) {
       if (Blocks(ed, TetFace(ed.tet(x), f), opened)) continue;
       const uint32_t y = ed.Neighbor(x, f);
       if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(ed, ed.tet(y), p)) continue;
-      in.insert(y);
+      add(y);
       queue.push_back(y);
     }
   }
   // Make every boundary face see p, growing across it where allowed, else dropping its
   // owner; then drop tetrahedra until no vertex is inside the cavity (it would be lost).
   // A dropped tetrahedron never comes back, so this ends.
-  absl::flat_hash_set<uint32_t> dropped;
   auto drop = [&](uint32_t x) {
     if (std::find(seeds.begin(), seeds.end(), x) != seeds.end()) return false;
+    if (in.contains(x)) --size;
     in.erase(x);
     dropped.insert(x);
     return true;
   };
   for (int round = 0;; ++round) {
-    if (round == 64 || in.size() > kMaxCavity) return false;
+    if (round == 64 || size > kMaxCavity) return false;
     std::vector<std::pair<uint32_t, int>> hidden;
-    for (uint32_t x : Sorted(in)) {
+    for (uint32_t x : in.Sorted()) {
       for (int f = 0; f < 4; ++f) {
         if (!OnCavityBoundary(ed, in, x, f, opened)) continue;
         const auto face = ed.InwardFace(x, f);
@@ -107,14 +157,14 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
       if (!in.contains(x)) continue;
       const uint32_t y = ed.Neighbor(x, f);
       if (y != UINT32_MAX && !dropped.contains(y) && !Blocks(ed, TetFace(ed.tet(x), f), opened)) {
-        in.insert(y);
+        add(y);
       } else if (!drop(x)) {
         return false;
       }
     }
     if (!hidden.empty()) continue;
     bool inside = false;
-    for (uint32_t x : Sorted(in)) {
+    for (uint32_t x : in.Sorted()) {
       for (uint32_t w : ed.tet(x)) {
         if (!in.contains(x)) break;
         const bool all_in = std::all_of(ed.star(w).begin(), ed.star(w).end(),
@@ -145,7 +195,7 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
     if (!inside) break;
   }
   // Fill: p joined to every boundary face; every vertex of the cavity must stay on it.
-  *cavity = Sorted(in);
+  *cavity = in.Sorted();
   fill->clear();
   absl::flat_hash_set<uint32_t> on_boundary, all;
   for (uint32_t x : *cavity) {

@@ -76,6 +76,19 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     }
     return false;
   };
+  // The work list: the clock at a tetrahedron's or vertex's last failed try (0: none). A try
+  // whose neighbourhood has not changed since would fail again (tet_mesh_editor.h), so it is
+  // skipped; a flip that failed for want of room under the budget is tried again.
+  std::vector<uint64_t> worst_tried, mean_tried, move_tried(ed.num_nodes(), 0);
+  auto skip = [&](std::vector<uint64_t>& tried, uint32_t t) {
+    if (t >= tried.size()) tried.resize(t + 1 + t / 4, 0);
+    if (tried[t] == 0 || !ed.UnchangedSince(ed.tet(t), tried[t])) return false;
+    ++report->retries_skipped;
+    return true;
+  };
+  auto remember_failure = [&](std::vector<uint64_t>& tried, uint32_t t) {
+    if (flip_room() == 3) tried[t] = ed.clock();
+  };
   for (int pass = 0; pass < options.passes && status.ok(); ++pass) {
     uint64_t changes = 0;
     std::vector<uint32_t> bad = ed.Bad(options.target_degrees);
@@ -83,26 +96,45 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       status = progress.Tick(i, bad.size(), 4096);
       const uint32_t t = bad[i];
       if (!ed.alive(t) || ed.quality(t) >= options.target_degrees) continue;
-      if (flip(t, -1)) {
-        ++changes;
-      } else if (ed.quality(t) < options.insert_below_degrees && fits(kInsertAdds) &&
-                 inserter.InsertNear(t)) {
+      if (!skip(worst_tried, t)) {
+        if (flip(t, -1)) {
+          ++changes;
+          continue;
+        }
+        remember_failure(worst_tried, t);
+      }
+      if (ed.quality(t) < options.insert_below_degrees && fits(kInsertAdds) &&
+          inserter.InsertNear(t)) {
         ++report->inserted_vertices;
         ++changes;
       }
     }
-    // Then flips that raise the mean.
+    // Then flips that raise the mean (a try that failed at an earlier pass's mean is not
+    // made again while its neighbourhood stands: the mean moves little between passes).
     const double mean = ed.MinMean().second;
     bad = ed.Bad(options.target_degrees);
     for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
       status = progress.Tick(i, bad.size(), 4096);
-      if (ed.alive(bad[i]) && flip(bad[i], mean)) ++changes;
+      const uint32_t t = bad[i];
+      if (!ed.alive(t) || skip(mean_tried, t)) continue;
+      if (flip(t, mean)) {
+        ++changes;
+      } else {
+        remember_failure(mean_tried, t);
+      }
     }
+    move_tried.resize(ed.num_nodes(), 0);
     for (uint32_t v = 0; v < ed.num_nodes() && status.ok(); ++v) {
       if (!freedom.may_move(v) || ed.StarMin(v) >= options.target_degrees) continue;
+      if (move_tried[v] != 0 && ed.UnchangedSince(v, move_tried[v])) {
+        ++report->retries_skipped;
+        continue;
+      }
       if (SmoothVertex(ed, freedom, v, smoothing)) {
         ++report->smoothing_moves;
         ++changes;
+      } else {
+        move_tried[v] = ed.clock();
       }
     }
     report->passes = pass + 1;

@@ -78,6 +78,7 @@ struct TetImproveReport {
   uint64_t sheet_face_splits = 0;  // of those, on a sheet face (splitting it in three)
   uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
   uint64_t over_budget = 0;        // insertions not tried for TetImproveOptions::max_tetrahedra
+  uint64_t retries_skipped = 0;    // flips and moves not tried again: failed, nothing changed
   uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)
   uint32_t sliding_vertices = 0;   // sheet vertices TetGen added, free within their sheet
                                    // triangle or along their sheet edge

@@ -4,7 +4,9 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_
 
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "common/types.h"
@@ -25,15 +27,29 @@ struct TetMesh {
   size_t num_sheet_faces() const;
 };
 
-// Signed volume of a tetrahedron: ((b - a) x (c - a)) . (d - a) / 6.
-double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+// Signed volume of a tetrahedron: ((b - a) x (c - a)) . (d - a) / 6. (These few are inline:
+// the improvement pass calls them millions of times.)
+inline double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return Dot(Cross(b - a, c - a), d - a) / 6.0;
+}
 
 // The centre of the sphere through a, b, c and d; false when they are coplanar.
-bool Circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3* centre);
+inline bool Circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3* centre) {
+  const Vec3 u = b - a, w = c - a, t = d - a;
+  const double det = 2 * Dot(u, Cross(w, t));
+  if (!(std::abs(det) > 0)) return false;
+  *centre = a + (Cross(w, t) * Norm2(u) + Cross(t, u) * Norm2(w) + Cross(u, w) * Norm2(t)) / det;
+  return true;
+}
 
 // A triangle's vertex ids in increasing order: the same key for every orientation.
 using FaceKey = std::array<uint32_t, 3>;
-FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c);
+inline FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {a, b, c};
+}
 // The face of t opposite its vertex f, as a key.
 inline FaceKey TetFace(const Tet& t, int f) {
   return SortedFace(t[(f + 1) % 4], t[(f + 2) % 4], t[(f + 3) % 4]);

@@ -15,6 +15,7 @@ std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
 TetMeshEditor::TetMeshEditor(TetMesh* mesh) : m_(*mesh) {
   const size_t n = m_.nodes.size();
   star_.resize(n);
+  changed_.assign(n, 0);
   q_.resize(m_.tets.size());
   dead_.assign(m_.tets.size(), 0);
   failed_.assign(m_.tets.size(), 0);
@@ -37,6 +38,7 @@ uint32_t TetMeshEditor::AddNode(const Vec3& p) {
   const uint32_t v = num_nodes();
   m_.nodes.push_back(p);
   star_.emplace_back();
+  changed_.push_back(clock_);
   sheet_faces_of_.emplace_back();
   return v;
 }
@@ -44,6 +46,7 @@ uint32_t TetMeshEditor::AddNode(const Vec3& p) {
 void TetMeshEditor::Remeasure(uint32_t t) {
   q_[t] = Quality(m_.tets[t]);
   failed_[t] = 0;
+  Stamp(m_.tets[t]);
 }
 
 double TetMeshEditor::Quality(const Tet& t) const {
@@ -52,6 +55,7 @@ double TetMeshEditor::Quality(const Tet& t) const {
 
 void TetMeshEditor::Kill(uint32_t t) {
   dead_[t] = 1;
+  Stamp(m_.tets[t]);
   for (uint32_t v : m_.tets[t]) {
     auto& s = star_[v];
     auto it = std::find(s.begin(), s.end(), t);
@@ -80,6 +84,7 @@ void TetMeshEditor::Add(const Tet& tet) {
     q_.push_back(Quality(tet));
   }
   for (uint32_t v : tet) star_[v].push_back(t);
+  Stamp(tet);
 }
 
 const uint32_t* TetMeshEditor::FacetFaceIndex(const FaceKey& face) const {

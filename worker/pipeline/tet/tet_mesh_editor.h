@@ -84,6 +84,17 @@ class TetMeshEditor {
   // The worst quality of v's star.
   double StarMin(uint32_t v) const;
 
+  // A clock of the edits: every Kill, Add and Remeasure ticks it and stamps the corners of
+  // its tetrahedron. What a flip at t or a move of v looks at lies in the stars of t's
+  // corners or of v (a vertex of the star moving remeasures the star's tetrahedra there),
+  // so one that failed at clock() == s fails again while no such stamp is past s: the
+  // work list of the improvement skips those.
+  uint64_t clock() const { return clock_; }
+  bool UnchangedSince(uint32_t v, uint64_t s) const { return changed_[v] <= s; }
+  bool UnchangedSince(const Tet& t, uint64_t s) const {
+    return changed_[t[0]] <= s && changed_[t[1]] <= s && changed_[t[2]] <= s && changed_[t[3]] <= s;
+  }
+
   // Writes the live tetrahedra back into the mesh, in order.
   void Finish();
 
@@ -94,6 +105,12 @@ class TetMeshEditor {
   std::vector<uint8_t> dead_;
   std::vector<uint8_t> failed_;  // per tetrahedron: insertion tried and failed, unchanged since
   std::vector<uint32_t> free_;   // dead slots to reuse
+  uint64_t clock_ = 1;
+  std::vector<uint64_t> changed_;  // per vertex: clock() at the last edit of its star
+  void Stamp(const Tet& t) {
+    ++clock_;
+    for (uint32_t v : t) changed_[v] = clock_;
+  }
   // Per tetrahedron and face: the neighbour last found there (kUnknown: none yet). A face
   // shared by two live tetrahedra has no third, so a remembered one that is alive and
   // holds the face is the neighbour.

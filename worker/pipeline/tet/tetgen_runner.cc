@@ -142,24 +142,6 @@ size_t TetMesh::num_sheet_faces() const {
   return n;
 }
 
-double TetVolume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return Dot(Cross(b - a, c - a), d - a) / 6.0;
-}
-
-bool Circumcentre(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3* centre) {
-  const Vec3 u = b - a, w = c - a, t = d - a;
-  const double det = 2 * Dot(u, Cross(w, t));
-  if (!(std::abs(det) > 0)) return false;
-  *centre = a + (Cross(w, t) * Norm2(u) + Cross(t, u) * Norm2(w) + Cross(u, w) * Norm2(t)) / det;
-  return true;
-}
-
-FaceKey SortedFace(uint32_t a, uint32_t b, uint32_t c) {
-  FaceKey k = {a, b, c};
-  std::sort(k.begin(), k.end());
-  return k;
-}
-
 std::string TetgenSwitches(const TetgenOptions& o) {
   std::string s = "-pzQ";
   if (o.max_radius_edge_ratio > 0) {

@@ -10,6 +10,7 @@
 #include "absl/container/flat_hash_set.h"
 #include "tests/testing/status_matchers.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/tet_mesh_editor.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -95,6 +96,30 @@ TEST(TetImproveTest, AnEdgeOnAFacetFaceIsNeverRemoved) {
   ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5, {}, &report).ok());
   EXPECT_EQ(m.tets.size(), 3u);
   EXPECT_EQ(report.edge_removals, 0u);
+}
+
+// The work list's clock: an edit stamps the corners of its tetrahedron and nothing else, so
+// a try at a tetrahedron away from the edit counts as unchanged and is not made again.
+TEST(TetImproveTest, AnEditStampsOnlyTheCornersOfItsTetrahedron) {
+  TetMesh m = Bipyramid();
+  TetMeshEditor ed(&m);
+  const uint64_t before = ed.clock();
+  const Tet first = ed.tet(0), second = ed.tet(1);  // {u, v, a, b} and {u, v, b, c}
+  EXPECT_TRUE(ed.UnchangedSince(first, before));
+  ed.Kill(0);
+  EXPECT_GT(ed.clock(), before);
+  EXPECT_FALSE(ed.UnchangedSince(first, before));
+  EXPECT_FALSE(ed.UnchangedSince(second, before)) << "it shares u, v and b";
+  EXPECT_TRUE(ed.UnchangedSince(2u, before)) << "c is no corner of the killed tetrahedron";
+  const uint64_t after_kill = ed.clock();
+  ed.Add(first);
+  EXPECT_FALSE(ed.UnchangedSince(3u, after_kill));
+  EXPECT_TRUE(ed.UnchangedSince(2u, after_kill));
+  const uint32_t w = ed.AddNode({0, 0, 0});
+  EXPECT_FALSE(ed.UnchangedSince(w, after_kill)) << "a new vertex is as new as the clock";
+  const uint64_t now = ed.clock();
+  ed.Remeasure(1);
+  EXPECT_FALSE(ed.UnchangedSince(2u, now)) << "remeasuring after a move stamps too";
 }
 
 TEST(TetImproveTest, AtTheBudgetOnlyFlipsThatAddNoTetrahedronRun) {

@@ -59,16 +59,30 @@ class Smoother {
   double Shape(const Tet& t, double q) const { return BlendedShape(ed_, t, q, o_.radius_weight); }
   Vec3 Masked(const Vec3& d) const { return fr_.Constrain(v_, d); }
 
-  // The star's worst and sum of shapes with the vertex at p.
-  void Eval(const Vec3& p, double* mn, double* sum) {
+  // The star's worst and sum of shapes with the vertex at p. A position with a tetrahedron
+  // under `reject_below` is refused whatever its sum, so the count stops there (its `mn` is
+  // under that bound, its sum left partial); so it does at an inverted tetrahedron, whose
+  // shape still counts. The angles come first and the shapes, which cost as much again,
+  // only for a position not refused.
+  void Eval(const Vec3& p, double* mn, double* sum, double reject_below = -1e300) {
     ed_.node(v_) = p;
     *mn = 1e300;
     *sum = 0;
+    size_t n = 0;
+    q_.resize(star_.size());
+    bool refused = false;
     for (uint32_t t : star_) {
       const double q = ed_.Quality(ed_.tet(t));
+      q_[n++] = q;
       *mn = std::min(*mn, q);
-      *sum += Shape(ed_.tet(t), q);
+      if (q < reject_below) {
+        refused = true;
+        break;
+      }
       if (q < 0) break;
+    }
+    if (!refused) {
+      for (size_t i = 0; i < n; ++i) *sum += Shape(ed_.tet(star_[i]), q_[i]);
     }
     ed_.node(v_) = start_;
   }
@@ -81,13 +95,14 @@ class Smoother {
   }
 
   // Backtracking along dir from the best: the first step (halving from max_step) whose
-  // star (worst, sum) `accept` takes becomes the new best.
+  // star (worst, sum) `accept` takes becomes the new best; `accept` never takes a worst
+  // under `reject_below` (Eval stops counting there).
   template <class Accept>
-  bool Search(const Vec3& dir, double max_step, Accept accept) {
+  bool Search(const Vec3& dir, double max_step, double reject_below, Accept accept) {
     for (double step = max_step; step > 1e-3 * length_; step *= 0.5) {
       const Vec3 p = fr_.Place(v_, best_ + dir * step);
       double mn, sum;
-      Eval(p, &mn, &sum);
+      Eval(p, &mn, &sum, reject_below);
       if (accept(mn, sum)) {
         Take(p, mn, sum);
         return true;
@@ -101,7 +116,7 @@ class Smoother {
   void TakeIfBetter(const Vec3& target) {
     const Vec3 p = fr_.Place(v_, start_ + Masked(target - start_));
     double mn, sum;
-    Eval(p, &mn, &sum);
+    Eval(p, &mn, &sum, std::min(cur_min_, o_.floor_degrees));
     if (mn > cur_min_ + kGain ||
         (mn >= std::min(cur_min_, o_.floor_degrees) && sum > cur_sum_ + kGain)) {
       Take(p, mn, sum);
@@ -174,7 +189,8 @@ class Smoother {
       const double dn = Norm(dir);
       if (!(dn > 1e-9 * Norm(g[0]))) break;
       dir = dir / dn;
-      if (!Search(dir, 0.2 * length_, [&](double mn, double) { return mn > cur_min_ + kGain; })) {
+      if (!Search(dir, 0.2 * length_, cur_min_ + kGain,
+                  [&](double mn, double) { return mn > cur_min_ + kGain; })) {
         break;
       }
     }
@@ -198,9 +214,10 @@ class Smoother {
       g = Masked(g);
       const double gn = Norm(g);
       if (!(gn > 0)) break;
-      if (!Search(g / gn, 0.1 * length_, [&](double mn, double sum) {
-            return mn >= std::min(cur_min_, o_.floor_degrees) && sum > cur_sum_ + kGain;
-          })) {
+      if (!Search(g / gn, 0.1 * length_, std::min(cur_min_, o_.floor_degrees),
+                  [&](double mn, double sum) {
+                    return mn >= std::min(cur_min_, o_.floor_degrees) && sum > cur_sum_ + kGain;
+                  })) {
         break;
       }
     }
@@ -216,6 +233,7 @@ class Smoother {
   Vec3 centroid_{0, 0, 0};
   double cur_min_ = 1e300, cur_sum_ = 0, length_ = 0;
   bool moved_ = false;
+  std::vector<double> q_;  // Eval's angles, star order
 };
 
 }  // namespace

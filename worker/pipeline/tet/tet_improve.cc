@@ -123,19 +123,28 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
         remember_failure(mean_tried, t);
       }
     }
+    // Then the smoothing, on all cores (tet_smoothing.h).
     move_tried.resize(ed.num_nodes(), 0);
-    for (uint32_t v = 0; v < ed.num_nodes() && status.ok(); ++v) {
-      if (!freedom.may_move(v) || ed.StarMin(v) >= options.target_degrees) continue;
-      if (move_tried[v] != 0 && ed.UnchangedSince(v, move_tried[v])) {
-        ++report->retries_skipped;
-        continue;
-      }
-      if (SmoothVertex(ed, freedom, v, smoothing)) {
+    std::vector<uint32_t> todo;
+    for (uint32_t v = 0; v < ed.num_nodes(); ++v) {
+      if (freedom.may_move(v)) todo.push_back(v);
+    }
+    auto wants = [&](uint32_t v) {
+      if (ed.StarMin(v) >= options.target_degrees) return false;
+      if (move_tried[v] == 0 || !ed.UnchangedSince(v, move_tried[v])) return true;
+      ++report->retries_skipped;
+      return false;
+    };
+    auto done = [&](uint32_t v, bool moved) {
+      if (moved) {
         ++report->smoothing_moves;
         ++changes;
       } else {
         move_tried[v] = ed.clock();
       }
+    };
+    if (status.ok()) {
+      status = SmoothVertices(ed, freedom, std::move(todo), smoothing, wants, done, progress);
     }
     report->passes = pass + 1;
     if (status.ok()) status = progress.Update(static_cast<double>(pass + 1) / options.passes);

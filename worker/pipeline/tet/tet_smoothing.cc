@@ -1,9 +1,13 @@
 #include "worker/pipeline/tet/tet_smoothing.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
+#include "common/status_macros.h"
 #include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_quality.h"
 
@@ -42,16 +46,15 @@ class Smoother {
   }
 
   // Tries the ring's centroid and the optimal-Delaunay point, then climbs: first the worst
-  // tetrahedra, then the mean. Leaves the vertex at the best position; true if it moved.
+  // tetrahedra, then the mean. Leaves the vertex at the best position; true if it moved
+  // (the caller measures the star again). Reads the vertex's star and its ring and writes
+  // only the vertex's position.
   bool Run() {
     TakeIfBetter(centroid_);
     TakeOptimalDelaunay();
     AscendWorst();
     AscendMean();
     ed_.node(v_) = best_;
-    if (moved_) {
-      for (uint32_t t : star_) ed_.Remeasure(t);
-    }
     return moved_;
   }
 
@@ -240,8 +243,53 @@ class Smoother {
 
 bool SmoothVertex(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v,
                   const SmoothingOptions& options) {
-  if (!fr.may_move(v)) return false;
-  return Smoother(ed, fr, v, options).Run();
+  if (!fr.may_move(v) || !Smoother(ed, fr, v, options).Run()) return false;
+  for (uint32_t t : ed.star(v)) ed.Remeasure(t);
+  return true;
+}
+
+absl::Status SmoothVertices(TetMeshEditor& ed, const VertexFreedom& fr, std::vector<uint32_t> todo,
+                            const SmoothingOptions& options,
+                            const std::function<bool(uint32_t)>& wants,
+                            const std::function<void(uint32_t, bool)>& done,
+                            const Progress& progress) {
+  std::vector<uint32_t> taken_in(ed.num_nodes(), 0);  // the round that took v or a neighbour
+  std::vector<uint32_t> round, waiting;
+  std::vector<uint8_t> moved;
+  const size_t total = todo.size();
+  size_t finished = 0;
+  for (uint32_t r = 1; !todo.empty(); ++r) {
+    round.clear();
+    waiting.clear();
+    for (uint32_t v : todo) {
+      if (taken_in[v] == r) {
+        waiting.push_back(v);
+        continue;
+      }
+      ++finished;
+      if (!fr.may_move(v) || !wants(v)) continue;
+      round.push_back(v);
+      for (uint32_t t : ed.star(v))
+        for (uint32_t w : ed.tet(t)) taken_in[w] = r;
+    }
+    moved.assign(round.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, round.size(), 8),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t i = range.begin(); i != range.end(); ++i) {
+                          moved[i] = Smoother(ed, fr, round[i], options).Run();
+                        }
+                      });
+    for (size_t i = 0; i < round.size(); ++i) {
+      if (moved[i]) {
+        for (uint32_t t : ed.star(round[i])) ed.Remeasure(t);
+      }
+      done(round[i], moved[i] != 0);
+    }
+    todo.swap(waiting);
+    SM_RETURN_IF_ERROR(
+        progress.Tick(static_cast<int64_t>(finished), static_cast<int64_t>(total), 1));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh

@@ -2,9 +2,11 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "absl/container/flat_hash_set.h"
@@ -232,6 +234,30 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
     }
   }
   EXPECT_GT(slid.size(), 0u);
+}
+
+// The smoothing runs on all cores in rounds of vertices that share no tetrahedron: the mesh
+// is the same, to the bit, on one thread and on several.
+TEST(TetImproveTest, TheSameMeshOnOneThreadAndOnAll) {
+  const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
+  VolumeMeshOptions o;
+  o.tetgen.max_volume = 4;
+  o.tetgen.steiner_on_sheets = true;
+  o.plc.lattice = 0;
+  std::optional<VolumeMeshResult> one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    SM_ASSERT_OK_AND_ASSIGN(one, BuildVolumeMesh(sheet, {20, 20, 20}, {}, o));
+  }
+  tbb::global_control several(tbb::global_control::max_allowed_parallelism, 4);
+  SM_ASSERT_OK_AND_ASSIGN(const VolumeMeshResult all, BuildVolumeMesh(sheet, {20, 20, 20}, {}, o));
+  ASSERT_GT(all.improvement.smoothing_moves, 100u);
+  EXPECT_EQ(all.improvement.smoothing_moves, one->improvement.smoothing_moves);
+  EXPECT_EQ(all.mesh.tets, one->mesh.tets);
+  ASSERT_EQ(all.mesh.nodes.size(), one->mesh.nodes.size());
+  for (size_t v = 0; v < all.mesh.nodes.size(); ++v) {
+    ASSERT_EQ(all.mesh.nodes[v], one->mesh.nodes[v]) << "node " << v;
+  }
 }
 
 TEST(TetImproveTest, SmoothingForTheBlendedShapeLiftsTheRadiusAspect) {

@@ -1,5 +1,8 @@
 #include "worker/pipeline/tet/tet_insertion.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <utility>
 
@@ -72,19 +75,32 @@ bool VertexInserter::InsertNear(uint32_t t) {
         }
     heights.push_back(0.12);
   }
+  // The candidates are measured on all cores (each reads the mesh only) and the best is
+  // taken in their order, the first of equals, as one thread would.
+  std::vector<Candidate> candidates(directions.size() * heights.size());
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    candidates[i].p =
+        centre + directions[i / heights.size()] * (heights[i % heights.size()] * length);
+  }
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, candidates.size(), 2),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+          Candidate& c = candidates[i];
+          if (!Cavity(ed_, t, c.p, &c.cavity, &c.fill)) {
+            c.cavity.clear();
+            continue;
+          }
+          c.quality = 1e300;
+          for (const Tet& x : c.fill) {
+            c.quality =
+                std::min(c.quality, MinDihedralDegrees(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), c.p));
+          }
+        }
+      });
   Candidate best;
-  for (const Vec3& n : directions) {
-    for (double h : heights) {
-      Candidate c;
-      c.p = centre + n * (h * length);
-      if (!Cavity(ed_, t, c.p, &c.cavity, &c.fill)) continue;
-      c.quality = 1e300;
-      for (const Tet& x : c.fill) {
-        c.quality =
-            std::min(c.quality, MinDihedralDegrees(ed_.P(x[0]), ed_.P(x[1]), ed_.P(x[2]), c.p));
-      }
-      if (c.quality > best.quality) best = std::move(c);
-    }
+  for (Candidate& c : candidates) {
+    if (!c.cavity.empty() && c.quality > best.quality) best = std::move(c);
   }
   auto gain = [&](const Candidate& c) {
     double current = 1e300;

@@ -1,6 +1,7 @@
 #include "worker/pipeline/tet/tet_mesh_editor.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "worker/pipeline/tet/tet_improve.h"
 
@@ -95,18 +96,23 @@ const uint32_t* TetMeshEditor::FacetFaceIndex(const FaceKey& face) const {
 uint32_t TetMeshEditor::Neighbor(uint32_t t, int f) const {
   const Tet& tet = m_.tets[t];
   const uint32_t a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], c = tet[(f + 3) % 4];
-  const uint32_t known = neighbor_[t][f];
+  // The memo is read and written through relaxed atomics: look-ups from several threads
+  // (the insertion's candidates) may fill it at once, and all of them write the one
+  // neighbour the mesh has there.
+  const uint32_t known = std::atomic_ref<uint32_t>(neighbor_[t][f]).load(std::memory_order_relaxed);
   if (known != kUnknown && !dead_[known]) {
     const Tet& k = m_.tets[known];
     if (Has(k, a) && Has(k, b) && Has(k, c)) return known;
   }
   for (uint32_t s : star_[a]) {
     if (s != t && Has(m_.tets[s], b) && Has(m_.tets[s], c)) {
-      neighbor_[t][f] = s;
+      std::atomic_ref<uint32_t>(neighbor_[t][f]).store(s, std::memory_order_relaxed);
       // And t is s's neighbour across the same face (the corner of s not on it).
       const Tet& st = m_.tets[s];
       for (int g = 0; g < 4; ++g) {
-        if (st[g] != a && st[g] != b && st[g] != c) neighbor_[s][g] = t;
+        if (st[g] != a && st[g] != b && st[g] != c) {
+          std::atomic_ref<uint32_t>(neighbor_[s][g]).store(t, std::memory_order_relaxed);
+        }
       }
       return s;
     }

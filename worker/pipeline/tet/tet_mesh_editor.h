@@ -28,7 +28,8 @@ inline bool Has(const Tet& t, uint32_t v) {
 std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set);
 
 // Holds a reference to the mesh, which must outlive it; killed tetrahedra stay in its list
-// (dead) until Finish. Quality is the smallest dihedral angle in degrees. Thread-compatible.
+// (dead) until Finish. Quality is the smallest dihedral angle in degrees. Thread-compatible;
+// its const methods may be called from several threads at once.
 class TetMeshEditor {
  public:
   // REQUIRES: every tetrahedron of `mesh` is positively oriented.

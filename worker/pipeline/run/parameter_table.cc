@@ -429,6 +429,11 @@ std::vector<ParamRow> VolumeMeshRows() {
                         SM_MEMBER(volume.improve.insert_below_degrees), "[0, 70.6]", "degrees",
                         "tetrahedra still below this after the flips get a new vertex beside them "
                         "(at most improve.target_degrees; 0: none)"));
+  rows.push_back(Number("improve.insert_again_below_degrees",
+                        SM_MEMBER(volume.improve.insert_again_below_degrees), "[0, 70.6]",
+                        "degrees",
+                        "after the first pass, only tetrahedra below this get a new vertex (the "
+                        "lower of it and improve.insert_below_degrees applies)"));
   rows.push_back(Number("improve.floor_degrees", SM_MEMBER(volume.improve.smoothing_floor_degrees),
                         "[0, 70.6]", "degrees",
                         "smoothing for the mean never lowers a vertex's worst tetrahedron below "

@@ -91,6 +91,9 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
   };
   for (int pass = 0; pass < options.passes && status.ok(); ++pass) {
     uint64_t changes = 0;
+    const double insert_below =
+        pass == 0 ? options.insert_below_degrees
+                  : std::min(options.insert_below_degrees, options.insert_again_below_degrees);
     std::vector<uint32_t> bad = ed.Bad(options.target_degrees);
     for (size_t i = 0; i < bad.size() && status.ok(); ++i) {
       status = progress.Tick(i, bad.size(), 4096);
@@ -103,8 +106,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
         }
         remember_failure(worst_tried, t);
       }
-      if (ed.quality(t) < options.insert_below_degrees && fits(kInsertAdds) &&
-          inserter.InsertNear(t)) {
+      if (ed.quality(t) < insert_below && fits(kInsertAdds) && inserter.InsertNear(t)) {
         ++report->inserted_vertices;
         ++changes;
       }

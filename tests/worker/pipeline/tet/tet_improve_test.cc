@@ -260,6 +260,29 @@ TEST(TetImproveTest, TheSameMeshOnOneThreadAndOnAll) {
   }
 }
 
+// After the first pass only tetrahedra below improve.insert_again_below_degrees get a new
+// vertex: at 0, four passes insert exactly what the first pass alone does (it is the same
+// first pass); at insert_below_degrees, the later passes insert more.
+TEST(TetImproveTest, AfterTheFirstPassOnlyTetrahedraBelowTheSecondBoundGetAVertex) {
+  const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
+  VolumeMeshOptions o;
+  o.tetgen.max_volume = 4;
+  o.tetgen.steiner_on_sheets = true;
+  o.plc.lattice = 0;
+  auto inserted = [&](int passes, double again) -> uint64_t {
+    VolumeMeshOptions v = o;
+    v.improve.passes = passes;
+    v.improve.insert_again_below_degrees = again;
+    absl::StatusOr<VolumeMeshResult> r = BuildVolumeMesh(sheet, {20, 20, 20}, {}, v);
+    EXPECT_TRUE(r.ok()) << r.status();
+    return r.ok() ? r->improvement.inserted_vertices : 0;
+  };
+  const uint64_t first = inserted(1, 0);
+  ASSERT_GT(first, 0u);
+  EXPECT_EQ(inserted(4, 0), first);
+  EXPECT_GT(inserted(4, 50), first);
+}
+
 TEST(TetImproveTest, SmoothingForTheBlendedShapeLiftsTheRadiusAspect) {
   // The default smoothing raises the mean of a blend of the smallest dihedral angle and
   // the radius aspect; weight 0 raises the dihedral angle alone, weight 1 the radius

@@ -236,14 +236,21 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   EXPECT_GT(slid.size(), 0u);
 }
 
-// The smoothing runs on all cores in rounds of vertices that share no tetrahedron: the mesh
-// is the same, to the bit, on one thread and on several.
-TEST(TetImproveTest, TheSameMeshOnOneThreadAndOnAll) {
-  const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
+// TetGen's own refinement, with points on the sheets and no lattice: the mesh with the most
+// for the improvement to do.
+VolumeMeshOptions RefinedByTetgen() {
   VolumeMeshOptions o;
   o.tetgen.max_volume = 4;
   o.tetgen.steiner_on_sheets = true;
   o.plc.lattice = 0;
+  return o;
+}
+
+// The smoothing runs on all cores in rounds of vertices that share no tetrahedron: the mesh
+// is the same, to the bit, on one thread and on several.
+TEST(TetImproveTest, TheSameMeshOnOneThreadAndOnAll) {
+  const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
+  const VolumeMeshOptions o = RefinedByTetgen();
   std::optional<VolumeMeshResult> one;
   {
     tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
@@ -265,10 +272,7 @@ TEST(TetImproveTest, TheSameMeshOnOneThreadAndOnAll) {
 // first pass); at insert_below_degrees, the later passes insert more.
 TEST(TetImproveTest, AfterTheFirstPassOnlyTetrahedraBelowTheSecondBoundGetAVertex) {
   const TriangleMesh sheet = WavySquare(4, 16, 10, 6, 0.15);
-  VolumeMeshOptions o;
-  o.tetgen.max_volume = 4;
-  o.tetgen.steiner_on_sheets = true;
-  o.plc.lattice = 0;
+  const VolumeMeshOptions o = RefinedByTetgen();
   auto inserted = [&](int passes, double again) -> uint64_t {
     VolumeMeshOptions v = o;
     v.improve.passes = passes;

@@ -1,10 +1,12 @@
 #include "worker/pipeline/scvd/scvd.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -29,38 +31,54 @@ namespace {
 // Synchronous multi-source breadth-first growth over `num_nodes` nodes whose neighbours
 // `for_each_neighbor(v, f)` visits. A node joins the first cell to reach it; among cells
 // reaching it in the same round, the lowest id — so the result does not depend on the
-// order of the frontier.
+// order of the frontier, and each round runs on all cores: a node is claimed for the round
+// by the one thread that moves its round from 0, and its cell is the least offered that
+// round (relaxed atomics; the round's end orders them).
 template <class ForEachNeighbor>
 absl::StatusOr<std::vector<uint32_t>> Grow(size_t num_nodes, ForEachNeighbor for_each_neighbor,
                                            std::span<const uint32_t> seeds,
                                            const Progress& progress) {
+  constexpr uint32_t kSeedRound = std::numeric_limits<uint32_t>::max();
   std::vector<uint32_t> cell(num_nodes, kNoCell);
-  std::vector<uint32_t> round(num_nodes, 0);
-  std::vector<uint32_t> frontier, next;
+  std::vector<uint32_t> round(num_nodes, 0);  // 0: not reached yet
+  std::vector<uint32_t> frontier;
   frontier.reserve(seeds.size());
   for (size_t i = 0; i < seeds.size(); ++i) {
     cell[seeds[i]] = static_cast<uint32_t>(i);
+    round[seeds[i]] = kSeedRound;
     frontier.push_back(seeds[i]);
   }
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> claimed;
   uint32_t r = 0;
   size_t reached = frontier.size();
   while (!frontier.empty()) {
     ++r;
-    next.clear();
-    for (uint32_t v : frontier) {
-      const uint32_t c = cell[v];
-      for_each_neighbor(v, [&](uint32_t u) {
-        if (cell[u] == kNoCell) {
-          cell[u] = c;
-          round[u] = r;
-          next.push_back(u);
-        } else if (round[u] == r && c < cell[u]) {
-          cell[u] = c;
-        }
-      });
-    }
-    reached += next.size();
-    frontier.swap(next);
+    for (auto& c : claimed) c.clear();
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, frontier.size(), 4096),
+        [&](const tbb::blocked_range<size_t>& range) {
+          std::vector<uint32_t>& mine = claimed.local();
+          for (size_t i = range.begin(); i != range.end(); ++i) {
+            const uint32_t v = frontier[i];
+            const uint32_t c = cell[v];  // set in an earlier round: read only in this one
+            for_each_neighbor(v, [&](uint32_t u) {
+              std::atomic_ref<uint32_t> ru(round[u]);
+              uint32_t seen = ru.load(std::memory_order_relaxed);
+              if (seen == 0 && ru.compare_exchange_strong(seen, r, std::memory_order_relaxed)) {
+                mine.push_back(u);
+                seen = r;
+              }
+              if (seen != r) return;
+              std::atomic_ref<uint32_t> cu(cell[u]);
+              uint32_t now = cu.load(std::memory_order_relaxed);
+              while (c < now && !cu.compare_exchange_weak(now, c, std::memory_order_relaxed)) {
+              }
+            });
+          }
+        });
+    frontier.clear();
+    for (const auto& c : claimed) frontier.insert(frontier.end(), c.begin(), c.end());
+    reached += frontier.size();
     if ((r & 15) == 0) {
       SM_RETURN_IF_ERROR(progress.Update(double(reached) / std::max<size_t>(1, num_nodes)));
     }

@@ -2,6 +2,10 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <vector>
 
 #include "tests/testing/shapes.h"
 #include "tests/testing/status_matchers.h"
@@ -97,6 +101,45 @@ TEST(ScvdTest, SimultaneousArrivalGoesToTheLowerId) {
   const std::vector<uint32_t> seeds_b = {0, 4};
   SM_ASSERT_OK_AND_ASSIGN(cell, GrowCells(nt, seeds_b));
   EXPECT_THAT(cell, ::testing::ElementsAre(0, 0, 0, 1, 1));
+}
+
+// The growth runs each round on all cores; its cells are those of a plain one-thread
+// breadth-first growth (first to arrive, lowest id among simultaneous arrivals), on one
+// thread and on several.
+TEST(ScvdTest, GrowingOnAllCoresGivesThePlainGrowthsCells) {
+  const SheetAnalysis a = Analyze(PlaneSlab({200, 200, 12}, {100, 100, 6}, {0, 0, 1}, 6));
+  const uint32_t n = static_cast<uint32_t>(a.neighbors.size());
+  ASSERT_GT(n, 100000u);
+  std::vector<uint32_t> seeds;
+  for (uint32_t v = 7; v < n && seeds.size() < 600; v += n / 600 + 13) seeds.push_back(v);
+  // The plain growth, round by round.
+  std::vector<uint32_t> expected(n, kNoCell), arrived(n, 0);
+  std::vector<uint32_t> frontier, next;
+  for (uint32_t i = 0; i < seeds.size(); ++i) {
+    expected[seeds[i]] = i;
+    frontier.push_back(seeds[i]);
+  }
+  for (uint32_t r = 1; !frontier.empty(); ++r) {
+    next.clear();
+    for (uint32_t v : frontier) {
+      for (uint32_t u : a.neighbors.of(v)) {
+        if (u == kNoNeighbor) continue;
+        if (expected[u] == kNoCell) {
+          expected[u] = expected[v];
+          arrived[u] = r;
+          next.push_back(u);
+        } else if (arrived[u] == r) {
+          expected[u] = std::min(expected[u], expected[v]);
+        }
+      }
+    }
+    frontier.swap(next);
+  }
+  for (int threads : {1, 2, 4}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    SM_ASSERT_OK_AND_ASSIGN(const std::vector<uint32_t> cell, GrowCells(a.neighbors, seeds));
+    EXPECT_EQ(cell, expected) << threads << " threads";
+  }
 }
 
 TEST(ScvdTest, LloydLowersTheEnergyAndAdjacencyIsSymmetricAndReal) {

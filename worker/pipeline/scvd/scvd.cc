@@ -31,25 +31,25 @@ namespace {
 // Synchronous multi-source breadth-first growth over `num_nodes` nodes whose neighbours
 // `for_each_neighbor(v, f)` visits. A node joins the first cell to reach it; among cells
 // reaching it in the same round, the lowest id — so the result does not depend on the
-// order of the frontier, and each round runs on all cores: a node is claimed for the round
-// by the one thread that moves its round from 0, and its cell is the least offered that
-// round (relaxed atomics; the round's end orders them).
+// order of the frontier, and each round runs on all cores. A node's round and cell share
+// one word (round << 32 | cell; round 0: not reached), so a look-up touches one place:
+// the one thread that moves it from 0 claims it for the round, and a lower cell offered in
+// the same round replaces the one there (relaxed atomics; the round's end orders them).
 template <class ForEachNeighbor>
 absl::StatusOr<std::vector<uint32_t>> Grow(size_t num_nodes, ForEachNeighbor for_each_neighbor,
                                            std::span<const uint32_t> seeds,
                                            const Progress& progress) {
-  constexpr uint32_t kSeedRound = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> cell(num_nodes, kNoCell);
-  std::vector<uint32_t> round(num_nodes, 0);  // 0: not reached yet
+  constexpr uint64_t kSeedRound = std::numeric_limits<uint32_t>::max();
+  auto word = [](uint64_t round, uint32_t cell) { return round << 32 | cell; };
+  std::vector<uint64_t> state(num_nodes, 0);
   std::vector<uint32_t> frontier;
   frontier.reserve(seeds.size());
   for (size_t i = 0; i < seeds.size(); ++i) {
-    cell[seeds[i]] = static_cast<uint32_t>(i);
-    round[seeds[i]] = kSeedRound;
+    state[seeds[i]] = word(kSeedRound, static_cast<uint32_t>(i));
     frontier.push_back(seeds[i]);
   }
   tbb::enumerable_thread_specific<std::vector<uint32_t>> claimed;
-  uint32_t r = 0;
+  uint64_t r = 0;
   size_t reached = frontier.size();
   while (!frontier.empty()) {
     ++r;
@@ -60,18 +60,20 @@ absl::StatusOr<std::vector<uint32_t>> Grow(size_t num_nodes, ForEachNeighbor for
           std::vector<uint32_t>& mine = claimed.local();
           for (size_t i = range.begin(); i != range.end(); ++i) {
             const uint32_t v = frontier[i];
-            const uint32_t c = cell[v];  // set in an earlier round: read only in this one
+            // Set in an earlier round: only read in this one.
+            const uint64_t offer = word(r, static_cast<uint32_t>(state[v]));
             for_each_neighbor(v, [&](uint32_t u) {
-              std::atomic_ref<uint32_t> ru(round[u]);
-              uint32_t seen = ru.load(std::memory_order_relaxed);
-              if (seen == 0 && ru.compare_exchange_strong(seen, r, std::memory_order_relaxed)) {
-                mine.push_back(u);
-                seen = r;
+              std::atomic_ref<uint64_t> su(state[u]);
+              uint64_t now = su.load(std::memory_order_relaxed);
+              if (now == 0) {
+                if (su.compare_exchange_strong(now, offer, std::memory_order_relaxed)) {
+                  mine.push_back(u);
+                  return;
+                }
               }
-              if (seen != r) return;
-              std::atomic_ref<uint32_t> cu(cell[u]);
-              uint32_t now = cu.load(std::memory_order_relaxed);
-              while (c < now && !cu.compare_exchange_weak(now, c, std::memory_order_relaxed)) {
+              // Reached this round by another cell: the lower id stays.
+              while (now >> 32 == r && offer < now &&
+                     !su.compare_exchange_weak(now, offer, std::memory_order_relaxed)) {
               }
             });
           }
@@ -83,6 +85,13 @@ absl::StatusOr<std::vector<uint32_t>> Grow(size_t num_nodes, ForEachNeighbor for
       SM_RETURN_IF_ERROR(progress.Update(double(reached) / std::max<size_t>(1, num_nodes)));
     }
   }
+  std::vector<uint32_t> cell(num_nodes);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_nodes, 1 << 16),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t v = range.begin(); v != range.end(); ++v) {
+                        cell[v] = state[v] == 0 ? kNoCell : static_cast<uint32_t>(state[v]);
+                      }
+                    });
   return cell;
 }
 

@@ -12,20 +12,25 @@ class IdSet {
  public:
   void Clear() {
     members_.clear();
+    size_ = 0;
     if (++epoch_ == 0) {  // wrapped: forget every old mark
       std::fill(mark_.begin(), mark_.end(), 0);
       epoch_ = 1;
     }
   }
   bool contains(uint32_t id) const { return id < mark_.size() && mark_[id] == epoch_; }
+  size_t size() const { return size_; }
   void insert(uint32_t id) {
     if (id >= mark_.size()) mark_.resize(id + 1 + id / 4, 0);
     if (mark_[id] == epoch_) return;
     mark_[id] = epoch_;
     members_.push_back(id);
+    ++size_;
   }
   void erase(uint32_t id) {
-    if (contains(id)) mark_[id] = 0;
+    if (!contains(id)) return;
+    mark_[id] = 0;
+    --size_;
   }
   // The members in increasing order (an erased id is left out, a re-inserted one counted
   // once).
@@ -42,7 +47,8 @@ class IdSet {
 
  private:
   std::vector<uint32_t> mark_;
-  std::vector<uint32_t> members_;
+  std::vector<uint32_t> members_;  // every id inserted since Clear, erased ones too
+  size_t size_ = 0;
   uint32_t epoch_ = 0;
 };
 
@@ -113,22 +119,16 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
   thread_local IdSet in, dropped;
   in.Clear();
   dropped.Clear();
-  size_t size = 0;  // of `in`
-  auto add = [&](uint32_t y) {
-    if (in.contains(y)) return;
-    in.insert(y);
-    ++size;
-  };
-  for (uint32_t s : seeds) add(s);
+  for (uint32_t s : seeds) in.insert(s);
   std::vector<uint32_t> queue(seeds.begin(), seeds.end());
-  while (!queue.empty() && size < kMaxCavity) {
+  while (!queue.empty() && in.size() < kMaxCavity) {
     const uint32_t x = queue.back();
     queue.pop_back();
     for (int f = 0; f < 4; ++f) {
       if (Blocks(ed, TetFace(ed.tet(x), f), opened)) continue;
       const uint32_t y = ed.Neighbor(x, f);
       if (y == UINT32_MAX || in.contains(y) || !InCircumsphere(ed, ed.tet(y), p)) continue;
-      add(y);
+      in.insert(y);
       queue.push_back(y);
     }
   }
@@ -137,13 +137,12 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
   // A dropped tetrahedron never comes back, so this ends.
   auto drop = [&](uint32_t x) {
     if (std::find(seeds.begin(), seeds.end(), x) != seeds.end()) return false;
-    if (in.contains(x)) --size;
     in.erase(x);
     dropped.insert(x);
     return true;
   };
   for (int round = 0;; ++round) {
-    if (round == 64 || size > kMaxCavity) return false;
+    if (round == 64 || in.size() > kMaxCavity) return false;
     std::vector<std::pair<uint32_t, int>> hidden;
     for (uint32_t x : in.Sorted()) {
       for (int f = 0; f < 4; ++f) {
@@ -157,7 +156,7 @@ bool GrowCavity(const TetMeshEditor& ed, const Vec3& p, const std::vector<uint32
       if (!in.contains(x)) continue;
       const uint32_t y = ed.Neighbor(x, f);
       if (y != UINT32_MAX && !dropped.contains(y) && !Blocks(ed, TetFace(ed.tet(x), f), opened)) {
-        add(y);
+        in.insert(y);
       } else if (!drop(x)) {
         return false;
       }

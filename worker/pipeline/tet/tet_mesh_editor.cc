@@ -7,12 +7,6 @@
 
 namespace sheetmesh {
 
-std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set) {
-  std::vector<uint32_t> v(set.begin(), set.end());
-  std::sort(v.begin(), v.end());
-  return v;
-}
-
 TetMeshEditor::TetMeshEditor(TetMesh* mesh) : m_(*mesh) {
   const size_t n = m_.nodes.size();
   star_.resize(n);

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
-#include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {
@@ -22,10 +21,6 @@ inline constexpr double kGain = 1e-6;  // degrees: the least rise that counts as
 inline bool Has(const Tet& t, uint32_t v) {
   return t[0] == v || t[1] == v || t[2] == v || t[3] == v;
 }
-
-// The set's members in increasing order: hash-set order changes from run to run, and the
-// result must not.
-std::vector<uint32_t> Sorted(const absl::flat_hash_set<uint32_t>& set);
 
 // Holds a reference to the mesh, which must outlive it; killed tetrahedra stay in its list
 // (dead) until Finish. Quality is the smallest dihedral angle in degrees. Thread-compatible;

@@ -239,12 +239,16 @@ class Smoother {
   std::vector<double> q_;  // Eval's angles, star order
 };
 
+void MeasureStar(TetMeshEditor& ed, uint32_t v) {
+  for (uint32_t t : ed.star(v)) ed.Remeasure(t);
+}
+
 }  // namespace
 
 bool SmoothVertex(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v,
                   const SmoothingOptions& options) {
   if (!fr.may_move(v) || !Smoother(ed, fr, v, options).Run()) return false;
-  for (uint32_t t : ed.star(v)) ed.Remeasure(t);
+  MeasureStar(ed, v);
   return true;
 }
 
@@ -267,7 +271,7 @@ absl::Status SmoothVertices(TetMeshEditor& ed, const VertexFreedom& fr, std::vec
         continue;
       }
       ++finished;
-      if (!fr.may_move(v) || !wants(v)) continue;
+      if (!wants(v)) continue;
       round.push_back(v);
       for (uint32_t t : ed.star(v))
         for (uint32_t w : ed.tet(t)) taken_in[w] = r;
@@ -280,9 +284,7 @@ absl::Status SmoothVertices(TetMeshEditor& ed, const VertexFreedom& fr, std::vec
                         }
                       });
     for (size_t i = 0; i < round.size(); ++i) {
-      if (moved[i]) {
-        for (uint32_t t : ed.star(round[i])) ed.Remeasure(t);
-      }
+      if (moved[i]) MeasureStar(ed, round[i]);
       done(round[i], moved[i] != 0);
     }
     todo.swap(waiting);

@@ -79,7 +79,9 @@ absl::StatusOr<Subprocess> Subprocess::Start(const SubprocessOptions& o) {
   for (char** e = environ; *e != nullptr; ++e) {
     bool replaced = false;
     for (const auto& [k, _] : o.env) replaced |= absl::StartsWith(*e, k + "=");
-    if (!replaced) env_strings.emplace_back(*e);
+    bool kept = !o.clean_env;
+    for (const std::string& k : o.keep_env) kept |= absl::StartsWith(*e, k + "=");
+    if (!replaced && kept) env_strings.emplace_back(*e);
   }
   for (const auto& [k, v] : o.env) env_strings.push_back(k + "=" + v);
   std::vector<char*> envp;

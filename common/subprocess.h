@@ -22,6 +22,10 @@ struct SubprocessOptions {
   uint64_t cpu_limit_seconds = 0;   // RLIMIT_CPU (SIGXCPU, then SIGKILL); 0 = none
   bool report_pipe = false;         // a pipe the child writes on fd 3 (report_fd())
   std::vector<std::pair<std::string, std::string>> env;  // set in the child's environment
+  // With clean_env the child sees only `env` and the variables named in keep_env, not this
+  // process's environment (which may hold secrets: a database password, tokens).
+  bool clean_env = false;
+  std::vector<std::string> keep_env;
 };
 
 // How a child ended, from waitpid's status.

@@ -256,7 +256,10 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
   o.memory_limit_bytes = limits.memory_bytes;
   o.cpu_limit_seconds = limits.cpu_seconds;
   o.report_pipe = true;
-  o.env = {{"TMPDIR", spec.output_dir}};
+  // The server's environment may hold secrets (PGPASSWORD, tokens): a job sees none of it.
+  o.env = {{"TMPDIR", spec.output_dir}, {"LC_ALL", "C"}};
+  o.clean_env = true;
+  o.keep_env = {"PATH", "GLIBC_TUNABLES", "SHEETMESH_NO_HUGE_PAGES"};
   SM_ASSIGN_OR_RETURN(Subprocess child, Subprocess::Start(o));
   ::fcntl(child.report_fd(), F_SETFL, O_NONBLOCK);
   const auto deadline = std::chrono::steady_clock::now() + absl::ToChronoMilliseconds(limits.wall);

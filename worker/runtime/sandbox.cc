@@ -71,12 +71,22 @@ absl::Status RestrictFilesystem(const SandboxPaths& paths) {
   auto add = [&](const std::string& p, uint64_t access) {
     if (st.ok()) st = AddRule(ruleset, p, access, handled);
   };
-  for (const char* system : {"/usr", "/lib", "/lib64", "/bin", "/sbin"}) {
+  // The libraries and programs a job loads (TetGen's among them), and the data files of
+  // libraries (/usr/share): no configuration, home or data folder. /lib, /lib64 and /bin are
+  // links into /usr on current systems; a rule on a link holds for its target.
+  for (const char* system :
+       {"/usr/lib", "/usr/lib64", "/usr/lib32", "/usr/libexec", "/usr/bin", "/usr/share",
+        "/usr/local/lib", "/usr/local/bin", "/lib", "/lib64", "/bin"}) {
     add(system, kRead | kExecute);
   }
   add("/etc/ld.so.cache", kRead);
-  add("/proc", kRead);
-  add("/sys", kRead);
+  // Of /proc only this process's own entries (not its parent's environment nor anyone
+  // else's) and the machine's size; of /sys the CPU topology the thread pools read.
+  add(absl::StrCat("/proc/", ::getpid()), kRead);
+  for (const char* machine : {"/proc/cpuinfo", "/proc/meminfo", "/proc/stat",
+                              "/sys/devices/system/cpu", "/sys/fs/cgroup"}) {
+    add(machine, kRead);
+  }
   add("/dev/null", kRead | LANDLOCK_ACCESS_FS_WRITE_FILE);
   add("/dev/urandom", kRead);
   for (const std::string& p : paths.read) add(p, kRead);

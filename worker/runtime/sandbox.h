@@ -16,8 +16,9 @@ struct SandboxPaths {
   std::vector<std::string> read_write;  // folders it may read, write and make files in
 };
 
-// Restricts this process to `paths` plus the system's programs and libraries (/usr, /lib,
-// /bin, /etc/ld.so.cache), /proc, /sys and /dev/null. kUnimplemented when the kernel has no
+// Restricts this process to `paths` plus the system's programs, libraries and their data
+// (/usr/lib*, /usr/bin, /usr/share, /etc/ld.so.cache), its own /proc entry, the machine's size
+// (/proc/cpuinfo, meminfo, stat; /sys CPU topology and cgroup), /dev/null and /dev/urandom. kUnimplemented when the kernel has no
 // Landlock (the caller decides whether to go on without); kInternal when a rule could not
 // be made. Paths that do not exist are left out.
 absl::Status RestrictFilesystem(const SandboxPaths& paths);

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/extract/scvd_of_set.h"
 #include "worker/pipeline/mesh/vertex_normals.h"
@@ -53,7 +54,48 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
     if (rim_cell[g]) active.push_back(g);
   }
   const double t = o.half_thickness_voxels, R = o.radius_voxels;
-  const int64_t reach = static_cast<int64_t>(std::ceil(R + t));
+  // Each cylinder is scanned within its own bounding box, clipped to the image: along axis
+  // i it reaches R sqrt(1 - n_i^2) + t |n_i| from Z.
+  struct Window {
+    int64_t lo[3], hi[3];
+    int64_t voxels() const {
+      int64_t v = 1;
+      for (int k = 0; k < 3; ++k) v *= std::max<int64_t>(0, hi[k] - lo[k] + 1);
+      return v;
+    }
+  };
+  const int64_t extent[3] = {d.nx, d.ny, d.nz};
+  auto window_of = [&](uint32_t g) {
+    const Index3 z = scvd.generators[g];
+    const double n[3] = {normal[g].x, normal[g].y, normal[g].z};
+    const int64_t c[3] = {z.x, z.y, z.z};
+    Window w;
+    for (int k = 0; k < 3; ++k) {
+      const double a = std::min(1.0, std::abs(n[k]));
+      const int64_t reach =
+          static_cast<int64_t>(std::ceil(R * std::sqrt(std::max(0.0, 1 - a * a)) + t * a));
+      w.lo[k] = std::max<int64_t>(0, c[k] - reach);
+      w.hi[k] = std::min<int64_t>(extent[k] - 1, c[k] + reach);
+    }
+    return w;
+  };
+  // What the round will cost, before it runs: the voxels it looks at, and the claims it may
+  // hold at once (each cylinder's, at most its window).
+  double visits = 0, claims_bound = 0;
+  const double cylinder = M_PI * (R + 1) * (R + 1) * (2 * t + 2);
+  for (const uint32_t g : active) {
+    const double w = static_cast<double>(window_of(g).voxels());
+    visits += w;
+    claims_bound += std::min(w, cylinder);
+  }
+  const double claim_bytes = 2 * sizeof(Claim) * claims_bound;  // the parts and their union
+  if (claim_bytes > static_cast<double>(o.memory_bytes) || visits > o.max_visits) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "extending %d rim cells with t = %g and R = %g voxels would look at %.3g voxels and "
+        "hold up to %.3g GB of claims (limits: %.3g voxels, %.3g GB of memory); lower t and R "
+        "(formula 4's flat cylinder) to about the sheets' thickness and a cell's radius",
+        active.size(), t, R, visits, claim_bytes / 1e9, o.max_visits, o.memory_bytes / 1e9));
+  }
   tbb::combinable<std::vector<Claim>> parts;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
                     [&](const tbb::blocked_range<size_t>& r) {
@@ -63,12 +105,11 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
                         const Index3 z = scvd.generators[g];
                         const Vec3& n = normal[g];
                         const int32_t label = patch.label[scvd.generator_voxel[g]];
-                        for (int64_t dz = -reach; dz <= reach; ++dz) {
-                          for (int64_t dy = -reach; dy <= reach; ++dy) {
-                            for (int64_t dx = -reach; dx <= reach; ++dx) {
-                              const int64_t x = z.x + dx, y = z.y + dy, zz = z.z + dz;
-                              if (!d.Contains(x, y, zz)) continue;
-                              const Vec3 v(dx, dy, dz);
+                        const Window w = window_of(g);
+                        for (int64_t zz = w.lo[2]; zz <= w.hi[2]; ++zz) {
+                          for (int64_t y = w.lo[1]; y <= w.hi[1]; ++y) {
+                            for (int64_t x = w.lo[0]; x <= w.hi[0]; ++x) {
+                              const Vec3 v(x - z.x, y - z.y, zz - z.z);
                               const double along = std::abs(Dot(v, n));
                               if (along >= t) continue;
                               if (Norm2(v) - along * along >= R * R) continue;

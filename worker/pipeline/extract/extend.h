@@ -18,6 +18,10 @@ struct ExtendOptions {
   int max_rounds = 1;                  // rebuild-and-extend rounds at most
   double scvd_radius_voxels = 5.0;     // r of the SCVD whose triangles give the normals
   uint64_t seed = 1;                   // SCVD seed
+  // What one round may cost: the claims it holds at once, and the voxels it looks at. A
+  // round estimated beyond either is kResourceExhausted before it starts.
+  int64_t memory_bytes = int64_t{4} << 30;
+  double max_visits = 4e10;
 };
 
 struct ExtendResult {
@@ -36,7 +40,8 @@ struct ScvdOfSet;  // scvd_of_set.h
 // the cylinder lies inside the patch. kInvalidArgument for t, R or r not positive or a
 // `within` of other dims; kCancelled if asked.
 // With `first_round`, the SCVD the first round was built on is left there (when the patch
-// is not empty), for a later step with the same radius and seed.
+// is not empty), for a later step with the same radius and seed. kResourceExhausted, naming t
+// and R, when a round's estimated cost passes options.memory_bytes or max_visits.
 absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
                                     const VoxelSet* within = nullptr, const Progress& progress = {},
                                     ScvdOfSet* first_round = nullptr);

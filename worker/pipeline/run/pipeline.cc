@@ -204,8 +204,12 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   LabelledVoxels model, dropped;
   if (options.extract) {
     StageTimer t(&report, "extract");
-    SM_ASSIGN_OR_RETURN(ExtractionResult ex,
-                        ExtractFeatures(phase.sheet, options.extraction, progress));
+    // The extension's claims share the job's memory budget with the readers'.
+    ExtractionOptions extraction = options.extraction;
+    const int64_t budget = MemoryBudget(options.input.open.limits);
+    extraction.detect_extend.memory_bytes = budget;
+    extraction.recover_extend.memory_bytes = budget;
+    SM_ASSIGN_OR_RETURN(ExtractionResult ex, ExtractFeatures(phase.sheet, extraction, progress));
     model = std::move(ex.model);
     dropped = std::move(ex.dropped);
     report.extraction = std::move(static_cast<ExtractionSummary&>(ex));

@@ -5,15 +5,17 @@
 #include <cmath>
 #include <cstring>
 #include <optional>
-#include <regex>
 #include <vector>
 
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "common/byte_order.h"
+#include "common/excerpt.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
 
@@ -174,12 +176,35 @@ absl::Status Bad(const std::string& path, absl::string_view field, absl::string_
   return absl::InvalidArgumentError(absl::StrCat(path, ": ", field, " ", what));
 }
 
-// The value of `key` in a .npy header dict ("'descr': '<u2', ..."), as text.
-std::optional<std::string> DictValue(const std::string& dict, const std::string& key) {
-  const std::regex re("'" + key + R"('\s*:\s*('[^']*'|True|False|\([^)]*\)))");
-  std::smatch m;
-  if (!std::regex_search(dict, m, re)) return std::nullopt;
-  return m[1].str();
+// The value of `key` in a .npy header dict ("'descr': '<u2', ..."), as text: a quoted
+// string, True, False or a parenthesised tuple. A plain scan, linear in the header (a
+// regular expression recursed once per character and overflowed the stack on a 40 KB
+// shape).
+std::optional<std::string> DictValue(absl::string_view dict, absl::string_view key) {
+  const std::string quoted = absl::StrCat("'", key, "'");
+  for (size_t at = dict.find(quoted); at != absl::string_view::npos;
+       at = dict.find(quoted, at + 1)) {
+    size_t i = at + quoted.size();
+    auto skip_space = [&] {
+      while (i < dict.size() && absl::ascii_isspace(static_cast<unsigned char>(dict[i]))) ++i;
+    };
+    skip_space();
+    if (i >= dict.size() || dict[i] != ':') continue;
+    ++i;
+    skip_space();
+    if (i >= dict.size()) return std::nullopt;
+    const absl::string_view rest = dict.substr(i);
+    if (rest[0] == '\'' || rest[0] == '(') {
+      const size_t end = rest.find(rest[0] == '(' ? ')' : '\'', 1);
+      if (end == absl::string_view::npos) return std::nullopt;
+      return std::string(rest.substr(0, end + 1));
+    }
+    for (const char* word : {"True", "False"}) {
+      if (absl::StartsWith(rest, word)) return std::string(word);
+    }
+    return std::nullopt;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -214,7 +239,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNpyVolume(const std::string& p
   const auto fortran = DictValue(dict, "fortran_order");
   const auto shape = DictValue(dict, "shape");
   if (!descr || !fortran || !shape) {
-    return Bad(path, "header", absl::StrCat("'", dict, "' lacks descr, fortran_order or shape"));
+    return Bad(path, "header",
+               absl::StrCat("'", Excerpt(dict), "' lacks descr, fortran_order or shape"));
   }
   const std::string d = descr->substr(1, descr->size() - 2);  // without the quotes
   static const std::pair<const char*, Stored> kTypes[] = {
@@ -241,12 +267,14 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNpyVolume(const std::string& p
                                             ',', absl::SkipWhitespace())) {
     int64_t e = 0;
     if (!absl::SimpleAtoi(absl::StripAsciiWhitespace(p), &e) || e <= 0) {
-      return Bad(path, "shape", absl::StrCat(*shape, " has a bad extent '", p, "'"));
+      return Bad(
+          path, "shape",
+          absl::StrCat(Excerpt(*shape), " has a bad extent '", Excerpt(std::string(p)), "'"));
     }
     extents.push_back(e);
   }
   if (extents.size() != 2 && extents.size() != 3) {
-    return Bad(path, "shape", absl::StrCat(*shape, " is not 2D or 3D"));
+    return Bad(path, "shape", absl::StrCat(Excerpt(*shape), " is not 2D or 3D"));
   }
   const bool f_order = *fortran == "True";
   // C order lists the slowest axis first: (z, y, x) or (y, x); Fortran order the fastest.

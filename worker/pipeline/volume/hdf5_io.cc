@@ -2,12 +2,15 @@
 
 #include <hdf5.h>
 
+#include <cstring>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "common/paths.h"
 #include "common/status_macros.h"
 
 namespace sheetmesh {
@@ -19,6 +22,7 @@ class H5Id {
   H5Id(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
   H5Id(const H5Id&) = delete;
   H5Id& operator=(const H5Id&) = delete;
+  H5Id(H5Id&& o) noexcept : id_(o.release()), close_(o.close_) {}
   ~H5Id() {
     if (id_ >= 0) close_(id_);
   }
@@ -38,12 +42,32 @@ class H5Id {
 
 void QuietErrors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
-// The 2D and 3D numeric datasets of a file, for messages and for picking the only one.
-std::vector<std::string> VolumeDatasets(hid_t file) {
+// Deflate's best (1032:1 on constant data), with room for the chunk index.
+constexpr double kMaxDeflateRatio = 1100;
+
+// The most objects a listing visits, and the deepest path it descends: a file of 2,000
+// nested groups took minutes to list in full (each name is opened from the root).
+constexpr int kMaxListedObjects = 4096;
+constexpr size_t kMaxListedNameBytes = 1024;
+
+struct Listing {
   std::vector<std::string> names;
+  int visited = 0;
+  bool cut = false;  // the listing stopped at a bound
+};
+
+// The 2D and 3D numeric datasets of a file, for messages and for picking the only one;
+// at most kMaxListedObjects objects are looked at.
+Listing VolumeDatasets(hid_t file) {
+  Listing listing;
   H5Ovisit(
       file, H5_INDEX_NAME, H5_ITER_NATIVE,
       [](hid_t obj, const char* name, const H5O_info_t* info, void* out) -> herr_t {
+        auto* l = static_cast<Listing*>(out);
+        if (++l->visited > kMaxListedObjects || std::strlen(name) > kMaxListedNameBytes) {
+          l->cut = true;
+          return 1;  // stops the visit
+        }
         if (info->type != H5O_TYPE_DATASET) return 0;
         H5Id ds(H5Dopen2(obj, name, H5P_DEFAULT), H5Dclose);
         if (!ds.ok()) return 0;
@@ -52,18 +76,169 @@ std::vector<std::string> VolumeDatasets(hid_t file) {
         const int rank = H5Sget_simple_extent_ndims(space.get());
         const H5T_class_t c = H5Tget_class(type.get());
         if ((rank == 2 || rank == 3) && (c == H5T_INTEGER || c == H5T_FLOAT)) {
-          static_cast<std::vector<std::string>*>(out)->push_back(absl::StrCat("/", name));
+          l->names.push_back(absl::StrCat("/", name));
         }
         return 0;
       },
-      &names);
-  return names;
+      &listing);
+  return listing;
+}
+
+std::string Listed(const Listing& l) {
+  if (l.names.empty()) return l.cut ? "none among the first objects" : "none";
+  return absl::StrCat(absl::StrJoin(l.names, ", "),
+                      l.cut ? " (and maybe more: the listing stops after 4096 objects)" : "");
+}
+
+// What a dataset may make the library read besides its own file: external raw storage,
+// the source files of a virtual dataset, and external links on the way to it. A volume sent
+// to the server (confine_named_files without roots) may name no other file; a referenced one
+// only files under the roots.
+struct NamedFilePolicy {
+  std::string file;  // the HDF5 file, for messages and relative names
+  VolumeLimits limits;
+  absl::Status refused;  // set by the external-link callback when it denies a link
+};
+
+// The file `name` (as the HDF5 file `from` stores it) may be read, or the status saying why
+// not. Relative names are taken beside `from` (the efile and virtual prefixes are set so).
+absl::StatusOr<std::string> AllowNamedFile(const NamedFilePolicy& p, const std::string& from,
+                                           const std::string& name, absl::string_view what) {
+  std::filesystem::path path(name);
+  if (path.is_relative()) path = std::filesystem::absolute(from).parent_path() / path;
+  if (!p.limits.confine_named_files) return path.string();
+  if (p.limits.named_file_roots.empty()) {
+    return absl::PermissionDeniedError(absl::StrCat(
+        p.file, ": ", what, " names the file '", name,
+        "'; a volume sent to the server may not name another file (copy the data into the "
+        "dataset, e.g. h5repack -l CONTI, or send the volume by reference under an allowed "
+        "root)"));
+  }
+  return ResolveUnderRoots(path.string(), p.limits.named_file_roots,
+                           absl::StrCat(p.file, ": ", what));
+}
+
+herr_t OnExternalLink(const char* parent_file, const char*, const char* child_file,
+                      const char* child_object, unsigned*, hid_t, void* data) {
+  auto* p = static_cast<NamedFilePolicy*>(data);
+  absl::StatusOr<std::string> ok =
+      AllowNamedFile(*p, parent_file, child_file,
+                     absl::StrCat("an external link to ", child_file, ":", child_object));
+  if (ok.ok()) return 0;
+  if (p->refused.ok()) p->refused = ok.status();
+  return -1;
+}
+
+// A dataset access list that resolves relative external names beside their file and asks
+// `policy` before following an external link.
+H5Id AccessList(NamedFilePolicy* policy) {
+  H5Id dapl(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
+  H5Pset_efile_prefix(dapl.get(), "${ORIGIN}");
+  H5Pset_elink_cb(dapl.get(), OnExternalLink, policy);
+  return dapl;
+}
+
+// Refuses external raw storage and virtual sources that `policy` does not allow; `depth`
+// counts virtual datasets followed (one level: a source may not be virtual itself).
+absl::Status CheckNamedStorage(NamedFilePolicy& policy, const std::string& file, hid_t ds,
+                               const std::string& where, int depth) {
+  H5Id dcpl(H5Dget_create_plist(ds), H5Pclose);
+  if (!dcpl.ok()) return absl::InvalidArgumentError(absl::StrCat(where, ": no creation list"));
+  const int externals = H5Pget_external_count(dcpl.get());
+  for (int i = 0; i < externals; ++i) {
+    char name[4096] = {0};
+    off_t offset = 0;
+    hsize_t size = 0;
+    if (H5Pget_external(dcpl.get(), i, sizeof(name), name, &offset, &size) < 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": external storage entry ", i, " cannot be read"));
+    }
+    SM_RETURN_IF_ERROR(
+        AllowNamedFile(policy, file, name, absl::StrCat("dataset ", where, " (external storage)"))
+            .status());
+  }
+  if (H5Pget_layout(dcpl.get()) != H5D_VIRTUAL) return absl::OkStatus();
+  if (depth > 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(where, ": a virtual dataset whose source is virtual too is not read"));
+  }
+  size_t sources = 0;
+  if (H5Pget_virtual_count(dcpl.get(), &sources) < 0) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": its virtual mapping cannot be read"));
+  }
+  for (size_t i = 0; i < sources; ++i) {
+    char name[4096] = {0}, dataset[4096] = {0};
+    if (H5Pget_virtual_filename(dcpl.get(), i, name, sizeof(name)) < 0 ||
+        H5Pget_virtual_dsetname(dcpl.get(), i, dataset, sizeof(dataset)) < 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": virtual source ", i, " cannot be read"));
+    }
+    if (std::string(name) == ".") continue;  // this file: its own checks apply
+    if (std::strchr(name, '%') != nullptr || std::strchr(dataset, '%') != nullptr) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": virtual source '", name, ":",
+                                                     dataset, "' is a pattern; not read"));
+    }
+    SM_ASSIGN_OR_RETURN(
+        const std::string source,
+        AllowNamedFile(policy, file, name,
+                       absl::StrCat("virtual dataset ", where, " (source ", i, ")")));
+    H5Id sf(H5Fopen(source.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    if (!sf.ok()) continue;  // a missing source reads as fill values
+    H5Id dapl = AccessList(&policy);
+    H5Id sds(H5Dopen2(sf.get(), dataset, dapl.get()), H5Dclose);
+    SM_RETURN_IF_ERROR(policy.refused);
+    if (!sds.ok()) continue;
+    SM_RETURN_IF_ERROR(CheckNamedStorage(policy, source, sds.get(),
+                                         absl::StrCat(source, ":", dataset), depth + 1));
+  }
+  return absl::OkStatus();
+}
+
+// Refuses chunk sizes and compression that would make a small file cost gigabytes or minutes:
+// a chunk is decoded whole, so it must fit the budget and not exceed the dataset by much,
+// and the data may not decode to more than deflate's best ratio allows.
+absl::Status CheckStorageCost(hid_t ds, hid_t file_type, int64_t declared_bytes,
+                              const VolumeLimits& limits, const std::string& where) {
+  H5Id dcpl(H5Dget_create_plist(ds), H5Pclose);
+  const size_t type_bytes = H5Tget_size(file_type);
+  if (H5Pget_layout(dcpl.get()) == H5D_CHUNKED) {
+    hsize_t chunk[H5S_MAX_RANK] = {0};
+    const int rank = H5Pget_chunk(dcpl.get(), H5S_MAX_RANK, chunk);
+    int64_t bytes = static_cast<int64_t>(type_bytes);
+    std::string shape;
+    for (int k = 0; k < rank; ++k) {
+      if (chunk[k] == 0 || bytes > (int64_t{1} << 50) / static_cast<int64_t>(chunk[k])) {
+        return absl::InvalidArgumentError(absl::StrCat(where, ": chunk extent ", chunk[k]));
+      }
+      bytes *= static_cast<int64_t>(chunk[k]);
+      absl::StrAppend(&shape, k ? "x" : "", chunk[k]);
+    }
+    SM_RETURN_IF_ERROR(
+        CheckAllocation(bytes, limits, absl::StrCat(where, ": one chunk (", shape, ")")));
+    // A chunk may be wider than a small dataset, but not by orders of magnitude.
+    const int64_t allowed = std::max<int64_t>(int64_t{64} << 20, 8 * declared_bytes);
+    if (bytes > allowed) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          where, ": one chunk (", shape, ") holds ", bytes, " bytes for a dataset of ",
+          declared_bytes, " bytes; rewrite it with smaller chunks (h5repack -l CHUNK=...)"));
+    }
+  }
+  if (H5Pget_layout(dcpl.get()) == H5D_VIRTUAL) return absl::OkStatus();
+  // Deflate decodes at most 1032 bytes per stored byte; unwritten chunks read as the fill
+  // value without any storage.
+  const int64_t stored = static_cast<int64_t>(H5Dget_storage_size(ds));
+  return CheckCompressionRatio(declared_bytes, stored, kMaxDeflateRatio, where);
 }
 
 class Hdf5Source : public VolumeSource {
  public:
-  Hdf5Source(hid_t file, hid_t dataset, hid_t memtype, int rank, VolumeInfo info)
-      : file_(file, H5Fclose), ds_(dataset, H5Dclose), memtype_(memtype), rank_(rank) {
+  Hdf5Source(hid_t file, hid_t dataset, hid_t memtype, int rank, VolumeInfo info,
+             std::unique_ptr<NamedFilePolicy> policy)
+      : policy_(std::move(policy)),
+        file_(file, H5Fclose),
+        ds_(dataset, H5Dclose),
+        memtype_(memtype),
+        rank_(rank) {
     info_ = std::move(info);
   }
 
@@ -90,6 +265,7 @@ class Hdf5Source : public VolumeSource {
   }
 
  private:
+  std::unique_ptr<NamedFilePolicy> policy_;  // outlives the ids whose access list names it
   H5Id file_, ds_;
   hid_t memtype_;
   int rank_;
@@ -137,25 +313,33 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenHdf5Volume(const std::string& 
   const hid_t fid = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (fid < 0) return absl::InvalidArgumentError(absl::StrCat(file, ": HDF5 cannot open it"));
   H5Id guard(fid, H5Fclose);
-  const std::vector<std::string> volumes = VolumeDatasets(fid);
+  // The source keeps the policy: the access list's external-link callback points at it.
+  auto policy = std::make_unique<NamedFilePolicy>();
+  policy->file = file;
+  policy->limits = limits;
+  H5Id dapl = AccessList(policy.get());
   std::string name = dataset;
   if (name.empty()) {
-    if (volumes.size() != 1) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(file, ": name the dataset (", file, ":/path); the file has ", volumes.size(),
-                       " 2D/3D datasets: ", absl::StrJoin(volumes, ", ")));
+    const Listing volumes = VolumeDatasets(fid);
+    if (volumes.names.size() != 1 || volumes.cut) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          file, ": name the dataset (", file, ":/path); the file has ", volumes.names.size(),
+          volumes.cut ? " or more" : "", " 2D/3D datasets: ", Listed(volumes)));
     }
-    name = volumes[0];
+    name = volumes.names[0];
   }
   const std::string where = absl::StrCat(file, ":", name);
-  if (H5Lexists(fid, name.c_str(), H5P_DEFAULT) <= 0) {
-    return absl::NotFoundError(absl::StrCat(
-        where, ": the file has no dataset ", name,
-        "; its 2D/3D datasets: ", volumes.empty() ? "none" : absl::StrJoin(volumes, ", ")));
+  const htri_t exists = H5Lexists(fid, name.c_str(), dapl.get());
+  SM_RETURN_IF_ERROR(policy->refused);
+  if (exists <= 0) {
+    return absl::NotFoundError(absl::StrCat(where, ": the file has no dataset ", name,
+                                            "; its 2D/3D datasets: ", Listed(VolumeDatasets(fid))));
   }
-  const hid_t ds = H5Dopen2(fid, name.c_str(), H5P_DEFAULT);
+  const hid_t ds = H5Dopen2(fid, name.c_str(), dapl.get());
+  SM_RETURN_IF_ERROR(policy->refused);
   if (ds < 0) return absl::InvalidArgumentError(absl::StrCat(where, ": is not a dataset"));
   H5Id ds_guard(ds, H5Dclose);
+  SM_RETURN_IF_ERROR(CheckNamedStorage(*policy, file, ds, where, 0));
   H5Id space(H5Dget_space(ds), H5Sclose);
   H5Id type(H5Dget_type(ds), H5Tclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
@@ -193,6 +377,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenHdf5Volume(const std::string& 
                                size * 8, "→float32");
   }
   SM_RETURN_IF_ERROR(CheckDims(info.dims, info.dtype, limits, where));
+  SM_RETURN_IF_ERROR(CheckStorageCost(
+      ds, type.get(), info.dims.num_voxels() * static_cast<int64_t>(size), limits, where));
   if (auto um = FloatAttribute(ds, "element_size_um", 3); !um.empty()) {
     info.placement.spacing = {um[2], um[1], um[0]};
     info.placement.unit = "um";
@@ -207,7 +393,7 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenHdf5Volume(const std::string& 
     }
   }
   return std::make_unique<Hdf5Source>(guard.release(), ds_guard.release(), memtype, rank,
-                                      std::move(info));
+                                      std::move(info), std::move(policy));
 }
 
 }  // namespace sheetmesh

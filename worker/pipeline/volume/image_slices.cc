@@ -8,6 +8,7 @@
 #include <jpeglib.h>
 // clang-format on
 #include <png.h>
+#include <sys/stat.h>
 
 #include <csetjmp>
 #include <cstring>
@@ -43,6 +44,17 @@ absl::StatusOr<FilePtr> OpenForRead(const std::string& file) {
   if (f == nullptr) return ErrnoStatus(errno, file);
   return f;
 }
+
+int64_t SizeOf(FILE* f) {
+  struct stat st;
+  return ::fstat(::fileno(f), &st) == 0 ? static_cast<int64_t>(st.st_size) : 0;
+}
+
+// The most a compressed slice may decode to per byte of its file: PNG is deflate (1032:1 at
+// best); a JPEG takes about 2 bits per 8x8 block of constant grey when progressive (255
+// pixels per byte), a few times less with arithmetic coding: 4096 leaves room for that.
+constexpr double kMaxPngRatio = 1100;
+constexpr double kMaxJpegPixelsPerByte = 4096;
 
 // ---------------------------------------------------------------- PNG
 
@@ -147,9 +159,12 @@ class PngSliceCodec : public SliceCodec {
     h.kind = PngKind(png.bit_depth, png.color_type);
     const int64_t channels =
         (png.color_type & PNG_COLOR_MASK_COLOR) && png.color_type != PNG_COLOR_TYPE_PALETTE ? 3 : 1;
-    SM_RETURN_IF_ERROR(
-        CheckAllocation(int64_t{h.width} * h.height * channels * BytesPerVoxel(h.dtype), limits,
-                        absl::StrCat(file, " (", h.width, "x", h.height, " ", h.kind, ")")));
+    const std::string what = absl::StrCat(file, " (", h.width, "x", h.height, " ", h.kind, ")");
+    const int64_t decoded = int64_t{h.width} * h.height * channels * BytesPerVoxel(h.dtype);
+    // Palette and sub-byte slices decode to more bytes than their compressed rows hold.
+    const int64_t packed = png.bit_depth < 8 ? decoded * png.bit_depth / 8 : decoded;
+    SM_RETURN_IF_ERROR(CheckCompressionRatio(packed, SizeOf(fp.get()), kMaxPngRatio, what));
+    SM_RETURN_IF_ERROR(CheckAllocation(decoded, limits, what));
     return h;
   }
 
@@ -206,6 +221,7 @@ struct JpegFailure {
   char message[JMSG_LENGTH_MAX] = {0};
   char warning[JMSG_LENGTH_MAX] = {0};
   int warnings = 0;
+  bool decoding = false;  // warnings end the decoding (not the header's reading)
 };
 
 void OnJpegError(j_common_ptr cinfo) {
@@ -216,10 +232,16 @@ void OnJpegError(j_common_ptr cinfo) {
 
 // Warnings (level -1) include "Premature end of JPEG file", after which libjpeg fills the
 // rest of the image with grey: the reader treats any as an error.
+// The first ends the decoding at once: a cut file of huge declared size would otherwise be
+// filled with grey to its end.
 void OnJpegMessage(j_common_ptr cinfo, int level) {
   auto* f = reinterpret_cast<JpegFailure*>(cinfo->err);
   if (level >= 0) return;
   if (f->warnings++ == 0) (*cinfo->err->format_message)(cinfo, f->warning);
+  if (f->decoding) {
+    std::snprintf(f->message, sizeof(f->message), "corrupt or cut short (%s)", f->warning);
+    std::longjmp(f->jump, 1);
+  }
 }
 
 class JpegFile {
@@ -249,6 +271,7 @@ class JpegFile {
   // Decodes into rows[y] as 8-bit grey (colour as its luminance).
   bool Read(JSAMPROW* rows) {
     if (setjmp(failure_.jump)) return false;
+    failure_.decoding = true;
     cinfo_.out_color_space = JCS_GRAYSCALE;
     jpeg_start_decompress(&cinfo_);
     while (cinfo_.output_scanline < cinfo_.output_height) {
@@ -305,9 +328,10 @@ class JpegSliceCodec : public SliceCodec {
     h.height = jpeg.height;
     h.dtype = DType::kUInt8;
     h.kind = JpegKind(jpeg.components);
-    SM_RETURN_IF_ERROR(
-        CheckAllocation(int64_t{h.width} * h.height, limits,
-                        absl::StrCat(file, " (", h.width, "x", h.height, " ", h.kind, ")")));
+    const std::string what = absl::StrCat(file, " (", h.width, "x", h.height, " ", h.kind, ")");
+    SM_RETURN_IF_ERROR(CheckCompressionRatio(int64_t{h.width} * h.height, SizeOf(fp.get()),
+                                             kMaxJpegPixelsPerByte, what));
+    SM_RETURN_IF_ERROR(CheckAllocation(int64_t{h.width} * h.height, limits, what));
     return h;
   }
 

@@ -1,12 +1,15 @@
 #include "worker/pipeline/volume/volume_source.h"
 
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <limits>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "common/machine.h"
 
 namespace sheetmesh {
@@ -111,9 +114,27 @@ absl::Status AsInputError(absl::Status status) {
   return absl::InvalidArgumentError(status.message());
 }
 
+absl::Status CheckCompressionRatio(int64_t decoded_bytes, int64_t stored_bytes, double max_ratio,
+                                   absl::string_view what) {
+  if (decoded_bytes <= 0) return absl::OkStatus();
+  const double ratio = static_cast<double>(decoded_bytes) / std::max<int64_t>(stored_bytes, 1);
+  if (ratio <= max_ratio) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s declares %d bytes of voxels but holds %d bytes of data for them (%.0f:1; its "
+      "compression reaches at most %.0f:1): cut short, or a header that does not describe "
+      "its data",
+      what, decoded_bytes, stored_bytes, ratio, max_ratio));
+}
+
 int64_t MemoryBudget(const VolumeLimits& limits) {
   if (limits.memory_bytes > 0) return limits.memory_bytes;
-  return static_cast<int64_t>(PhysicalMemoryBytes(uint64_t{16} << 30) / 4);
+  int64_t budget = static_cast<int64_t>(PhysicalMemoryBytes(uint64_t{16} << 30) / 4);
+  // Within a process whose address space is limited (a job's child), half of that limit.
+  struct rlimit as;
+  if (::getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    budget = std::min<int64_t>(budget, static_cast<int64_t>(as.rlim_cur / 2));
+  }
+  return budget;
 }
 
 absl::Status CheckAllocation(int64_t bytes, const VolumeLimits& limits, absl::string_view what) {

@@ -55,12 +55,21 @@ struct VolumeLimits {
   std::vector<std::string> named_file_roots;
 };
 
-// limits.memory_bytes, or a quarter of the machine's memory when it is 0.
+// limits.memory_bytes, or when it is 0 a quarter of the machine's memory (and at most half of
+// this process's address-space limit, where it has one).
 int64_t MemoryBudget(const VolumeLimits& limits);
 
 // kResourceExhausted when `bytes` (what `what` needs at once) exceed the budget, naming both;
 // kInvalidArgument when `bytes` is negative or overflowed.
 absl::Status CheckAllocation(int64_t bytes, const VolumeLimits& limits, absl::string_view what);
+
+// What a compressed file may decode to: a header declaring `decoded_bytes` from
+// `stored_bytes` of compressed data beyond `max_ratio` (the best the format's coder can do
+// on constant data: deflate 1032:1) describes data the file does not hold, and would make a
+// few bytes cost gigabytes or minutes. kInvalidArgument naming `what`, both sizes and the
+// ratio; ok otherwise.
+absl::Status CheckCompressionRatio(int64_t decoded_bytes, int64_t stored_bytes, double max_ratio,
+                                   absl::string_view what);
 
 // The status of a read of an input file, with kDataLoss (the file ended early: the user's
 // file is bad, not the system's storage) as kInvalidArgument.

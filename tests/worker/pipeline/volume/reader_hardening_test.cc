@@ -11,6 +11,7 @@
 #include "absl/strings/match.h"
 #include "common/file_util.h"
 #include "tests/testing/bad_volumes.h"
+#include "tests/testing/hostile_files.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
@@ -189,6 +190,131 @@ TEST(ReaderHardeningTest, AGrayscaleFloatVolumeNeedsItsSheetPhaseGiven) {
   in.selection = PhaseSelection::Window(0, 5);  // the dark sheet
   SM_ASSERT_OK_AND_ASSIGN(SheetPhase phase, LoadSheetPhase(in));
   EXPECT_EQ(phase.sheet.size(), 24u * 24u);
+}
+
+// Options of a volume sent to the server (it may name no other file), of one referenced under
+// `root` (it may name files under the root), and of a local user's own file (anything).
+OpenOptions Uploaded() {
+  OpenOptions o;
+  o.limits.confine_named_files = true;
+  return o;
+}
+OpenOptions Referenced(const std::string& root) {
+  OpenOptions o = Uploaded();
+  o.limits.named_file_roots = {root};
+  return o;
+}
+
+TEST(ReaderHardeningTest, AnHdf5DatasetStoredInAnotherFileIsRefusedUnlessThatFileIsAllowed) {
+  TempDir tmp;
+  const std::string root = tmp.File("root");
+  std::filesystem::create_directories(root);
+  for (const std::string secret : {"/proc/self/environ", "/etc/passwd"}) {
+    const std::string path = testing::Hdf5WithExternalStorage(tmp.File("root/leak.h5"), secret,
+                                                              secret == "/etc/passwd" ? 3 : 0);
+    EXPECT_THAT(OpenAndReadAll(path + ":/data", Uploaded()),
+                StatusIs(absl::StatusCode::kPermissionDenied,
+                         AllOf(HasSubstr(path), HasSubstr("external storage"), HasSubstr(secret))));
+    EXPECT_THAT(OpenAndReadAll(path + ":/data", Referenced(root)),
+                StatusIs(absl::StatusCode::kPermissionDenied,
+                         AllOf(HasSubstr("outside the allowed roots"), HasSubstr(secret))));
+  }
+  // A raw file beside it, under the root, may hold its voxels; so may any file offline.
+  ASSERT_THAT(WriteFileAtomically(tmp.File("root/voxels.bin"), std::string(4, '\x07')), IsOk());
+  const std::string beside =
+      testing::Hdf5WithExternalStorage(tmp.File("root/beside.h5"), "voxels.bin", 2);
+  EXPECT_THAT(OpenAndReadAll(beside + ":/data", Referenced(root)), IsOk());
+  EXPECT_THAT(OpenAndReadAll(beside + ":/data", Uploaded()),
+              StatusIs(absl::StatusCode::kPermissionDenied, HasSubstr("voxels.bin")));
+  EXPECT_THAT(OpenAndReadAll(beside + ":/data"), IsOk());
+}
+
+TEST(ReaderHardeningTest, Hdf5VirtualDatasetsAndExternalLinksReachOnlyAllowedFiles) {
+  TempDir tmp;
+  const std::string root = tmp.File("root");
+  std::filesystem::create_directories(root);
+  const std::string outside = testing::Hdf5Plain(tmp.File("outside.h5"), "/secret");
+  const std::string inside = testing::Hdf5Plain(tmp.File("root/inside.h5"), "/scan");
+  struct Case {
+    std::string path;
+    bool allowed_under_root;
+  };
+  const std::vector<Case> cases = {
+      {testing::Hdf5Virtual(tmp.File("root/vds_out.h5"), outside, "/secret"), false},
+      {testing::Hdf5Virtual(tmp.File("root/vds_in.h5"), "inside.h5", "/scan"), true},
+      {testing::Hdf5ExternalLink(tmp.File("root/link_out.h5"), outside, "/secret"), false},
+      {testing::Hdf5ExternalLink(tmp.File("root/link_in.h5"), inside, "/scan"), true},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.path);
+    const std::string volume = c.path + ":/data";
+    EXPECT_THAT(OpenAndReadAll(volume, Uploaded()),
+                StatusIs(absl::StatusCode::kPermissionDenied, HasSubstr(c.path)));
+    if (c.allowed_under_root) {
+      EXPECT_THAT(OpenAndReadAll(volume, Referenced(root)), IsOk());
+    } else {
+      EXPECT_THAT(OpenAndReadAll(volume, Referenced(root)),
+                  StatusIs(absl::StatusCode::kPermissionDenied, HasSubstr("outside.h5")));
+    }
+    EXPECT_THAT(OpenAndReadAll(volume), IsOk()) << "a local user's own file reads";
+  }
+}
+
+TEST(ReaderHardeningTest, Hdf5ChunkNestingAndEmptinessBombsEndInAnErrorNamingThem) {
+  TempDir tmp;
+  // One 512^3 chunk (128 MiB decoded) for a 48^3 dataset.
+  const std::string chunked = testing::Hdf5HugeChunk(tmp.File("chunk.h5"), 512);
+  EXPECT_THAT(OpenAndReadAll(chunked + ":/data"),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr(chunked), HasSubstr("512x512x512"))));
+  // A chunk a little wider than its dataset reads.
+  const std::string fine = testing::Hdf5HugeChunk(tmp.File("fine.h5"), 64);
+  EXPECT_THAT(OpenAndReadAll(fine + ":/data"), IsOk());
+  // Declared, never written: no data behind the dims.
+  const std::string empty = testing::Hdf5NeverWritten(tmp.File("empty.h5"), 256);
+  EXPECT_THAT(OpenAndReadAll(empty + ":/data"),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr(empty), HasSubstr("16777216 bytes"))));
+  // 2,000 nested groups: listing them stops at its bound; named, the dataset opens.
+  const std::string nested = testing::Hdf5NestedGroups(tmp.File("nested.h5"), 2000);
+  EXPECT_THAT(OpenAndReadAll(nested), StatusIs(absl::StatusCode::kInvalidArgument,
+                                               AllOf(HasSubstr(nested), HasSubstr("dataset"))));
+  std::string deep;
+  for (int i = 0; i < 2000; ++i) deep += "/g";
+  EXPECT_THAT(OpenAndReadAll(nested + ":" + deep + "/data"), IsOk());
+}
+
+TEST(ReaderHardeningTest, ANpyShapeOf20000ExtentsIsInvalidArgumentNotACrash) {
+  TempDir tmp;
+  const std::string path = testing::NpyWithLongShape(tmp.File("long.npy"), 20000);
+  ASSERT_GT(std::filesystem::file_size(path), 40000u);
+  EXPECT_THAT(OpenAndReadAll(path),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr(path), HasSubstr("shape"), HasSubstr("not 2D or 3D"))));
+}
+
+TEST(ReaderHardeningTest, SlicesClaimingMoreThanTheirBytesCanHoldAreRefusedBeforeDecoding) {
+  TempDir tmp;
+  for (const std::string& folder : {testing::JpegClaiming(tmp.File("jpeg"), 65500, 65500),
+                                    testing::PngClaiming(tmp.File("png"), 65500, 65500)}) {
+    EXPECT_THAT(OpenAndReadAll(folder),
+                StatusIs(absl::StatusCode::kInvalidArgument,
+                         AllOf(HasSubstr(folder), HasSubstr("65500x65500"), HasSubstr(":1"))));
+  }
+}
+
+TEST(ReaderHardeningTest, AVdbCutAnywhereInItsHeaderIsInvalidArgument) {
+  TempDir tmp;
+  const std::string path = tmp.File("cut.vdb");
+  ASSERT_THAT(testing::WriteVolume(path, testing::SheetVolume({48, 40, 32})), IsOk());
+  const int64_t size = static_cast<int64_t>(std::filesystem::file_size(path));
+  // Every cut in the first 600 bytes (the header and the first descriptor: the audit cut at
+  // 200), then every 5% of the file.
+  for (int64_t keep = 0; keep < size; keep += keep < 600 ? 1 : size / 20) {
+    ASSERT_THAT(testing::VdbCutTo(path, keep), HasSubstr("cut.vdb"));
+    EXPECT_THAT(OpenAndReadAll(path), StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr(path)))
+        << "kept " << keep << " of " << size << " bytes";
+  }
 }
 
 }  // namespace

@@ -62,10 +62,13 @@ constexpr char kUsage[] =
 
 // The payload that marks a status as the end of a job (not a refused call).
 constexpr char kJobFailed[] = "sheetmesh/job-failed";
+// The payload that marks a status as about the user's own files on this machine.
+constexpr char kUserInput[] = "sheetmesh/user-input";
 
-// 2 for bad input the user can mend: refused parameters, and a job that failed on its
-// volume (bad, cut, too big for the server's budget, naming a file it may not); 1 for the
-// rest (the server, the network, a job or file that does not exist).
+// 2 for bad input the user can mend: refused parameters, a volume of theirs that is missing
+// here, and a job that failed on its volume (bad, cut, too big for the server's budget,
+// naming a file it may not); 1 for the rest (the server, the network, a job or blob the
+// server does not have).
 int ExitCodeOf(const absl::Status& st) {
   switch (st.code()) {
     case absl::StatusCode::kInvalidArgument:
@@ -75,7 +78,8 @@ int ExitCodeOf(const absl::Status& st) {
     case absl::StatusCode::kResourceExhausted:
     case absl::StatusCode::kFailedPrecondition:
     case absl::StatusCode::kPermissionDenied:
-      return st.GetPayload(kJobFailed).has_value() ? 2 : 1;
+    case absl::StatusCode::kNotFound:
+      return st.GetPayload(kJobFailed).has_value() || st.GetPayload(kUserInput).has_value() ? 2 : 1;
     default:
       return 1;
   }
@@ -176,6 +180,15 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
   req.set_no_cache(absl::GetFlag(FLAGS_no_cache));
   v1::JobInput& in = *req.mutable_input();
   in.set_file_name(std::filesystem::path(args[0]).filename().string());
+  // The user's own volume, a folder of slices or a file.h5:/dataset: a missing one is theirs
+  // to mend (exit 2), unlike a job the server does not have.
+  std::error_code ec;
+  const std::string local = args[0].substr(0, args[0].rfind(":/"));
+  if (!absl::GetFlag(FLAGS_reference) && !std::filesystem::exists(local, ec)) {
+    absl::Status missing = absl::NotFoundError(absl::StrCat(local, ": no such file or folder"));
+    missing.SetPayload(kUserInput, absl::Cord("1"));
+    return missing;
+  }
   if (absl::GetFlag(FLAGS_reference)) {
     in.set_volume_path(std::filesystem::absolute(args[0]).string());
   } else if (std::filesystem::is_directory(args[0]) ||
@@ -293,6 +306,10 @@ absl::Status Jobs(SheetmeshClient& c, const std::vector<std::string>& args) {
 
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
+  if (WantsVersion(argc, argv)) {
+    PrintVersion("sheetmesh", std::cout);
+    return 0;
+  }
   if (WantsHelp(argc, argv)) {
     std::cout << kUsage << "\nflags:\n";
     PrintFlagsOf("client/main.cc", std::cout);
@@ -307,8 +324,8 @@ int Main(int argc, char** argv) {
     std::cerr << "sheetmesh: " << unparsed.status().message() << "\n";
     return 2;
   }
-  std::vector<char*> rest =
-      absl::ParseCommandLine(static_cast<int>(unparsed->size()), unparsed->data());
+  std::vector<char*> rest = sheetmesh::ParseFlagsOrExit(static_cast<int>(unparsed->size()),
+                                                        unparsed->data(), "sheetmesh");
   if (rest.size() < 2) {
     std::cerr << kUsage;
     return 2;

@@ -137,12 +137,16 @@ int main(int argc, char** argv) {
   // bench/RESULTS.md, "Service").
   sheetmesh::UseTransparentHugePages(argc, argv, /*max_arenas=*/2);
   absl::SetProgramUsageMessage("sheetmesh-server --data_dir=DIR [flags]");
+  if (sheetmesh::WantsVersion(argc, argv)) {
+    sheetmesh::PrintVersion("sheetmesh-server", std::cout);
+    return 0;
+  }
   if (sheetmesh::WantsHelp(argc, argv)) {
     std::cout << "sheetmesh-server --data_dir=DIR [flags]\n\n";
     sheetmesh::PrintFlagsOf("server/main.cc", std::cout);
     return 0;
   }
-  absl::ParseCommandLine(argc, argv);
+  sheetmesh::ParseFlagsOrExit(argc, argv, "sheetmesh-server");
   // Every open upload holds descriptors: take the most the system allows this process (the
   // soft limit, often 1024, up to the hard one).
   struct rlimit files;

@@ -92,4 +92,18 @@ case_ vdb_claiming_gigabytes 2 "claims.vdb|not a readable .vdb" -- "$cli" info "
 case_ vdb_with_a_gigabyte_name 2 "name.vdb|not a readable .vdb" -- "$cli" info "$tmp/name.vdb" --memory_limit_gb=1
 [ "$("$cli" info "$tmp/name.vdb" --memory_limit_gb=1 2>&1 | wc -c)" -lt 1000 ] || fail "name.vdb: the message quotes the file's garbage at length"
 case_ memory_limit_negative 2 "memory_limit_gb=-3" -- "$cli" info "$tmp/s.vdb" --memory_limit_gb=-3
+# Usage errors exit 2 like every other mendable input; --version answers.
+case_ unknown_flag 2 "unknown flag --bogus" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --bogus
+case_ bad_flag_value 2 "memory_limit_gb=abc" -- "$cli" info "$tmp/s.vdb" --memory_limit_gb=abc
+case_ missing_file 2 "missing.tif" -- "$cli" info "$tmp/missing.tif"
+case_ version 0 "sheetmesh-pipeline 0." -- "$cli" --version
+# The audit's runaway parameters: refused before the stage or within a range that ends.
+# (A cylinder as wide as the image is one claim per voxel of it: both finish within 2 GB.)
+case_ detect_t_100 0 "extract" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --extract --detect_t=100 --memory_limit_gb=2
+case_ detect_R_1000 0 "extract" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --extract --detect_R=1000 --memory_limit_gb=2
+case_ tet_min_dihedral_69.99 2 "tet_min_dihedral = 69.99|[0, 20]" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --volume_mesh --tet_min_dihedral=69.99
+case_ seed_above_its_range 2 "surface_seed|9007199254740992" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_seed=9007199254740993
+case_ all_nan_names_no_sentinel 2 "every voxel is NaN" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1
+"$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1 2>&1 | grep -q "inf" && fail "all-NaN: the message quotes the empty range's sentinel"
+case_ spacing_1e-6_m 0 "model.vdb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/tiny" --spacing=1e-6,1e-6,1e-6 --unit=m
 echo "hardening CLI: $cases cases passed"

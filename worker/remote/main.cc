@@ -43,12 +43,16 @@ ABSL_FLAG(int, renew_seconds, 5, "lease renewal period (below a third of the ser
 int main(int argc, char** argv) {
   if (const int code = sheetmesh::runtime::RunJobChildIfAsked(argc, argv); code >= 0) return code;
   absl::SetProgramUsageMessage("sheetmesh-worker --server=HOST:PORT --scratch_dir=DIR [flags]");
+  if (sheetmesh::WantsVersion(argc, argv)) {
+    sheetmesh::PrintVersion("sheetmesh-worker", std::cout);
+    return 0;
+  }
   if (sheetmesh::WantsHelp(argc, argv)) {
     std::cout << "sheetmesh-worker --server=HOST:PORT --scratch_dir=DIR [flags]\n\n";
     sheetmesh::PrintFlagsOf("worker/remote/main.cc", std::cout);
     return 0;
   }
-  absl::ParseCommandLine(argc, argv);
+  sheetmesh::ParseFlagsOrExit(argc, argv, "sheetmesh-worker");
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);

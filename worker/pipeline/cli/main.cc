@@ -42,8 +42,9 @@ ABSL_FLAG(bool, closed, false, "score: the mesh is a closed surface; score the v
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
 ABSL_FLAG(std::string, volume, "",
           "volume: the image whose box, spacing and origin the mesh fills");
-ABSL_FLAG(std::string, out_format, "raw",
-          "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip or vdb");
+ABSL_FLAG(std::string, out_format, "",
+          "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip or vdb (default: by the "
+          "output's extension, raw when it names none of them)");
 ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
 // phantom
 ABSL_FLAG(std::string, preset, "",
@@ -182,14 +183,16 @@ absl::Status Phantom(const std::vector<std::string>& args) {
   if (absl::GetFlag(FLAGS_specks) >= -1) options.phantom.num_specks = absl::GetFlag(FLAGS_specks);
   options.output = absl::GetFlag(FLAGS_o);
   if (options.output.empty()) return absl::InvalidArgumentError("phantom needs -o FILE");
-  SM_ASSIGN_OR_RETURN(options.format, ParseVolumeFormat(absl::GetFlag(FLAGS_out_format)));
+  SM_ASSIGN_OR_RETURN(options.format,
+                      OutputVolumeFormat(absl::GetFlag(FLAGS_out_format), options.output));
   options.truth_path = absl::GetFlag(FLAGS_truth);
   return RunPhantom(options, std::cout);
 }
 
 absl::Status Convert(const std::vector<std::string>& args, const PipelineOptions& o) {
   if (args.size() != 1) return Usage("convert VOLUME -o FILE --out_format=F");
-  SM_ASSIGN_OR_RETURN(VolumeFormat format, ParseVolumeFormat(absl::GetFlag(FLAGS_out_format)));
+  SM_ASSIGN_OR_RETURN(VolumeFormat format,
+                      OutputVolumeFormat(absl::GetFlag(FLAGS_out_format), absl::GetFlag(FLAGS_o)));
   if (absl::GetFlag(FLAGS_o).empty()) return absl::InvalidArgumentError("convert needs -o FILE");
   return RunConvert(args[0], o.input.open, absl::GetFlag(FLAGS_o), format, std::cout);
 }
@@ -296,6 +299,10 @@ absl::Status LimitMemory(double gib) {
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
+  if (WantsVersion(argc, argv)) {
+    PrintVersion("sheetmesh-pipeline", std::cout);
+    return 0;
+  }
   if (WantsHelp(argc, argv)) {
     PrintHelp(command);
     return 0;
@@ -311,8 +318,8 @@ int Main(int argc, char** argv) {
           : TakeParameterFlags(argc, argv, Accepts(command), command);
   absl::Status status = flags.status();
   if (status.ok()) {
-    std::vector<char*> positional =
-        absl::ParseCommandLine(static_cast<int>(flags->rest.size()), flags->rest.data());
+    std::vector<char*> positional = sheetmesh::ParseFlagsOrExit(
+        static_cast<int>(flags->rest.size()), flags->rest.data(), "sheetmesh-pipeline");
     const std::vector<std::string> args(positional.begin() + std::min<size_t>(2, positional.size()),
                                         positional.end());
     status = LimitMemory(absl::GetFlag(FLAGS_memory_limit_gb));

@@ -6,7 +6,9 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -82,54 +84,98 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   // What the round will cost, before it runs: the voxels it looks at, and the claims it may
   // hold at once (each cylinder's, at most its window).
   double visits = 0, claims_bound = 0;
-  const double cylinder = M_PI * (R + 1) * (R + 1) * (2 * t + 2);
+  // A flat cylinder holds at most its own volume, and no more than the image's widest plane
+  // section (at most the root of the sum of its faces' squared areas) times its thickness.
+  const double nx = d.nx, ny = d.ny, nz = d.nz;
+  const double widest = std::sqrt(nx * nx * ny * ny + ny * ny * nz * nz + nz * nz * nx * nx);
+  const double cylinder = std::min(M_PI * (R + 1) * (R + 1), widest) * (2 * t + 2);
   for (const uint32_t g : active) {
     const double w = static_cast<double>(window_of(g).voxels());
     visits += w;
     claims_bound += std::min(w, cylinder);
   }
-  const double claim_bytes = 2 * sizeof(Claim) * claims_bound;  // the parts and their union
+  // Claims are kept as a list (sorted, the nearest plane's first) or, where the cylinders
+  // cover much of the image, as the best claim per voxel of a dense array: the same result.
+  const double list_bytes = 2 * sizeof(Claim) * claims_bound;  // the parts and their union
+  const double dense_bytes = sizeof(uint64_t) * static_cast<double>(d.num_voxels());
+  const bool dense = o.claims == ExtendOptions::ClaimStore::kAuto
+                         ? dense_bytes < list_bytes
+                         : o.claims == ExtendOptions::ClaimStore::kDense;
+  const double claim_bytes = dense ? dense_bytes : list_bytes;
   if (claim_bytes > static_cast<double>(o.memory_bytes) || visits > o.max_visits) {
     return absl::ResourceExhaustedError(absl::StrFormat(
         "extending %d rim cells with t = %g and R = %g voxels would look at %.3g voxels and "
-        "hold up to %.3g GB of claims (limits: %.3g voxels, %.3g GB of memory); lower t and R "
+        "hold %.3g GB of claims (limits: %.3g voxels, %.3g GB of memory); lower t and R "
         "(formula 4's flat cylinder) to about the sheets' thickness and a cell's radius",
         active.size(), t, R, visits, claim_bytes / 1e9, o.max_visits, o.memory_bytes / 1e9));
   }
-  tbb::combinable<std::vector<Claim>> parts;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                      std::vector<Claim>& out = parts.local();
-                      for (size_t i = r.begin(); i < r.end(); ++i) {
-                        const uint32_t g = active[i];
-                        const Index3 z = scvd.generators[g];
-                        const Vec3& n = normal[g];
-                        const int32_t label = patch.label[scvd.generator_voxel[g]];
-                        const Window w = window_of(g);
-                        for (int64_t zz = w.lo[2]; zz <= w.hi[2]; ++zz) {
-                          for (int64_t y = w.lo[1]; y <= w.hi[1]; ++y) {
-                            for (int64_t x = w.lo[0]; x <= w.hi[0]; ++x) {
-                              const Vec3 v(x - z.x, y - z.y, zz - z.z);
-                              const double along = std::abs(Dot(v, n));
-                              if (along >= t) continue;
-                              if (Norm2(v) - along * along >= R * R) continue;
-                              if (patch.set.Contains(x, y, zz)) continue;
-                              if (within != nullptr && !within->Contains(x, y, zz)) continue;
-                              out.push_back({static_cast<uint64_t>((zz * d.ny + y) * d.nx + x),
-                                             static_cast<float>(along), label});
+  // Calls claim(key, off_plane, label) for every voxel each rim cylinder may add.
+  auto scan = [&](auto&& claim) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t i = r.begin(); i < r.end(); ++i) {
+                          const uint32_t g = active[i];
+                          const Index3 z = scvd.generators[g];
+                          const Vec3& n = normal[g];
+                          const int32_t label = patch.label[scvd.generator_voxel[g]];
+                          const Window w = window_of(g);
+                          for (int64_t zz = w.lo[2]; zz <= w.hi[2]; ++zz) {
+                            for (int64_t y = w.lo[1]; y <= w.hi[1]; ++y) {
+                              for (int64_t x = w.lo[0]; x <= w.hi[0]; ++x) {
+                                const Vec3 v(x - z.x, y - z.y, zz - z.z);
+                                const double along = std::abs(Dot(v, n));
+                                if (along >= t) continue;
+                                if (Norm2(v) - along * along >= R * R) continue;
+                                if (patch.set.Contains(x, y, zz)) continue;
+                                if (within != nullptr && !within->Contains(x, y, zz)) continue;
+                                claim(static_cast<uint64_t>((zz * d.ny + y) * d.nx + x),
+                                      static_cast<float>(along), label);
+                              }
                             }
                           }
                         }
-                      }
-                    });
+                      });
+  };
   std::vector<Claim> claims;
-  parts.combine_each(
-      [&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
-  tbb::parallel_sort(claims.begin(), claims.end());
-  // The first claim of each voxel is the nearest plane's (ties: the lower label).
-  claims.erase(std::unique(claims.begin(), claims.end(),
-                           [](const Claim& a, const Claim& b) { return a.key == b.key; }),
-               claims.end());
+  if (dense) {
+    // (off_plane, label) packed so that the smaller word is the nearer plane, then the lower
+    // label: a non-negative float's bits order as the float, the label offset to unsigned.
+    constexpr uint64_t kNone = ~uint64_t{0};
+    std::vector<std::atomic<uint64_t>> best(static_cast<size_t>(d.num_voxels()));
+    tbb::parallel_for(size_t{0}, best.size(),
+                      [&](size_t i) { best[i].store(kNone, std::memory_order_relaxed); });
+    scan([&](uint64_t key, float along, int32_t label) {
+      uint32_t bits;
+      std::memcpy(&bits, &along, 4);
+      const uint64_t word =
+          (uint64_t{bits} << 32) | (static_cast<uint32_t>(label) ^ uint32_t{0x80000000u});
+      uint64_t seen = best[key].load(std::memory_order_relaxed);
+      while (word < seen &&
+             !best[key].compare_exchange_weak(seen, word, std::memory_order_relaxed)) {
+      }
+    });
+    for (size_t key = 0; key < best.size(); ++key) {
+      const uint64_t word = best[key].load(std::memory_order_relaxed);
+      if (word == kNone) continue;
+      float along;
+      const uint32_t bits = static_cast<uint32_t>(word >> 32);
+      std::memcpy(&along, &bits, 4);
+      claims.push_back(
+          {key, along, static_cast<int32_t>(static_cast<uint32_t>(word) ^ uint32_t{0x80000000u})});
+    }
+  } else {
+    tbb::combinable<std::vector<Claim>> parts;
+    scan([&](uint64_t key, float along, int32_t label) {
+      parts.local().push_back({key, along, label});
+    });
+    parts.combine_each(
+        [&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
+    tbb::parallel_sort(claims.begin(), claims.end());
+    // The first claim of each voxel is the nearest plane's (ties: the lower label).
+    claims.erase(std::unique(claims.begin(), claims.end(),
+                             [](const Claim& a, const Claim& b) { return a.key == b.key; }),
+                 claims.end());
+  }
   if (built != nullptr) *built = std::move(s);
   return claims;
 }

@@ -22,6 +22,11 @@ struct ExtendOptions {
   // round estimated beyond either is kResourceExhausted before it starts.
   int64_t memory_bytes = int64_t{4} << 30;
   double max_visits = 4e10;
+  // How a round keeps its claims: a sorted list, or the best claim per voxel of the whole
+  // image; kAuto takes the smaller. Both give the same patch (the nearest plane's claim,
+  // ties to the lower label).
+  enum class ClaimStore { kAuto, kList, kDense };
+  ClaimStore claims = ClaimStore::kAuto;
 };
 
 struct ExtendResult {

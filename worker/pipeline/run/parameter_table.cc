@@ -61,7 +61,7 @@ std::vector<ParamRow> InputRows() {
                          "[0, 1099511627776]", "bytes", "raw volumes: bytes before the voxels"));
   rows.push_back(Text("input.vdb_grid", SM_MEMBER(input.open.vdb_grid),
                       "vdb volumes: the grid to read (empty: the first scalar grid)"));
-  rows.push_back(Triple("input.spacing", &OpenOptions::spacing, "(0, 1e9]", "unit",
+  rows.push_back(Triple("input.spacing", &OpenOptions::spacing, "[1e-12, 1e9]", "unit",
                         "voxel size x, y, z overriding the file's"));
   rows.push_back(Triple("input.origin", &OpenOptions::origin, "[-1e15, 1e15]", "unit",
                         "position of voxel (0, 0, 0) overriding the file's"));
@@ -371,7 +371,9 @@ std::vector<ParamRow> VolumeMeshRows() {
   rows.push_back(Number("tet.radius_edge_ratio", SM_MEMBER(volume.tetgen.max_radius_edge_ratio),
                         "0 | [1, 10]", "", "TetGen's radius-edge ratio bound (-q; 0: none)"));
   rows.push_back(Number("tet.min_dihedral", SM_MEMBER(volume.tetgen.min_dihedral_degrees),
-                        "[0, 70)", "degrees", "the smallest dihedral angle asked of TetGen"));
+                        "[0, 20]", "degrees",
+                        "the smallest dihedral angle asked of TetGen (above about 20 degrees "
+                        "its refinement need not end)"));
   rows.push_back(Number("tet.max_volume", SM_MEMBER(volume.tetgen.max_volume), "[0, 1e30]",
                         "unit^3", "largest tetrahedron volume (0: none)"));
   rows.push_back(Bool("tet.steiner_on_sheets", SM_MEMBER(volume.tetgen.steiner_on_sheets),

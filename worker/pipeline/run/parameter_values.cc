@@ -170,6 +170,14 @@ ParamValue Widen(const ParamSpec& s, ParamValue v) {
 std::string Violation(const ParamRow& row, const ParamValue& v) {
   const ParamSpec& s = row.spec;
   auto in_range = [&](double x) { return std::isfinite(x) && s.range.Contains(x); };
+  // An integer beyond 2^53 may round onto a bound (2^53 + 1 onto 2^53): it is in range only
+  // when the doubles on both sides of its rounding are.
+  auto int_in_range = [&](int64_t i) {
+    const double d = static_cast<double>(i);
+    if (!in_range(d)) return false;
+    if (static_cast<long double>(i) == static_cast<long double>(d)) return true;
+    return in_range(std::nextafter(d, -HUGE_VAL)) && in_range(std::nextafter(d, HUGE_VAL));
+  };
   auto list_size_ok = [&](size_t n) {
     if (s.count > 0) return n == static_cast<size_t>(s.count);
     return n > 0 || s.allow_empty;
@@ -179,7 +187,7 @@ std::string Violation(const ParamRow& row, const ParamValue& v) {
     case ParamType::kText:
       break;
     case ParamType::kInteger:
-      if (!in_range(static_cast<double>(std::get<int64_t>(v)))) return Expected(s);
+      if (!int_in_range(std::get<int64_t>(v))) return Expected(s);
       break;
     case ParamType::kNumber:
       if (!in_range(std::get<double>(v))) return Expected(s);
@@ -196,8 +204,7 @@ std::string Violation(const ParamRow& row, const ParamValue& v) {
     }
     case ParamType::kIntegers: {
       const auto& x = std::get<std::vector<int64_t>>(v);
-      if (!list_size_ok(x.size()) ||
-          !std::all_of(x.begin(), x.end(), [&](int64_t i) { return in_range(double(i)); }))
+      if (!list_size_ok(x.size()) || !std::all_of(x.begin(), x.end(), int_in_range))
         return Expected(s);
       break;
     }

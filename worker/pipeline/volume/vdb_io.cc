@@ -3,6 +3,8 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 #include <vector>
@@ -25,10 +27,35 @@ void InitializeOpenVdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
+constexpr char kSpacingMeta[] = "sheetmesh_spacing";
+constexpr char kOriginMeta[] = "sheetmesh_origin";
+constexpr char kTransformUnitMeta[] = "sheetmesh_transform_unit";
+
+// OpenVDB refuses a transform whose determinant is nearly 0 (below about 1e-8): a voxel of
+// 5 um given in metres. The transform is then written in a unit 1000^k smaller (the exact
+// placement stays in the metadata, which this reader takes first).
+double TransformScale(const Placement& p) {
+  const double smallest = std::min({p.spacing.x, p.spacing.y, p.spacing.z});
+  double scale = 1;
+  while (smallest * scale < 1e-2 && scale < 1e15) scale *= 1000;
+  return scale;
+}
+
+std::string ScaledUnit(const std::string& unit, double scale) {
+  if (scale == 1) return unit;
+  static const char* kLengths[] = {"m", "mm", "um", "nm", "pm"};
+  int steps = static_cast<int>(std::lround(std::log10(scale) / 3));
+  for (int i = 0; i < 5; ++i) {
+    if (unit == kLengths[i] && i + steps < 5) return kLengths[i + steps];
+  }
+  return absl::StrCat(unit.empty() ? "unit" : unit, " x ", scale);
+}
+
 openvdb::math::Transform::Ptr MakeTransform(const Placement& p) {
+  const double k = TransformScale(p);
   openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
-  m.setToScale(openvdb::Vec3d(p.spacing.x, p.spacing.y, p.spacing.z));
-  m.setTranslation(openvdb::Vec3d(p.origin.x, p.origin.y, p.origin.z));
+  m.setToScale(openvdb::Vec3d(k * p.spacing.x, k * p.spacing.y, k * p.spacing.z));
+  m.setTranslation(openvdb::Vec3d(k * p.origin.x, k * p.origin.y, k * p.origin.z));
   return openvdb::math::Transform::createLinearTransform(m);
 }
 
@@ -38,6 +65,12 @@ void SetVolumeMeta(openvdb::GridBase& grid, const Dims& dims, DType dtype, const
                                                                    static_cast<int>(dims.nz))));
   grid.insertMeta(kDTypeMeta, openvdb::StringMetadata(std::string(DTypeName(dtype))));
   if (!p.unit.empty()) grid.insertMeta(kUnitMeta, openvdb::StringMetadata(p.unit));
+  grid.insertMeta(kSpacingMeta,
+                  openvdb::Vec3DMetadata(openvdb::Vec3d(p.spacing.x, p.spacing.y, p.spacing.z)));
+  grid.insertMeta(kOriginMeta,
+                  openvdb::Vec3DMetadata(openvdb::Vec3d(p.origin.x, p.origin.y, p.origin.z)));
+  const double k = TransformScale(p);
+  if (k != 1) grid.insertMeta(kTransformUnitMeta, openvdb::StringMetadata(ScaledUnit(p.unit, k)));
   grid.setTransform(MakeTransform(p));
 }
 
@@ -362,6 +395,14 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
   const openvdb::Vec3d o = xf.indexToWorld(origin);
   info.placement.spacing = {vs.x(), vs.y(), vs.z()};
   info.placement.origin = {o.x(), o.y(), o.z()};
+  // The exact placement this writer kept beside a transform it had to scale.
+  const auto spacing_meta = base->getMetadata<openvdb::Vec3DMetadata>(kSpacingMeta);
+  const auto origin_meta = base->getMetadata<openvdb::Vec3DMetadata>(kOriginMeta);
+  if (spacing_meta && origin_meta && dims_meta) {
+    const openvdb::Vec3d sp = spacing_meta->value(), og = origin_meta->value();
+    info.placement.spacing = {sp.x(), sp.y(), sp.z()};
+    info.placement.origin = {og.x(), og.y(), og.z()};
+  }
   if (const auto unit = base->getMetadata<openvdb::StringMetadata>(kUnitMeta)) {
     info.placement.unit = unit->value();
   }

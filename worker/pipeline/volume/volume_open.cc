@@ -271,6 +271,15 @@ absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name) {
                    "nrrd-gzip or vdb"));
 }
 
+absl::StatusOr<VolumeFormat> OutputVolumeFormat(absl::string_view name, const std::string& path) {
+  if (!name.empty()) return ParseVolumeFormat(name);
+  const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
+  if (ext == ".tif" || ext == ".tiff") return VolumeFormat::kTiff;
+  if (ext == ".nrrd") return VolumeFormat::kNrrd;
+  if (ext == ".vdb") return VolumeFormat::kVdb;
+  return VolumeFormat::kRaw;
+}
+
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,
                                                                const VolumeInfo& info,
                                                                VolumeFormat format) {

@@ -67,6 +67,9 @@ absl::Status WriteDense(const DenseVolume& volume, VolumeSink& sink);
 // Output formats for CreateVolumeWriter.
 enum class VolumeFormat { kRaw, kTiff, kTiffFolder, kNrrd, kNrrdGzip, kVdb };
 absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name);
+// `name` parsed, or when it is empty the format `path`'s extension names (.tif/.tiff, .nrrd,
+// .vdb), raw otherwise.
+absl::StatusOr<VolumeFormat> OutputVolumeFormat(absl::string_view name, const std::string& path);
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,
                                                                const VolumeInfo& info,
                                                                VolumeFormat format);

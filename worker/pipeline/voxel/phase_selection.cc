@@ -288,12 +288,16 @@ absl::StatusOr<VoxelSet> SelectPhase(VolumeSource& source, const PhaseSelection&
   return absl::InternalError("unknown dtype");
 }
 
+std::string SelectionStats::RangeText() const {
+  if (!(min_value <= max_value)) return "the volume holds no number: every voxel is NaN";
+  return absl::StrCat("values range from ", min_value, " to ", max_value);
+}
+
 absl::Status CheckNotEmpty(const VoxelSet& set, const VolumeInfo& info,
                            const PhaseSelection& selection, const SelectionStats& stats) {
   if (!set.empty()) return absl::OkStatus();
   return absl::InvalidArgumentError(absl::StrCat(
-      info.path, ": selection ", selection.ToString(), " matched no voxel (values range from ",
-      stats.min_value, " to ", stats.max_value,
+      info.path, ": selection ", selection.ToString(), " matched no voxel (", stats.RangeText(),
       stats.outside_mask > 0 ? absl::StrCat("; ", stats.outside_mask, " matched outside the mask")
                              : std::string(),
       ")"));

@@ -5,10 +5,10 @@
 #define SHEETMESH_WORKER_PIPELINE_VOXEL_PHASE_SELECTION_H_
 
 #include <string>
-#include "absl/strings/string_view.h"
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "common/progress.h"
 #include "worker/pipeline/volume/volume_source.h"
 #include "worker/pipeline/voxel/voxel_set.h"
@@ -35,8 +35,10 @@ absl::StatusOr<PhaseSelection> ParsePhaseSelection(absl::string_view text);
 
 // Statistics gathered while selecting, for messages and reports.
 struct SelectionStats {
-  double min_value = 0;  // over all voxels of the box
-  double max_value = 0;
+  double min_value = 0;  // over all voxels of the box (NaN skipped; min > max when none is
+  double max_value = 0;  // a number)
+  // "values range from LO to HI", or that the volume holds no number at all.
+  std::string RangeText() const;
   uint64_t selected = 0;
   uint64_t outside_mask = 0;  // selected voxels dropped by the mask
 };

@@ -20,8 +20,8 @@ absl::Status CheckNotGrayscale(const SheetInput& input, const SheetPhase& phase)
   return absl::InvalidArgumentError(absl::StrCat(
       input.path, ": a ", DTypeName(phase.info.dtype),
       " volume read with the default sheet phase (every non-zero voxel) makes ",
-      std::llround(100.0 * phase.stats.selected / voxels), "% of its ", voxels,
-      " voxels sheet (values ", phase.stats.min_value, " to ", phase.stats.max_value,
+      std::llround(100.0 * phase.stats.selected / voxels), "% of its ", voxels, " voxels sheet (",
+      phase.stats.RangeText(),
       "); a grayscale scan needs its sheet phase given: input.threshold, input.labels or "
       "input.window (--threshold=otsu for the dark phase, with --threshold_above for the "
       "bright; --threshold=V; --labels=V; --window=LO:HI)"));

@@ -76,5 +76,42 @@ TEST(ExtendTest, BadParametersAreInvalidArgument) {
               StatusIs(absl::StatusCode::kInvalidArgument));
 }
 
+TEST(ExtendTest, TheDenseAndTheListedClaimsGiveTheSamePatch) {
+  // Two crossing slabs and a fragment, so that cylinders compete for voxels.
+  const Dims d{64, 56, 40};
+  const VoxelSet set =
+      Union(Union(BoxSet(d, {4, 6, 18}, {40, 50, 21}), BoxSet(d, {30, 6, 4}, {33, 50, 36})),
+            BoxSet(d, {46, 10, 18}, {60, 44, 21}));
+  for (const double t : {1.5, 4.0}) {
+    ExtendOptions list, dense;
+    list.half_thickness_voxels = dense.half_thickness_voxels = t;
+    list.max_rounds = dense.max_rounds = 2;
+    list.claims = ExtendOptions::ClaimStore::kList;
+    dense.claims = ExtendOptions::ClaimStore::kDense;
+    SM_ASSERT_OK_AND_ASSIGN(ExtendResult a, Extend(Labelled(set), list));
+    SM_ASSERT_OK_AND_ASSIGN(ExtendResult b, Extend(Labelled(set), dense));
+    EXPECT_GT(a.added, 0u);
+    EXPECT_EQ(a.added, b.added) << "t " << t;
+    EXPECT_EQ(a.patch.set, b.patch.set) << "t " << t;
+    EXPECT_EQ(a.patch.label, b.patch.label) << "t " << t;
+  }
+}
+
+TEST(ExtendTest, ARoundBeyondItsMemoryIsRefusedBeforeItStartsNamingTAndR) {
+  const Dims d{64, 56, 40};
+  const VoxelSet set = BoxSet(d, {4, 6, 18}, {40, 50, 21});
+  ExtendOptions o;
+  o.half_thickness_voxels = 30;
+  o.radius_voxels = 500;
+  o.memory_bytes = 1 << 16;  // less than one claim per voxel of the image
+  EXPECT_THAT(
+      Extend(Labelled(set), o),
+      StatusIs(absl::StatusCode::kResourceExhausted,
+               ::testing::AllOf(::testing::HasSubstr("t = 30"), ::testing::HasSubstr("R = 500"))));
+  o.memory_bytes = int64_t{1} << 30;  // the whole image as dense claims fits
+  SM_ASSERT_OK_AND_ASSIGN(ExtendResult r, Extend(Labelled(set), o));
+  EXPECT_GT(r.added, 0u);
+}
+
 }  // namespace
 }  // namespace sheetmesh

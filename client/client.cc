@@ -93,6 +93,10 @@ std::unique_ptr<grpc::ClientContext> SheetmeshClient::Context() const {
   auto ctx = std::make_unique<grpc::ClientContext>();
   if (!options_.auth_token.empty())
     ctx->AddMetadata("authorization", "Bearer " + options_.auth_token);
+  if (!options_.artifact_job.empty()) {
+    ctx->AddMetadata("sheetmesh-job", options_.artifact_job);
+    ctx->AddMetadata("sheetmesh-worker", options_.artifact_worker);
+  }
   return ctx;
 }
 

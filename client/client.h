@@ -21,6 +21,10 @@ struct ClientOptions {
   bool tls = false;           // TLS with the system's roots, or...
   std::string tls_root_cert;  // ...with this PEM file
   int upload_retries = 5;     // broken upload streams resumed this many times
+  // A worker uploading a job's outputs: the job (jobs/ID) and the worker holding it, sent
+  // with every call so that the server records the uploads as that job's.
+  std::string artifact_job;
+  std::string artifact_worker;
 };
 
 // A one-line hint for an error that says the server could not be reached ("" for any

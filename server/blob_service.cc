@@ -2,7 +2,10 @@
 
 #include <vector>
 
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "server/status_util.h"
@@ -79,15 +82,57 @@ void BlobServiceImpl::Reap() {
 absl::StatusOr<bool> BlobServiceImpl::Owns(const std::string& tenant,
                                            const v1::Digest& digest) const {
   if (!ctx_->blobs->Contains(digest)) return false;
-  if (ctx_->tenants->open() || tenant == Tenants::kWorkerTenant) return true;
+  // A job's artifacts are its worker's uploads for it, on an open server too (FinishJob
+  // takes no other blob).
+  const bool job_owner = absl::StartsWith(tenant, "@job.");
+  if (!job_owner && (ctx_->tenants->open() || tenant == Tenants::kWorkerTenant)) return true;
   return ctx_->jobs->OwnsBlob(tenant, digest.hash());
+}
+
+std::string ArtifactOwner(const std::string& job) {
+  return absl::StrCat("@job.", absl::StripPrefix(job, "jobs/"));
+}
+
+namespace {
+
+std::string Metadata(const grpc::ServerContext& context, const char* key) {
+  const auto& m = context.client_metadata();
+  auto it = m.find(key);
+  return it == m.end() ? "" : std::string(it->second.data(), it->second.size());
+}
+
+}  // namespace
+
+grpc::Status BlobServiceImpl::Caller(grpc::ServerContext* context, std::string* owner) const {
+  if (grpc::Status a = ctx_->tenants->Authenticate(*context, owner); !a.ok()) return a;
+  if (*owner != Tenants::kWorkerTenant) return grpc::Status::OK;
+  const std::string job = Metadata(*context, kArtifactJobHeader);
+  if (job.empty()) return grpc::Status::OK;  // a worker reading a job's input
+  const std::string worker = Metadata(*context, kArtifactWorkerHeader);
+  bool plain = absl::StartsWith(job, "jobs/") && job.size() > 5 && job.size() < 200;
+  for (char c : job.substr(std::min<size_t>(5, job.size()))) {
+    plain &= absl::ascii_isalnum(c) || c == '-' || c == '_';
+  }
+  if (!plain || worker.empty()) {
+    return ToGrpcStatus(absl::InvalidArgumentError(
+        absl::StrCat("an artifact upload names job '", job, "' and worker '", worker,
+                     "'; both are needed, the job as jobs/ID")));
+  }
+  // The job must be this worker's now (renewing its lease is what a working worker does).
+  const absl::Status leased = ctx_->jobs->Renew(job, worker, ctx_->worker_lease);
+  if (!leased.ok()) {
+    return ToGrpcStatus(absl::PermissionDeniedError(absl::StrCat(
+        "worker ", worker, " uploads for ", job, ", which it does not hold: ", leased.message())));
+  }
+  *owner = ArtifactOwner(job);
+  return grpc::Status::OK;
 }
 
 grpc::Status BlobServiceImpl::FindMissingBlobs(grpc::ServerContext* context,
                                                const v1::FindMissingBlobsRequest* request,
                                                v1::FindMissingBlobsResponse* response) {
   std::string tenant;
-  if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
+  if (grpc::Status a = Caller(context, &tenant); !a.ok()) return a;
   for (const v1::Digest& d : request->digests()) {
     if (absl::Status st = CheckDigest(d); !st.ok()) return ToGrpcStatus(st);
     absl::StatusOr<bool> owned = Owns(tenant, d);
@@ -105,7 +150,7 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
                                     grpc::ServerReader<v1::WriteRequest>* reader,
                                     v1::WriteResponse* response) {
   std::string tenant;
-  if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
+  if (grpc::Status a = Caller(context, &tenant); !a.ok()) return a;
   absl::StatusOr<StreamLimits::Slot> slot =
       ctx_->upload_streams->Acquire(ClientOf(*context, ctx_->tenants->open() ? "" : tenant));
   if (!slot.ok()) return ToGrpcStatus(slot.status());
@@ -180,7 +225,7 @@ grpc::Status BlobServiceImpl::QueryWriteStatus(grpc::ServerContext* context,
                                                const v1::QueryWriteStatusRequest* request,
                                                v1::QueryWriteStatusResponse* response) {
   std::string tenant;
-  if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
+  if (grpc::Status a = Caller(context, &tenant); !a.ok()) return a;
   absl::StatusOr<v1::Digest> digest = DigestOfResource(request->resource_name());
   if (!digest.ok()) return ToGrpcStatus(digest.status());
   absl::StatusOr<bool> owned = Owns(tenant, *digest);
@@ -214,9 +259,10 @@ grpc::Status BlobServiceImpl::Read(grpc::ServerContext* context, const v1::ReadR
         absl::StrCat("read_offset ", request->read_offset(), " and read_limit ",
                      request->read_limit(), " do not fit a blob of ", size, " bytes"));
   }
-  const int64_t end = request->read_limit() == 0
+  // A limit past the blob's end reads to its end (offset + limit may not fit 64 bits).
+  const int64_t end = request->read_limit() == 0 || request->read_limit() > size - request->read_offset()
                           ? size
-                          : std::min(size, request->read_offset() + request->read_limit());
+                          : request->read_offset() + request->read_limit();
   absl::StatusOr<ScopedFd> fd = OpenForRead(*path);
   if (!fd.ok()) return ToGrpcStatus(fd.status());
   std::vector<std::byte> buf(kMaxPiece);

@@ -14,6 +14,14 @@
 
 namespace sheetmesh::server {
 
+// Metadata a remote worker sends with the uploads of a job's artifacts: the job (jobs/ID)
+// and the worker holding it. Such uploads belong to the job (ArtifactOwner), so that
+// FinishJob takes as artifacts only blobs uploaded for that job by its worker.
+inline constexpr char kArtifactJobHeader[] = "sheetmesh-job";
+inline constexpr char kArtifactWorkerHeader[] = "sheetmesh-worker";
+// The owner the blob store records a job's artifact uploads under ("@job.ID").
+std::string ArtifactOwner(const std::string& job);
+
 class BlobServiceImpl final : public v1::BlobService::Service {
  public:
   explicit BlobServiceImpl(const ServiceContext* ctx);
@@ -39,6 +47,9 @@ class BlobServiceImpl final : public v1::BlobService::Service {
   // Whether `tenant` may use the blob (it owns it); a server without tokens has one tenant,
   // which owns everything stored.
   absl::StatusOr<bool> Owns(const std::string& tenant, const v1::Digest& digest) const;
+  // Who the call is, for ownership: the caller's tenant, or for a worker uploading a job's
+  // artifacts the job (after checking the worker holds it).
+  grpc::Status Caller(grpc::ServerContext* context, std::string* owner) const;
 
   const ServiceContext* ctx_;
   mutable std::mutex mu_;

@@ -4,6 +4,7 @@
 #include <string.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -25,6 +26,11 @@
 
 namespace sheetmesh::server {
 namespace {
+
+// The folder of a tenant's unfinished uploads.
+std::string TenantFolder(const std::string& root, const std::string& tenant) {
+  return absl::StrCat(root, "/uploads/", tenant.empty() ? "_" : tenant);
+}
 
 void SyncDir(const std::string& dir) {
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
@@ -354,8 +360,7 @@ absl::StatusOr<std::shared_ptr<BlobStore::Upload>> BlobStore::GetUpload(const st
   auto up = std::make_shared<Upload>();
   up->key = key;
   up->expected = expected;
-  up->part_path = absl::StrCat(root_, "/uploads/", tenant.empty() ? "_" : tenant, "/", parts[1],
-                               "-", parts[3], ".part");
+  up->part_path = absl::StrCat(TenantFolder(root_, tenant), "/", parts[1], "-", parts[3], ".part");
   if (stored_counts && Contains(expected)) {
     up->complete = true;
     up->committed = up->written = size;
@@ -444,6 +449,7 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Append(const std::string& tena
                                                    up->expected.size_bytes()));
   }
   if (!data.empty()) {
+    SM_RETURN_IF_ERROR(CheckRoom(tenant, static_cast<int64_t>(data.size())));
     SM_RETURN_IF_ERROR(up->file->Append(data));
     up->sha->Update(data.data(), data.size());
     up->written += data.size();
@@ -551,6 +557,67 @@ int BlobStore::ExpireUploads(absl::Duration max_age) {
     }
   }
   return removed;
+}
+
+void BlobStore::SetUploadLimits(int64_t max_unfinished_bytes_per_tenant, int64_t min_free_bytes) {
+  std::lock_guard<std::mutex> lock(mu_);
+  max_unfinished_per_tenant_ = max_unfinished_bytes_per_tenant;
+  min_free_bytes_ = min_free_bytes;
+}
+
+int64_t BlobStore::UnfinishedBytes(const std::string& tenant) const {
+  int64_t bytes = 0;
+  std::error_code ec;
+  for (auto e = std::filesystem::directory_iterator(TenantFolder(root_, tenant), ec);
+       !ec && e != std::filesystem::directory_iterator(); e.increment(ec)) {
+    struct stat st;
+    if (e->path().extension() == ".part" && ::stat(e->path().c_str(), &st) == 0) {
+      bytes += st.st_size;
+    }
+  }
+  return bytes;
+}
+
+absl::Status BlobStore::CheckRoom(const std::string& tenant, int64_t bytes) {
+  int64_t per_tenant, min_free;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    per_tenant = max_unfinished_per_tenant_;
+    min_free = min_free_bytes_;
+  }
+  if (min_free > 0) {
+    struct statvfs fs;
+    if (::statvfs(root_.c_str(), &fs) == 0) {
+      const int64_t free_bytes = static_cast<int64_t>(fs.f_bavail) * fs.f_frsize;
+      if (free_bytes - bytes < min_free) {
+        return absl::ResourceExhaustedError(absl::StrCat(
+            "the server's data folder has ", free_bytes, " bytes free; ", bytes,
+            " more would leave less than its floor of ", min_free,
+            " bytes (--min_free_disk_mb): uploads wait until space is freed"));
+      }
+    }
+  }
+  if (per_tenant <= 0) return absl::OkStatus();
+  // Measured on disk at most once a second (replicas sharing the folder write there too),
+  // counting this server's appends in between.
+  const absl::Time now = absl::Now();
+  bool measure;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    measure = now - usage_[tenant].measured > absl::Seconds(1);
+  }
+  const int64_t on_disk = measure ? UnfinishedBytes(tenant) : 0;
+  std::lock_guard<std::mutex> lock(mu_);
+  Usage& u = usage_[tenant];
+  if (measure) u = {on_disk, 0, now};
+  if (u.on_disk + u.since + bytes > per_tenant) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "tenant ", tenant.empty() ? "default" : tenant, " has ", u.on_disk + u.since,
+        " bytes in unfinished uploads; ", bytes, " more would pass the limit of ", per_tenant,
+        " bytes (--max_unfinished_upload_mb): finish or abandon an upload first"));
+  }
+  u.since += bytes;
+  return absl::OkStatus();
 }
 
 int BlobStore::open_uploads() const {

@@ -90,6 +90,14 @@ class BlobStore {
   // Uploads with open files (a stream is writing them).
   int open_uploads() const;
 
+  // What unfinished uploads may take: a tenant's bytes in uploads not yet stored, and the
+  // free space an append must leave in the folder (for the job store and the jobs'
+  // outputs). An append beyond either is kResourceExhausted naming the limit and its flag,
+  // before anything is written. 0: no limit.
+  void SetUploadLimits(int64_t max_unfinished_bytes_per_tenant, int64_t min_free_bytes);
+  // The bytes of `tenant`'s unfinished uploads in the folder (all servers sharing it).
+  int64_t UnfinishedBytes(const std::string& tenant) const;
+
   const std::string& root() const { return root_; }
 
  private:
@@ -102,9 +110,20 @@ class BlobStore {
   absl::Status OpenPart(Upload& up, bool lock, bool* moved);
   UploadState Stored(Upload& up);
 
+  absl::Status CheckRoom(const std::string& tenant, int64_t bytes);
+
   std::string root_;
   mutable std::mutex mu_;
   std::map<std::string, std::shared_ptr<Upload>> uploads_;
+  int64_t max_unfinished_per_tenant_ = 0;
+  int64_t min_free_bytes_ = 0;
+  // A tenant's unfinished bytes as last measured on disk, and what was appended since.
+  struct Usage {
+    int64_t on_disk = 0;
+    int64_t since = 0;
+    absl::Time measured = absl::InfinitePast();
+  };
+  std::map<std::string, Usage> usage_;
 };
 
 }  // namespace sheetmesh::server

@@ -63,8 +63,11 @@ class JobStore {
   virtual absl::Status Delete(const std::string& name) = 0;
   // RUNNING jobs whose lease ended go back to QUEUED, or FAILED after max_attempts.
   // `all` treats every RUNNING job as expired (a restart: no worker of the old process
-  // lives). Returns how many were requeued or failed.
-  virtual absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) = 0;
+  // lives). With `not_the_jobs_fault` (the server that ran them died, and its jobs ran
+  // isolated, so none of them took it down) the lost run is not counted as an attempt.
+  // Returns how many were requeued or failed.
+  virtual absl::StatusOr<int> RequeueExpired(int max_attempts, bool all,
+                                             bool not_the_jobs_fault = false) = 0;
   // A SUCCEEDED job with this cache key.
   virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
   virtual absl::StatusOr<int64_t> CountInState(v1::JobState state) = 0;

@@ -64,14 +64,16 @@ void ApplyCancelBeforeStart(v1::Job* job) {
   job->mutable_error()->set_message("cancelled before it started");
 }
 
-void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts) {
+void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
+                     bool not_the_jobs_fault) {
   job->clear_progress();
+  if (not_the_jobs_fault) job->set_lost_to_restarts(job->lost_to_restarts() + 1);
   if (cancel_requested) {
     job->set_state(v1::CANCELLED);
     job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
     job->mutable_error()->set_message("cancelled while its worker was lost");
     *job->mutable_end_time() = NowTimestamp();
-  } else if (job->attempts() >= max_attempts) {
+  } else if (job->attempts() - job->lost_to_restarts() >= max_attempts) {
     job->set_state(v1::FAILED);
     job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
     job->mutable_error()->set_message(

@@ -47,7 +47,10 @@ void ApplyCancelBeforeStart(v1::Job* job);
 
 // A RUNNING job whose worker was lost (lease expired, server restarted): CANCELLED when a
 // cancel was asked, FAILED after max_attempts, QUEUED again otherwise.
-void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts);
+// With `not_the_jobs_fault` the lost run is counted in lost_to_restarts, not against
+// max_attempts.
+void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
+                     bool not_the_jobs_fault = false);
 
 }  // namespace sheetmesh::server
 

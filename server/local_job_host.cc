@@ -168,6 +168,7 @@ absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& j
 }
 
 absl::StatusOr<v1::Artifact> LocalJobHost::PutArtifact(const std::string& job,
+                                                       const std::string& /*worker*/,
                                                        const std::string& path,
                                                        const std::string& media_type) {
   SM_ASSIGN_OR_RETURN(v1::Digest d, blobs_->PutFile(path));

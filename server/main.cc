@@ -48,6 +48,8 @@ ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(int64_t, max_blob_bytes, int64_t{64} << 30, "largest upload accepted, bytes");
 ABSL_FLAG(int64_t, max_queued_jobs, 1000, "jobs the queue may hold");
+ABSL_FLAG(int64_t, max_unfinished_upload_mb, 65536,
+          "bytes one tenant may hold in unfinished uploads, MiB");
 ABSL_FLAG(int, max_upload_streams, 256, "open upload (Write) streams, in all");
 ABSL_FLAG(int, max_upload_streams_per_client, 64,
           "open upload streams of one client (its tenant; on an open server, its address)");
@@ -65,7 +67,8 @@ ABSL_FLAG(bool, gc_once, false,
           "run one retention pass over --data_dir, print what it removed (or, with "
           "--gc_dry_run, would remove) and exit, without serving");
 ABSL_FLAG(int64_t, min_free_disk_mb, 256,
-          "health says NOT_SERVING while the data folder has less free space than this");
+          "uploads are refused, and health says NOT_SERVING, while the data folder has less "
+          "free space than this");
 ABSL_FLAG(int, lease_seconds, 30, "worker lease length");
 ABSL_FLAG(int, max_attempts, 3, "runs before a job whose worker keeps vanishing fails");
 ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
@@ -101,6 +104,8 @@ sheetmesh::server::ServerOptions OptionsFromFlags() {
   o.tls_key = absl::GetFlag(FLAGS_tls_key);
   o.limits.max_blob_bytes = absl::GetFlag(FLAGS_max_blob_bytes);
   o.limits.max_queued_jobs = absl::GetFlag(FLAGS_max_queued_jobs);
+  o.limits.max_unfinished_upload_bytes_per_tenant =
+      std::max<int64_t>(1, absl::GetFlag(FLAGS_max_unfinished_upload_mb)) << 20;
   o.limits.max_upload_streams = absl::GetFlag(FLAGS_max_upload_streams);
   o.limits.max_upload_streams_per_client = absl::GetFlag(FLAGS_max_upload_streams_per_client);
   o.limits.max_watch_streams = absl::GetFlag(FLAGS_max_watch_streams);

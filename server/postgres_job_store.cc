@@ -262,7 +262,7 @@ class PostgresJobStore : public JobStore {
     });
   }
 
-  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) override {
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault) override {
     int n = 0;
     SM_RETURN_IF_ERROR(pool_->Transaction([&](Conn& c) -> absl::Status {
       // Rows another replica is requeueing are skipped, not waited for.
@@ -277,7 +277,7 @@ class PostgresJobStore : public JobStore {
                          {P(int64_t{v1::RUNNING})}));
       for (int i = 0; i < q.rows(); ++i) {
         SM_ASSIGN_OR_RETURN(v1::Job job, ParseStoredJob(q.Bytes(i, 1)));
-        ApplyLostWorker(&job, q.Text(i, 2) == "t", max_attempts);
+        ApplyLostWorker(&job, q.Text(i, 2) == "t", max_attempts, not_the_jobs_fault);
         SM_RETURN_IF_ERROR(SetState(c, q.Text(i, 0), job));
         ++n;
       }

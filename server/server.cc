@@ -218,7 +218,15 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   SM_ASSIGN_OR_RETURN(s.blobs, BlobStore::Open(o.data_dir + "/blobs"));
   // Jobs that were running when the previous process ended have no worker any more. Over
   // PostgreSQL other servers' workers may be running theirs: only expired leases go back.
-  SM_RETURN_IF_ERROR(s.jobs->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty()).status());
+  // Isolated jobs cannot take the server down: its death was not theirs, and their lost run
+  // does not count against max_attempts.
+  SM_RETURN_IF_ERROR(s.jobs
+                         ->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty(),
+                                          /*not_the_jobs_fault=*/o.postgres.empty() &&
+                                              o.isolate_jobs)
+                         .status());
+  s.blobs->SetUploadLimits(o.limits.max_unfinished_upload_bytes_per_tenant,
+                           o.min_free_disk_bytes);
 
   LocalJobHostOptions ho;
   ho.allowed_roots = o.allowed_roots;

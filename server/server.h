@@ -57,8 +57,10 @@ struct ServerOptions {
   absl::Duration blob_retention = absl::Hours(24 * 7);
   absl::Duration gc_interval = absl::Hours(1);
   bool gc_dry_run = false;
-  // Health says NOT_SERVING while the data folder's file system has less free space than
-  // this, or the process holds more than nine tenths of its descriptor limit.
+  // Uploads are refused (RESOURCE_EXHAUSTED) where they would leave less free space than
+  // this in the data folder's file system, so that the job store and the jobs' outputs
+  // always have room; health says NOT_SERVING below it, or while the process holds more
+  // than nine tenths of its descriptor limit.
   int64_t min_free_disk_bytes = int64_t{256} << 20;
 };
 

@@ -18,6 +18,9 @@ namespace sheetmesh::server {
 
 struct ServiceLimits {
   int64_t max_blob_bytes = int64_t{64} << 30;  // an upload beyond this is refused
+  // A tenant's unfinished uploads (bytes not yet stored as blobs) may not pass this: a
+  // client that opens uploads and never finishes them fills no disk.
+  int64_t max_unfinished_upload_bytes_per_tenant = int64_t{64} << 30;
   int64_t max_queued_jobs = 1000;              // CreateJob beyond this is refused
   // Open Write streams (each holds two descriptors and a thread while it lasts).
   int max_upload_streams = 256;

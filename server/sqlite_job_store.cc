@@ -341,7 +341,7 @@ class SqliteJobStore : public JobStore {
     return Exec("COMMIT");
   }
 
-  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all) override {
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault) override {
     std::lock_guard<std::mutex> lock(mu_);
     std::vector<std::pair<std::string, v1::Job>> expired;
     {
@@ -362,7 +362,7 @@ class SqliteJobStore : public JobStore {
         q.Bind(1, id);
         if (q.Step() == SQLITE_ROW) cancel = q.Int(0) != 0;
       }
-      ApplyLostWorker(&job, cancel, max_attempts);
+      ApplyLostWorker(&job, cancel, max_attempts, not_the_jobs_fault);
       SM_RETURN_IF_ERROR(SetStateLocked(id, job));
     }
     return static_cast<int>(expired.size());

@@ -1,6 +1,9 @@
 #include "server/worker_service.h"
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "common/excerpt.h"
+#include "server/blob_service.h"
 #include "server/auth.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
@@ -9,6 +12,15 @@
 
 namespace sheetmesh::server {
 namespace {
+
+// A name a client may save the artifact under: no folder, no hidden file, no control bytes.
+bool IsArtifactName(const std::string& name) {
+  if (name.empty() || name.size() > 255 || name[0] == '.') return false;
+  for (char c : name) {
+    if (!(absl::ascii_isalnum(c) || c == '.' || c == '_' || c == '-')) return false;
+  }
+  return true;
+}
 
 grpc::Status NeedNames(const std::string& name, const std::string& worker) {
   if (worker.empty()) {
@@ -114,8 +126,27 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
                         absl::StrCat("state ", v1::JobState_Name(state),
                                      " does not end a job (SUCCEEDED, FAILED or CANCELLED)"));
   }
-  // Every artifact must be stored already.
+  // Every artifact has a plain file name, and is a blob this job's worker uploaded for this
+  // job (with worker tokens: an open server has one tenant), stored already.
   for (const v1::Artifact& a : request->artifacts()) {
+    if (!IsArtifactName(a.name())) {
+      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                          absl::StrCat("artifact name '", Excerpt(a.name(), 80),
+                                       "' is not a plain file name ([A-Za-z0-9._-], not starting "
+                                       "with '.', at most 255 characters)"));
+    }
+    if (absl::Status d = CheckDigest(a.digest()); !d.ok()) return ToGrpcStatus(d);
+    if (ctx_->tenants->has_worker_tokens()) {
+      absl::StatusOr<bool> owned =
+          ctx_->jobs->OwnsBlob(ArtifactOwner(request->name()), a.digest().hash());
+      if (!owned.ok()) return ToGrpcStatus(owned.status());
+      if (!*owned) {
+        return grpc::Status(
+            grpc::StatusCode::PERMISSION_DENIED,
+            absl::StrCat("artifact ", a.name(), " (", DigestString(a.digest()),
+                         ") was not uploaded for ", request->name(), " by its worker"));
+      }
+    }
     if (!ctx_->blobs->Contains(a.digest())) {
       return grpc::Status(
           grpc::StatusCode::FAILED_PRECONDITION,

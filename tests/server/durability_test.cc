@@ -22,8 +22,8 @@ namespace {
 // The sheetmesh-server binary as a child process.
 class ServerProcess {
  public:
-  ServerProcess(std::string data_dir, std::string root)
-      : data_dir_(std::move(data_dir)), root_(std::move(root)) {}
+  ServerProcess(std::string data_dir, std::string root, std::vector<std::string> extra = {})
+      : data_dir_(std::move(data_dir)), root_(std::move(root)), extra_(std::move(extra)) {}
   ~ServerProcess() { Kill(SIGKILL); }
 
   void Start() {
@@ -33,6 +33,7 @@ class ServerProcess {
                                      "--data_dir=" + data_dir_, "--port_file=" + port_file,
                                      "--allowed_root=" + root_, "--workers=1",
                                      "--lease_seconds=3"};
+    args.insert(args.end(), extra_.begin(), extra_.end());
     pid_ = ::fork();
     ASSERT_GE(pid_, 0);
     if (pid_ == 0) {
@@ -73,6 +74,7 @@ class ServerProcess {
 
  private:
   std::string data_dir_, root_;
+  std::vector<std::string> extra_;
   pid_t pid_ = -1;
   int port_ = 0;
   std::unique_ptr<client::SheetmeshClient> client_;
@@ -110,11 +112,12 @@ TEST(DurabilityTest, SigkillMidJobThenRestartFinishesEveryAcceptedJob) {
   ASSERT_TRUE(WIFSIGNALED(status));
 
   server.Start();
-  // Both jobs are there and finish; the killed run counts as an attempt.
+  // Both jobs are there and finish; the killed run is an attempt lost to the restart.
   auto ea = server.client().Watch(ja->name(), {});
   ASSERT_TRUE(ea.ok()) << ea.status();
   EXPECT_EQ(ea->state(), v1::SUCCEEDED) << ea->error().message();
   EXPECT_EQ(ea->attempts(), 2);
+  EXPECT_EQ(ea->lost_to_restarts(), 1);
   auto eb = server.client().Watch(jb->name(), {});
   ASSERT_TRUE(eb.ok()) << eb.status();
   EXPECT_EQ(eb->state(), v1::SUCCEEDED) << eb->error().message();
@@ -133,6 +136,45 @@ TEST(DurabilityTest, SigkillMidJobThenRestartFinishesEveryAcceptedJob) {
     EXPECT_EQ(d->size_bytes(), art.digest().size_bytes()) << art.name();
   }
   // No scratch left behind by the killed run once the job is done.
+  EXPECT_EQ(server.Kill(SIGTERM), 0);
+}
+
+// Waits until `job` runs its stage `stage` or later.
+void AwaitStage(client::SheetmeshClient& c, const std::string& job, int stage) {
+  const absl::Time deadline = absl::Now() + absl::Seconds(60);
+  for (;;) {
+    auto j = c.GetJob(job);
+    ASSERT_TRUE(j.ok()) << j.status();
+    if (j->state() == v1::RUNNING && j->progress().stage_index() >= stage) return;
+    ASSERT_NE(j->state(), v1::SUCCEEDED) << "the job ended before the kill";
+    ASSERT_LT(absl::Now(), deadline);
+    absl::SleepFor(absl::Milliseconds(20));
+  }
+}
+
+TEST(DurabilityTest, AServerKilledMoreOftenThanMaxAttemptsFailsNoneOfItsJobs) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.File("root"));
+  const std::string slow = WritePhantom(dir.File("root"), "slow", 200, 23);
+  // One attempt allowed: every kill of the server would fail the job if it counted.
+  ServerProcess server(dir.File("data"), dir.File("root"), {"--max_attempts=1"});
+  server.Start();
+  v1::CreateJobRequest a;
+  a.set_request_id("killed-twice");
+  a.mutable_input()->set_volume_path(slow);
+  a.mutable_parameters()->set_extract(true);
+  auto job = server.client().CreateJob(a);
+  ASSERT_TRUE(job.ok()) << job.status();
+  for (int kill = 0; kill < 2; ++kill) {
+    AwaitStage(server.client(), job->name(), 1);
+    ASSERT_TRUE(WIFSIGNALED(server.Kill(SIGKILL)));
+    server.Start();
+  }
+  auto done = server.client().Watch(job->name(), {});
+  ASSERT_TRUE(done.ok()) << done.status();
+  EXPECT_EQ(done->state(), v1::SUCCEEDED) << done->error().message();
+  EXPECT_EQ(done->attempts(), 3);
+  EXPECT_EQ(done->lost_to_restarts(), 2);
   EXPECT_EQ(server.Kill(SIGTERM), 0);
 }
 

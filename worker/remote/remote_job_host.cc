@@ -170,9 +170,15 @@ absl::StatusOr<runtime::LocalVolume> RemoteJobHost::ResolveInput(const v1::Job& 
 }
 
 absl::StatusOr<v1::Artifact> RemoteJobHost::PutArtifact(const std::string& job,
+                                                        const std::string& worker,
                                                         const std::string& path,
                                                         const std::string& media_type) {
-  SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(options_.server));
+  // The upload says whose output it is: the server records it as the job's, and takes as
+  // the job's artifacts only blobs so uploaded.
+  client::ClientOptions o = options_.server;
+  o.artifact_job = job;
+  o.artifact_worker = worker;
+  SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(o));
   SM_ASSIGN_OR_RETURN(v1::Digest d, c->Upload(path));
   v1::Artifact a;
   *a.mutable_digest() = d;

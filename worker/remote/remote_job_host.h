@@ -35,7 +35,8 @@ class RemoteJobHost : public runtime::JobHost {
   bool ReportProgress(const std::string& job, const std::string& worker,
                       const runtime::ProgressUpdate& update) override;
   absl::StatusOr<runtime::LocalVolume> ResolveInput(const v1::Job& job) override;
-  absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& path,
+  absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& worker,
+                                           const std::string& path,
                                            const std::string& media_type) override;
   absl::Status Finish(const std::string& job, const std::string& worker, const absl::Status& result,
                       const std::vector<v1::Artifact>& artifacts) override;

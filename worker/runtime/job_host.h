@@ -88,8 +88,10 @@ class JobHost {
                               const ProgressUpdate& update) = 0;
   // Makes the job's input readable locally.
   virtual absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) = 0;
-  // Stores an output file as a blob.
-  virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& path,
+  // Stores an output file of `job`, run by `worker`, as a blob.
+  virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job,
+                                                   const std::string& worker,
+                                                   const std::string& path,
                                                    const std::string& media_type) = 0;
   // Ends the job: SUCCEEDED with `artifacts` when result is OK, CANCELLED when it is
   // kCancelled, FAILED otherwise.

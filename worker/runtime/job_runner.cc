@@ -119,7 +119,7 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
       return absl::InternalError(absl::StrCat("the job named an output '", name, "'"));
     }
     SM_ASSIGN_OR_RETURN(v1::Artifact a,
-                        host.PutArtifact(job.name(), dir + "/" + name, MediaTypeOf(name)));
+                        host.PutArtifact(job.name(), worker, dir + "/" + name, MediaTypeOf(name)));
     a.set_name(name);
     artifacts.push_back(std::move(a));
   }

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <iostream>
 #include <condition_variable>
 
 #include "absl/strings/str_cat.h"
@@ -41,9 +42,10 @@ class PoolObserverHost : public JobHost {
   absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) override {
     return pool_->host_->ResolveInput(job);
   }
-  absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& path,
+  absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& worker,
+                                           const std::string& path,
                                            const std::string& media_type) override {
-    return pool_->host_->PutArtifact(job, path, media_type);
+    return pool_->host_->PutArtifact(job, worker, path, media_type);
   }
   absl::Status Finish(const std::string& j, const std::string& w, const absl::Status& r,
                       const std::vector<v1::Artifact>& a) override {
@@ -102,10 +104,26 @@ void WorkerPool::Work(int index) {
                result.status().code() == absl::StatusCode::kCancelled) {
       host_->Release(job.name(), worker).IgnoreError();  // runs again after restart
     } else {
-      host_
-          ->Finish(job.name(), worker, result.status(),
-                   result.ok() ? *result : std::vector<v1::Artifact>{})
-          .IgnoreError();
+      // A refused finish leaves the job to its lease, which expires and runs it again: say
+      // why, where the operator looks.
+      const absl::Status finished =
+          host_->Finish(job.name(), worker, result.status(),
+                        result.ok() ? *result : std::vector<v1::Artifact>{});
+      if (!finished.ok()) {
+        std::cerr << "sheetmesh worker " << worker << ": " << job.name()
+                  << " could not be finished: " << finished << std::endl;
+        // Results the server refuses (not a server that is away) fail the job, saying why,
+        // rather than running it again to the same refusal.
+        if (result.ok() && finished.code() != absl::StatusCode::kUnavailable &&
+            finished.code() != absl::StatusCode::kDeadlineExceeded) {
+          host_
+              ->Finish(job.name(), worker,
+                       absl::InternalError(absl::StrCat("the server refused the job's results: ",
+                                                        finished.message())),
+                       {})
+              .IgnoreError();
+        }
+      }
     }
     --busy_;
   }

@@ -3,6 +3,7 @@ package main
 import (
 	"fmt"
 	"io"
+	"math"
 	"mime"
 	"net/http"
 	"strconv"
@@ -18,7 +19,7 @@ type byteRange struct{ start, end int64 }
 // parseRange reads a "Range: bytes=..." header for a blob of `size` bytes: one range
 // (multipart answers are not offered). ok=false means unsatisfiable (416); a header that
 // is not a bytes range, or asks for several, is ignored (the whole blob, as RFC 9110
-// allows).
+// allows). Positions too large for 64 bits are as large as any: past the end.
 func parseRange(h string, size int64) (r byteRange, partial, ok bool) {
 	whole := byteRange{0, size}
 	if h == "" || !strings.HasPrefix(h, "bytes=") || strings.Contains(h, ",") {
@@ -31,8 +32,8 @@ func parseRange(h string, size int64) (r byteRange, partial, ok bool) {
 	}
 	first, last := strings.TrimSpace(spec[:dash]), strings.TrimSpace(spec[dash+1:])
 	if first == "" { // the last N bytes
-		n, err := strconv.ParseInt(last, 10, 64)
-		if err != nil || n < 0 {
+		n, valid := position(last)
+		if !valid {
 			return whole, false, true
 		}
 		if n == 0 || size == 0 {
@@ -43,8 +44,8 @@ func parseRange(h string, size int64) (r byteRange, partial, ok bool) {
 		}
 		return byteRange{size - n, size}, true, true
 	}
-	a, err := strconv.ParseInt(first, 10, 64)
-	if err != nil || a < 0 {
+	a, valid := position(first)
+	if !valid {
 		return whole, false, true
 	}
 	if a >= size {
@@ -52,7 +53,7 @@ func parseRange(h string, size int64) (r byteRange, partial, ok bool) {
 	}
 	b := size - 1
 	if last != "" {
-		if b, err = strconv.ParseInt(last, 10, 64); err != nil || b < a {
+		if b, valid = position(last); !valid || b < a {
 			return whole, false, true
 		}
 		if b >= size {
@@ -60,6 +61,24 @@ func parseRange(h string, size int64) (r byteRange, partial, ok bool) {
 		}
 	}
 	return byteRange{a, b + 1}, true, true
+}
+
+// position reads a byte position of a Range: decimal digits, any number of them (a value
+// beyond 64 bits is math.MaxInt64). valid=false for anything else.
+func position(s string) (int64, bool) {
+	if s == "" {
+		return 0, false
+	}
+	for i := 0; i < len(s); i++ {
+		if s[i] < '0' || s[i] > '9' {
+			return 0, false
+		}
+	}
+	n, err := strconv.ParseInt(s, 10, 64)
+	if err != nil {
+		return math.MaxInt64, true // only digits: too large
+	}
+	return n, true
 }
 
 // download answers GET /v1/jobs/{id}/artifacts/{name}: the artifact's bytes with its

@@ -5,6 +5,7 @@ import (
 	"net/http"
 	"regexp"
 	"strings"
+	"time"
 
 	"github.com/grpc-ecosystem/grpc-gateway/runtime"
 	"google.golang.org/grpc"
@@ -21,9 +22,13 @@ type gateway struct {
 	web     http.Handler
 	openAPI []byte
 	o       options
+	tokens  *tokenCheck
+	links   *linkSealer
+	watches *watchQuota
 }
 
 var (
+	linkRoute     = regexp.MustCompile(`^/v1/jobs/([A-Za-z0-9_-]+)/artifacts/([^/]+):link$`)
 	artifactRoute = regexp.MustCompile(`^/v1/jobs/([A-Za-z0-9_-]+)/artifacts/([^/]+)$`)
 	watchRoute    = regexp.MustCompile(`^/v1/jobs/([A-Za-z0-9_-]+):watch$`)
 	uploadRoute   = regexp.MustCompile(`^/v1/uploads/([A-Za-z0-9_-]+)/blobs/([0-9a-f]{64})/([0-9]+)$`)
@@ -48,19 +53,17 @@ func newGateway(ctx context.Context, conn *grpc.ClientConn, o options) (http.Han
 	if err != nil {
 		return nil, err
 	}
-	g := &gateway{ctx: ctx, jobs: pb.NewJobServiceClient(conn), blobs: pb.NewBlobServiceClient(conn),
-		api: api, web: web, openAPI: doc, o: o}
-	return g, nil
-}
-
-// tokenFromQuery makes ?access_token= the request's Authorization header where it has
-// none: a browser cannot set headers on a link or an EventSource.
-func tokenFromQuery(r *http.Request) {
-	if r.Header.Get("Authorization") == "" {
-		if t := r.URL.Query().Get("access_token"); t != "" {
-			r.Header.Set("Authorization", "Bearer "+t)
-		}
+	links, err := newLinkSealer(o.linkKeyFile, o.linkTTL)
+	if err != nil {
+		return nil, err
 	}
+	blobs := pb.NewBlobServiceClient(conn)
+	g := &gateway{ctx: ctx, jobs: pb.NewJobServiceClient(conn), blobs: blobs,
+		api: api, web: web, openAPI: doc, o: o,
+		tokens:  &tokenCheck{blobs: blobs, ttl: 30 * time.Second, known: map[[32]byte]time.Time{}},
+		links:   links,
+		watches: &watchQuota{limit: o.maxWatchesPerClient, open: map[string]int{}}}
+	return g, nil
 }
 
 // outgoing is the request's context with its bearer token for the server.
@@ -84,15 +87,29 @@ func (g *gateway) ServeHTTP(w http.ResponseWriter, r *http.Request) {
 		w.Header().Set("Content-Type", "text/plain")
 		w.Write([]byte("ok\n"))
 	case strings.HasPrefix(p, "/v1/"):
-		tokenFromQuery(r)
+		if !g.guard(w, r) {
+			return
+		}
+		if m := linkRoute.FindStringSubmatch(p); m != nil {
+			if onlyMethods(w, r, http.MethodPost) {
+				g.makeLink(w, r, "jobs/"+m[1], m[2])
+			}
+			return
+		}
 		if m := artifactRoute.FindStringSubmatch(p); m != nil {
-			if onlyMethods(w, r, http.MethodGet, http.MethodHead) {
+			if onlyMethods(w, r, http.MethodGet, http.MethodHead) && g.fromLink(w, r, "jobs/"+m[1], m[2]) {
 				g.download(w, r, "jobs/"+m[1], m[2])
 			}
 			return
 		}
 		if m := watchRoute.FindStringSubmatch(p); m != nil {
 			if onlyMethods(w, r, http.MethodGet) {
+				release, err := g.watches.acquire(r)
+				if err != nil {
+					writeError(w, err)
+					return
+				}
+				defer release()
 				g.watch(w, r, "jobs/"+m[1])
 			}
 			return

@@ -1,8 +1,11 @@
 package main
 
 import (
+	"math"
+	"net/http"
 	"strings"
 	"testing"
+	"time"
 
 	"google.golang.org/grpc/codes"
 	pb "sheetmesh/v1"
@@ -26,6 +29,11 @@ func TestRanges(t *testing.T) {
 		{"bytes=5-2", 100, 0, 100, false, true},     // invalid: the whole blob
 		{"bytes=0-1,5-6", 100, 0, 100, false, true}, // several: the whole blob
 		{"items=0-1", 100, 0, 100, false, true},
+		// Positions past 64 bits: as large as any.
+		{"bytes=99999999999999999999-", 100, 0, 0, false, false},
+		{"bytes=10-99999999999999999999", 100, 10, 100, true, true},
+		{"bytes=-99999999999999999999", 100, 0, 100, true, true},
+		{"bytes=+5-9", 100, 0, 100, false, true}, // not digits: the whole blob
 	} {
 		r, partial, ok := parseRange(c.header, c.size)
 		if ok != c.satisfy || (ok && (r.start != c.start || r.end != c.end || partial != c.partial)) {
@@ -76,5 +84,61 @@ func TestFlags(t *testing.T) {
 		if _, err := parseFlags(bad); err == nil {
 			t.Errorf("%v accepted", bad)
 		}
+	}
+}
+
+func TestLinksOpenOneArtifactUntilTheyExpire(t *testing.T) {
+	s, err := newLinkSealer("", time.Minute)
+	if err != nil {
+		t.Fatal(err)
+	}
+	now := time.Now()
+	text, err := s.seal(sealedLink{Auth: "Bearer secret-token", Job: "jobs/1", Name: "a.png",
+		Expires: now.Add(time.Minute).Unix()})
+	if err != nil {
+		t.Fatal(err)
+	}
+	if strings.Contains(text, "secret") {
+		t.Errorf("the token shows in the link: %s", text)
+	}
+	if l, err := s.open(text, "jobs/1", "a.png", now); err != nil || l.Auth != "Bearer secret-token" {
+		t.Errorf("a fresh link: %v %+v", err, l)
+	}
+	for _, c := range []struct {
+		job, name string
+		at        time.Time
+		want      string
+	}{
+		{"jobs/2", "a.png", now, "is for jobs/1"},
+		{"jobs/1", "b.png", now, "is for jobs/1"},
+		{"jobs/1", "a.png", now.Add(2 * time.Minute), "expired"},
+	} {
+		if _, err := s.open(text, c.job, c.name, c.at); err == nil || !strings.Contains(err.Error(), c.want) {
+			t.Errorf("%s %s at +%v: %v, want %q", c.job, c.name, c.at.Sub(now), err, c.want)
+		}
+	}
+	other, _ := newLinkSealer("", time.Minute)
+	if _, err := other.open(text, "jobs/1", "a.png", now); err == nil {
+		t.Error("another gateway's key opened the link")
+	}
+	if _, err := s.open(text[:len(text)-2]+"AA", "jobs/1", "a.png", now); err == nil {
+		t.Error("a changed link opened")
+	}
+}
+
+func TestOriginsAndPositions(t *testing.T) {
+	g := &gateway{o: options{corsOrigins: []string{"https://lab.example"}}}
+	r := &http.Request{Host: "gw:8080"}
+	for origin, want := range map[string]bool{"": true, "http://gw:8080": true,
+		"https://lab.example": true, "https://evil.example": false} {
+		if got := g.originAllowed(r, origin); got != want {
+			t.Errorf("origin %q: %v, want %v", origin, got, want)
+		}
+	}
+	if n, ok := position("99999999999999999999999"); !ok || n != math.MaxInt64 {
+		t.Errorf("a position past 64 bits: %d %v", n, ok)
+	}
+	if _, ok := position("-5"); ok {
+		t.Error("a signed position was taken")
 	}
 }

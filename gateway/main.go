@@ -8,8 +8,10 @@
 //	    [--server_tls --server_ca=ca.pem --server_name=NAME] [--cors_origins=https://a,...]
 //	    [--web_root=DIR] [--port_file=FILE]
 //
-// A request's "Authorization: Bearer <token>" goes through to the server as is (GET
-// routes a browser opens without headers may carry it as ?access_token=).
+// A request's "Authorization: Bearer <token>" goes through to the server as is; before a
+// request's body is read its token is checked, its origin and media type (guard.go). A
+// browser opens artifacts through short-lived sealed links, never with a token in a URL
+// (links.go).
 package main
 
 import (
@@ -34,6 +36,12 @@ type options struct {
 	serverTLS                                               bool
 	corsOrigins                                             []string
 	maxChunkBytes                                           int64
+	maxJSONBytes                                            int64
+	bodyIdle, bodyGrace                                     time.Duration
+	bodyMinRate                                             float64
+	linkKeyFile                                             string
+	linkTTL                                                 time.Duration
+	maxWatchesPerClient                                     int
 }
 
 func parseFlags(args []string) (options, error) {
@@ -48,6 +56,13 @@ func parseFlags(args []string) (options, error) {
 	fs.StringVar(&o.webRoot, "web_root", "", "serve the front-end from this folder instead of the built-in one")
 	fs.StringVar(&o.portFile, "port_file", "", "write the bound port here once listening (for scripts)")
 	chunkMB := fs.Int64("max_chunk_mb", 64, "largest upload chunk one request may carry, MiB")
+	jsonMB := fs.Int64("max_json_mb", 16, "largest JSON body a request may carry, MiB")
+	fs.DurationVar(&o.bodyIdle, "body_idle", 20*time.Second, "a body that brings no byte for this long is cut off")
+	fs.DurationVar(&o.bodyGrace, "body_grace", 30*time.Second, "time a body may take before its rate is checked")
+	minRateKB := fs.Float64("body_min_kb_per_second", 32, "a body slower than this on average (after --body_grace) is cut off")
+	fs.StringVar(&o.linkKeyFile, "link_key_file", "", "32-byte key sealing artifact links (shared by gateways behind one address; default: one made at start)")
+	fs.DurationVar(&o.linkTTL, "link_ttl", 10*time.Minute, "how long an artifact link opens its artifact")
+	fs.IntVar(&o.maxWatchesPerClient, "max_watches_per_client", 32, "open watches of one client address")
 	if err := fs.Parse(args); err != nil {
 		return o, err
 	}
@@ -58,6 +73,14 @@ func parseFlags(args []string) (options, error) {
 		return o, fmt.Errorf("--max_chunk_mb=%d: must be within [1, 4096]", *chunkMB)
 	}
 	o.maxChunkBytes = *chunkMB << 20
+	if *jsonMB < 1 || *jsonMB > 1024 {
+		return o, fmt.Errorf("--max_json_mb=%d: must be within [1, 1024]", *jsonMB)
+	}
+	o.maxJSONBytes = *jsonMB << 20
+	o.bodyMinRate = *minRateKB * 1024
+	if o.bodyIdle <= 0 || o.bodyGrace < 0 || o.bodyMinRate < 0 || o.linkTTL <= 0 || o.maxWatchesPerClient < 1 {
+		return o, fmt.Errorf("--body_idle, --link_ttl and --max_watches_per_client must be positive; --body_grace and --body_min_kb_per_second not negative")
+	}
 	for _, c := range strings.Split(*cors, ",") {
 		if c = strings.TrimSpace(c); c != "" {
 			o.corsOrigins = append(o.corsOrigins, strings.TrimRight(c, "/"))
@@ -125,7 +148,7 @@ func main() {
 			os.Exit(2)
 		}
 	}
-	srv := &http.Server{Handler: handler, ReadHeaderTimeout: 30 * time.Second}
+	srv := &http.Server{Handler: handler, ReadHeaderTimeout: 30 * time.Second, ConnContext: withConn}
 	done := make(chan struct{})
 	go func() {
 		sig := make(chan os.Signal, 1)

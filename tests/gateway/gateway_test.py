@@ -63,7 +63,8 @@ class GatewayTest(unittest.TestCase):
         port = wait_port_file(cls.tmp / "port", cls.server, "sheetmesh-server")
         cls.gateway = subprocess.Popen(
             [GATEWAY_BIN, "--listen=127.0.0.1:0", "--server=127.0.0.1:%d" % port,
-             "--port_file=%s" % (cls.tmp / "gport"), "--cors_origins=http://front.example", "--max_chunk_mb=1"],
+             "--port_file=%s" % (cls.tmp / "gport"), "--cors_origins=http://front.example", "--max_chunk_mb=1",
+             "--body_grace=2s", "--body_idle=3s", "--body_min_kb_per_second=4", "--max_watches_per_client=3"],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         cls.port = wait_port_file(cls.tmp / "gport", cls.gateway, "sheetmesh-gateway")
 
@@ -250,10 +251,26 @@ class GatewayTest(unittest.TestCase):
         self.assertEqual(resp.getheader("Content-Range"), "bytes */%d" % size)
         resp, body = self.request("HEAD", "/v1/%s/artifacts/surface.ply" % job["name"])
         self.assertEqual((resp.status, int(resp.getheader("Content-Length")), body), (200, size, b""))
-        # A link without headers carries the token in the query.
+        # A token in a URL is refused; a sealed short-lived link opens one artifact without
+        # headers, and only that one.
         resp, body = self.request("GET", "/v1/%s/artifacts/report.json?access_token=%s" % (job["name"], TOKEN),
                                   token=False)
-        self.assertEqual(resp.status, 200)
+        self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "Authorization")
+        link = self.json_call("POST", "/v1/%s/artifacts/report.json:link" % job["name"], {})
+        self.assertNotIn(TOKEN, link["url"])
+        resp, body = self.request("GET", link["url"], token=False)
+        self.assertEqual((resp.status, hashlib.sha256(body).hexdigest()), (200, rep["digest"]["hash"]))
+        resp, body = self.request("GET", link["url"].replace("report.json", "surface.ply"), token=False)
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "report.json")
+        resp, body = self.request("POST", "/v1/%s/artifacts/report.json:link" % job["name"], {}, token=False)
+        self.assertEqual(resp.status, 401)
+        # Range positions past 64 bits are past the end, not ignored.
+        resp, body = self.request("GET", "/v1/%s/artifacts/surface.ply" % job["name"],
+                                  headers={"Range": "bytes=99999999999999999999-"})
+        self.assertEqual(resp.status, 416)
+        resp, body = self.request("GET", "/v1/%s/artifacts/surface.ply" % job["name"],
+                                  headers={"Range": "bytes=10-99999999999999999999"})
+        self.assertEqual((resp.status, len(body)), (206, size - 10))
         resp, body = self.request("GET", "/v1/%s/artifacts/nothing.bin" % job["name"])
         self.assert_error(resp, body, 404, "NOT_FOUND", "nothing.bin", "report.json")
 
@@ -286,7 +303,7 @@ class GatewayTest(unittest.TestCase):
         # A chunk above the gateway's limit (1 MiB here) is refused before it is read.
         base = "/v1/uploads/%s/blobs/%s/%d" % (uuid.uuid4().hex, "0" * 64, 3 << 20)
         resp, body = self.request("PUT", base, b"\0" * (2 << 20))
-        self.assert_error(resp, body, 429, "RESOURCE_EXHAUSTED", "--max_chunk_mb")
+        self.assert_error(resp, body, 413, "RESOURCE_EXHAUSTED", "--max_chunk_mb")
         resp, body = self.request("PUT", base + "?offset=-4", b"")
         self.assert_error(resp, body, 400, "INVALID_ARGUMENT", "offset=\"-4\"")
 
@@ -363,7 +380,8 @@ class GatewayTest(unittest.TestCase):
                              "data": base64.b64encode(blob[:6000]).decode()}),
                  json.dumps({"write_offset": 6000, "finish_write": True,
                              "data": base64.b64encode(blob[6000:]).decode()})]
-        written = self.json_call("POST", "/v1/uploads:write", "\n".join(lines))
+        written = self.json_call("POST", "/v1/uploads:write", "\n".join(lines),
+                                 headers={"Content-Type": "application/x-ndjson"})
         self.assertEqual(int(written["committed_size"]), len(blob))
         resp, body = self.request("GET", "/v1/blobs/%s/%d?read_offset=100&read_limit=1000" % (digest, len(blob)))
         self.assertEqual(resp.status, 200)
@@ -397,6 +415,104 @@ class GatewayTest(unittest.TestCase):
         self.assertIn(b"<title>sheetmesh</title>", body)
         resp, body = self.request("GET", "/jobs/anything", token=False)  # the front-end's own routes
         self.assertIn(b"<title>sheetmesh</title>", body)
+
+    def rss_kb(self):
+        for line in open("/proc/%d/status" % self.gateway.pid):
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+        return 0
+
+    def test_g_bodies_are_checked_before_they_are_read(self):
+        """Origin and media type first, then the size, then the token; slow bodies are cut."""
+        # A text/plain POST (what a cross-site form sends without asking) creates nothing.
+        resp, body = self.request("POST", "/v1/jobs", json.dumps({"request_id": "x"}),
+                                  headers={"Content-Type": "text/plain"})
+        self.assert_error(resp, body, 415, "INVALID_ARGUMENT", "application/json")
+        resp, body = self.request("POST", "/v1/jobs", {"request_id": "x"},
+                                  headers={"Origin": "http://elsewhere.example"})
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "elsewhere.example")
+        # 256 MiB announced: refused from the headers, the gateway reads none of it.
+        before = self.rss_kb()
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=30)
+        conn.putrequest("POST", "/v1/jobs")
+        for k, v in (("Authorization", "Bearer " + TOKEN), ("Content-Type", "application/json"),
+                     ("Content-Length", str(256 << 20))):
+            conn.putheader(k, v)
+        conn.endheaders()
+        conn.send(b"{" + b" " * 65536)
+        resp = conn.getresponse()
+        self.assert_error(resp, resp.read(), 413, "RESOURCE_EXHAUSTED", str(256 << 20))
+        conn.close()
+        self.assertLess(self.rss_kb() - before, 20_000, "the gateway grew reading a refused body")
+        # Without a token: 401 before the body, for twenty tricklers at once.
+        started = time.time()
+        conns = []
+        for _ in range(20):
+            c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=30)
+            c.putrequest("POST", "/v1/jobs")
+            c.putheader("Content-Type", "application/json")
+            c.putheader("Content-Length", "1000")
+            c.endheaders()
+            c.send(b"{")
+            conns.append(c)
+        for c in conns:
+            resp = c.getresponse()
+            self.assertEqual(resp.status, 401)
+            resp.read()
+            c.close()
+        self.assertLess(time.time() - started, 20)
+        # With a token, a body trickling one byte a second is cut off (grace 2 s, 4 KiB/s).
+        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=60)
+        c.putrequest("POST", "/v1/jobs")
+        for k, v in (("Authorization", "Bearer " + TOKEN), ("Content-Type", "application/json"),
+                     ("Content-Length", "100")):
+            c.putheader(k, v)
+        c.endheaders()
+        started = time.time()
+        try:
+            for _ in range(100):
+                c.send(b" ")
+                time.sleep(1)
+                if time.time() - started > 30:
+                    break
+            resp = c.getresponse()
+            status = resp.status
+        except (BrokenPipeError, ConnectionResetError, http.client.RemoteDisconnected):
+            status = None  # the gateway closed the connection
+        self.assertNotEqual(status, 200)
+        self.assertLess(time.time() - started, 15, "the slow body was not cut off")
+        c.close()
+
+    def test_h_watches_are_limited_per_client(self):
+        job = self.create(input={"volume_path": str(self.slow)}, parameters={"extract": True})
+        try:
+            streams = []
+            for _ in range(3):
+                c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=60)
+                c.request("GET", "/v1/%s:watch" % job["name"], headers={"Authorization": "Bearer " + TOKEN})
+                r = c.getresponse()
+                self.assertEqual(r.status, 200)
+                r.readline()
+                streams.append((c, r))
+            resp, body = self.request("GET", "/v1/%s:watch" % job["name"])
+            self.assert_error(resp, body, 429, "RESOURCE_EXHAUSTED", "--max_watches_per_client")
+            streams[0][0].close()
+            deadline = time.time() + 10
+            while True:
+                c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=60)
+                c.request("GET", "/v1/%s:watch" % job["name"], headers={"Authorization": "Bearer " + TOKEN})
+                r = c.getresponse()
+                if r.status == 200 or time.time() > deadline:
+                    break
+                r.read()
+                c.close()
+                time.sleep(0.2)
+            self.assertEqual(r.status, 200, "a closed watch frees its place")
+            c.close()
+            for c, _ in streams[1:]:
+                c.close()
+        finally:
+            self.cancel_all()
 
 
 if __name__ == "__main__":

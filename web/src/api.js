@@ -46,10 +46,11 @@ export const getJob = (name) => call("GET", `/v1/${name}`);
 export const createJob = (req) => call("POST", "/v1/jobs", req);
 export const cancelJob = (name) => call("POST", `/v1/${name}:cancel`, {});
 
-// A link the browser can follow without headers.
-export function artifactUrl(job, name) {
-  const q = token() ? `?access_token=${encodeURIComponent(token())}` : "";
-  return `/v1/${job}/artifacts/${encodeURIComponent(name)}${q}`;
+// A link to one artifact the browser can open without headers (an image, a download): the
+// gateway seals the token into it for a few minutes, so the token never shows in a URL.
+export async function artifactLink(job, name) {
+  const r = await call("POST", `/v1/${job}/artifacts/${encodeURIComponent(name)}:link`, {});
+  return r.url;
 }
 
 export async function fetchArtifact(job, name) {

@@ -45,10 +45,29 @@ function qualityTable(report) {
       row("gamma", "gamma"), row("edge aspect", "edge_aspect")));
 }
 
+// A download through a fresh short-lived link (the token never goes into a URL).
+async function download(event, job, name) {
+  event.preventDefault();
+  try {
+    const a = el("a", { href: await api.artifactLink(job, name), download: name });
+    document.body.append(a);
+    a.click();
+    a.remove();
+  } catch (e) {
+    showError(e);
+  }
+}
+
+function linkedImage(job, name) {
+  const img = el("img", { alt: name });
+  api.artifactLink(job, name).then((url) => { img.src = url; }).catch(showError);
+  return img;
+}
+
 async function results(root, job) {
   const names = (job.artifacts || []).map((a) => a.name);
   root.append(el("h3", {}, "Downloads"), el("ul", { id: "downloads" }, (job.artifacts || []).map((a) =>
-    el("li", {}, el("a", { href: api.artifactUrl(job.name, a.name), download: a.name, "data-name": a.name }, a.name),
+    el("li", {}, el("a", { href: "#", "data-name": a.name, onclick: (e) => download(e, job.name, a.name) }, a.name),
       ` ${Number(a.digest.size_bytes).toLocaleString()} bytes, ${a.media_type}`))));
   if (!names.includes("report.json")) return;
   const report = await (await api.fetchArtifact(job.name, "report.json")).json();
@@ -56,7 +75,7 @@ async function results(root, job) {
   const previews = names.filter((n) => n.endsWith(".png"));
   if (previews.length) {
     root.append(el("h3", {}, "Previews"), el("div", { class: "previews" }, previews.map((n) =>
-      el("figure", {}, el("img", { src: api.artifactUrl(job.name, n), alt: n }), el("figcaption", {}, n)))));
+      el("figure", {}, linkedImage(job.name, n), el("figcaption", {}, n)))));
   }
   root.append(el("h3", {}, "Pieces"), piecesTable(report), el("h3", {}, "Volume mesh"), qualityTable(report));
   const ply = names.find((n) => n.endsWith(".ply"));

@@ -31,16 +31,28 @@ absl::StatusOr<std::string> ResolveUnderRoots(const std::string& path,
       return absl::PermissionDeniedError(absl::StrCat(what, " '", path, "' may not contain '..'"));
     }
   }
+  auto under_a_root = [&](const std::string& p) {
+    for (const std::string& root : roots) {
+      char rr[PATH_MAX];
+      if (::realpath(root.c_str(), rr) == nullptr) continue;
+      std::string r = rr;
+      if (r.back() != '/') r += '/';
+      if (p.rfind(r, 0) == 0 || p + "/" == r) return true;
+    }
+    return false;
+  };
   char real[PATH_MAX];
-  if (::realpath(path.c_str(), real) == nullptr) return ErrnoStatus(errno, path);
-  const std::string resolved = real;
-  for (const std::string& root : roots) {
-    char rr[PATH_MAX];
-    if (::realpath(root.c_str(), rr) == nullptr) continue;
-    std::string r = rr;
-    if (r.back() != '/') r += '/';
-    if (resolved.rfind(r, 0) == 0 || resolved + "/" == r) return resolved;
+  if (::realpath(path.c_str(), real) == nullptr) {
+    // Whether a file outside the roots exists is not for the caller to learn.
+    const int err = errno;
+    if (!under_a_root(std::filesystem::path(path).lexically_normal().string())) {
+      return absl::PermissionDeniedError(absl::StrCat(
+          what, " '", path, "' is outside the allowed roots (", absl::StrJoin(roots, ", "), ")"));
+    }
+    return ErrnoStatus(err, path);
   }
+  const std::string resolved = real;
+  if (under_a_root(resolved)) return resolved;
   return absl::PermissionDeniedError(absl::StrCat(what, " '", path, "' resolves to '", resolved,
                                                   "', outside the allowed roots (",
                                                   absl::StrJoin(roots, ", "), ")"));

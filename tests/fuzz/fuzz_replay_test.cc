@@ -70,6 +70,10 @@ TEST(FuzzReplayTest, VdbFileCorpusAndMutations) {
   Replay("vdb_file", FuzzVdbFile, 6);
 }
 TEST(FuzzReplayTest, RawFileCorpusAndMutations) { Replay("raw_file", FuzzRawFile, 60); }
+TEST(FuzzReplayTest, Hdf5FileCorpusAndMutations) { Replay("hdf5_file", FuzzHdf5File, 40); }
+TEST(FuzzReplayTest, NpyFileCorpusAndMutations) { Replay("npy_file", FuzzNpyFile, 60); }
+TEST(FuzzReplayTest, JpegFileCorpusAndMutations) { Replay("jpeg_file", FuzzJpegFile, 60); }
+TEST(FuzzReplayTest, PngFileCorpusAndMutations) { Replay("png_file", FuzzPngFile, 60); }
 TEST(FuzzReplayTest, TextParsersCorpusAndMutations) {
   Replay("text_parsers", FuzzTextParsers, 300);
 }

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <filesystem>
 #include <string>
 
 #include "common/file_util.h"
@@ -17,6 +18,8 @@ VolumeLimits SmallLimits() {
   l.max_voxels = 1 << 20;
   l.max_extent = 1 << 12;
   l.memory_bytes = int64_t{64} << 20;
+  // As a volume sent to the server: it may name no other file.
+  l.confine_named_files = true;
   return l;
 }
 
@@ -71,6 +74,40 @@ void FuzzRawFile(const uint8_t* data, size_t size) {
   options.raw_dtype = static_cast<DType>(data[0] % 3);
   OpenAndRead(Bytes(data + 3, size - 3), ".raw", options);
 }
+
+void FuzzHdf5File(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".h5", {}); }
+
+void FuzzNpyFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".npy", {}); }
+
+namespace {
+
+// The bytes as the one slice of a folder.
+void OpenSliceFolder(absl::string_view bytes, const char* ext) {
+  const std::string dir = TempPath(".slices");
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/slice_0000" + ext;
+  if (WriteFileAtomically(file, bytes).ok()) {
+    OpenOptions options;
+    options.limits = SmallLimits();
+    auto source = OpenVolume(dir, options);
+    if (source.ok()) {
+      const Dims d = (*source)->info().dims;
+      std::vector<std::byte> slice(static_cast<size_t>(d.nx * d.ny) *
+                                   BytesPerVoxel((*source)->info().dtype));
+      for (int64_t z = 0; z < d.nz; ++z) {
+        if (!(*source)->ReadSlices(z, 1, slice).ok()) break;
+      }
+    }
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+}
+
+}  // namespace
+
+void FuzzJpegFile(const uint8_t* data, size_t size) { OpenSliceFolder(Bytes(data, size), ".jpg"); }
+
+void FuzzPngFile(const uint8_t* data, size_t size) { OpenSliceFolder(Bytes(data, size), ".png"); }
 
 void FuzzTextParsers(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

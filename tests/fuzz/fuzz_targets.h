@@ -17,6 +17,12 @@ void FuzzTiffFile(const uint8_t* data, size_t size);
 void FuzzNrrdFile(const uint8_t* data, size_t size);
 void FuzzVdbFile(const uint8_t* data, size_t size);
 void FuzzRawFile(const uint8_t* data, size_t size);
+// An HDF5 file (its only dataset), a NumPy .npy file, and a one-slice folder of a JPEG or a
+// PNG, each opened as a volume sent to the server is (naming no other file).
+void FuzzHdf5File(const uint8_t* data, size_t size);
+void FuzzNpyFile(const uint8_t* data, size_t size);
+void FuzzJpegFile(const uint8_t* data, size_t size);
+void FuzzPngFile(const uint8_t* data, size_t size);
 // Selection text, dims-in-file-name text and dtype names.
 void FuzzTextParsers(const uint8_t* data, size_t size);
 

@@ -65,10 +65,21 @@ func (g *gateway) bodyLimit(r *http.Request) (int64, string) {
 	return g.o.maxJSONBytes, "--max_json_mb"
 }
 
+// endUnread marks a request refused before its body was read: the connection ends with the
+// answer. (Otherwise the server would read what is left of a small body to keep the
+// connection, waiting as long as a trickling client likes.)
+func endUnread(w http.ResponseWriter, r *http.Request) {
+	w.Header().Set("Connection", "close")
+	if conn, ok := r.Context().Value(connKey{}).(net.Conn); ok {
+		conn.SetReadDeadline(time.Now())
+	}
+}
+
 // guard answers a request it refuses and returns false; otherwise it wraps the body in
 // its limits and returns true.
 func (g *gateway) guard(w http.ResponseWriter, r *http.Request) bool {
 	if r.URL.Query().Has("access_token") {
+		endUnread(w, r)
 		writeErrorCode(w, codes.InvalidArgument, "a token in a URL (access_token) is not taken: "+
 			"send it as 'Authorization: Bearer <token>', or use a link from POST "+
 			"/v1/jobs/{id}/artifacts/{name}:link")
@@ -78,6 +89,7 @@ func (g *gateway) guard(w http.ResponseWriter, r *http.Request) bool {
 		return true
 	}
 	if origin := r.Header.Get("Origin"); !g.originAllowed(r, origin) {
+		endUnread(w, r)
 		writeErrorCode(w, codes.PermissionDenied, fmt.Sprintf(
 			"%s %s from origin %s, which is not in --cors_origins", r.Method, r.URL.Path, origin))
 		return false
@@ -88,6 +100,7 @@ func (g *gateway) guard(w http.ResponseWriter, r *http.Request) bool {
 		// does not.
 		mt, _, _ := mime.ParseMediaType(r.Header.Get("Content-Type"))
 		if mt != "application/json" && mt != "application/x-ndjson" {
+			endUnread(w, r)
 			writeJSONStatus(w, http.StatusUnsupportedMediaType, errorBody{int32(codes.InvalidArgument),
 				"INVALID_ARGUMENT", fmt.Sprintf("%s %s needs Content-Type: application/json (got %q)",
 					r.Method, r.URL.Path, r.Header.Get("Content-Type"))})
@@ -96,14 +109,14 @@ func (g *gateway) guard(w http.ResponseWriter, r *http.Request) bool {
 	}
 	limit, flag := g.bodyLimit(r)
 	if r.ContentLength > limit {
-		w.Header().Set("Connection", "close")
+		endUnread(w, r)
 		writeJSONStatus(w, http.StatusRequestEntityTooLarge, errorBody{int32(codes.ResourceExhausted),
 			"RESOURCE_EXHAUSTED", fmt.Sprintf("a body of %d bytes exceeds the %d bytes %s %s may carry "+
 				"(the gateway's %s): send smaller chunks", r.ContentLength, limit, r.Method, r.URL.Path, flag)})
 		return false
 	}
 	if err := g.tokens.check(r); err != nil {
-		w.Header().Set("Connection", "close") // the body is not read: end the connection
+		endUnread(w, r)
 		writeError(w, err)
 		return false
 	}

@@ -461,6 +461,20 @@ class GatewayTest(unittest.TestCase):
             resp.read()
             c.close()
         self.assertLess(time.time() - started, 20)
+        # ...and the gateway ends the connection instead of waiting for the rest of the body.
+        import socket
+        s = socket.create_connection(("127.0.0.1", self.port))
+        s.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                  b"Content-Length: 1000\r\n\r\n{")
+        s.settimeout(10)
+        answer = b""
+        while True:
+            part = s.recv(65536)  # times out (fails) if the connection is held open
+            if not part:
+                break
+            answer += part
+        s.close()
+        self.assertTrue(answer.startswith(b"HTTP/1.1 401"), answer[:100])
         # With a token, a body trickling one byte a second is cut off (grace 2 s, 4 KiB/s).
         c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=60)
         c.putrequest("POST", "/v1/jobs")

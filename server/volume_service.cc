@@ -50,10 +50,13 @@ absl::StatusOr<runtime::InspectedVolume> InspectIsolated(const InspectOptions& o
   return runtime::InspectVolumeInChild(program, spec, o.limits);
 }
 
-// Opens `path` here.
+// Opens `path` here; the files it names must lie under `roots`, as in a child.
 absl::StatusOr<runtime::InspectedVolume> InspectHere(const std::string& path,
-                                                     const std::string& parameters) {
+                                                     const std::string& parameters,
+                                                     const std::vector<std::string>& roots) {
   SM_ASSIGN_OR_RETURN(PipelineOptions o, runtime::OptionsFromResolved(parameters, path));
+  o.input.open.limits.confine_named_files = true;
+  o.input.open.limits.named_file_roots = roots;
   SM_ASSIGN_OR_RETURN(std::unique_ptr<VolumeSource> source, OpenVolume(path, o.input.open));
   return runtime::InspectedOf(source->info());
 }
@@ -77,7 +80,7 @@ grpc::Status VolumeServiceImpl::InspectVolume(grpc::ServerContext* context,
   absl::StatusOr<runtime::InspectedVolume> v =
       ctx_->inspect.isolate
           ? InspectIsolated(ctx_->inspect, *path, r->path(), *parameters, ctx_->allowed_roots)
-          : InspectHere(*path, *parameters);
+          : InspectHere(*path, *parameters, ctx_->allowed_roots);
   if (!v.ok()) return ToGrpcStatus(v.status());
   response->set_path(*path);
   for (int k = 0; k < 3; ++k) response->add_dims(v->dims[k]);

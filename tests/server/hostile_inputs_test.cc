@@ -131,6 +131,24 @@ TEST_P(HostileInputsTest, EachEndsWithItsCodeNamingItAndLeaksNothing) {
   }
 }
 
+TEST_P(HostileInputsTest, InspectVolumeRefusesWhatAJobRefuses) {
+  StartServer();
+  const std::string dir = options_.allowed_roots[0] + "/inspect";
+  std::filesystem::create_directories(dir);
+  for (const std::string& path :
+       {Hdf5WithExternalStorage(dir + "/passwd.h5", "/etc/passwd", 0),
+        Hdf5WithExternalStorage(dir + "/environ.h5", "/proc/self/environ", 0)}) {
+    SCOPED_TRACE(path);
+    v1::InspectVolumeRequest r;
+    r.set_path(path);
+    v1::InspectVolumeResponse response;
+    const grpc::Status st =
+        client_->volumes()->InspectVolume(client_->Context().get(), r, &response);
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::PERMISSION_DENIED) << st.error_message();
+    EXPECT_THAT(st.error_message(), HasSubstr("outside the allowed roots"));
+  }
+}
+
 TEST_P(HostileInputsTest, RunawayParametersAreRefusedOrFinish) {
   StartServer();
   const std::string sample = WritePhantom(options_.allowed_roots[0], "p", 48, 3);

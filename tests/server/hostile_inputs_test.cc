@@ -189,6 +189,27 @@ TEST_P(HostileInputsTest, RunawayParametersAreRefusedOrFinish) {
   }
 }
 
+// A 4 KB file the HDF5 fuzzer found on which libhdf5 1.10 loops for ever inside H5Ovisit
+// (a symbol table that leads back to itself): kept apart from the corpus the test suite
+// replays in its own process. A job's child must open its volume within job_limits.open.
+TEST_F(ServiceTest, AVolumeWhoseHeaderNeverOpensFailsTheJobInItsChild) {
+  options_.job_limits.open = absl::Seconds(3);
+  StartServer();
+  const std::string path = dir_.File("loop.h5");
+  std::filesystem::copy_file(
+      std::string(SHEETMESH_FUZZ_CORPUS) + "/../hangs/hdf5_file/hdf5_symbol_table_loop", path);
+  auto digest = client_->Upload(path);
+  ASSERT_TRUE(digest.ok()) << digest.status();
+  auto job = client_->CreateJob(UploadRequest(*digest, "loop.h5", "loop"));
+  ASSERT_TRUE(job.ok()) << job.status();
+  const v1::Job done = WaitFinished(job->name());
+  EXPECT_EQ(done.state(), v1::FAILED);
+  EXPECT_EQ(done.error().code(), static_cast<int>(absl::StatusCode::kInvalidArgument))
+      << done.error().message();
+  EXPECT_THAT(done.error().message(), HasSubstr("did not open within 3 s"));
+  EXPECT_EQ(*client_->Health(), "SERVING");
+}
+
 INSTANTIATE_TEST_SUITE_P(IsolatedAndInProcess, HostileInputsTest, ::testing::Bool(),
                          [](const ::testing::TestParamInfo<bool>& i) {
                            return i.param ? "Isolated" : "InProcess";

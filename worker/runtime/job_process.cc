@@ -75,6 +75,38 @@ std::string AsClientSees(const absl::Status& st, const std::string& display,
   return message;
 }
 
+// The line the child sends when its volume did not open in time, made before the alarm is
+// set: the handler may only write() and _exit().
+std::string g_open_timeout_line;
+
+void OnOpenTimeout(int) {
+  const ssize_t n = ::write(kReportFd, g_open_timeout_line.data(), g_open_timeout_line.size());
+  (void)n;
+  ::_exit(1);
+}
+
+// Opens the volume once under an alarm of `seconds`, so that a header no library can finish
+// reading fails the job as a bad input.
+absl::Status ProbeOpen(const PipelineOptions& options, const std::string& display,
+                       const std::string& volume, int64_t seconds) {
+  if (seconds <= 0) return absl::OkStatus();
+  g_open_timeout_line =
+      JsonText({{"result",
+                 {{"code", static_cast<int>(absl::StatusCode::kInvalidArgument)},
+                  {"message", absl::StrCat(display, ": the volume did not open within ", seconds,
+                                           " s (a damaged file whose structure loops?)")}}}}) +
+      "\n";
+  ::signal(SIGALRM, OnOpenTimeout);
+  ::alarm(static_cast<unsigned>(seconds));
+  absl::StatusOr<std::unique_ptr<VolumeSource>> source = OpenVolume(volume, options.input.open);
+  ::alarm(0);
+  ::signal(SIGALRM, SIG_DFL);
+  if (!source.ok()) {
+    return absl::Status(source.status().code(), AsClientSees(source.status(), display, volume));
+  }
+  return absl::OkStatus();
+}
+
 // An inspecting child opens the volume, says what it holds, and runs no stage.
 int InspectChild(const PipelineOptions& options, const std::string& display,
                  const std::string& volume) {
@@ -127,6 +159,11 @@ int ChildMain(const std::string& spec_path) {
     limits.named_file_roots = data_files ? roots : std::vector<std::string>{};
     // Readers refuse what would not fit: half the job's address space, at once.
     if (memory > 0) limits.memory_bytes = static_cast<int64_t>(memory / 2);
+    if (absl::Status opened =
+            ProbeOpen(*options, display, volume, spec.value("open_seconds", int64_t{0}));
+        !opened.ok()) {
+      return fail(opened.code(), std::string(opened.message()));
+    }
     if (spec.value("inspect", false)) return InspectChild(*options, display, volume);
     options->output.dir = out;
     absl::StatusOr<PipelineReport> report = RunPipeline(*options, Progress(&observer, "read"));
@@ -248,7 +285,8 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
                   {"allowed_roots", spec.allowed_roots},
                   {"data_files", spec.data_files},
                   {"inspect", spec.inspect},
-                  {"memory_limit_bytes", limits.memory_bytes}};
+                  {"memory_limit_bytes", limits.memory_bytes},
+                  {"open_seconds", absl::ToInt64Seconds(limits.open)}};
   SM_RETURN_IF_ERROR(WriteFileAtomically(spec_path, JsonText(j)));
   SubprocessOptions o;
   o.argv = {self, kChildFlag, spec_path};

@@ -41,6 +41,10 @@ struct JobLimits {
   uint64_t memory_bytes = uint64_t{8} << 30;  // its address space (RLIMIT_AS)
   uint64_t cpu_seconds = 0;                   // its CPU time (0: none)
   absl::Duration wall = absl::Hours(24);      // it is killed after this
+  // Opening the volume (its header, its slices' list) may take this long: a damaged file
+  // can make a library loop for ever (HDF5 1.10 on a symbol table that points back on
+  // itself), and the job then fails as a bad input instead of holding its worker.
+  absl::Duration open = absl::Minutes(2);
 };
 
 // One progress report of the child; return false to stop it (it is killed).

@@ -123,8 +123,11 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   report.volume.path = surface;
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(TriangleMesh mesh, ReadMesh(surface, box.placement));
-  SM_ASSIGN_OR_RETURN(VolumeMeshResult r,
-                      BuildVolumeMesh(mesh, box.dims, box.placement, options.volume));
+  VolumeMeshOptions vo = options.volume;
+  if (!options.output.dir.empty() && MakeDirs(options.output.dir).ok()) {
+    vo.tetgen.failed_plc_path = options.output.dir + "/tetgen_failed.poly";
+  }
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult r, BuildVolumeMesh(mesh, box.dims, box.placement, vo));
   report.timings.push_back({"volume", absl::ToDoubleSeconds(absl::Now() - start)});
   SM_RETURN_IF_ERROR(MakeDirs(options.output.dir));
   const std::string dir = options.output.dir;

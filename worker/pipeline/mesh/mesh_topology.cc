@@ -160,6 +160,27 @@ size_t OrientConsistently(TriangleMesh* mesh) {
   return non_orientable;
 }
 
+bool FacesClash(const std::vector<Vec3>& v, const Face& a, const Face& b,
+                double fold_angle_degrees) {
+  int shared = 0;
+  uint32_t sv[3];
+  for (uint32_t x : a)
+    for (uint32_t y : b)
+      if (x == y) sv[shared++] = x;
+  const Triangle ta = {v[a[0]], v[a[1]], v[a[2]]}, tb = {v[b[0]], v[b[1]], v[b[2]]};
+  if (shared == 0) return TrianglesIntersect(ta, tb);
+  if (shared == 1) return TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
+  if (shared == 2) {
+    uint32_t ra = 0, rb = 0;
+    for (uint32_t x : a)
+      if (x != sv[0] && x != sv[1]) ra = x;
+    for (uint32_t y : b)
+      if (y != sv[0] && y != sv[1]) rb = y;
+    return DihedralAngleDegrees(v[sv[0]], v[sv[1]], v[ra], v[rb]) < fold_angle_degrees;
+  }
+  return false;  // the same triangle twice
+}
+
 std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleMesh& mesh,
                                                                  size_t max_pairs,
                                                                  double fold_angle_degrees) {
@@ -175,7 +196,6 @@ std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleM
   std::vector<uint32_t> stamp(mesh.faces.size(), UINT32_MAX);
   for (uint32_t f = 0; f < mesh.faces.size() && out.size() < max_pairs; ++f) {
     const Face& a = mesh.faces[f];
-    const Triangle ta = Corners(mesh, f);
     grid.Query(lo[f], hi[f], [&](uint32_t g) {
       if (g <= f || stamp[g] == f || out.size() >= max_pairs) return;
       stamp[g] = f;
@@ -183,27 +203,7 @@ std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleM
       for (int k = 0; k < 3; ++k) {
         if (hi[f][k] < lo[g][k] || hi[g][k] < lo[f][k]) return;
       }
-      int shared = 0;
-      uint32_t sv[3];
-      for (uint32_t u : a)
-        for (uint32_t v : b)
-          if (u == v) sv[shared++] = u;
-      const Triangle tb = Corners(mesh, g);
-      bool hit = false;
-      if (shared == 0) {
-        hit = TrianglesIntersect(ta, tb);
-      } else if (shared == 1) {
-        hit = TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
-      } else if (shared == 2) {
-        uint32_t ra = 0, rb = 0;
-        for (uint32_t u : a)
-          if (u != sv[0] && u != sv[1]) ra = u;
-        for (uint32_t v : b)
-          if (v != sv[0] && v != sv[1]) rb = v;
-        hit = DihedralAngleDegrees(mesh.vertices[sv[0]], mesh.vertices[sv[1]], mesh.vertices[ra],
-                                   mesh.vertices[rb]) < fold_angle_degrees;
-      }
-      if (hit) out.emplace_back(f, g);
+      if (FacesClash(mesh.vertices, a, b, fold_angle_degrees)) out.emplace_back(f, g);
     });
   }
   return out;

@@ -63,6 +63,12 @@ size_t OrientConsistently(TriangleMesh* mesh);
 // common vertex that intersect, faces with one common vertex that overlap beyond it, and
 // faces with a common edge folded onto each other (dihedral angle below
 // `fold_angle_degrees`). At most `max_pairs` pairs.
+// Whether faces a and b of vertices v clash, by the rules FindSelfIntersections applies to
+// each pair (none shared: they intersect; one shared vertex: they overlap beyond it; a
+// shared edge: folded onto each other below fold_angle_degrees).
+bool FacesClash(const std::vector<Vec3>& v, const Face& a, const Face& b,
+                double fold_angle_degrees = 1.0);
+
 std::vector<std::pair<uint32_t, uint32_t>> FindSelfIntersections(const TriangleMesh& mesh,
                                                                  size_t max_pairs = 1000,
                                                                  double fold_angle_degrees = 1.0);

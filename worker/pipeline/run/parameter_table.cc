@@ -413,6 +413,10 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "voxels",
                         "collapse sheet edges shorter than this where that makes no fold or "
                         "clash (0: none)"));
+  rows.push_back(Number("plc.untangle_voxels", SM_MEMBER(volume.plc.untangle_voxels), "[0, 3]",
+                        "voxels",
+                        "sheet triangles that cut through each other are untangled by moving a "
+                        "vertex at most this far, or flipping an edge (0: none)"));
   rows.push_back(Number("plc.contact_voxels", SM_MEMBER(volume.plc.contact_voxels), "[0, 3]",
                         "voxels",
                         "a sheet vertex this near another sheet moves onto it, joining the two "

@@ -263,8 +263,13 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   VolumeMeshResult volume;
   if (options.volume_mesh) {
     StageTimer t(&report, "volume");
-    SM_ASSIGN_OR_RETURN(volume, BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement,
-                                                options.volume, progress.Stage("volume")));
+    VolumeMeshOptions vo = options.volume;
+    // A PLC TetGen fails on is kept beside the outputs: the input of a bug report.
+    if (!options.output.dir.empty() && MakeDirs(options.output.dir).ok()) {
+      vo.tetgen.failed_plc_path = options.output.dir + "/tetgen_failed.poly";
+    }
+    SM_ASSIGN_OR_RETURN(volume, BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement, vo,
+                                                progress.Stage("volume")));
     report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
   }
 

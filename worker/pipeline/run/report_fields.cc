@@ -148,6 +148,10 @@ nlohmann::json PlcStats::Fields() const {
           {"merged_vertices", merged_vertices},
           {"dropped_triangles", dropped_triangles},
           {"repaired_triangles", repaired_triangles},
+          {"untangled", {{"clashing_pairs", clashing_pairs},
+                         {"moved_vertices", untangle_moves},
+                         {"flipped_edges", untangle_flips},
+                         {"max_move_voxels", untangle_max_move}}},
           {"flipped_edges", flipped_edges},
           {"dropped_caps", dropped_caps},
           {"dropped_overlaps", dropped_overlaps},
@@ -178,6 +182,7 @@ nlohmann::json VolumeMeshStats::Fields() const {
   j["tetgen_switches"] = tetgen_switches;
   j["tetgen_seconds"] = tetgen_seconds;
   j["tetgen_tetrahedra"] = tetgen_tetrahedra;
+  j["tetgen_recovery"] = tetgen_recovery;
   // The sizing used: the lattice (in median sheet edges and physical units, finest and
   // coarsest level), its grading, and the budget with the TetGen runs it took.
   j["sizing"] = {{"lattice", lattice},

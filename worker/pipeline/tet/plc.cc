@@ -156,9 +156,18 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   std::vector<Vec3>& v = snapped.v;
   const std::vector<uint8_t>& on_face = snapped.on_face;
   SheetTriangles& st = snapped.st;
-  // Facets must not cut through each other: check before TetGen, and name the clashes.
-  SM_RETURN_IF_ERROR(
-      ResolveClashes(v, snapped.checked_clean, placement, options, &st, &plc, clashes));
+  // Facets must not cut through each other: untangle them, check before TetGen, and name
+  // the clashes left.
+  bool clean = snapped.checked_clean;
+  if (!clean && options.untangle_voxels > 0) {
+    const UntangleStats u = Untangle(st, v, on_face, options.untangle_voxels);
+    plc.clashing_pairs = u.found_pairs;
+    plc.untangle_moves = u.moved_vertices;
+    plc.untangle_flips = u.flipped_edges;
+    plc.untangle_max_move = u.max_move;
+    clean = u.remaining_pairs == 0;
+  }
+  SM_RETURN_IF_ERROR(ResolveClashes(v, clean, placement, options, &st, &plc, clashes));
   if (options.short_edge_voxels > 0) {
     plc.collapsed_edges = CollapseShortEdges(st, v, on_face, options.short_edge_voxels);
   }

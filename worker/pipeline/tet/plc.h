@@ -34,6 +34,12 @@ struct PlcStats {
   uint32_t merged_vertices = 0;      // merged into a near-duplicate
   uint32_t dropped_triangles = 0;    // degenerate after snapping, or lying in a box face
   uint32_t repaired_triangles = 0;   // removed because they clashed (repair mode)
+  uint32_t clashing_pairs = 0;       // sheet triangle pairs that cut through each other
+                                     // before untangling
+  uint32_t untangle_moves = 0;       // vertices moved to untangle them (PlcOptions::
+                                     // untangle_voxels)
+  uint32_t untangle_flips = 0;       // edges flipped to untangle them
+  double untangle_max_move = 0;      // the largest of those moves, voxels
   uint32_t flipped_edges = 0;        // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;         // flat rim triangles dropped
   uint32_t dropped_overlaps = 0;     // rim triangles dropped for lying on another sheet
@@ -82,8 +88,11 @@ struct PlcOptions {
   // image. 0 (or below snap_voxels): only snap_voxels.
   double snap_clear_voxels = 1.5;
   double merge_voxels = 1e-3;  // vertices this close merge
-  bool repair = false;         // remove clashing triangles (the smaller of each pair)
-                               // instead of failing
+  // Sheet triangles that cut through each other are untangled first, by moving a vertex of
+  // the pair at most this many voxels or flipping one of its edges (UntangleStats); 0: none.
+  double untangle_voxels = 1.0;
+  bool repair = false;         // remove the clashing triangles untangling left (the smaller
+                               // of each pair) instead of failing
   // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
   // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
   // are within flip_fold_degrees is flipped where that raises their smallest angle (0:

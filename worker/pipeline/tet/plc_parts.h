@@ -47,6 +47,24 @@ struct SnappedSheets {
 SnappedSheets SnapToBox(const TriangleMesh& sheets, const Vec3& lo, const Vec3& hi,
                         const PlcOptions& options, PlcStats* stats);
 
+// What Untangle did.
+struct UntangleStats {
+  uint32_t found_pairs = 0;      // clashing pairs before
+  uint32_t remaining_pairs = 0;  // after
+  uint32_t moved_vertices = 0;
+  uint32_t flipped_edges = 0;
+  double max_move = 0;  // voxels
+};
+
+// Mends sheet triangles that cut through each other (FindSelfIntersections' rules) by local
+// moves that keep every triangle: a vertex of a clashing pair moves by at most
+// max_move_voxels (toward the middle of its neighbours, or off the other triangle's plane;
+// a vertex on one box face stays in it, one on a box edge or corner stays), else an edge of
+// the pair is flipped, each only where it leaves its faces clashing with none, no sliver
+// (1 degree) and none turned over. Rounds until none clash or none mends.
+UntangleStats Untangle(SheetTriangles& st, std::vector<Vec3>& v,
+                       const std::vector<uint8_t>& on_face, double max_move_voxels);
+
 // Sheet triangles that cut through each other: listed in `clashes` (when not null, in
 // physical units); kFailedPrecondition naming the first five unless options.repair, which
 // drops the smaller of each pair (stats->repaired_triangles) and fails only if clashes

@@ -191,6 +191,10 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  const bool failed = exit->signaled || exit->code != 0;
+  if (failed && !options.failed_plc_path.empty()) {
+    WriteFileAtomically(options.failed_plc_path, plc.ToPoly()).IgnoreError();
+  }
   if (exit->signaled) {
     const int sig = exit->code;
     const std::string tail = Tail(log);

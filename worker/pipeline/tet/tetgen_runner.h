@@ -28,6 +28,9 @@ struct TetgenOptions {
   uint64_t memory_limit_bytes = uint64_t{8} << 30;  // address-space limit of the child
   std::string scratch_dir;                          // "" = $TMPDIR or /tmp
   bool keep_scratch = false;                        // keep the scratch folder (debugging)
+  // Where a PLC TetGen crashed or failed on is copied ("" = nowhere): the input of a bug to
+  // report, and of a regression case.
+  std::string failed_plc_path;
 };
 
 // The TetGen command-line switches for `options` (without the file name).

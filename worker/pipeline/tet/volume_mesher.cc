@@ -159,6 +159,41 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
       ") holds (about ", std::llround(room), "); raise it to at least ", box_volume / room));
 }
 
+// TetGen 1.5 can crash, or give up recovering a facet, on a PLC it meshes with other
+// switches: asked to add no point on the facets (-Y), it segfaults where recovering a sheet
+// triangle whole needs one (the DPM junction at r = 3). TetGen runs again, first without
+// its own quality refinement (the improvement does that; its Steiner points are where
+// it crashes most), then also free to add points on the sheet triangles where recovering
+// them needs one (each is still covered exactly by tetrahedron faces, its added points
+// sliding in it during the improvement); its refinement, free on the sheets, would split
+// them many times over (a tenfold count on the DPM junction). What failed is said in
+// r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::failed_plc_path).
+absl::StatusOr<TetMesh> RunTetgenRecovering(const Plc& plc, const TetgenOptions& options,
+                                            const Progress& progress, VolumeMeshResult* r) {
+  std::vector<TetgenOptions> tries = {options};
+  if (options.max_radius_edge_ratio > 0) {  // no -q: the constrained Delaunay mesh alone
+    tries.push_back(options);
+    tries.back().max_radius_edge_ratio = 0;
+  }
+  if (!options.steiner_on_sheets) {  // and free to add the points recovery needs
+    tries.push_back(tries.back());
+    tries.back().steiner_on_sheets = true;
+  }
+  absl::Status last;
+  for (size_t i = 0; i < tries.size(); ++i) {
+    absl::StatusOr<TetMesh> mesh = RunTetgen(plc, tries[i], progress);
+    // Only a crash or an error of TetGen's own is tried again; limits and cancels are final.
+    if (mesh.ok() || mesh.status().code() != absl::StatusCode::kInternal) {
+      if (mesh.ok() && i > 0) r->tetgen_switches = TetgenSwitches(tries[i]);
+      return mesh;
+    }
+    last = mesh.status();
+    r->tetgen_recovery.push_back(
+        absl::StrCat(TetgenSwitches(tries[i]), ": ", last.message().substr(0, 160)));
+  }
+  return last;
+}
+
 // Builds the PLC and runs TetGen into r->mesh, sizing the lattice for the budget, if any:
 // the lattice coarsens by the prediction (up to three PLCs), then by TetGen's count (two
 // runs); then no lattice, which gives the improvement the best start (kept if within the
@@ -184,7 +219,8 @@ absl::Status MeshWithinBudget(const TriangleMesh& sheets, const Dims& dims,
     SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r->box_volume, dims));
     const absl::Time start = absl::Now();
     ++r->sizing_attempts;
-    SM_ASSIGN_OR_RETURN(r->mesh, RunTetgen(*plc, options.tetgen, progress.Sub(0, 0.9)));
+    SM_ASSIGN_OR_RETURN(r->mesh,
+                        RunTetgenRecovering(*plc, options.tetgen, progress.Sub(0, 0.9), r));
     r->tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
     const uint64_t made = r->mesh.tets.size();
     if (budget == 0 || made <= room) return absl::OkStatus();

@@ -54,7 +54,10 @@ struct VolumeMeshStats : PlcStats {
   TetQuality quality;
   Conformity conformity;
   double box_volume = 0;              // physical units^3
-  std::string tetgen_switches;        // as TetGen ran
+  std::string tetgen_switches;        // as TetGen ran (the run that made the mesh)
+  // TetGen runs that crashed or failed before the one that made the mesh: their switches
+  // and errors (RunTetgenRecovering).
+  std::vector<std::string> tetgen_recovery;
   double tetgen_seconds = 0;          // the last TetGen run's
   uint64_t tetgen_tetrahedra = 0;     // TetGen's, before the improvement
   uint64_t max_tetrahedra = 0;        // the budget asked for (0: none)

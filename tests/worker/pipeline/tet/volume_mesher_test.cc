@@ -246,9 +246,17 @@ TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakes
   };
   EXPECT_TRUE(has(held, {0.5, 10, 10}));
   EXPECT_TRUE(has(held, {-0.5, 9, 9.8}));
-  // Snapping P regardless makes the clash, which the check reports.
+  // Snapping P regardless makes the clash: untangled by a move or a flip, both triangles
+  // kept; without untangling, the check reports it.
   PlcOptions forced = near_only;
   forced.snap_voxels = 1.5;
+  forced.contact_voxels = 0;  // (a contact mend would split B: not what is counted here)
+  SM_ASSERT_OK_AND_ASSIGN(const Plc untangled, BuildPlc(clash, dims, {}, forced));
+  EXPECT_EQ(untangled.clashing_pairs, 1u);
+  EXPECT_GE(untangled.untangle_moves + untangled.untangle_flips, 1u);
+  EXPECT_LE(untangled.untangle_max_move, forced.untangle_voxels);
+  EXPECT_EQ(untangled.sheet_triangles.size(), 2u);
+  forced.untangle_voxels = 0;
   EXPECT_THAT(BuildPlc(clash, dims, {}, forced),
               StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("intersect")));
   // Without B, P snaps.

@@ -331,6 +331,7 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
         Normalized(Vec3(std::sin(dip) * std::sin(az), std::sin(dip) * std::cos(az), std::cos(dip)));
     s.center = centre + Vec3(rng.Uniform(-0.15, 0.15) * d.nx, rng.Uniform(-0.15, 0.15) * d.ny,
                              rng.Uniform(-0.15, 0.15) * d.nz);
+    if (options.center_z_fraction >= 0) s.center.z = options.center_z_fraction * (d.nz - 1);
     const Vec3 helper = std::abs(s.normal.z) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
     s.u = Normalized(Cross(helper, s.normal));
     s.v = Cross(s.normal, s.u);

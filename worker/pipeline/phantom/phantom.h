@@ -31,6 +31,9 @@ struct PhantomOptions {
   double fragment_gap_voxels = 3.0;    // width of those gaps (below R = 7: detection bridges)
   double min_dip_degrees = 25.0;       // sheets dip between these two
   double max_dip_degrees = 90.0;
+  // When in [0, 1]: every sheet's centre at this fraction of the box's height (z), instead
+  // of near the middle (a sheet running along a box face: grazing contacts with it).
+  double center_z_fraction = -1;
   int num_specks = 0;  // small blobs (-1: one per 20^3 voxels of box)
   double speck_radius_voxels = 1.5;
   DType dtype = DType::kUInt8;

@@ -63,10 +63,65 @@ PhantomOptions RoughNetwork() {
   return o;
 }
 
+// As hard as a real dissolution slab: walls rough and not parallel, the aperture 20-60
+// voxels along it, dipping up to 15 degrees.
+PhantomOptions RoughSlab() {
+  PhantomOptions o = ThickSlab();
+  o.seed = 5;
+  o.aperture_voxels = 40.0;
+  o.aperture_variation = 0.5;  // 20-60 voxels
+  o.undulation_voxels = 4.0;
+  o.wall_roughness_voxels = 6.0;
+  o.max_dip_degrees = 15.0;
+  return o;
+}
+
+// A dense network of thin sheets crossing at shallow angles: dips within 2-10 degrees, so
+// that any two meet at 20 degrees or less.
+PhantomOptions ShallowNetwork() {
+  PhantomOptions o;
+  o.dims = {160, 160, 120};
+  o.seed = 13;
+  o.num_sheets = 6;
+  o.aperture_voxels = 3.0;
+  o.aperture_variation = 0.3;
+  o.undulation_voxels = 1.5;
+  o.wall_roughness_voxels = 1.0;
+  o.extent_fraction = 0.35;
+  o.holes_per_sheet = 1;
+  o.fragmented_sheets = 0;
+  o.min_dip_degrees = 2.0;
+  o.max_dip_degrees = 10.0;
+  o.num_specks = 60;
+  return o;
+}
+
+// Sheets running along the box's bottom face, a few voxels above it and dipping 1-6
+// degrees: they meet the face at grazing angles.
+PhantomOptions GrazingSheet() {
+  PhantomOptions o;
+  o.dims = {140, 120, 80};
+  o.seed = 17;
+  o.num_sheets = 2;
+  o.aperture_voxels = 4.0;
+  o.aperture_variation = 0.3;
+  o.undulation_voxels = 1.5;
+  o.wall_roughness_voxels = 1.0;
+  o.extent_fraction = 0.6;
+  o.holes_per_sheet = 1;
+  o.fragmented_sheets = 0;
+  o.min_dip_degrees = 1.0;
+  o.max_dip_degrees = 6.0;
+  o.center_z_fraction = 0.07;
+  o.num_specks = 20;
+  return o;
+}
+
 }  // namespace
 
 std::vector<std::string> PhantomPresetNames() {
-  return {"sample", "paper", "thick_slab", "rough_network"};
+  return {"sample",     "paper",           "thick_slab",   "rough_network",
+          "rough_slab", "shallow_network", "grazing_sheet"};
 }
 
 absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
@@ -74,6 +129,9 @@ absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
   if (name == "paper") return Paper();
   if (name == "thick_slab") return ThickSlab();
   if (name == "rough_network") return RoughNetwork();
+  if (name == "rough_slab") return RoughSlab();
+  if (name == "shallow_network") return ShallowNetwork();
+  if (name == "grazing_sheet") return GrazingSheet();
   return absl::InvalidArgumentError(
       absl::StrCat("--preset=", absl::string_view(name.data(), name.size()), " is not known; use ",
                    absl::StrJoin(PhantomPresetNames(), ", ")));

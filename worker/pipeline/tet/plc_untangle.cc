@@ -76,7 +76,7 @@ class Untangler {
   }
 
   // Whether the faces in `changed` (as they are now in v_/st_) clash with any face, or a
-  // face of them is a sliver or turned over against `normals` (their normals before).
+  // face of them is a sliver or faces away from `normals` (the sheet's side there).
   bool Clean(const std::vector<uint32_t>& changed, const std::vector<Vec3>& normals) {
     absl::flat_hash_set<uint32_t> own(changed.begin(), changed.end());
     for (size_t i = 0; i < changed.size(); ++i) {
@@ -110,8 +110,12 @@ class Untangler {
       const uint32_t other =
           std::find(st_.faces[a].begin(), st_.faces[a].end(), u) != st_.faces[a].end() ? b : a;
       const std::vector<uint32_t>& star = around_[u];
-      std::vector<Vec3> normals;
-      for (uint32_t f : star) normals.push_back(UnitNormal(TriangleOf(v_, st_.faces[f])));
+      // The sheet's side here: its star's area-weighted normal, which a face folded back
+      // (a minority) turns against. After the move every face of the star must face it.
+      Vec3 side_normal(0, 0, 0);
+      for (uint32_t f : star) side_normal = side_normal + AreaVector(TriangleOf(v_, st_.faces[f]));
+      side_normal = Normalized(side_normal);
+      const std::vector<Vec3> normals(star.size(), side_normal);
       // The middle of its neighbours, and off the other triangle's plane on its own side.
       Vec3 middle(0, 0, 0);
       int n = 0;
@@ -178,8 +182,9 @@ class Untangler {
         }
         if (exists) continue;
         const Face old_f = st_.faces[f], old_g = st_.faces[g];
-        const std::vector<Vec3> normals = {UnitNormal(TriangleOf(v_, old_f)),
-                                           UnitNormal(TriangleOf(v_, old_g))};
+        const Vec3 side =
+            Normalized(AreaVector(TriangleOf(v_, old_f)) + AreaVector(TriangleOf(v_, old_g)));
+        const std::vector<Vec3> normals = {side, side};
         st_.faces[f] = {x, z2, z1};  // x -> y -> z1 kept its turn: x, z2, z1 and y, z1, z2
         st_.faces[g] = {y, z1, z2};
         if (Clean({f, g}, normals)) {

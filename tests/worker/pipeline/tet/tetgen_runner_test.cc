@@ -73,6 +73,34 @@ TEST(TetgenRunnerTest, TetgenThatIsKilledOrFailsGivesTheDocumentedErrors) {
               StatusIs(absl::StatusCode::kNotFound));
 }
 
+// TetGen that crashes on a PLC under some switches (as it segfaults recovering a sheet
+// triangle whole under -Y) runs again with others; what failed is in the report, and the
+// PLC is kept for a bug report.
+TEST(TetgenRunnerTest, ATetgenCrashIsRecoveredWithOtherSwitchesAndReported) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  o.tetgen.failed_plc_path = tmp.File("failed.poly");
+  // Crashes whenever asked to refine (-q) and to add no point on the facets (-Y).
+  o.tetgen.program = FakeTetgen(tmp, "case \"$1\" in *q*Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
+  ASSERT_EQ(r.tetgen_recovery.size(), 1u);
+  EXPECT_THAT(r.tetgen_recovery[0], HasSubstr("-pzQq1.5/10O2/3Y: TetGen crashed with signal 11"));
+  EXPECT_EQ(r.tetgen_switches, "-pzQO2/3Y");
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_TRUE(std::filesystem::exists(tmp.File("failed.poly")));
+  // Crashing under -Y whatever the rest: TetGen may then add points on the sheets.
+  o.tetgen.program = FakeTetgen(tmp, "case \"$1\" in *Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
+  SM_ASSERT_OK_AND_ASSIGN(r, BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
+  EXPECT_EQ(r.tetgen_recovery.size(), 2u);
+  EXPECT_EQ(r.tetgen_switches, "-pzQO2/3");
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  // Crashing whatever: the last error is returned.
+  o.tetgen.program = FakeTetgen(tmp, "kill -11 $$");
+  EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kInternal, HasSubstr("signal 11")));
+}
+
 TEST(TetgenRunnerTest, CancellationKillsTetgen) {
   TempDir tmp;
   VolumeMeshOptions o;

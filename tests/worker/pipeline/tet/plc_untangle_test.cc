@@ -1,0 +1,96 @@
+// Untangle: clashing sheet triangles mended by small moves and flips, every triangle kept.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/tet/plc_parts.h"
+
+namespace sheetmesh {
+namespace {
+
+SheetTriangles Sheets(const std::vector<Face>& faces, const std::vector<int32_t>& piece) {
+  SheetTriangles s;
+  s.faces = faces;
+  for (uint32_t f = 0; f < faces.size(); ++f) {
+    s.source.push_back(f);
+    s.piece.push_back(piece[f]);
+    s.thickness.push_back(2);
+  }
+  return s;
+}
+
+size_t Clashes(const SheetTriangles& s, const std::vector<Vec3>& v) {
+  TriangleMesh m;
+  m.vertices = v;
+  m.faces = s.faces;
+  return FindSelfIntersections(m, 1000, 1.0).size();
+}
+
+TEST(PlcUntangleTest, AFanFoldedOverItselfAtAVertexIsMendedByAMove) {
+  // A fan of 6 triangles around c in the plane z = 5; rim vertex 1 pushed past vertex 2, so
+  // that the triangles (c, 0, 1) and (c, 1, 2) overlap beyond c.
+  std::vector<Vec3> v = {{10, 10, 5}};  // c
+  for (int k = 0; k < 6; ++k) {
+    const double a = k * M_PI / 3;
+    v.push_back({10 + 4 * std::cos(a), 10 + 4 * std::sin(a), 5});
+  }
+  v[2] = {10 + 4 * std::cos(2.3), 10 + 4 * std::sin(2.3), 5};  // past vertex 3's angle
+  v[3] = {10 + 4 * std::cos(2.0), 10 + 4 * std::sin(2.0), 5};
+  std::vector<Face> faces;
+  for (uint32_t k = 0; k < 6; ++k) faces.push_back({0, 1 + k, 1 + (k + 1) % 6});
+  SheetTriangles s = Sheets(faces, std::vector<int32_t>(6, 0));
+  ASSERT_GT(Clashes(s, v), 0u);
+  const std::vector<uint8_t> on_face(v.size(), 0);
+  const UntangleStats u = Untangle(s, v, on_face, 1.0);
+  EXPECT_GT(u.found_pairs, 0u);
+  EXPECT_EQ(u.remaining_pairs, 0u);
+  EXPECT_GE(u.moved_vertices + u.flipped_edges, 1u);
+  EXPECT_LE(u.max_move, 1.0);
+  EXPECT_EQ(s.faces.size(), 6u) << "every triangle kept";
+  EXPECT_EQ(Clashes(s, v), 0u);
+}
+
+TEST(PlcUntangleTest, ASheetPokingAFractionOfAVoxelThroughAnotherIsMended) {
+  // Sheet B: a square in z = 5. Sheet A: a triangle standing on B's edge region whose
+  // lower corner dips 0.3 voxels through B, away from B's vertices.
+  std::vector<Vec3> v = {{0, 0, 5},    {20, 0, 5},  {20, 20, 5}, {0, 20, 5},  // B
+                         {9, 10, 4.7}, {11, 8, 12}, {11, 12, 12}};            // A
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 2, 3}, {4, 5, 6}}, {0, 0, 1});
+  ASSERT_GT(Clashes(s, v), 0u);
+  const std::vector<uint8_t> on_face(v.size(), 0);
+  const UntangleStats u = Untangle(s, v, on_face, 1.0);
+  EXPECT_EQ(u.remaining_pairs, 0u);
+  EXPECT_EQ(Clashes(s, v), 0u);
+  EXPECT_EQ(s.faces.size(), 3u);
+  EXPECT_GT(v[4].z, 5.0) << "A's corner came back above B";
+}
+
+TEST(PlcUntangleTest, SheetsCrossingDeeplyAreNotForcedApart) {
+  // Two squares crossing at right angles through each other's middles: no move of a voxel
+  // undoes that, and none is made that would deform them.
+  std::vector<Vec3> v = {{0, 10, 0}, {20, 10, 0}, {20, 10, 20}, {0, 10, 20},
+                         {10, 0, 0}, {10, 20, 0}, {10, 20, 20}, {10, 0, 20}};
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}}, {0, 0, 1, 1});
+  const std::vector<Vec3> before = v;
+  const std::vector<uint8_t> on_face(v.size(), 0);
+  const UntangleStats u = Untangle(s, v, on_face, 1.0);
+  EXPECT_GT(u.remaining_pairs, 0u);
+  EXPECT_EQ(u.moved_vertices, 0u);
+  EXPECT_EQ(v, before);
+}
+
+TEST(PlcUntangleTest, AVertexOnABoxFaceStaysOnIt) {
+  // The poking corner lies on the box face x = -0.5 (bit 0): it may move only in y and z.
+  std::vector<Vec3> v = {{-0.5, 0, 5},    {20, 0, 5}, {20, 20, 5}, {-0.5, 20, 5},
+                         {-0.5, 10, 4.7}, {4, 8, 12}, {4, 12, 12}};
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 2, 3}, {4, 5, 6}}, {0, 0, 1});
+  std::vector<uint8_t> on_face(v.size(), 0);
+  on_face[0] = on_face[3] = on_face[4] = 1;
+  const UntangleStats u = Untangle(s, v, on_face, 1.0);
+  EXPECT_EQ(u.remaining_pairs, 0u);
+  EXPECT_EQ(v[4].x, -0.5);
+  EXPECT_EQ(Clashes(s, v), 0u);
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -223,10 +223,33 @@ absl::Status CheckStorageCost(hid_t ds, hid_t file_type, int64_t declared_bytes,
           declared_bytes, " bytes; rewrite it with smaller chunks (h5repack -l CHUNK=...)"));
     }
   }
-  if (H5Pget_layout(dcpl.get()) == H5D_VIRTUAL) return absl::OkStatus();
+  const H5D_layout_t layout = H5Pget_layout(dcpl.get());
+  if (layout == H5D_VIRTUAL) return absl::OkStatus();
+  const int64_t stored = static_cast<int64_t>(H5Dget_storage_size(ds));
+  // Unfiltered contiguous or compact data is stored as it is read: a dataset holding fewer
+  // bytes than its dims declare is damaged (libhdf5 1.10 reads past a short compact buffer).
+  if ((layout == H5D_COMPACT || layout == H5D_CONTIGUOUS) &&
+      H5Pget_external_count(dcpl.get()) == 0 && stored < declared_bytes) {
+    return absl::InvalidArgumentError(absl::StrCat(where, ": declares ", declared_bytes,
+                                                   " bytes of voxels but stores ", stored,
+                                                   " (a damaged or cut file)"));
+  }
+  // In the file that holds the dataset (an external link's target, perhaps).
+  hsize_t file_bytes = 0;
+  {
+    H5Id own(H5Iget_file_id(ds), H5Fclose);
+    if (!own.ok() || H5Fget_filesize(own.get(), &file_bytes) < 0) file_bytes = 0;
+  }
+  if (layout == H5D_CONTIGUOUS && H5Pget_external_count(dcpl.get()) == 0 && stored > 0 &&
+      file_bytes > 0) {
+    const haddr_t at = H5Dget_offset(ds);
+    if (at == HADDR_UNDEF || static_cast<int64_t>(at) + stored > static_cast<int64_t>(file_bytes)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          where, ": its data lies beyond the file's ", file_bytes, " bytes (cut short?)"));
+    }
+  }
   // Deflate decodes at most 1032 bytes per stored byte; unwritten chunks read as the fill
   // value without any storage.
-  const int64_t stored = static_cast<int64_t>(H5Dget_storage_size(ds));
   return CheckCompressionRatio(declared_bytes, stored, kMaxDeflateRatio, where);
 }
 

@@ -4,7 +4,7 @@
     /usr/bin/python3 bench/hardening2_bench.py BUILD bombs [--old OLD_BUILD]
     /usr/bin/python3 bench/hardening2_bench.py BUILD runaway [--old OLD_BUILD]
     /usr/bin/python3 bench/hardening2_bench.py BUILD gateway [--slow 100]
-    /usr/bin/python3 bench/hardening2_bench.py BUILD soak [--jobs 36]
+    /usr/bin/python3 bench/hardening2_bench.py BUILD soak [--jobs 36] [--soak_dims 200] [--old OLD_BUILD]
 
 - bombs: small files that claimed gigabytes or minutes (an HDF5 dataset in one 1 GiB gzip
   chunk, 2,000 nested HDF5 groups, a .npy with a 40 KB shape, a 600-byte JPEG and a PNG
@@ -238,12 +238,17 @@ def bench_gateway(build, slow):
         server.wait()
 
 
-def bench_soak(build, jobs, seed):
+def bench_soak(build, jobs, seed, side, server_build=None):
     rng = random.Random(seed)
     folder = OUT / "soak"
     subprocess.run(["rm", "-rf", str(folder)])
     (folder / "root").mkdir(parents=True)
-    vol = sample(build, folder / "root")
+    # Jobs of several seconds each (extraction on a side^3 phantom), so that kills every
+    # 1-4 s land in their runs again and again.
+    vol = folder / "root" / ("soak_%dx%dx%d_u8.raw" % (side, side, side))
+    subprocess.run([pipeline(build), "phantom", "--dims=%dx%dx%d" % (side, side, side), "--seed=23", "--sheets=4",
+                    "-o", str(vol)], check=True, stdout=subprocess.DEVNULL)
+    server_bin = str((server_build or build) / "server/sheetmesh-server")
     os.environ["SHEETMESH_PYTHON_STUBS"] = str(build / "python")
     sys.path.insert(0, str(ROOT.parent / "client" / "python"))
     import sheetmesh_client  # noqa: E402
@@ -253,7 +258,7 @@ def bench_soak(build, jobs, seed):
         port = folder / "port"
         if port.exists():
             port.unlink()
-        proc = subprocess.Popen([str(build / "server/sheetmesh-server"), "--address=127.0.0.1:0",
+        proc = subprocess.Popen([server_bin, "--address=127.0.0.1:0",
                                  "--data_dir=%s" % (folder / "data"), "--port_file=%s" % port,
                                  "--allowed_root=%s" % (folder / "root"), "--workers=2", "--lease_seconds=3"],
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -290,8 +295,8 @@ def bench_soak(build, jobs, seed):
     for j in final.values():
         states[jobs_pb2.JobState.Name(j.state)] = states.get(jobs_pb2.JobState.Name(j.state), 0) + 1
     lost = [j.lost_to_restarts for j in final.values()]
-    print("soak: %d jobs (extract, r 5-10, the sample), the server SIGKILLed every 1-4 s (%d kills, %.0f s), "
-          "max_attempts 3" % (jobs, kills, time.time() - t0))
+    print("soak (%s): %d jobs (extract, r 5-10, a %d^3 phantom), the server SIGKILLed every 1-4 s (%d kills, "
+          "%.0f s), max_attempts 3" % (server_bin, jobs, side, kills, time.time() - t0))
     print("  ended: %s; runs lost to restarts per job: max %d, total %d; attempts max %d" % (
         states, max(lost), sum(lost), max(j.attempts for j in final.values())))
     for j in final.values():
@@ -307,6 +312,7 @@ def main():
     ap.add_argument("--slow", type=int, default=100)
     ap.add_argument("--jobs", type=int, default=36)
     ap.add_argument("--seed", type=int, default=40)
+    ap.add_argument("--soak_dims", type=int, default=200)
     a = ap.parse_args()
     build = a.build.resolve()
     old = a.old.resolve() if a.old else None
@@ -317,7 +323,9 @@ def main():
     elif a.what == "gateway":
         bench_gateway(build, a.slow)
     else:
-        bench_soak(build, a.jobs, a.seed)
+        bench_soak(build, a.jobs, a.seed, a.soak_dims)
+        if old:
+            bench_soak(build, a.jobs, a.seed, a.soak_dims, server_build=old)
 
 
 if __name__ == "__main__":

@@ -160,6 +160,42 @@ size_t OrientConsistently(TriangleMesh* mesh) {
   return non_orientable;
 }
 
+namespace {
+
+// Whether direction s lies in the angle from u to w (all from one point, in the plane of
+// normal n = u x w), counting its sides: a touch counts as inside.
+bool InAngle(const Vec3& s, const Vec3& u, const Vec3& w, const Vec3& n) {
+  const double tol = 1e-9 * Norm(s) * Norm(n) * (Norm(u) + Norm(w));
+  return Dot(Cross(u, s), n) >= -tol && Dot(Cross(s, w), n) >= -tol && Dot(s, u + w) > 0;
+}
+
+}  // namespace
+
+bool WedgesOverlap(const Vec3& p, const Vec3& a1, const Vec3& a2, const Vec3& b1, const Vec3& b2) {
+  const Vec3 u1 = a1 - p, w1 = a2 - p, u2 = b1 - p, w2 = b2 - p;
+  const Vec3 n1 = Cross(u1, w1), n2 = Cross(u2, w2);
+  const double s1 = Norm(n1), s2 = Norm(n2);
+  if (!(s1 > 0) || !(s2 > 0)) return false;  // a degenerate triangle: not this test's
+  const Vec3 line = Cross(n1, n2);
+  if (Norm(line) <= 1e-9 * s1 * s2) {
+    // Coplanar: the angles overlap where an edge or the bisector of one lies strictly
+    // within the other (each tested in its own plane's turn).
+    auto strictly = [](const Vec3& s, const Vec3& u, const Vec3& w, const Vec3& n) {
+      const double tol = 1e-9 * Norm(s) * Norm(n) * (Norm(u) + Norm(w));
+      return Dot(Cross(u, s), n) > tol && Dot(Cross(s, w), n) > tol;
+    };
+    const Vec3 mid1 = Normalized(u1) + Normalized(w1), mid2 = Normalized(u2) + Normalized(w2);
+    return strictly(u2, u1, w1, n1) || strictly(w2, u1, w1, n1) || strictly(mid2, u1, w1, n1) ||
+           strictly(u1, u2, w2, n2) || strictly(w1, u2, w2, n2) || strictly(mid1, u2, w2, n2);
+  }
+  // The planes meet in a line through p: the triangles share more than p where the line
+  // enters both angles on the same side of p.
+  for (const Vec3& s : {line, line * -1.0}) {
+    if (InAngle(s, u1, w1, n1) && InAngle(s, u2, w2, n2)) return true;
+  }
+  return false;
+}
+
 bool FacesClash(const std::vector<Vec3>& v, const Face& a, const Face& b,
                 double fold_angle_degrees) {
   int shared = 0;
@@ -169,7 +205,16 @@ bool FacesClash(const std::vector<Vec3>& v, const Face& a, const Face& b,
       if (x == y) sv[shared++] = x;
   const Triangle ta = {v[a[0]], v[a[1]], v[a[2]]}, tb = {v[b[0]], v[b[1]], v[b[2]]};
   if (shared == 0) return TrianglesIntersect(ta, tb);
-  if (shared == 1) return TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
+  if (shared == 1) {
+    const uint32_t p = sv[0];
+    uint32_t a1 = 0, a2 = 0, b1 = 0, b2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (a[k] == p) a1 = a[(k + 1) % 3], a2 = a[(k + 2) % 3];
+      if (b[k] == p) b1 = b[(k + 1) % 3], b2 = b[(k + 2) % 3];
+    }
+    return WedgesOverlap(v[p], v[a1], v[a2], v[b1], v[b2]) ||
+           TrianglesIntersect(Shrink(ta, 1e-3), Shrink(tb, 1e-3));
+  }
   if (shared == 2) {
     uint32_t ra = 0, rb = 0;
     for (uint32_t x : a)

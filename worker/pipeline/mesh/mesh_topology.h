@@ -63,6 +63,12 @@ size_t OrientConsistently(TriangleMesh* mesh);
 // common vertex that intersect, faces with one common vertex that overlap beyond it, and
 // faces with a common edge folded onto each other (dihedral angle below
 // `fold_angle_degrees`). At most `max_pairs` pairs.
+// Whether the triangles (p, a1, a2) and (p, b1, b2), sharing only p, share more than p: the
+// line their planes meet in enters both of their angles at p on one side (a touch counts),
+// or, in one plane, their angles overlap.
+bool WedgesOverlap(const Vec3& p, const Vec3& a1, const Vec3& a2, const Vec3& b1,
+                   const Vec3& b2);
+
 // Whether faces a and b of vertices v clash, by the rules FindSelfIntersections applies to
 // each pair (none shared: they intersect; one shared vertex: they overlap beyond it; a
 // shared edge: folded onto each other below fold_angle_degrees).

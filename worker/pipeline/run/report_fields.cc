@@ -151,6 +151,8 @@ nlohmann::json PlcStats::Fields() const {
           {"untangled", {{"clashing_pairs", clashing_pairs},
                          {"moved_vertices", untangle_moves},
                          {"flipped_edges", untangle_flips},
+                         {"split_crossings", untangle_splits},
+                         {"retriangulated_patches", untangle_patches},
                          {"max_move_voxels", untangle_max_move}}},
           {"flipped_edges", flipped_edges},
           {"dropped_caps", dropped_caps},

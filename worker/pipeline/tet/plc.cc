@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <set>
 
 #include "absl/strings/str_cat.h"
@@ -105,6 +106,22 @@ PlcFacet BoxFacet(int face, const Plc& plc, const std::vector<Vec3>& v,
   return facet;
 }
 
+// Bit k set where vertex i lies on box face k: on it before (`was`), or at its plane now
+// (within rounding); a coordinate past the box is clamped onto it.
+std::vector<uint8_t> OnBox(std::vector<Vec3>& v, const Vec3& lo, const Vec3& hi,
+                           const std::vector<uint8_t>& was) {
+  std::vector<uint8_t> on(v.size(), 0);
+  for (size_t i = 0; i < v.size(); ++i) {
+    on[i] = i < was.size() ? was[i] : 0;
+    for (int k = 0; k < 3; ++k) {
+      const double tol = 1e-9 * (1 + std::abs(hi[k] - lo[k]));
+      if (v[i][k] <= lo[k] + tol) v[i][k] = lo[k], on[i] |= 1 << (2 * k);
+      if (v[i][k] >= hi[k] - tol) v[i][k] = hi[k], on[i] |= 1 << (2 * k + 1);
+    }
+  }
+  return on;
+}
+
 }  // namespace
 
 SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop) {
@@ -164,6 +181,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.clashing_pairs = u.found_pairs;
     plc.untangle_moves = u.moved_vertices;
     plc.untangle_flips = u.flipped_edges;
+    plc.untangle_patches = u.retriangulated_patches;
+    plc.untangle_splits = u.split_crossings;
     plc.untangle_max_move = u.max_move;
     clean = u.remaining_pairs == 0;
   }
@@ -186,6 +205,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
     plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }
+  // Which box faces each vertex lies on, as the mends left it: a vertex moved onto another
+  // sheet where that sheet meets the box lies on the box too, and its edges there must be
+  // segments of the box's facet (else TetGen sees a sheet triangle cut the box face and
+  // gives up); none may lie outside.
+  const std::vector<uint8_t> on_box = OnBox(v, lo, hi, on_face);
 
   // Compact the used vertices; the 8 box corners go first.
   std::vector<uint32_t> index(v.size(), UINT32_MAX);
@@ -221,7 +245,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   }
   for (int face = 0; face < 6; ++face) {
     plc.facets.push_back(
-        BoxFacet(face, plc, v, on_face, index, st.faces, box_points, first_box_point, placement));
+        BoxFacet(face, plc, v, on_box, index, st.faces, box_points, first_box_point, placement));
   }
   for (size_t t = 0; t < plc.sheet_triangles.size(); ++t) {
     const Face& f = plc.sheet_triangles[t];

@@ -39,6 +39,8 @@ struct PlcStats {
   uint32_t untangle_moves = 0;       // vertices moved to untangle them (PlcOptions::
                                      // untangle_voxels)
   uint32_t untangle_flips = 0;       // edges flipped to untangle them
+  uint32_t untangle_splits = 0;      // crossing pairs split to meet in an edge
+  uint32_t untangle_patches = 0;     // patches re-triangulated to untangle them
   double untangle_max_move = 0;      // the largest of those moves, voxels
   uint32_t flipped_edges = 0;        // sheet edges flipped for better triangles
   uint32_t dropped_caps = 0;         // flat rim triangles dropped

@@ -53,12 +53,17 @@ struct UntangleStats {
   uint32_t remaining_pairs = 0;  // after
   uint32_t moved_vertices = 0;
   uint32_t flipped_edges = 0;
-  double max_move = 0;  // voxels
+  uint32_t split_crossings = 0;         // pairs crossing beyond a shared corner, split to
+                                        // meet in an edge
+  uint32_t retriangulated_patches = 0;  // patches replaced by a fan (RetriangulatePatch)
+  double max_move = 0;                  // voxels
 };
 
 // Mends sheet triangles that cut through each other (FindSelfIntersections' rules) by local
 // moves that keep every triangle: a vertex of a clashing pair moves by at most
-// max_move_voxels (toward the middle of its neighbours, or off the other triangle's plane;
+// max_move_voxels, and where nothing at that size mends a pair, by up to three times that
+// (toward the middle of its neighbours, or off the other triangle's plane; last, the faces
+// of one piece around the pair re-triangulated as a fan from their outline's middle;
 // a vertex on one box face stays in it, one on a box edge or corner stays), else an edge of
 // the pair is flipped, each only where it leaves its faces clashing with none, no sliver
 // (1 degree) and none turned over. Rounds until none clash or none mends.

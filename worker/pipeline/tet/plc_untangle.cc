@@ -20,6 +20,7 @@ namespace sheetmesh {
 namespace {
 
 constexpr double kMinMovedAngle = 1.0;  // degrees: a move may not make a sliver triangle
+constexpr double kMinSplitAngle = 0.2;  // degrees: nor a split (its pieces are thin by nature)
 constexpr int kMaxRounds = 12;
 
 Triangle TriangleOf(const std::vector<Vec3>& v, const Face& f) {
@@ -30,11 +31,11 @@ class Untangler {
  public:
   Untangler(SheetTriangles& st, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
             double max_move)
-      : st_(st), v_(v), on_face_(on_face), max_move_(max_move) {}
+      : st_(st), v_(v), on_face_(on_face), base_move_(max_move), max_move_(max_move) {}
 
   UntangleStats Run() {
     UntangleStats stats;
-    for (int round = 0; round < kMaxRounds; ++round) {
+    for (int round = 0; round < kMaxRounds + 2; ++round) {
       TriangleMesh mesh;
       mesh.vertices = v_;
       mesh.faces = st_.faces;
@@ -47,9 +48,22 @@ class Untangler {
       uint32_t mended = 0;
       for (const auto& [a, b] : pairs) {
         if (touched[a] || touched[b]) continue;
-        if (MoveAVertex(a, b, &touched, &stats) || FlipAnEdge(a, b, &touched, &stats)) ++mended;
+        if (MoveAVertex(a, b, &touched, &stats) || FlipAnEdge(a, b, &touched, &stats)) {
+          ++mended;
+        } else if (SplitAtCrossing(a, b, &stats)) {
+          ++mended;
+          break;  // the faces and their index changed: the next round looks again
+        } else if (max_move_ >= 3 * base_move_ && RetriangulatePatch(a, b, &stats)) {
+          ++mended;
+          break;  // the faces and their index changed: the next round looks again
+        }
       }
-      if (mended == 0) break;
+      if (mended == 0) {
+        // What small moves cannot mend may need a larger one: up to three times the cap,
+        // after everything else has been tried at the smaller.
+        if (max_move_ >= 3 * base_move_) break;
+        max_move_ += base_move_;
+      }
     }
     return stats;
   }
@@ -77,18 +91,20 @@ class Untangler {
 
   // Whether the faces in `changed` (as they are now in v_/st_) clash with any face, or a
   // face of them is a sliver or faces away from `normals` (the sheet's side there).
-  bool Clean(const std::vector<uint32_t>& changed, const std::vector<Vec3>& normals) {
+  bool Clean(const std::vector<uint32_t>& changed, const std::vector<Vec3>& normals,
+             const std::vector<uint8_t>& gone = {}, double min_angle = kMinMovedAngle) {
     absl::flat_hash_set<uint32_t> own(changed.begin(), changed.end());
     for (size_t i = 0; i < changed.size(); ++i) {
       const Face& f = st_.faces[changed[i]];
       const Triangle t = TriangleOf(v_, f);
-      if (MinAngleDegrees(t) < kMinMovedAngle) return false;
+      if (MinAngleDegrees(t) < min_angle) return false;
       if (Dot(UnitNormal(t), normals[i]) <= 0) return false;
       Vec3 lo, hi;
       TriangleBox(t, 0.0, &lo, &hi);
       bool clash = false;
       grid_.Query(lo, hi, [&](uint32_t g) {
         if (clash || g == changed[i] || (own.contains(g) && g < changed[i])) return;
+        if (g < gone.size() && gone[g]) return;
         clash = FacesClash(v_, f, st_.faces[g], 1.0);
       });
       if (clash) return false;
@@ -201,6 +217,262 @@ class Untangler {
     return false;
   }
 
+  // Two triangles that share one corner p and cross beyond it (their planes' line through p
+  // runs inside both) meet along a segment p-q, q where the line leaves the first of them
+  // (on its edge opposite p). Both are split there so that p-q is an edge of each: the one
+  // left at q along its edge (with the triangle across that edge), the other at q along its
+  // edge too, or around q where q lies inside it. They then meet in an edge, as crossing
+  // sheets must in the PLC; the surface stays where it was.
+  bool SplitAtCrossing(uint32_t a, uint32_t b, UntangleStats* stats) {
+    const Face fa = st_.faces[a], fb = st_.faces[b];
+    uint32_t p = UINT32_MAX;
+    int shared = 0;
+    for (uint32_t x : fa)
+      for (uint32_t y : fb)
+        if (x == y) p = x, ++shared;
+    if (shared != 1) return false;
+    auto rotate = [&](const Face& f) {  // f as (p, next, next)
+      int k = 0;
+      while (f[k] != p) ++k;
+      return Face{f[k], f[(k + 1) % 3], f[(k + 2) % 3]};
+    };
+    const Face ra = rotate(fa), rb = rotate(fb);
+    const Vec3 P = v_[p];
+    const Vec3 na = AreaVector(TriangleOf(v_, fa)), nb = AreaVector(TriangleOf(v_, fb));
+    Vec3 line = Cross(na, nb);
+    if (!(Norm(line) > 1e-12 * Norm(na) * Norm(nb))) return false;  // coplanar: not here
+    line = Normalized(line);
+    // Where a ray from P along d leaves triangle (P, x, y) through its edge x-y: the ray's
+    // parameter and the edge's, by least squares in the triangle's plane.
+    auto exit = [&](const Face& f, const Vec3& d, double* t, double* u) {
+      const Vec3 x = v_[f[1]], y = v_[f[2]];
+      // P + t d = x + u (y - x): two unknowns, three equations.
+      const Vec3 e = y - x, r = x - P;
+      const double dd = Dot(d, d), de = Dot(d, e), ee = Dot(e, e), dr = Dot(d, r), er = Dot(e, r);
+      const double det = dd * ee - de * de;
+      if (!(std::abs(det) > 1e-12 * dd * ee)) return false;
+      *t = (dr * ee - de * er) / det;
+      *u = (de * dr - dd * er) / det;
+      return *t > 0 && *u >= 0 && *u <= 1;
+    };
+    for (const Vec3& d : {line, line * -1.0}) {
+      double ta, ua, tb, ub;
+      if (!exit(ra, d, &ta, &ua) || !exit(rb, d, &tb, &ub)) continue;
+      // The first to be left is split along its edge; the other along its edge too if it
+      // is left there as well, else around q inside it.
+      const bool a_first = ta <= tb;
+      const Face& edge_split = a_first ? ra : rb;
+      const Face& other = a_first ? rb : ra;
+      const uint32_t f_edge = a_first ? a : b, f_other = a_first ? b : a;
+      const double t_edge = std::min(ta, tb), t_other = std::max(ta, tb);
+      const double u_edge = a_first ? ua : ub, u_other = a_first ? ub : ua;
+      const Vec3 q = P + d * t_edge;
+      // Too near a corner, the pieces would be slivers: a move mends that better.
+      const double len = Norm(v_[edge_split[2]] - v_[edge_split[1]]);
+      if (u_edge * len < 0.05 || (1 - u_edge) * len < 0.05) continue;
+      const bool on_other_edge = (t_other - t_edge) < 1e-6 * (1 + t_other);
+      return Split(f_edge, edge_split, f_other, other, q, on_other_edge ? u_other : -1, stats);
+    }
+    return false;
+  }
+
+  // Makes the splits SplitAtCrossing chose, keeping them where they leave no clash.
+  bool Split(uint32_t f_edge, const Face& edge_split, uint32_t f_other, const Face& other,
+             const Vec3& q, double u_other, UntangleStats* stats) {
+    const size_t faces_before = st_.faces.size();
+    const std::vector<Face> saved = st_.faces;
+    const uint32_t qi = static_cast<uint32_t>(v_.size());
+    v_.push_back(q);
+    std::vector<uint32_t> changed, origin;  // each changed face, and the face it came from
+    auto add = [&](uint32_t like, const Face& f) {
+      st_.faces.push_back(f);
+      st_.source.push_back(st_.source[like]);
+      st_.piece.push_back(st_.piece[like]);
+      st_.thickness.push_back(st_.thickness[like]);
+      changed.push_back(static_cast<uint32_t>(st_.faces.size() - 1));
+      origin.push_back(like);
+    };
+    auto replace = [&](uint32_t f, const Face& with) {
+      st_.faces[f] = with;
+      changed.push_back(f);
+      origin.push_back(f);
+    };
+    // Face f = (w, x, y) with x-y the edge split at q: (w, x, q) and (w, q, y).
+    auto split_edge = [&](uint32_t f, const Face& wxy) {
+      replace(f, {wxy[0], wxy[1], qi});
+      add(f, {wxy[0], qi, wxy[2]});
+    };
+    // The faces across edge x-y of face f, turned so that the edge comes second and third.
+    auto across = [&](uint32_t f, uint32_t x, uint32_t y) {
+      std::vector<std::pair<uint32_t, Face>> out;
+      for (uint32_t g : around_[x]) {
+        if (g == f) continue;
+        const Face& gf = st_.faces[g];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t r0 = gf[k], r1 = gf[(k + 1) % 3], w = gf[(k + 2) % 3];
+          if ((r0 == x && r1 == y) || (r0 == y && r1 == x)) out.push_back({g, Face{w, r0, r1}});
+        }
+      }
+      return out;
+    };
+    const auto neighbours_e = across(f_edge, edge_split[1], edge_split[2]);
+    const auto neighbours_o = across(f_other, other[1], other[2]);
+    split_edge(f_edge, edge_split);
+    for (const auto& [g, wxy] : neighbours_e) {
+      if (g != f_other) split_edge(g, wxy);
+    }
+    if (u_other >= 0) {
+      split_edge(f_other, other);
+      for (const auto& [g, wxy] : neighbours_o) {
+        if (g != f_edge) split_edge(g, wxy);
+      }
+    } else {
+      replace(f_other, {other[0], other[1], qi});
+      add(f_other, {other[1], other[2], qi});
+      add(f_other, {other[2], other[0], qi});
+    }
+    GrowGrid(changed);
+    // Each piece keeps the side of the face it came from.
+    std::vector<Vec3> normals;
+    for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
+    if (Clean(changed, normals, {}, kMinSplitAngle)) {
+      ++stats->split_crossings;
+      return true;
+    }
+    st_.faces = saved;
+    st_.source.resize(faces_before);
+    st_.piece.resize(faces_before);
+    st_.thickness.resize(faces_before);
+    v_.pop_back();
+    return false;
+  }
+
+  // Replaces the faces around the pair (every face of one piece at a corner of a or b) by
+  // a fan from one new vertex to the patch's outline, where the outline is one loop and
+  // the fan clashes with nothing: the patch's surface is kept, its tangle gone.
+  bool RetriangulatePatch(uint32_t a, uint32_t b, UntangleStats* stats) {
+    for (uint32_t seed : {a, b}) {
+      const int32_t piece = st_.piece[seed];
+      std::vector<uint32_t> patch;
+      for (uint32_t f : {a, b}) {
+        if (st_.piece[f] != piece) continue;
+        for (uint32_t u : st_.faces[f]) {
+          for (uint32_t g : around_[u]) {
+            if (st_.piece[g] == piece && std::find(patch.begin(), patch.end(), g) == patch.end()) {
+              patch.push_back(g);
+            }
+          }
+        }
+      }
+      // The outline: directed edges of the patch that no other patch face has reversed.
+      std::vector<std::pair<uint32_t, uint32_t>> outline;
+      for (uint32_t f : patch) {
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t x = st_.faces[f][k], y = st_.faces[f][(k + 1) % 3];
+          int uses = 0;
+          for (uint32_t g : patch) {
+            const Face& gf = st_.faces[g];
+            for (int j = 0; j < 3; ++j) {
+              const uint32_t p = gf[j], q = gf[(j + 1) % 3];
+              uses += (p == x && q == y) || (p == y && q == x);
+            }
+          }
+          if (uses == 1) outline.emplace_back(x, y);
+        }
+      }
+      // One simple loop, in order.
+      std::vector<uint32_t> loop;
+      if (outline.size() < 3) continue;
+      loop.push_back(outline[0].first);
+      uint32_t at = outline[0].second;
+      bool simple = true;
+      while (at != loop[0] && simple) {
+        int next = -1, count = 0;
+        for (size_t e = 0; e < outline.size(); ++e) {
+          if (outline[e].first == at) next = static_cast<int>(e), ++count;
+        }
+        simple = count == 1 && loop.size() < outline.size();
+        if (!simple) break;
+        loop.push_back(at);
+        at = outline[next].second;
+      }
+      if (!simple || loop.size() != outline.size()) continue;
+      // The patch's side, thickness and place.
+      Vec3 side(0, 0, 0), middle(0, 0, 0);
+      double area = 0, thick = 0;
+      for (uint32_t f : patch) {
+        const Triangle t = TriangleOf(v_, st_.faces[f]);
+        side = side + AreaVector(t);
+        area += Area(t);
+        thick += Area(t) * st_.thickness[f];
+      }
+      side = Normalized(side);
+      for (uint32_t u : loop) middle = middle + v_[u];
+      middle = middle * (1.0 / loop.size());
+      const std::vector<Face> old_faces = [&] {
+        std::vector<Face> o;
+        for (uint32_t f : patch) o.push_back(st_.faces[f]);
+        return o;
+      }();
+      const uint32_t centre = static_cast<uint32_t>(v_.size());
+      v_.push_back(middle);
+      std::vector<Face> fan;
+      for (size_t k = 0; k < loop.size(); ++k) {
+        fan.push_back({loop[k], loop[(k + 1) % loop.size()], centre});
+      }
+      // Patch faces first take the fan's faces; the rest of the fan is appended, the rest
+      // of the patch removed at the end.
+      std::vector<uint32_t> changed;
+      const size_t keep = std::min(patch.size(), fan.size());
+      for (size_t k = 0; k < keep; ++k) st_.faces[patch[k]] = fan[k], changed.push_back(patch[k]);
+      const size_t before = st_.faces.size();
+      for (size_t k = keep; k < fan.size(); ++k) {
+        st_.faces.push_back(fan[k]);
+        st_.source.push_back(st_.source[patch[0]]);
+        st_.piece.push_back(piece);
+        st_.thickness.push_back(st_.thickness[patch[0]]);
+        changed.push_back(static_cast<uint32_t>(st_.faces.size() - 1));
+      }
+      std::vector<uint8_t> gone(st_.faces.size(), 0);
+      for (size_t k = keep; k < patch.size(); ++k) gone[patch[k]] = 1;
+      // A removed face must not count as a clash partner: it becomes the centre alone.
+      for (size_t k = keep; k < patch.size(); ++k) st_.faces[patch[k]] = {centre, centre, centre};
+      GrowGrid(changed);
+      const std::vector<Vec3> normals(changed.size(), side);
+      if (Clean(changed, normals, gone)) {
+        for (uint32_t f : changed) st_.thickness[f] = static_cast<float>(thick / area);
+        SheetTriangles kept;
+        for (size_t f = 0; f < st_.faces.size(); ++f) {
+          if (gone[f]) continue;
+          kept.faces.push_back(st_.faces[f]);
+          kept.source.push_back(st_.source[f]);
+          kept.piece.push_back(st_.piece[f]);
+          kept.thickness.push_back(st_.thickness[f]);
+        }
+        st_ = std::move(kept);
+        ++stats->retriangulated_patches;
+        return true;
+      }
+      // Undone.
+      for (size_t k = 0; k < patch.size(); ++k) st_.faces[patch[k]] = old_faces[k];
+      st_.faces.resize(before);
+      st_.source.resize(before);
+      st_.piece.resize(before);
+      st_.thickness.resize(before);
+      v_.pop_back();
+    }
+    return false;
+  }
+
+  // Puts faces added since Index() into the grid.
+  void GrowGrid(const std::vector<uint32_t>& faces) {
+    for (uint32_t f : faces) {
+      Vec3 lo, hi;
+      TriangleBox(TriangleOf(v_, st_.faces[f]), 2 * max_move_, &lo, &hi);
+      grid_.Insert(f, lo, hi);
+    }
+  }
+
   // Face f changed its corners from `old`: the vertex index follows.
   void Reindex(uint32_t f, const Face& old) {
     for (uint32_t u : old) {
@@ -213,6 +485,7 @@ class Untangler {
   SheetTriangles& st_;
   std::vector<Vec3>& v_;
   const std::vector<uint8_t>& on_face_;
+  const double base_move_;
   double max_move_;
   std::vector<std::vector<uint32_t>> around_;
   SpatialGrid grid_{1.0};

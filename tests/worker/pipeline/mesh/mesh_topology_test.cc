@@ -111,5 +111,24 @@ TEST(TriangleGeometryTest, IntersectionAndDistance) {
   EXPECT_NEAR(MinAngleDegrees(a), 45.0, 1e-9);
 }
 
+TEST(MeshTopologyTest, WedgesSharingAVertexOverlapWhereTheirPlanesLineEntersBoth) {
+  const Vec3 p(0, 0, 0);
+  // T1 in z = 0 spanning 0..90 degrees; T2 stands on the diagonal (1, 1, 0), so their planes
+  // meet along it, inside both: they share more than p.
+  EXPECT_TRUE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {3, 3, -2}, {3, 3, 2}));
+  // T2 standing on the diagonal (-1, 1, 0): outside T1's angle.
+  EXPECT_FALSE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {-3, 3, -2}, {-3, 3, 2}));
+  // T2 standing on T1's edge direction (1, 0, 0): a touch along the edge counts.
+  EXPECT_TRUE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {3, 0, -2}, {3, 0, 2}));
+  // T2 above T1's plane only, leaning over it: the planes meet outside both angles.
+  EXPECT_FALSE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {-2, -1, 3}, {-1, -2, 3}));
+  // In one plane: disjoint angles, then overlapping ones, then an identical one.
+  EXPECT_FALSE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {-4, 0, 0}, {0, -4, 0}));
+  EXPECT_TRUE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {3, 1, 0}, {-4, 1, 0}));
+  EXPECT_TRUE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {0, 5, 0}, {5, 0, 0}));
+  // Neighbours in one plane (adjacent angles meeting along an edge) do not overlap.
+  EXPECT_FALSE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {0, 4, 0}, {-4, 0, 0}));
+}
+
 }  // namespace
 }  // namespace sheetmesh

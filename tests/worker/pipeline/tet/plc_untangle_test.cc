@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/plc_parts.h"
 
 namespace sheetmesh {
@@ -27,14 +28,14 @@ size_t Clashes(const SheetTriangles& s, const std::vector<Vec3>& v) {
 }
 
 TEST(PlcUntangleTest, AFanFoldedOverItselfAtAVertexIsMendedByAMove) {
-  // A fan of 6 triangles around c in the plane z = 5; rim vertex 1 pushed past vertex 2, so
-  // that the triangles (c, 0, 1) and (c, 1, 2) overlap beyond c.
+  // A fan of 6 triangles around c in the plane z = 5; rim vertex 2 pushed a little past
+  // vertex 3, so that the triangle (c, 2, 3) turns over onto its neighbours.
   std::vector<Vec3> v = {{10, 10, 5}};  // c
   for (int k = 0; k < 6; ++k) {
     const double a = k * M_PI / 3;
     v.push_back({10 + 4 * std::cos(a), 10 + 4 * std::sin(a), 5});
   }
-  v[2] = {10 + 4 * std::cos(2.3), 10 + 4 * std::sin(2.3), 5};  // past vertex 3's angle
+  v[2] = {10 + 4 * std::cos(2.1), 10 + 4 * std::sin(2.1), 5};  // 0.4 voxels past vertex 3
   v[3] = {10 + 4 * std::cos(2.0), 10 + 4 * std::sin(2.0), 5};
   std::vector<Face> faces;
   for (uint32_t k = 0; k < 6; ++k) faces.push_back({0, 1 + k, 1 + (k + 1) % 6});
@@ -90,6 +91,37 @@ TEST(PlcUntangleTest, AVertexOnABoxFaceStaysOnIt) {
   EXPECT_EQ(u.remaining_pairs, 0u);
   EXPECT_EQ(v[4].x, -0.5);
   EXPECT_EQ(Clashes(s, v), 0u);
+}
+
+}  // namespace
+}  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+TEST(PlcUntangleTest, TwoTrianglesCrossingBeyondASharedCornerAreSplitToMeetInAnEdge) {
+  // Two triangles sharing p = (0, 0, 0), in planes 60 degrees apart, crossing along the
+  // x axis for 6 voxels: no small move undoes that; both are split at the crossing's end
+  // q = (6, 0, 0) (B's edge there, A around it) and meet in the edge p-q.
+  std::vector<Vec3> v = {{0, 0, 0},
+                         {10, -4, 0},
+                         {10, 4, 0},  // A, in z = 0
+                         {6, -3, -5.2},
+                         {6, 3, 5.2}};  // B, tilted about x
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 3, 4}}, {0, 1});
+  ASSERT_EQ(Clashes(s, v), 1u);
+  const std::vector<uint8_t> on_face(v.size(), 0);
+  const UntangleStats u = Untangle(s, v, on_face, 0.5);
+  EXPECT_EQ(u.remaining_pairs, 0u);
+  EXPECT_EQ(u.split_crossings, 1u);
+  EXPECT_EQ(Clashes(s, v), 0u);
+  EXPECT_EQ(s.faces.size(), 2u + 1u + 2u) << "A in three around q, B in two along its edge";
+  ASSERT_EQ(v.size(), 6u);
+  EXPECT_NEAR(Norm(v[5] - Vec3(6, 0, 0)), 0.0, 1e-9);
+  // The pieces cover what the two covered.
+  double area = 0;
+  for (const Face& f : s.faces) area += Area({v[f[0]], v[f[1]], v[f[2]]});
+  EXPECT_NEAR(area, Area({v[0], v[1], v[2]}) + Area({v[0], v[3], v[4]}), 1e-9);
 }
 
 }  // namespace

@@ -393,7 +393,7 @@ TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
   }
 }
 
-TEST(VolumeMesherTest, RepairRemovesASimpleClash) {
+TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
   // One small triangle cutting through a sheet: removing it is the whole repair.
   TriangleMesh m = Square(4, 15, 10, 2);
   const uint32_t base = static_cast<uint32_t>(m.vertices.size());
@@ -403,9 +403,16 @@ TEST(VolumeMesherTest, RepairRemovesASimpleClash) {
   m.faces.push_back({base, base + 1, base + 2});
   m.face_piece.push_back(1);
   m.face_thickness.push_back(1);
-  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, {}),
-              StatusIs(absl::StatusCode::kFailedPrecondition));
+  // By default it is untangled: moved off the sheet, nothing removed.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult kept, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
+  EXPECT_EQ(kept.clashing_pairs, 1u);
+  EXPECT_EQ(kept.repaired_triangles, 0u);
+  EXPECT_EQ(kept.conformity.sheet_triangles, 9u);
+  // Without untangling the clash is refused, or, with repair, the triangle goes.
   VolumeMeshOptions o;
+  o.plc.untangle_voxels = 0;
+  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kFailedPrecondition));
   o.plc.repair = true;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
   EXPECT_EQ(r.repaired_triangles, 1u);

@@ -20,7 +20,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev clang libfuzzer-14-dev
   # Python tooling (always run with /usr/bin/python3)
   python3 python3-numpy python3-scipy python3-vtk9 python3-skimage python3-meshio
-  python3-grpcio python3-protobuf python3-yaml
+  python3-grpcio python3-protobuf python3-yaml python3-pygalmesh python3-matplotlib
   # the HTTP gateway (Go in GOPATH mode, no module downloads), previews, browser tests
   golang-go golang-grpc-gateway golang-github-grpc-ecosystem-grpc-gateway-dev
   golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev libpng-dev chromium

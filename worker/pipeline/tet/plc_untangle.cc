@@ -10,6 +10,7 @@
 #include <cmath>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
@@ -44,13 +45,16 @@ class Untangler {
       if (round == 0) stats.found_pairs = stats.remaining_pairs;
       if (pairs.empty()) break;
       Index();
+      clashing_.clear();
+      for (const auto& [a, b] : pairs) clashing_.insert(PairKey(a, b));
       std::vector<uint8_t> touched(st_.faces.size(), 0);
       uint32_t mended = 0;
       for (const auto& [a, b] : pairs) {
         if (touched[a] || touched[b]) continue;
+        target_ = PairKey(a, b);
         if (MoveAVertex(a, b, &touched, &stats) || FlipAnEdge(a, b, &touched, &stats)) {
           ++mended;
-        } else if (SplitAtCrossing(a, b, &stats)) {
+        } else if (SplitAtCrossing(a, b, &stats) || SplitThroughCrossing(a, b, &stats)) {
           ++mended;
           break;  // the faces and their index changed: the next round looks again
         } else if (max_move_ >= 3 * base_move_ && RetriangulatePatch(a, b, &stats)) {
@@ -92,8 +96,12 @@ class Untangler {
   // Whether the faces in `changed` (as they are now in v_/st_) clash with any face, or a
   // face of them is a sliver or faces away from `normals` (the sheet's side there).
   bool Clean(const std::vector<uint32_t>& changed, const std::vector<Vec3>& normals,
-             const std::vector<uint8_t>& gone = {}, double min_angle = kMinMovedAngle) {
-    absl::flat_hash_set<uint32_t> own(changed.begin(), changed.end());
+             const std::vector<uint8_t>& gone = {}, double min_angle = kMinMovedAngle,
+             const std::vector<uint32_t>& origins = {}) {
+    absl::flat_hash_map<uint32_t, uint32_t> origin_of;  // changed face -> the face it was
+    for (size_t i = 0; i < changed.size(); ++i) {
+      origin_of[changed[i]] = origins.empty() ? changed[i] : origins[i];
+    }
     for (size_t i = 0; i < changed.size(); ++i) {
       const Face& f = st_.faces[changed[i]];
       const Triangle t = TriangleOf(v_, f);
@@ -102,14 +110,25 @@ class Untangler {
       Vec3 lo, hi;
       TriangleBox(t, 0.0, &lo, &hi);
       bool clash = false;
+      const uint32_t of = origin_of[changed[i]];
       grid_.Query(lo, hi, [&](uint32_t g) {
-        if (clash || g == changed[i] || (own.contains(g) && g < changed[i])) return;
+        if (clash || g == changed[i]) return;
+        const auto own = origin_of.find(g);
+        if (own != origin_of.end() && g < changed[i]) return;  // that pair was looked at
         if (g < gone.size() && gone[g]) return;
-        clash = FacesClash(v_, f, st_.faces[g], 1.0);
+        if (!FacesClash(v_, f, st_.faces[g], 1.0)) return;
+        // A clash the faces they came from had already is another pair's to mend; the
+        // pair being mended, or a new clash, is not allowed.
+        const uint32_t og = own != origin_of.end() ? own->second : g;
+        clash = PairKey(of, og) == target_ || !clashing_.contains(PairKey(of, og));
       });
       if (clash) return false;
     }
     return true;
+  }
+
+  static uint64_t PairKey(uint32_t x, uint32_t y) {
+    return (uint64_t{std::min(x, y)} << 32) | std::max(x, y);
   }
 
   // Moves one vertex of the pair so that neither of its faces clashes with anything.
@@ -276,6 +295,165 @@ class Untangler {
     return false;
   }
 
+  // Two triangles sharing no corner that cut through each other meet along a segment s-e
+  // whose ends lie on edges of the one or the other. Each end is added to both: on an edge
+  // (with the triangle across it) where it lies on one, else inside; s-e is then an edge of
+  // both triangulations (the second end lands in a piece that has the first as a corner).
+  bool SplitThroughCrossing(uint32_t a, uint32_t b, UntangleStats* stats) {
+    const Face fa = st_.faces[a], fb = st_.faces[b];
+    for (uint32_t x : fa)
+      for (uint32_t y : fb)
+        if (x == y) return false;
+    // Where the edges of one cross the other: the points, and which triangle's edge each is
+    // on.
+    struct Cut {
+      Vec3 p;
+      bool on_a;  // on an edge of a (inside b), else on an edge of b (inside a)
+    };
+    std::vector<Cut> cuts;
+    auto cross = [&](const Face& edges, const Face& tri, bool on_a) {
+      const Triangle t = TriangleOf(v_, tri);
+      const Vec3 n = AreaVector(t);
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 p0 = v_[edges[k]], p1 = v_[edges[(k + 1) % 3]];
+        const double d0 = Dot(p0 - t[0], n), d1 = Dot(p1 - t[0], n);
+        if ((d0 > 0) == (d1 > 0) || d0 == d1) continue;
+        const Vec3 q = p0 + (p1 - p0) * (d0 / (d0 - d1));
+        double u, w, x;
+        if (!ProjectBarycentric(q, t, &u, &w, &x) || u < 0 || w < 0 || x < 0) continue;
+        cuts.push_back({q, on_a});
+      }
+    };
+    cross(fa, fb, true);
+    cross(fb, fa, false);
+    if (cuts.size() < 2) return false;
+    // The segment: the two cuts farthest apart.
+    size_t i0 = 0, i1 = 1;
+    double best = -1;
+    for (size_t i = 0; i < cuts.size(); ++i)
+      for (size_t j = i + 1; j < cuts.size(); ++j)
+        if (Norm2(cuts[i].p - cuts[j].p) > best)
+          best = Norm2(cuts[i].p - cuts[j].p), i0 = i, i1 = j;
+    if (best < 0.05 * 0.05) return false;  // a graze: a move mends it better
+    const size_t faces_before = st_.faces.size();
+    const std::vector<Face> saved = st_.faces;
+    const size_t vertices_before = v_.size();
+    std::vector<uint32_t> changed, origin;
+    const uint32_t s_id = static_cast<uint32_t>(v_.size());
+    v_.push_back(cuts[i0].p);
+    v_.push_back(cuts[i1].p);
+    const uint32_t e_id = s_id + 1;
+    bool ok = true;
+    for (uint32_t tri : {a, b}) {
+      // The pieces of this triangle so far (it and what splitting it adds).
+      std::vector<uint32_t> pieces = {tri};
+      for (uint32_t q : {s_id, e_id}) {
+        if (!ok) break;
+        ok = InsertPoint(q, &pieces, &changed, &origin);
+      }
+      if (!ok) break;
+      bool joined = false;  // s-e is an edge of a piece
+      for (uint32_t f : pieces) {
+        const Face& pf = st_.faces[f];
+        const bool has_s = std::find(pf.begin(), pf.end(), s_id) != pf.end();
+        const bool has_e = std::find(pf.begin(), pf.end(), e_id) != pf.end();
+        joined = joined || (has_s && has_e);
+      }
+      ok = joined;
+    }
+    if (ok) {
+      GrowGrid(changed);
+      std::vector<Vec3> normals;
+      for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
+      if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
+        ++stats->split_crossings;
+        return true;
+      }
+    }
+    st_.faces = saved;
+    st_.source.resize(faces_before);
+    st_.piece.resize(faces_before);
+    st_.thickness.resize(faces_before);
+    v_.resize(vertices_before);
+    return false;
+  }
+
+  // Adds vertex q (already in v_) to the piece of `pieces` it lies in: on the piece's edge
+  // (splitting the face across it too, which joins `pieces` when it is one of them) or
+  // inside it. Records what changed. False where q lies in none.
+  bool InsertPoint(uint32_t q, std::vector<uint32_t>* pieces, std::vector<uint32_t>* changed,
+                   std::vector<uint32_t>* origin) {
+    const Vec3& p = v_[q];
+    auto record = [&](uint32_t f, uint32_t from) {
+      if (std::find(changed->begin(), changed->end(), f) == changed->end()) {
+        changed->push_back(f);
+        origin->push_back(from);
+      }
+    };
+    auto add = [&](uint32_t like, const Face& f) {
+      const uint32_t from = OriginOf(like, *changed, *origin);
+      st_.faces.push_back(f);
+      st_.source.push_back(st_.source[like]);
+      st_.piece.push_back(st_.piece[like]);
+      st_.thickness.push_back(st_.thickness[like]);
+      const uint32_t id = static_cast<uint32_t>(st_.faces.size() - 1);
+      record(id, from);
+      return id;
+    };
+    for (uint32_t f : *pieces) {
+      const Face face = st_.faces[f];
+      double u[3];
+      if (!ProjectBarycentric(p, TriangleOf(v_, face), &u[0], &u[1], &u[2])) continue;
+      const double tol = 1e-9;
+      if (u[0] < -tol || u[1] < -tol || u[2] < -tol) continue;
+      const uint32_t from = OriginOf(f, *changed, *origin);
+      // On an edge: the corner opposite has a barycentric coordinate of (nearly) 0.
+      int opposite = -1;
+      for (int k = 0; k < 3; ++k) {
+        if (std::abs(u[k]) <= 1e-7) opposite = k;
+      }
+      if (opposite < 0) {
+        st_.faces[f] = {face[0], face[1], q};
+        record(f, from);
+        pieces->push_back(add(f, {face[1], face[2], q}));
+        pieces->push_back(add(f, {face[2], face[0], q}));
+        return true;
+      }
+      const uint32_t w = face[opposite], x = face[(opposite + 1) % 3], y = face[(opposite + 2) % 3];
+      // The faces across x-y (this piece's neighbours in the sheet), split there too.
+      std::vector<std::pair<uint32_t, Face>> across;
+      for (uint32_t g = 0; g < st_.faces.size(); ++g) {
+        if (g == f) continue;
+        const Face& gf = st_.faces[g];
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t r0 = gf[k], r1 = gf[(k + 1) % 3], r2 = gf[(k + 2) % 3];
+          if ((r0 == x && r1 == y) || (r0 == y && r1 == x)) across.push_back({g, Face{r2, r0, r1}});
+        }
+      }
+      st_.faces[f] = {w, x, q};
+      record(f, from);
+      pieces->push_back(add(f, {w, q, y}));
+      for (const auto& [g, wxy] : across) {
+        const uint32_t gfrom = OriginOf(g, *changed, *origin);
+        st_.faces[g] = {wxy[0], wxy[1], q};
+        record(g, gfrom);
+        const uint32_t h = add(g, {wxy[0], q, wxy[2]});
+        if (std::find(pieces->begin(), pieces->end(), g) != pieces->end()) pieces->push_back(h);
+      }
+      return true;
+    }
+    return false;
+  }
+
+  // The face f came from before this split began: itself, unless it was made by it.
+  static uint32_t OriginOf(uint32_t f, const std::vector<uint32_t>& changed,
+                           const std::vector<uint32_t>& origin) {
+    for (size_t i = 0; i < changed.size(); ++i) {
+      if (changed[i] == f) return origin[i];
+    }
+    return f;
+  }
+
   // Makes the splits SplitAtCrossing chose, keeping them where they leave no clash.
   bool Split(uint32_t f_edge, const Face& edge_split, uint32_t f_other, const Face& other,
              const Vec3& q, double u_other, UntangleStats* stats) {
@@ -335,7 +513,7 @@ class Untangler {
     // Each piece keeps the side of the face it came from.
     std::vector<Vec3> normals;
     for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
-    if (Clean(changed, normals, {}, kMinSplitAngle)) {
+    if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
       ++stats->split_crossings;
       return true;
     }
@@ -489,6 +667,8 @@ class Untangler {
   double max_move_;
   std::vector<std::vector<uint32_t>> around_;
   SpatialGrid grid_{1.0};
+  absl::flat_hash_set<uint64_t> clashing_;  // the round's clashing pairs, by PairKey
+  uint64_t target_ = 0;                     // the pair being mended
 };
 
 }  // namespace

@@ -81,7 +81,8 @@ TEST(TetgenRunnerTest, ATetgenCrashIsRecoveredWithOtherSwitchesAndReported) {
   VolumeMeshOptions o;
   o.tetgen.failed_plc_path = tmp.File("failed.poly");
   // Crashes whenever asked to refine (-q) and to add no point on the facets (-Y).
-  o.tetgen.program = FakeTetgen(tmp, "case \"$1\" in *q*Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
+  o.tetgen.program =
+      FakeTetgen(tmp, "case \"$1\" in *q*Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
                           BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
   ASSERT_EQ(r.tetgen_recovery.size(), 1u);

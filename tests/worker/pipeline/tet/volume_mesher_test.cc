@@ -374,17 +374,24 @@ TEST(VolumeMesherTest, ATetrahedronBudgetCoarsensTheLatticeAndOneTooSmallNamesTh
   EXPECT_EQ(e.conformity.conforming, e.conformity.sheet_triangles);
 }
 
-TEST(VolumeMesherTest, IntersectingFacetsAreReportedNotPassedOn) {
-  // A vertical square piercing a horizontal one without sharing edges.
+TEST(VolumeMesherTest, SheetsPiercingEachOtherMeetAlongTheirCrossingInTheMesh) {
+  // A vertical square piercing a horizontal one without sharing edges: the triangles are
+  // split along the crossing, so that the two sheets meet in edges there, and mesh.
   TriangleMesh m = Append(Square(4, 15, 10, 2), Square(5, 14, 9.5, 2, 1, 3, /*axis=*/0));
-  auto r = BuildVolumeMesh(m, {20, 20, 20}, {}, {});
-  EXPECT_THAT(r, StatusIs(absl::StatusCode::kFailedPrecondition,
-                          ::testing::AllOf(HasSubstr("intersect"), HasSubstr("triangles"))));
-  VolumeMeshOptions repair;
-  repair.plc.repair = true;
-  auto fixed = BuildVolumeMesh(m, {20, 20, 20}, {}, repair);
-  // Removing one triangle of each pair is not enough for a full piercing: still refused,
-  // with the reason, and nothing is passed to TetGen.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
+  EXPECT_GT(r.clashing_pairs, 0u);
+  EXPECT_GT(r.untangle_splits, 0u);
+  EXPECT_EQ(r.repaired_triangles, 0u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  // Without untangling the clashes are reported, and nothing is passed to TetGen; removing
+  // one triangle of each pair (repair) is not enough for a full piercing.
+  VolumeMeshOptions o;
+  o.plc.untangle_voxels = 0;
+  EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, o),
+              StatusIs(absl::StatusCode::kFailedPrecondition,
+                       ::testing::AllOf(HasSubstr("intersect"), HasSubstr("triangles"))));
+  o.plc.repair = true;
+  auto fixed = BuildVolumeMesh(m, {20, 20, 20}, {}, o);
   if (!fixed.ok()) {
     EXPECT_THAT(fixed,
                 StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("still intersect")));

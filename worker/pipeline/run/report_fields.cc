@@ -148,12 +148,13 @@ nlohmann::json PlcStats::Fields() const {
           {"merged_vertices", merged_vertices},
           {"dropped_triangles", dropped_triangles},
           {"repaired_triangles", repaired_triangles},
-          {"untangled", {{"clashing_pairs", clashing_pairs},
-                         {"moved_vertices", untangle_moves},
-                         {"flipped_edges", untangle_flips},
-                         {"split_crossings", untangle_splits},
-                         {"retriangulated_patches", untangle_patches},
-                         {"max_move_voxels", untangle_max_move}}},
+          {"untangled",
+           {{"clashing_pairs", clashing_pairs},
+            {"moved_vertices", untangle_moves},
+            {"flipped_edges", untangle_flips},
+            {"split_crossings", untangle_splits},
+            {"retriangulated_patches", untangle_patches},
+            {"max_move_voxels", untangle_max_move}}},
           {"flipped_edges", flipped_edges},
           {"dropped_caps", dropped_caps},
           {"dropped_overlaps", dropped_overlaps},
@@ -200,6 +201,11 @@ nlohmann::json VolumeMeshStats::Fields() const {
   j["conformity"] = conformity.Fields();
   j["quality"] = quality.Fields();
   j["improvement"] = improvement.Fields();
+  j["sliver_refinement"] = {{"min_dihedral_before", sliver_refinement.min_dihedral_before},
+                            {"slivers_on_sheets", sliver_refinement.slivers_on_sheets},
+                            {"rounds", sliver_refinement.rounds},
+                            {"split_edges", sliver_refinement.split_edges},
+                            {"stopped", sliver_refinement.stopped}};
   return j;
 }
 

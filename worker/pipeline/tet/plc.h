@@ -93,8 +93,8 @@ struct PlcOptions {
   // Sheet triangles that cut through each other are untangled first, by moving a vertex of
   // the pair at most this many voxels or flipping one of its edges (UntangleStats); 0: none.
   double untangle_voxels = 1.0;
-  bool repair = false;         // remove the clashing triangles untangling left (the smaller
-                               // of each pair) instead of failing
+  bool repair = false;  // remove the clashing triangles untangling left (the smaller
+                        // of each pair) instead of failing
   // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
   // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
   // are within flip_fold_degrees is flipped where that raises their smallest angle (0:
@@ -162,6 +162,13 @@ struct Clash {
 absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
                              const Placement& placement, const PlcOptions& options = {},
                              std::vector<Clash>* clashes = nullptr);
+
+// Bisects every edge of each marked sheet triangle (of plc->sheet_triangles) but those
+// lying in a box face, and with each edge every sheet triangle on it, at a new vertex in
+// its middle (appended to the vertices): the sheets keep their shape, their edges there
+// halve. The new triangles are appended, each with its facet, piece and thickness. Returns
+// the number of edges split.
+uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc);
 
 }  // namespace sheetmesh
 

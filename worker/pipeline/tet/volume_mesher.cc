@@ -247,6 +247,99 @@ absl::Status MeshWithinBudget(const TriangleMesh& sheets, const Dims& dims,
   }
 }
 
+// The PLC sheet triangles around the tetrahedra under `aim` degrees that have two or more
+// corners on the sheets (what the improvement left there it cannot mend: it moves no sheet
+// vertex, and a point it adds in a narrow gap between sheets lands as flat): every sheet
+// triangle with a face at such a corner. Counts those tetrahedra into *slivers.
+std::vector<uint8_t> SheetTrianglesAtSlivers(const Plc& plc, const TetMesh& mesh, double aim,
+                                             uint32_t* slivers) {
+  std::vector<std::vector<uint32_t>> sheet_of(mesh.nodes.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const int64_t t = int64_t{mesh.face_marker[f]} - kFirstSheetMarker;
+    if (t < 0 || t >= static_cast<int64_t>(plc.sheet_triangles.size())) continue;
+    for (uint32_t v : mesh.faces[f]) sheet_of[v].push_back(static_cast<uint32_t>(t));
+  }
+  std::vector<uint8_t> marked(plc.sheet_triangles.size(), 0);
+  *slivers = 0;
+  for (const Tet& t : mesh.tets) {
+    int on = 0;
+    for (uint32_t v : t) on += !sheet_of[v].empty();
+    if (on < 2) continue;
+    const Vec3 &a = mesh.nodes[t[0]], &b = mesh.nodes[t[1]], &c = mesh.nodes[t[2]],
+               &d = mesh.nodes[t[3]];
+    if (!(MeasureTet(a, b, c, d).min_dihedral_degrees < aim)) continue;
+    ++*slivers;
+    for (uint32_t v : t) {
+      for (uint32_t s : sheet_of[v]) marked[s] = 1;
+    }
+  }
+  return marked;
+}
+
+// TetGen's mesh made ready: sheet faces taken again where TetGen listed them wrongly, then
+// the improvement within the budget.
+absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Progress& progress,
+                    TetMesh* mesh, uint32_t* rederived, TetImproveReport* report) {
+  *rederived = RederiveFacetFaces(plc, mesh);
+  TetImproveOptions improve = options.improve;
+  improve.max_tetrahedra = options.max_tetrahedra;
+  return ImproveTetMesh(mesh, plc.box_lo, plc.box_hi, static_cast<uint32_t>(plc.vertices.size()),
+                        improve, report, progress);
+}
+
+// Where slivers pinned by the sheets are left (under tet.min_dihedral), the sheet
+// triangles around them are bisected and TetGen and the improvement run again on the finer
+// PLC; a round is kept while it raises the smallest angle within the budget. The sheets
+// keep their shape exactly (each new vertex is an edge's midpoint); only their edges there
+// get shorter.
+absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& progress, Plc* plc,
+                             VolumeMeshResult* r) {
+  constexpr int kRounds = 3;
+  constexpr double kMinGain = 0.1;  // degrees: a round that gains less is not kept
+  const double aim = options.tetgen.min_dihedral_degrees;
+  double worst = MeasureQuality(r->mesh).min_dihedral.min;
+  r->sliver_refinement.min_dihedral_before = worst;
+  for (int round = 0; round < kRounds && aim > 0 && worst < aim; ++round) {
+    const Progress step = progress.Sub(double(round) / kRounds, double(round + 1) / kRounds);
+    uint32_t slivers = 0;
+    const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(*plc, r->mesh, aim, &slivers);
+    if (round == 0) r->sliver_refinement.slivers_on_sheets = slivers;
+    Plc finer = *plc;
+    const uint32_t split = RefineSheetTriangles(marked, &finer);
+    if (split == 0) break;
+    VolumeMeshResult trial;
+    absl::StatusOr<TetMesh> mesh =
+        RunTetgenRecovering(finer, options.tetgen, step.Sub(0, 0.7), &trial);
+    if (!mesh.ok()) {
+      if (mesh.status().code() == absl::StatusCode::kCancelled) return mesh.status();
+      r->sliver_refinement.stopped =
+          absl::StrCat("TetGen: ", mesh.status().message().substr(0, 160));
+      break;
+    }
+    uint32_t rederived = 0;
+    TetImproveReport report;
+    SM_RETURN_IF_ERROR(Finish(finer, options, step.Sub(0.7, 1), &*mesh, &rederived, &report));
+    if (options.max_tetrahedra > 0 && mesh->tets.size() > options.max_tetrahedra) {
+      r->sliver_refinement.stopped = "the budget";
+      break;
+    }
+    const double now = MeasureQuality(*mesh).min_dihedral.min;
+    if (!(now > worst + kMinGain)) {
+      r->sliver_refinement.stopped = absl::StrCat("no gain (", now, " degrees)");
+      break;
+    }
+    worst = now;
+    *plc = std::move(finer);
+    r->mesh = *std::move(mesh);
+    r->rederived_facets = rederived;
+    r->improvement = report;
+    r->tetgen_tetrahedra = trial.tetgen_tetrahedra;
+    ++r->sliver_refinement.rounds;
+    r->sliver_refinement.split_edges += split;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
@@ -263,16 +356,13 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   Plc plc;
   SM_RETURN_IF_ERROR(
       MeshWithinBudget(sheets, dims, placement, options, progress, &plc_options, &plc, &r));
-  static_cast<PlcStats&>(r) = plc;
   r.lattice = plc_options.lattice;
   r.grading = plc_options.grading;
   r.tetgen_tetrahedra = r.mesh.tets.size();
-  r.rederived_facets = RederiveFacetFaces(plc, &r.mesh);
-  TetImproveOptions improve = options.improve;
-  improve.max_tetrahedra = options.max_tetrahedra;
-  SM_RETURN_IF_ERROR(ImproveTetMesh(&r.mesh, plc.box_lo, plc.box_hi,
-                                    static_cast<uint32_t>(plc.vertices.size()), improve,
-                                    &r.improvement, progress.Sub(0.9, 0.98)));
+  SM_RETURN_IF_ERROR(
+      Finish(plc, options, progress.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets, &r.improvement));
+  SM_RETURN_IF_ERROR(RefineAtSlivers(options, progress.Sub(0.95, 0.99), &plc, &r));
+  static_cast<PlcStats&>(r) = plc;
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.orphan_faces > 0) {
     return absl::InternalError(

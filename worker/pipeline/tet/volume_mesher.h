@@ -53,8 +53,8 @@ struct VolumeMeshStats : PlcStats {
   double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;
-  double box_volume = 0;              // physical units^3
-  std::string tetgen_switches;        // as TetGen ran (the run that made the mesh)
+  double box_volume = 0;        // physical units^3
+  std::string tetgen_switches;  // as TetGen ran (the run that made the mesh)
   // TetGen runs that crashed or failed before the one that made the mesh: their switches
   // and errors (RunTetgenRecovering).
   std::vector<std::string> tetgen_recovery;
@@ -70,6 +70,15 @@ struct VolumeMeshStats : PlcStats {
   uint32_t rederived_facets = 0;      // sheet facets whose faces TetGen listed wrongly (taken
                                       // again from the tetrahedra)
   TetImproveReport improvement;
+  // The sheet triangles bisected around slivers the sheets pinned (RefineAtSlivers).
+  struct SliverRefinement {
+    double min_dihedral_before = 0;  // degrees, before any round
+    uint32_t slivers_on_sheets = 0;  // tetrahedra under tet.min_dihedral with two or
+                                     // more corners on the sheets, before any round
+    uint32_t rounds = 0;             // rounds kept
+    uint32_t split_edges = 0;        // sheet edges bisected in them
+    std::string stopped;             // why a round was not kept, if one was not
+  } sliver_refinement;
 
   // Every figure by name, the quality and conformity nested, for the report.
   nlohmann::json Fields() const;

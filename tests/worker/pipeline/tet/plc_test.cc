@@ -324,5 +324,76 @@ TEST(PlcTest, ASlitFramedByThreeRimEdgesIsClosed) {
   EXPECT_EQ(r.closed_slits, 1u);
 }
 
+double SheetArea(const Plc& plc) {
+  double area = 0;
+  for (const Face& t : plc.sheet_triangles) {
+    area += Area({plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]});
+  }
+  return area;
+}
+
+TEST(PlcTest, RefiningBisectsTheEdgesAndEveryTriangleOnThem) {
+  // Two sheets of different pieces; the first ends on the box (x = -0.5), where its edges
+  // in the box face must stay whole.
+  const TriangleMesh m = Append(Square(-0.5, 12, 10, 2, 3, 2.0f), Square(4, 16, 8, 2, 5, 4.0f));
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
+  const size_t before = plc.sheet_triangles.size();
+  const double area = SheetArea(plc);
+  std::vector<uint8_t> marked(before, 1);
+  const Plc original = plc;
+  const uint32_t split = RefineSheetTriangles(marked, &plc);
+  EXPECT_GT(split, 0u);
+  // Every edge but those in the box face x = -0.5 or y = -0.5 (2 + 2 of the first sheet's 16);
+  // an interior edge splits two triangles, a rim edge one.
+  EXPECT_EQ(split, 2u * 16 - 4);
+  EXPECT_GE(plc.sheet_triangles.size(), before + split);
+  EXPECT_LE(plc.sheet_triangles.size(), before + 2 * split);
+  EXPECT_EQ(plc.vertices.size(), original.vertices.size() + split);
+  EXPECT_NEAR(SheetArea(plc), area, 1e-9 * area);
+  // One facet per sheet triangle, in order, with its marker; pieces and thicknesses kept.
+  ASSERT_EQ(plc.facets.size(), 6 + plc.sheet_triangles.size());
+  ASSERT_EQ(plc.sheet_piece.size(), plc.sheet_triangles.size());
+  ASSERT_EQ(plc.sheet_thickness.size(), plc.sheet_triangles.size());
+  for (size_t t = 0; t < plc.sheet_triangles.size(); ++t) {
+    const Face& f = plc.sheet_triangles[t];
+    EXPECT_EQ(plc.facets[6 + t].marker, kFirstSheetMarker + static_cast<int32_t>(t));
+    EXPECT_EQ(plc.facets[6 + t].polygons, (std::vector<std::vector<uint32_t>>{{f[0], f[1], f[2]}}));
+    EXPECT_EQ(plc.sheet_thickness[t], plc.sheet_piece[t] == 3 ? 2.0f : 4.0f);
+  }
+  // No new vertex in the box face x = -0.5, and the box facets untouched.
+  for (size_t i = original.vertices.size(); i < plc.vertices.size(); ++i) {
+    EXPECT_GT(plc.vertices[i].x, -0.5 + 1e-9);
+  }
+  for (int f = 0; f < 6; ++f) EXPECT_EQ(plc.facets[f].polygons, original.facets[f].polygons);
+  // TetGen meshes the finer PLC with every sheet triangle made of tetrahedron faces.
+  TetgenOptions tetgen;
+  tetgen.steiner_on_sheets = false;
+  SM_ASSERT_OK_AND_ASSIGN(TetMesh mesh, RunTetgen(plc, tetgen, {}));
+  EXPECT_EQ(mesh.num_sheet_faces(), plc.sheet_triangles.size());
+}
+
+TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
+  // A sheet's rim running 0.8 voxels over another sheet, parallel: TetGen must fill the gap
+  // under 24-voxel sheet edges, which pins flat tetrahedra (3.8 degrees). Contacts are not mended
+  // here, so the gap stays; bisecting the sheet triangles around those tetrahedra raises the angle.
+  const TriangleMesh m = Append(Square(2, 26, 10, 1, 0), Square(14, 38, 10.8, 1, 1));
+  VolumeMeshOptions with;
+  with.plc.contact_voxels = 0;
+  with.plc.overlap_voxels = 0;
+  VolumeMeshOptions without = with;
+  without.tetgen.min_dihedral_degrees = 0;  // no aim: no refinement
+  VolumeMeshResult r, off;
+  MeshWithAndWithout(m, {40, 40, 22}, with, without, &r, &off);
+  EXPECT_EQ(off.sliver_refinement.rounds, 0u);
+  EXPECT_LT(off.quality.min_dihedral.min, 10);
+  EXPECT_GE(r.sliver_refinement.rounds, 1u);
+  EXPECT_GT(r.sliver_refinement.split_edges, 0u);
+  EXPECT_GT(r.sliver_refinement.slivers_on_sheets, 0u);
+  EXPECT_DOUBLE_EQ(r.sliver_refinement.min_dihedral_before, off.quality.min_dihedral.min);
+  EXPECT_GT(r.sheet_faces, off.sheet_faces);
+  // Not yet to 10 degrees: the worst left is not pinned at the refined triangles.
+  EXPECT_GT(r.quality.min_dihedral.min, 5);
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -85,7 +85,11 @@ PlcFacet BoxFacet(int face, const Plc& plc, const std::vector<Vec3>& v,
     const Face& t = faces[f];
     for (int e = 0; e < 3; ++e) {
       const uint32_t s = t[e], u = t[(e + 1) % 3];
-      if ((on_face[s] & on_face[u] & (1 << face)) != 0) {
+      // An edge in this face is a segment of its facet, unless it runs along the outline:
+      // both ends on one box edge, on another face too. (Ends on two box edges make a chord
+      // across a corner of the face, which TetGen must be given.)
+      const uint8_t both = on_face[s] & on_face[u];
+      if ((both & (1 << face)) != 0 && (both & ~(1 << face)) == 0) {
         segments.insert({std::min(index[s], index[u]), std::max(index[s], index[u])});
       }
     }
@@ -94,7 +98,6 @@ PlcFacet BoxFacet(int face, const Plc& plc, const std::vector<Vec3>& v,
     }
   }
   for (const auto& [s, u] : segments) {
-    if (on_polygon.count(s) && on_polygon.count(u)) continue;  // lies on the outline
     facet.polygons.push_back({s, u});
     points.erase(s);
     points.erase(u);

@@ -395,5 +395,36 @@ TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
   EXPECT_GT(r.quality.min_dihedral.min, 5);
 }
 
+TEST(PlcTest, AnEdgeAcrossACornerOfABoxFaceIsASegmentOfItsFacet) {
+  // A sheet triangle whose edge a-b lies in the box face x = 19.5 with a on the box edge
+  // y = 19.5 and b on the box edge z = -0.5: a chord across the face's corner, both ends on
+  // its outline. TetGen crashed (unifysegments) when the chord was left out of the facet
+  // as if it ran along the outline (the grazing_sheet preset, seed 1964, run r = 8).
+  TriangleMesh m;
+  m.vertices = {{19.5, 19.5, 5}, {19.5, 12, -0.5}, {10, 15, 5}};
+  m.faces = {{0, 1, 2}};
+  m.face_piece = {0};
+  m.face_thickness = {1};
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
+  const Face& t = plc.sheet_triangles.at(0);
+  uint32_t a = 0, b = 0;
+  for (uint32_t x : t) {
+    if (Norm(plc.vertices[x] - Vec3(19.5, 19.5, 5)) < 1e-9) a = x;
+    if (Norm(plc.vertices[x] - Vec3(19.5, 12, -0.5)) < 1e-9) b = x;
+  }
+  ASSERT_NE(a, b);
+  int chords = 0;
+  for (int f = 0; f < 6; ++f) {
+    for (const auto& polygon : plc.facets[f].polygons) {
+      chords += polygon.size() == 2 && std::min(polygon[0], polygon[1]) == std::min(a, b) &&
+                std::max(polygon[0], polygon[1]) == std::max(a, b);
+    }
+  }
+  EXPECT_EQ(chords, 1);  // in the face x = 19.5 only
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -289,18 +289,19 @@ absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Prog
 
 // Where slivers pinned by the sheets are left (under tet.min_dihedral), the sheet
 // triangles around them are bisected and TetGen and the improvement run again on the finer
-// PLC; a round is kept while it raises the smallest angle within the budget. The sheets
+// PLC; a round is kept while it raises the smallest angle (by kMinGain) within the budget,
+// its tetrahedra filling the box. The sheets
 // keep their shape exactly (each new vertex is an edge's midpoint); only their edges there
 // get shorter.
 absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& progress, Plc* plc,
                              VolumeMeshResult* r) {
-  constexpr int kRounds = 3;
+  const int rounds = options.sliver_rounds;
   constexpr double kMinGain = 0.1;  // degrees: a round that gains less is not kept
   const double aim = options.tetgen.min_dihedral_degrees;
   double worst = MeasureQuality(r->mesh).min_dihedral.min;
   r->sliver_refinement.min_dihedral_before = worst;
-  for (int round = 0; round < kRounds && aim > 0 && worst < aim; ++round) {
-    const Progress step = progress.Sub(double(round) / kRounds, double(round + 1) / kRounds);
+  for (int round = 0; round < rounds && aim > 0 && worst < aim; ++round) {
+    const Progress step = progress.Sub(double(round) / rounds, double(round + 1) / rounds);
     uint32_t slivers = 0;
     const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(*plc, r->mesh, aim, &slivers);
     if (round == 0) r->sliver_refinement.slivers_on_sheets = slivers;
@@ -323,7 +324,12 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
       r->sliver_refinement.stopped = "the budget";
       break;
     }
-    const double now = MeasureQuality(*mesh).min_dihedral.min;
+    const TetQuality quality = MeasureQuality(*mesh);
+    if (quality.inverted > 0 || std::abs(quality.volume - r->box_volume) > 1e-6 * r->box_volume) {
+      r->sliver_refinement.stopped = "a mesh that did not fill the box";
+      break;
+    }
+    const double now = quality.min_dihedral.min;
     if (!(now > worst + kMinGain)) {
       r->sliver_refinement.stopped = absl::StrCat("no gain (", now, " degrees)");
       break;

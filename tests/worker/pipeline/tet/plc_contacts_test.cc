@@ -68,7 +68,10 @@ TEST(PlcContactsTest, AVertexHalfAVoxelOffAnotherSheetsFaceMovesOntoItSplittingT
 TEST(PlcContactsTest, TheMendedContactMeshesWithoutSlivers) {
   // Left apart, TetGen fills the half-voxel gap under the corner with slivers (A's face
   // there may not be split, -Y); joined, there is no gap.
-  VolumeMeshOptions joined, apart;
+  VolumeMeshOptions joined;
+  joined.plc.grading = 0.4;  // the lattice this case was built at
+  joined.sliver_rounds = 0;  // the mend alone
+  VolumeMeshOptions apart = joined;
   apart.plc.contact_voxels = 0;
   const Dims dims{60, 60, 60};
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Diamond(), dims, {}, joined));
@@ -83,6 +86,26 @@ TEST(PlcContactsTest, TheMendedContactMeshesWithoutSlivers) {
   EXPECT_EQ(r.improvement.sheet_face_splits + r.improvement.sheet_edge_splits, 0u);
   EXPECT_GT(r.quality.min_dihedral.min, s.quality.min_dihedral.min);
   EXPECT_LT(s.quality.min_dihedral.min, 10.0);
+}
+
+TEST(PlcContactsTest, TheGapLeftApartIsRefinedAway) {
+  // Left apart (no mend), the slivers in the gap are pinned by the sheets: bisecting the
+  // sheet triangles around them and meshing again lifts the smallest angle over 10 degrees.
+  VolumeMeshOptions apart;
+  apart.plc.grading = 0.4;
+  apart.plc.contact_voxels = 0;
+  VolumeMeshOptions once = apart;
+  once.sliver_rounds = 0;
+  const Dims dims{60, 60, 60};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Diamond(), dims, {}, apart));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(Diamond(), dims, {}, once));
+  EXPECT_LT(s.quality.min_dihedral.min, 10.0);
+  EXPECT_DOUBLE_EQ(r.sliver_refinement.min_dihedral_before, s.quality.min_dihedral.min);
+  EXPECT_GE(r.sliver_refinement.rounds, 1u);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_GT(r.conformity.sheet_triangles, s.conformity.sheet_triangles);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
 }
 
 TEST(PlcContactsTest, ARimRunningHalfAVoxelOverAnotherSheetIsNamedNotMoved) {

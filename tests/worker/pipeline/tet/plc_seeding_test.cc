@@ -21,10 +21,11 @@ using ::testing::ElementsAre;
 
 TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   // The 40 x 40 sheet of the lattice test below in a 60^3 box [-0.5, 59.5]^3, spacing 5:
-  // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33.
+  // level 0 (h = 5) lies 3 to 13 from the sheet, level 1 (h = 10) 13 to 33 (grading 0.4).
   const TriangleMesh sheet = Square(10, 50, 30, 8);
   PlcOptions o;
   o.lattice = 1.0;
+  o.grading = 0.4;
   o.seed_box = true;
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
   ASSERT_GT(plc.box_points, 0u);
@@ -179,7 +180,7 @@ TEST(PlcTest, TheSeededLatticeHasTheGradedSpacingAtEachDistance) {
   ASSERT_GE(coarsest.size(), 2u);
   EXPECT_NEAR(ClosestPair(level1), std::sqrt(3.0) / 2 * 10, 1e-9);
   EXPECT_NEAR(ClosestPair(coarsest), std::sqrt(3.0) / 2 * 40, 1e-9);
-  // The default grading (0.4) keeps each level 2.5 of its spacings wide: more seeds.
+  // A grading of 0.4 keeps each level 2.5 of its spacings wide: more seeds.
   o.grading = 0.4;
   SM_ASSERT_OK_AND_ASSIGN(Plc slow, BuildPlc(sheet, {200, 200, 200}, {}, o));
   EXPECT_GT(slow.seed_points, plc.seed_points);

@@ -163,6 +163,7 @@ nlohmann::json PlcStats::Fields() const {
           {"collapsed_edges", collapsed_edges},
           {"mended_contacts", mended_contacts},
           {"unmended_contacts", unmended_contacts},
+          {"joined_touches", joined_touches},
           {"contact_places", places},
           {"box_points", box_points},
           {"seed_points", seed_points},

@@ -14,6 +14,7 @@ namespace sheetmesh {
 namespace {
 
 constexpr size_t kContactPlaces = 10;  // unmended contacts the report names
+constexpr double kTouchVoxels = 1e-6;  // a vertex this near a sheet edge or face lies on it
 
 // The sheets' median edge sets the spacing of the seeded points, so that the tetrahedra
 // off the sheets are about as large as those on them. 0 without sheets.
@@ -208,11 +209,27 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
     plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }
+  // A vertex the mends left exactly on another sheet's edge or face is joined to it.
+  plc.joined_touches = JoinTouches(st, v, kTouchVoxels);
   // Which box faces each vertex lies on, as the mends left it: a vertex moved onto another
   // sheet where that sheet meets the box lies on the box too, and its edges there must be
   // segments of the box's facet (else TetGen sees a sheet triangle cut the box face and
   // gives up); none may lie outside.
   const std::vector<uint8_t> on_box = OnBox(v, lo, hi, on_face);
+  // A triangle the mends laid into a box face (its corners all on it) is that face's: as a
+  // sheet facet too it would overlap the box's, and TetGen aborts.
+  {
+    std::vector<uint8_t> drop(st.faces.size(), 0);
+    bool any = false;
+    for (size_t f = 0; f < st.faces.size(); ++f) {
+      const Face& t = st.faces[f];
+      if ((on_box[t[0]] & on_box[t[1]] & on_box[t[2]]) != 0) drop[f] = 1, any = true;
+    }
+    if (any) {
+      plc.dropped_triangles += static_cast<uint32_t>(std::count(drop.begin(), drop.end(), 1));
+      st = Without(st, drop);
+    }
+  }
 
   // Compact the used vertices; the 8 box corners go first.
   std::vector<uint32_t> index(v.size(), UINT32_MAX);

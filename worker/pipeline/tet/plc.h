@@ -56,6 +56,8 @@ struct PlcStats {
   uint32_t unmended_contacts = 0;    // such vertices left where they are: the move made
                                      // a clash
   std::vector<Vec3> contact_places;  // where the first of those are, physical units
+  uint32_t joined_touches = 0;       // sheet vertices lying on another sheet triangle's
+                                     // edge or face, joined to it (JoinTouches)
   uint32_t box_points = 0;           // points seeded on the box's edges and faces
                                      // (PlcOptions::seed_box), after the sheets' vertices
   uint32_t seed_points = 0;          // lattice points seeded off the sheets (the last

@@ -304,4 +304,74 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
   return mended;
 }
 
+uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps) {
+  uint32_t joined = 0;
+  for (int round = 0; round < 8 && !s.faces.empty(); ++round) {
+    std::vector<std::vector<uint32_t>> faces_of(v.size());
+    double longest = eps;
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        faces_of[s.faces[f][k]].push_back(f);
+        longest = std::max(longest, Norm(v[s.faces[f][k]] - v[s.faces[f][(k + 1) % 3]]));
+      }
+    }
+    SpatialGrid grid(longest);
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      Vec3 lo, hi;
+      TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, eps, &lo, &hi);
+      grid.Insert(f, lo, hi);
+    }
+    // Each vertex lying on a triangle not its own: on its edge or inside it (a corner that
+    // close is a duplicate, the merge's business).
+    std::vector<Contact> found;
+    for (uint32_t u = 0; u < v.size(); ++u) {
+      if (faces_of[u].empty()) continue;
+      bool taken = false;
+      grid.Query(v[u] - Vec3(eps, eps, eps), v[u] + Vec3(eps, eps, eps), [&](uint32_t f) {
+        const Face& t = s.faces[f];
+        if (taken || t[0] == u || t[1] == u || t[2] == u) return;
+        Contact c;
+        if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, eps, &c) ||
+            c.kind == Contact::kCorner) {
+          return;
+        }
+        c.vertex = u, c.face = f;
+        found.push_back(c);
+        taken = true;
+      });
+    }
+    if (found.empty()) break;
+    // Each face split once a round (its edge's faces too).
+    std::vector<uint8_t> busy(s.faces.size(), 0);
+    std::vector<Contact> apply;
+    for (Contact& c : found) {
+      const Face& t = s.faces[c.face];
+      std::vector<uint32_t> touched = {c.face};
+      if (c.kind == Contact::kEdge) {
+        const uint32_t a = t[c.k], b = t[(c.k + 1) % 3];
+        for (uint32_t f : faces_of[a]) {
+          const Face& g = s.faces[f];
+          if (g[0] == b || g[1] == b || g[2] == b) c.edge_faces.push_back(f);
+        }
+        touched = c.edge_faces;
+      }
+      // The faces of the vertex itself re-point nothing (it stays), but a face both on
+      // the edge and at the vertex would fold: such a touch is a clash, not a T.
+      bool skip = false;
+      for (uint32_t f : touched) {
+        skip = skip || busy[f];
+        for (uint32_t x : s.faces[f]) skip = skip || x == c.vertex;
+      }
+      if (skip) continue;
+      for (uint32_t f : touched) busy[f] = 1;
+      apply.push_back(c);
+    }
+    if (apply.empty()) break;
+    std::vector<int> owner;
+    Apply(apply, s, v, owner);
+    joined += static_cast<uint32_t>(apply.size());
+  }
+  return joined;
+}
+
 }  // namespace sheetmesh

@@ -106,6 +106,12 @@ struct BoxPoint {
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
                       double gap, std::vector<Vec3>* unmended);
 
+// Joins each sheet vertex that lies on another sheet triangle (within eps voxels of its
+// edge or its interior, a T that the mends before left or made) to it: the edge's faces,
+// or the face, split there. TetGen takes a vertex on a facet's edge for a crossing and
+// aborts. Returns the number joined.
+uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps);
+
 // Collapses sheet edges shorter than max_length (voxels), shortest first, each to its
 // midpoint (or onto its end on the box), where that makes no fold or hole and turns no
 // face by over 30 degrees; a round that makes a clash is undone. Returns the number.

@@ -136,5 +136,41 @@ TEST(PlcUntangleTest, TwoTrianglesCrossingBeyondASharedCornerAreSplitToMeetInAnE
   EXPECT_NEAR(area, Area({v[0], v[1], v[2]}) + Area({v[0], v[3], v[4]}), 1e-9);
 }
 
+TEST(PlcUntangleTest, VerticesLyingOnAnotherSheetsEdgeOrFaceAreJoinedToThem) {
+  // Sheet A, a square in z = 10 split along its diagonal 0-2; sheet B's vertex 4 lies on
+  // that diagonal (a quarter along), sheet C's vertex 7 inside A's triangle (0, 1, 2),
+  // neither joined to A: TetGen takes such a T for a crossing and aborts (the rough network
+  // at r = 2). A's faces split there; nothing moves.
+  std::vector<Vec3> v = {{2, 2, 10},  {22, 2, 10}, {22, 22, 10}, {2, 22, 10},  // A
+                         {7, 7, 10},  {12, 4, 18}, {4, 12, 18},                // B
+                         {18, 6, 10}, {18, 6, 18}, {14, 2, 16}};               // C
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {7, 8, 9}}, {0, 0, 1, 2});
+  const std::vector<Vec3> before = v;
+  EXPECT_EQ(JoinTouches(s, v, 1e-6), 2u);
+  for (size_t i = 0; i < v.size(); ++i) EXPECT_LT(Norm(v[i] - before[i]), 1e-9) << i;
+  // The diagonal's two faces split at 4 (4 faces), the half that holds 7 at 7 (3 faces):
+  // 6 faces of A, B's and C's.
+  ASSERT_EQ(s.faces.size(), 8u);
+  auto has_edge = [&](uint32_t a, uint32_t b) {
+    for (const Face& t : s.faces) {
+      for (int k = 0; k < 3; ++k) {
+        if ((t[k] == a && t[(k + 1) % 3] == b) || (t[k] == b && t[(k + 1) % 3] == a)) return true;
+      }
+    }
+    return false;
+  };
+  EXPECT_TRUE(has_edge(0, 4));
+  EXPECT_TRUE(has_edge(4, 2));
+  EXPECT_FALSE(has_edge(0, 2));
+  EXPECT_TRUE(has_edge(7, 1));
+  // A keeps its area; pieces go with the faces.
+  double area = 0;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    if (s.piece[f] == 0) area += Area({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]});
+  }
+  EXPECT_NEAR(area, 400, 1e-9);
+  EXPECT_EQ(JoinTouches(s, v, 1e-6), 0u);  // nothing left to join
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -296,7 +296,8 @@ absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Prog
 absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& progress, Plc* plc,
                              VolumeMeshResult* r) {
   const int rounds = options.sliver_rounds;
-  constexpr double kMinGain = 0.1;  // degrees: a round that gains less is not kept
+  constexpr double kMinGain = 0.1;           // degrees: a round that gains less is not kept
+  constexpr double kMinRoundSeconds = 10.0;  // TetGen's least time limit in a round
   const double aim = options.tetgen.min_dihedral_degrees;
   double worst = MeasureQuality(r->mesh).min_dihedral.min;
   r->sliver_refinement.min_dihedral_before = worst;
@@ -308,9 +309,15 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
     Plc finer = *plc;
     const uint32_t split = RefineSheetTriangles(marked, &finer);
     if (split == 0) break;
+    // A finer PLC meshes about as fast: TetGen's refinement that does not end on it (the
+    // grazing sheet at r = 11 ran into the 600 s limit) is cut short, the mesh there is
+    // kept. A round that fails leaves no tetgen_failed.poly beside a mesh that succeeded.
+    TetgenOptions tetgen = options.tetgen;
+    tetgen.time_limit_seconds =
+        std::min(tetgen.time_limit_seconds, std::max(kMinRoundSeconds, 20 * r->tetgen_seconds));
+    tetgen.failed_plc_path.clear();
     VolumeMeshResult trial;
-    absl::StatusOr<TetMesh> mesh =
-        RunTetgenRecovering(finer, options.tetgen, step.Sub(0, 0.7), &trial);
+    absl::StatusOr<TetMesh> mesh = RunTetgenRecovering(finer, tetgen, step.Sub(0, 0.7), &trial);
     if (!mesh.ok()) {
       if (mesh.status().code() == absl::StatusCode::kCancelled) return mesh.status();
       r->sliver_refinement.stopped =

@@ -40,6 +40,12 @@ PY
 mesh rough_surface_r5 surface "$tmp/rough_160x160x160_u8.raw" --r=5  # TetGen SIGSEGV before
 mesh rough_surface_r4 surface "$tmp/rough_160x160x160_u8.raw" --r=4
 mesh rough_run_r11 run "$tmp/rough_160x160x160_u8.raw" --r=11
+# Found by the property test: a sheet edge across the corner of a box face (TetGen crashed
+# in unifysegments), a refinement round whose mesh did not fill the box.
+"$cli" phantom --preset=grazing_sheet --seed=1964 --dims=64x64x64 -o "$tmp/graze_64x64x64_u8.raw" > /dev/null
+mesh grazing_run_r8 run "$tmp/graze_64x64x64_u8.raw" --labels=255 --r=8
+"$cli" phantom --preset=shallow_network --seed=5072 --dims=80x80x80 -o "$tmp/shallow_80x80x80_u8.raw" > /dev/null
+mesh shallow_surface_r10 surface "$tmp/shallow_80x80x80_u8.raw" --labels=255 --r=10
 if [ -n "$shared" ] && [ -f "$shared/netl_binary_fracture_small.tif" ]; then
   netl=$shared/netl_binary_fracture_small.tif
   dpm=$shared/dpm_3fractures_100x100x100_u8.raw

@@ -209,7 +209,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
     plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }
-  // A vertex the mends left exactly on another sheet's edge or face is joined to it.
+  // A triangle the mends left with no area covers nothing and holds a corner on its own
+  // long edge, which TetGen aborts on: it goes, and a vertex then left exactly on another
+  // sheet's edge or face is joined to it.
+  plc.dropped_triangles += DropFlatTriangles(st, v, kTouchVoxels);
   plc.joined_touches = JoinTouches(st, v, kTouchVoxels);
   // Which box faces each vertex lies on, as the mends left it: a vertex moved onto another
   // sheet where that sheet meets the box lies on the box too, and its edges there must be

@@ -374,4 +374,17 @@ uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps) {
   return joined;
 }
 
+uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double eps) {
+  std::vector<uint8_t> drop(s.faces.size(), 0);
+  uint32_t n = 0;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    const Vec3 &a = v[s.faces[f][0]], &b = v[s.faces[f][1]], &c = v[s.faces[f][2]];
+    const double longest = std::max({Norm(b - a), Norm(c - b), Norm(a - c)});
+    // Twice the area is the longest edge times the height over it.
+    if (Norm(Cross(b - a, c - a)) <= eps * longest) drop[f] = 1, ++n;
+  }
+  if (n > 0) s = Without(s, drop);
+  return n;
+}
+
 }  // namespace sheetmesh

@@ -106,6 +106,10 @@ struct BoxPoint {
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
                       double gap, std::vector<Vec3>* unmended);
 
+// Drops the sheet triangles whose corners lie on a line (within eps voxels: no area, one
+// corner on the long edge), which the mends can leave. Returns the number dropped.
+uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double eps);
+
 // Joins each sheet vertex that lies on another sheet triangle (within eps voxels of its
 // edge or its interior, a T that the mends before left or made) to it: the edge's faces,
 // or the face, split there. TetGen takes a vertex on a facet's edge for a crossing and

@@ -172,5 +172,19 @@ TEST(PlcUntangleTest, VerticesLyingOnAnotherSheetsEdgeOrFaceAreJoinedToThem) {
   EXPECT_EQ(JoinTouches(s, v, 1e-6), 0u);  // nothing left to join
 }
 
+TEST(PlcUntangleTest, AFlatTriangleLeftByTheMendsGoesAndItsCornerIsJoined) {
+  // Triangle (0, 1, 2) has its corner 2 on its own long edge 0-1 (no area), as a split can
+  // leave it (the rough network at r = 2); triangle (0, 3, 1) lies across that edge. The
+  // flat one goes; 2 is then a T on the edge 0-1 of the other, which is joined.
+  std::vector<Vec3> v = {{2, 2, 10}, {10, 2, 10}, {4, 2, 10}, {6, 8, 10}, {4, -4, 14}};
+  SheetTriangles s = Sheets({{0, 1, 2}, {0, 3, 1}, {2, 4, 0}}, {0, 0, 0});
+  EXPECT_EQ(DropFlatTriangles(s, v, 1e-6), 1u);
+  ASSERT_EQ(s.faces.size(), 2u);
+  EXPECT_EQ(DropFlatTriangles(s, v, 1e-6), 0u);
+  EXPECT_EQ(JoinTouches(s, v, 1e-6), 1u);
+  EXPECT_EQ(s.faces.size(), 3u);  // (0, 3, 1) split at 2 into two
+  EXPECT_EQ(Clashes(s, v), 0u);
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -37,43 +37,71 @@ std::vector<Hostile> Cases() {
   return {
       {"environ_by_external_storage",
        [](D d, D) { return Hdf5WithExternalStorage(d + "/environ.h5", "/proc/self/environ", 0); },
-       false, StatusCode::kPermissionDenied, {"external storage", "/proc/self/environ"}},
+       false,
+       StatusCode::kPermissionDenied,
+       {"external storage", "/proc/self/environ"}},
       {"job_store_by_external_storage",
        [](D d, D data) { return Hdf5WithExternalStorage(d + "/db.h5", data + "/jobs.db", 100); },
-       false, StatusCode::kPermissionDenied, {"jobs.db"}},
+       false,
+       StatusCode::kPermissionDenied,
+       {"jobs.db"}},
       {"passwd_by_external_storage_referenced",
-       [](D d, D) { return Hdf5WithExternalStorage(d + "/passwd.h5", "/etc/passwd", 0); }, true,
-       StatusCode::kPermissionDenied, {"outside the allowed roots", "/etc/passwd"}},
+       [](D d, D) { return Hdf5WithExternalStorage(d + "/passwd.h5", "/etc/passwd", 0); },
+       true,
+       StatusCode::kPermissionDenied,
+       {"outside the allowed roots", "/etc/passwd"}},
       {"another_jobs_scratch_by_virtual_dataset_referenced",
        [](D d, D data) {
          std::filesystem::create_directories(data + "/scratch/other");
          const std::string other = Hdf5Plain(data + "/scratch/other/volume.h5", "/data");
          return Hdf5Virtual(d + "/vds.h5", other, "/data");
        },
-       true, StatusCode::kPermissionDenied, {"virtual dataset", "outside the allowed roots"}},
+       true,
+       StatusCode::kPermissionDenied,
+       {"virtual dataset", "outside the allowed roots"}},
       {"missing_outside_file_by_virtual_dataset_referenced",
-       [](D d, D data) { return Hdf5Virtual(d + "/gone.h5", data + "/no/such.h5", "/data"); }, true,
-       StatusCode::kPermissionDenied, {"outside the allowed roots"}},
+       [](D d, D data) { return Hdf5Virtual(d + "/gone.h5", data + "/no/such.h5", "/data"); },
+       true,
+       StatusCode::kPermissionDenied,
+       {"outside the allowed roots"}},
       {"outside_file_by_external_link_referenced",
        [](D d, D data) {
          const std::string outside = Hdf5Plain(data + "/../outside.h5", "/secret");
          return Hdf5ExternalLink(d + "/link.h5", outside, "/secret") + ":/data";
        },
-       true, StatusCode::kPermissionDenied, {"external link"}},
+       true,
+       StatusCode::kPermissionDenied,
+       {"external link"}},
       {"hdf5_gigabyte_chunk",
-       [](D d, D) { return Hdf5HugeChunk(d + "/chunk.h5", 512); }, false,
-       StatusCode::kInvalidArgument, {"512x512x512"}},
+       [](D d, D) { return Hdf5HugeChunk(d + "/chunk.h5", 512); },
+       false,
+       StatusCode::kInvalidArgument,
+       {"512x512x512"}},
       {"hdf5_2000_nested_groups",
-       [](D d, D) { return Hdf5NestedGroups(d + "/nested.h5", 2000); }, false,
-       StatusCode::kInvalidArgument, {"dataset"}},
-      {"npy_40kb_shape", [](D d, D) { return NpyWithLongShape(d + "/long.npy", 20000); }, false,
-       StatusCode::kInvalidArgument, {"shape"}},
-      {"vdb_cut_to_200_bytes", [](D d, D) { return VdbCutTo(d + "/cut.vdb", 200); }, false,
-       StatusCode::kInvalidArgument, {"not a readable .vdb"}},
-      {"jpeg_claiming_65500", [](D d, D) { return JpegClaiming(d + "/jpegs", 65500, 65500); },
-       true, StatusCode::kInvalidArgument, {"65500x65500"}},
-      {"png_claiming_65500", [](D d, D) { return PngClaiming(d + "/pngs", 65500, 65500); }, true,
-       StatusCode::kInvalidArgument, {"65500x65500"}},
+       [](D d, D) { return Hdf5NestedGroups(d + "/nested.h5", 2000); },
+       false,
+       StatusCode::kInvalidArgument,
+       {"dataset"}},
+      {"npy_40kb_shape",
+       [](D d, D) { return NpyWithLongShape(d + "/long.npy", 20000); },
+       false,
+       StatusCode::kInvalidArgument,
+       {"shape"}},
+      {"vdb_cut_to_200_bytes",
+       [](D d, D) { return VdbCutTo(d + "/cut.vdb", 200); },
+       false,
+       StatusCode::kInvalidArgument,
+       {"not a readable .vdb"}},
+      {"jpeg_claiming_65500",
+       [](D d, D) { return JpegClaiming(d + "/jpegs", 65500, 65500); },
+       true,
+       StatusCode::kInvalidArgument,
+       {"65500x65500"}},
+      {"png_claiming_65500",
+       [](D d, D) { return PngClaiming(d + "/pngs", 65500, 65500); },
+       true,
+       StatusCode::kInvalidArgument,
+       {"65500x65500"}},
   };
 }
 
@@ -115,9 +143,8 @@ TEST_P(HostileInputsTest, EachEndsWithItsCodeNamingItAndLeaksNothing) {
   int n = 0;
   for (const Hostile& c : Cases()) {
     SCOPED_TRACE(c.name);
-    const std::string dir =
-        c.by_reference ? absl::StrCat(options_.allowed_roots[0], "/case", ++n)
-                       : dir_.File(absl::StrCat("case", ++n, "/in"));
+    const std::string dir = c.by_reference ? absl::StrCat(options_.allowed_roots[0], "/case", ++n)
+                                           : dir_.File(absl::StrCat("case", ++n, "/in"));
     std::filesystem::create_directories(dir);
     const std::string path = c.make(dir, options_.data_dir);
     auto done = Run(c.name, path, c.by_reference);

@@ -235,8 +235,9 @@ absl::Status Died(const ChildExit& exit, const std::string& stage, const JobLimi
   }
   if (exit.signaled && exit.code != SIGBUS && (stage == "start" || stage == "read")) {
     // Before any stage of ours ran on it: a reader library crashed on the input.
-    absl::StrAppend(&what, " (while reading the volume: a library crashed on it; is the file "
-                           "damaged?)");
+    absl::StrAppend(&what,
+                    " (while reading the volume: a library crashed on it; is the file "
+                    "damaged?)");
   }
   if (!tail.empty()) absl::StrAppend(&what, "; its last output: ", tail);
   return absl::InternalError(what);

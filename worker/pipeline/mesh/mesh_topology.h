@@ -4,10 +4,9 @@
 #define SHEETMESH_WORKER_PIPELINE_MESH_MESH_TOPOLOGY_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "worker/pipeline/mesh/triangle_mesh.h"
 
@@ -66,8 +65,7 @@ size_t OrientConsistently(TriangleMesh* mesh);
 // Whether the triangles (p, a1, a2) and (p, b1, b2), sharing only p, share more than p: the
 // line their planes meet in enters both of their angles at p on one side (a touch counts),
 // or, in one plane, their angles overlap.
-bool WedgesOverlap(const Vec3& p, const Vec3& a1, const Vec3& a2, const Vec3& b1,
-                   const Vec3& b2);
+bool WedgesOverlap(const Vec3& p, const Vec3& a1, const Vec3& a2, const Vec3& b1, const Vec3& b2);
 
 // Whether faces a and b of vertices v clash, by the rules FindSelfIntersections applies to
 // each pair (none shared: they intersect; one shared vertex: they overlap beyond it; a

@@ -244,8 +244,8 @@ absl::Status CheckStorageCost(hid_t ds, hid_t file_type, int64_t declared_bytes,
       file_bytes > 0) {
     const haddr_t at = H5Dget_offset(ds);
     if (at == HADDR_UNDEF || static_cast<int64_t>(at) + stored > static_cast<int64_t>(file_bytes)) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          where, ": its data lies beyond the file's ", file_bytes, " bytes (cut short?)"));
+      return absl::InvalidArgumentError(absl::StrCat(where, ": its data lies beyond the file's ",
+                                                     file_bytes, " bytes (cut short?)"));
     }
   }
   // Deflate decodes at most 1032 bytes per stored byte; unwritten chunks read as the fill

@@ -361,20 +361,8 @@ class Untangler {
       }
       ok = joined;
     }
-    if (ok) {
-      GrowGrid(changed);
-      std::vector<Vec3> normals;
-      for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
-      if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
-        ++stats->split_crossings;
-        return true;
-      }
-    }
-    st_.faces = saved;
-    st_.source.resize(faces_before);
-    st_.piece.resize(faces_before);
-    st_.thickness.resize(faces_before);
-    v_.resize(vertices_before);
+    if (ok) return KeepSplitOrUndo(changed, origin, saved, faces_before, vertices_before, stats);
+    Undo(saved, faces_before, vertices_before);
     return false;
   }
 
@@ -454,6 +442,30 @@ class Untangler {
     return f;
   }
 
+  // Keeps a split whose faces `changed` (each from the face origin[i] of `saved`, on its
+  // side) leave no clash, counting it; else puts the faces and vertices back as they were.
+  bool KeepSplitOrUndo(const std::vector<uint32_t>& changed, const std::vector<uint32_t>& origin,
+                       const std::vector<Face>& saved, size_t faces_before, size_t vertices_before,
+                       UntangleStats* stats) {
+    GrowGrid(changed);
+    std::vector<Vec3> normals;
+    for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
+    if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
+      ++stats->split_crossings;
+      return true;
+    }
+    Undo(saved, faces_before, vertices_before);
+    return false;
+  }
+
+  void Undo(const std::vector<Face>& saved, size_t faces_before, size_t vertices_before) {
+    st_.faces = saved;
+    st_.source.resize(faces_before);
+    st_.piece.resize(faces_before);
+    st_.thickness.resize(faces_before);
+    v_.resize(vertices_before);
+  }
+
   // Makes the splits SplitAtCrossing chose, keeping them where they leave no clash.
   bool Split(uint32_t f_edge, const Face& edge_split, uint32_t f_other, const Face& other,
              const Vec3& q, double u_other, UntangleStats* stats) {
@@ -509,20 +521,7 @@ class Untangler {
       add(f_other, {other[1], other[2], qi});
       add(f_other, {other[2], other[0], qi});
     }
-    GrowGrid(changed);
-    // Each piece keeps the side of the face it came from.
-    std::vector<Vec3> normals;
-    for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
-    if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
-      ++stats->split_crossings;
-      return true;
-    }
-    st_.faces = saved;
-    st_.source.resize(faces_before);
-    st_.piece.resize(faces_before);
-    st_.thickness.resize(faces_before);
-    v_.pop_back();
-    return false;
+    return KeepSplitOrUndo(changed, origin, saved, faces_before, qi, stats);
   }
 
   // Replaces the faces around the pair (every face of one piece at a corner of a or b) by

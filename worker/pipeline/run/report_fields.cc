@@ -148,11 +148,13 @@ nlohmann::json PlcStats::Fields() const {
           {"merged_vertices", merged_vertices},
           {"dropped_triangles", dropped_triangles},
           {"repaired_triangles", repaired_triangles},
+          {"repaired_area_voxels", repaired_area_voxels},
           {"untangled",
            {{"clashing_pairs", clashing_pairs},
             {"moved_vertices", untangle_moves},
             {"flipped_edges", untangle_flips},
             {"split_crossings", untangle_splits},
+            {"thin_splits", untangle_thin_splits},
             {"retriangulated_patches", untangle_patches},
             {"max_move_voxels", untangle_max_move}}},
           {"flipped_edges", flipped_edges},
@@ -207,6 +209,8 @@ nlohmann::json VolumeMeshStats::Fields() const {
                             {"rounds", sliver_refinement.rounds},
                             {"split_edges", sliver_refinement.split_edges},
                             {"stopped", sliver_refinement.stopped}};
+  j["input_wedges"] = {{"narrowest_degrees", wedges.narrowest_degrees},
+                       {"under_min_dihedral", wedges.narrow_edges}};
   return j;
 }
 

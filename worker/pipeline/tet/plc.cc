@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/tet/plc_parts.h"
 
 namespace sheetmesh {
@@ -172,6 +173,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   const Vec3 lo(-0.5, -0.5, -0.5), hi(dims.nx - 0.5, dims.ny - 0.5, dims.nz - 0.5);
   plc.box_lo = placement.ToPhysical(lo);
   plc.box_hi = placement.ToPhysical(hi);
+  plc.voxel_length = PhysicalLength(1.0, placement);
 
   SnappedSheets snapped = SnapToBox(sheets, lo, hi, options, &plc);
   std::vector<Vec3>& v = snapped.v;
@@ -187,6 +189,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.untangle_flips = u.flipped_edges;
     plc.untangle_patches = u.retriangulated_patches;
     plc.untangle_splits = u.split_crossings;
+    plc.untangle_thin_splits = u.thin_splits;
     plc.untangle_max_move = u.max_move;
     clean = u.remaining_pairs == 0;
   }

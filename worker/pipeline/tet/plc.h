@@ -33,13 +33,16 @@ struct PlcStats {
                                      // it since snapping them made a clash
   uint32_t merged_vertices = 0;      // merged into a near-duplicate
   uint32_t dropped_triangles = 0;    // degenerate after snapping, or lying in a box face
-  uint32_t repaired_triangles = 0;   // removed because they clashed (repair mode)
+  uint32_t repaired_triangles = 0;   // removed because they clashed after untangling
+                                     // (PlcOptions::repair)
+  double repaired_area_voxels = 0;   // their area, voxels^2
   uint32_t clashing_pairs = 0;       // sheet triangle pairs that cut through each other
                                      // before untangling
   uint32_t untangle_moves = 0;       // vertices moved to untangle them (PlcOptions::
                                      // untangle_voxels)
   uint32_t untangle_flips = 0;       // edges flipped to untangle them
   uint32_t untangle_splits = 0;      // crossing pairs split to meet in an edge
+  uint32_t untangle_thin_splits = 0;  // of those, split as a last resort with thin pieces
   uint32_t untangle_patches = 0;     // patches re-triangulated to untangle them
   double untangle_max_move = 0;      // the largest of those moves, voxels
   uint32_t flipped_edges = 0;        // sheet edges flipped for better triangles
@@ -78,10 +81,20 @@ struct Plc : PlcStats {
   std::vector<int32_t> sheet_piece;    // per kept sheet triangle
   std::vector<float> sheet_thickness;  // per kept sheet triangle, voxels
   Vec3 box_lo, box_hi;                 // physical
+  double voxel_length = 1;             // physical
 
   // The PLC as a TetGen .poly file (0-based numbering).
   std::string ToPoly() const;
 };
+
+// The narrowest angle at which facets meet in an edge (sheet and sheet, a sheet folded
+// on itself, sheet and box face), degrees: the tetrahedra in that wedge can have no
+// larger dihedral angle there, in any mesh that keeps the facets.
+struct WedgeBound {
+  double narrowest_degrees = 360;  // 360: no facets meet in an edge
+  uint32_t narrow_edges = 0;       // edges with a wedge under the aim asked for
+};
+WedgeBound MeasureWedges(const Plc& plc, double below_degrees);
 
 struct PlcOptions {
   double snap_voxels = 0.75;  // vertices this close to a box face move onto it
@@ -95,8 +108,11 @@ struct PlcOptions {
   // Sheet triangles that cut through each other are untangled first, by moving a vertex of
   // the pair at most this many voxels or flipping one of its edges (UntangleStats); 0: none.
   double untangle_voxels = 1.0;
-  bool repair = false;  // remove the clashing triangles untangling left (the smaller
-                        // of each pair) instead of failing
+  // Clashes untangling leaves (a sheet crumpled within a voxel or two, which neither moves,
+  // flips, splits nor a patch mends: 3 of the 140 runs of the volume mesh sweep) are
+  // removed, the smaller triangle of each pair, and the report says how many and their
+  // area; false: the job fails, naming them.
+  bool repair = true;
   // Sheet triangles TetGen must keep are improved first, since a thin or flat one forces
   // tiny tetrahedra and slivers: an edge between two triangles of one piece whose normals
   // are within flip_fold_degrees is flipped where that raises their smallest angle (0:
@@ -172,6 +188,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
 // halve. The new triangles are appended, each with its facet, piece and thickness. Returns
 // the number of edges split.
 uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc);
+
+// Removes the marked sheet triangles (of plc->sheet_triangles) with their facets; the
+// others keep their order and are numbered again (marker kFirstSheetMarker + index). Their
+// vertices stay (points of the PLC). Returns the number removed.
+uint32_t DropSheetTriangles(const std::vector<uint8_t>& drop, Plc* plc);
 
 }  // namespace sheetmesh
 

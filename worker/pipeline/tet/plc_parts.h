@@ -55,6 +55,7 @@ struct UntangleStats {
   uint32_t flipped_edges = 0;
   uint32_t split_crossings = 0;         // pairs crossing beyond a shared corner, split to
                                         // meet in an edge
+  uint32_t thin_splits = 0;             // of those, split with pieces under kMinSplitAngle
   uint32_t retriangulated_patches = 0;  // patches replaced by a fan (RetriangulatePatch)
   double max_move = 0;                  // voxels
 };

@@ -87,4 +87,29 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
   return split;
 }
 
+uint32_t DropSheetTriangles(const std::vector<uint8_t>& drop, Plc* plc) {
+  const size_t first_sheet_facet = plc->facets.size() - plc->sheet_triangles.size();
+  Plc kept_only = *plc;
+  kept_only.facets.resize(first_sheet_facet);
+  kept_only.sheet_triangles.clear();
+  kept_only.sheet_piece.clear();
+  kept_only.sheet_thickness.clear();
+  uint32_t dropped = 0;
+  for (size_t t = 0; t < plc->sheet_triangles.size(); ++t) {
+    if (t < drop.size() && drop[t]) {
+      ++dropped;
+      continue;
+    }
+    const Face& f = plc->sheet_triangles[t];
+    kept_only.facets.push_back(
+        {{{f[0], f[1], f[2]}},
+         kFirstSheetMarker + static_cast<int32_t>(kept_only.sheet_triangles.size())});
+    kept_only.sheet_triangles.push_back(f);
+    kept_only.sheet_piece.push_back(plc->sheet_piece[t]);
+    kept_only.sheet_thickness.push_back(plc->sheet_thickness[t]);
+  }
+  *plc = std::move(kept_only);
+  return dropped;
+}
+
 }  // namespace sheetmesh

@@ -22,7 +22,14 @@ namespace {
 
 constexpr double kMinMovedAngle = 1.0;  // degrees: a move may not make a sliver triangle
 constexpr double kMinSplitAngle = 0.2;  // degrees: nor a split (its pieces are thin by nature)
+constexpr double kMinSplitLength = 0.05;  // voxels: a split's new edges at least this long
+// What neither moves, flips, splits nor patches mended at those bounds is split with thin
+// pieces as a last resort: the sheets then meet in an edge where they cross, which TetGen
+// can mesh (with small tetrahedra there), rather than the job being refused.
+constexpr double kLastResortSplitAngle = 1e-3;
+constexpr double kLastResortSplitLength = 1e-4;
 constexpr int kMaxRounds = 12;
+constexpr int kLastResortRounds = 8;
 
 Triangle TriangleOf(const std::vector<Vec3>& v, const Face& f) {
   return {v[f[0]], v[f[1]], v[f[2]]};
@@ -36,7 +43,7 @@ class Untangler {
 
   UntangleStats Run() {
     UntangleStats stats;
-    for (int round = 0; round < kMaxRounds + 2; ++round) {
+    for (int round = 0; round < kMaxRounds + 2 + kLastResortRounds; ++round) {
       TriangleMesh mesh;
       mesh.vertices = v_;
       mesh.faces = st_.faces;
@@ -64,9 +71,15 @@ class Untangler {
       }
       if (mended == 0) {
         // What small moves cannot mend may need a larger one: up to three times the cap,
-        // after everything else has been tried at the smaller.
-        if (max_move_ >= 3 * base_move_) break;
-        max_move_ += base_move_;
+        // after everything else has been tried at the smaller; then thin splits.
+        if (max_move_ < 3 * base_move_) {
+          max_move_ += base_move_;
+        } else if (min_split_angle_ > kLastResortSplitAngle) {
+          min_split_angle_ = kLastResortSplitAngle;
+          min_split_length_ = kLastResortSplitLength;
+        } else {
+          break;
+        }
       }
     }
     return stats;
@@ -288,8 +301,11 @@ class Untangler {
       const Vec3 q = P + d * t_edge;
       // Too near a corner, the pieces would be slivers: a move mends that better.
       const double len = Norm(v_[edge_split[2]] - v_[edge_split[1]]);
-      if (u_edge * len < 0.05 || (1 - u_edge) * len < 0.05) continue;
-      const bool on_other_edge = (t_other - t_edge) < 1e-6 * (1 + t_other);
+      if (u_edge * len < min_split_length_ || (1 - u_edge) * len < min_split_length_) continue;
+      // Left within a split's least length of each other (d is a unit vector), q is on the
+      // other's edge too: inside it, it would make a piece with no angle.
+      const bool on_other_edge =
+          (t_other - t_edge) < std::max(1e-6 * (1 + t_other), min_split_length_);
       return Split(f_edge, edge_split, f_other, other, q, on_other_edge ? u_other : -1, stats);
     }
     return false;
@@ -334,7 +350,7 @@ class Untangler {
       for (size_t j = i + 1; j < cuts.size(); ++j)
         if (Norm2(cuts[i].p - cuts[j].p) > best)
           best = Norm2(cuts[i].p - cuts[j].p), i0 = i, i1 = j;
-    if (best < 0.05 * 0.05) return false;  // a graze: a move mends it better
+    if (best < min_split_length_ * min_split_length_) return false;  // a graze: a move mends it
     const size_t faces_before = st_.faces.size();
     const std::vector<Face> saved = st_.faces;
     const size_t vertices_before = v_.size();
@@ -450,8 +466,9 @@ class Untangler {
     GrowGrid(changed);
     std::vector<Vec3> normals;
     for (uint32_t from : origin) normals.push_back(UnitNormal(TriangleOf(v_, saved[from])));
-    if (Clean(changed, normals, {}, kMinSplitAngle, origin)) {
+    if (Clean(changed, normals, {}, min_split_angle_, origin)) {
       ++stats->split_crossings;
+      if (min_split_angle_ < kMinSplitAngle) ++stats->thin_splits;
       return true;
     }
     Undo(saved, faces_before, vertices_before);
@@ -668,6 +685,8 @@ class Untangler {
   SpatialGrid grid_{1.0};
   absl::flat_hash_set<uint64_t> clashing_;  // the round's clashing pairs, by PairKey
   uint64_t target_ = 0;                     // the pair being mended
+  double min_split_angle_ = kMinSplitAngle;   // degrees, the least angle a split may make
+  double min_split_length_ = kMinSplitLength;  // voxels
 };
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -157,22 +158,23 @@ std::string TetgenSwitches(const TetgenOptions& o) {
   return s;
 }
 
-absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
-                                  const Progress& progress) {
+namespace {
+
+// A TetGen run on `plc` in `scratch` with `switches`: its exit, within the time limit (else
+// kDeadlineExceeded) unless `progress` cancels; its output goes to scratch/tetgen.log.
+absl::StatusOr<ChildExit> RunInScratch(const Plc& plc, const TetgenOptions& options,
+                                       const std::string& switches, const Scratch& scratch,
+                                       const Progress& progress) {
   absl::StatusOr<std::string> program = FindProgram(options.program);
   if (!program.ok()) {
     return absl::NotFoundError(
         absl::StrCat("TetGen ", program.status().message(), " (Debian package tetgen)"));
   }
-  SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
   const std::string poly = scratch.dir() + "/plc.poly";
   SM_RETURN_IF_ERROR(WriteFileAtomically(poly, plc.ToPoly()));
-  const std::string log = scratch.dir() + "/tetgen.log";
-  const std::string switches = TetgenSwitches(options);
-
   SubprocessOptions spawn;
   spawn.argv = {*program, switches, poly};
-  spawn.output_path = log;
+  spawn.output_path = scratch.dir() + "/tetgen.log";
   spawn.memory_limit_bytes = options.memory_limit_bytes;
   SM_ASSIGN_OR_RETURN(Subprocess child, Subprocess::Start(spawn));
   const auto start = std::chrono::steady_clock::now();
@@ -191,12 +193,27 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  const bool failed = exit->signaled || exit->code != 0;
+  if (exit->code == 127 && !exit->signaled && Tail(spawn.output_path).empty()) {
+    return absl::NotFoundError(
+        absl::StrCat("TetGen program '", *program, "' could not be started"));
+  }
+  return *exit;
+}
+
+}  // namespace
+
+absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
+                                  const Progress& progress) {
+  SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
+  const std::string log = scratch.dir() + "/tetgen.log";
+  const std::string switches = TetgenSwitches(options);
+  SM_ASSIGN_OR_RETURN(const ChildExit exit, RunInScratch(plc, options, switches, scratch, progress));
+  const bool failed = exit.signaled || exit.code != 0;
   if (failed && !options.failed_plc_path.empty()) {
     WriteFileAtomically(options.failed_plc_path, plc.ToPoly()).IgnoreError();
   }
-  if (exit->signaled) {
-    const int sig = exit->code;
+  if (exit.signaled) {
+    const int sig = exit.code;
     const std::string tail = Tail(log);
     if (tail.find("bad_alloc") != std::string::npos || tail.find("memory") != std::string::npos) {
       return absl::ResourceExhaustedError(absl::StrCat(
@@ -205,14 +222,9 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
     return absl::InternalError(absl::StrCat("TetGen crashed with signal ", sig, " (",
                                             strsignal(sig), "); its last output: ", tail));
   }
-  const int code = exit->code;
-  if (code == 127 && Tail(log).empty()) {
-    return absl::NotFoundError(
-        absl::StrCat("TetGen program '", *program, "' could not be started"));
-  }
-  if (code != 0) {
-    return absl::InternalError(
-        absl::StrCat("TetGen exited with code ", code, " running '", switches, "': ", Tail(log)));
+  if (exit.code != 0) {
+    return absl::InternalError(absl::StrCat("TetGen exited with code ", exit.code, " running '",
+                                            switches, "': ", Tail(log)));
   }
   auto mesh = ReadOutput(scratch.dir() + "/plc.1", plc);
   if (!mesh.ok()) {
@@ -220,6 +232,34 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
                                             "; its log: ", Tail(log)));
   }
   return mesh;
+}
+
+absl::StatusOr<std::vector<std::pair<uint32_t, uint32_t>>> FindFacetIntersections(
+    const Plc& plc, const TetgenOptions& options, const Progress& progress) {
+  SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
+  SM_ASSIGN_OR_RETURN(const ChildExit exit, RunInScratch(plc, options, "-pd", scratch, progress));
+  const std::string log = scratch.dir() + "/tetgen.log";
+  if (exit.signaled || exit.code != 0) {
+    return absl::InternalError(
+        absl::StrCat("TetGen's intersection check ", exit.ToString(), ": ", Tail(log)));
+  }
+  SM_ASSIGN_OR_RETURN(const std::string text, ReadFileToString(log, int64_t{1} << 30));
+  // "  Facet #A intersects facet #B at triangles:", A and B counted from 1; each pair is
+  // listed once per pair of its triangles.
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    const std::vector<absl::string_view> words =
+        absl::StrSplit(line, absl::ByAnyChar(" #"), absl::SkipEmpty());
+    if (words.size() < 5 || words[0] != "Facet" || words[2] != "intersects") continue;
+    uint32_t a = 0, b = 0;
+    if (!absl::SimpleAtoi(words[1], &a) || !absl::SimpleAtoi(words[4], &b) || a == 0 || b == 0) {
+      continue;
+    }
+    pairs.push_back({std::min(a, b) - 1, std::max(a, b) - 1});
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
 }
 
 }  // namespace sheetmesh

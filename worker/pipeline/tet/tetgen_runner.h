@@ -7,6 +7,8 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -42,6 +44,12 @@ std::string TetgenSwitches(const TetgenOptions& options);
 // is missing; kCancelled (the child is killed) if `progress` asks.
 absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
                                   const Progress& progress = {});
+
+// The pairs of facets (indices into plc.facets, smaller first) that TetGen's own check
+// (-d, exact predicates) finds cutting through each other: what a crash on a PLC that
+// passed sheetmesh's checks is looked for by.
+absl::StatusOr<std::vector<std::pair<uint32_t, uint32_t>>> FindFacetIntersections(
+    const Plc& plc, const TetgenOptions& options, const Progress& progress = {});
 
 }  // namespace sheetmesh
 

@@ -166,9 +166,14 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
 // it crashes most), then also free to add points on the sheet triangles where recovering
 // them needs one (each is still covered exactly by tetrahedron faces, its added points
 // sliding in it during the improvement); its refinement, free on the sheets, would split
-// them many times over (a tenfold count on the DPM junction). What failed is said in
-// r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::failed_plc_path).
-absl::StatusOr<TetMesh> RunTetgenRecovering(const Plc& plc, const TetgenOptions& options,
+// them many times over (a tenfold count on the DPM junction). Where every try fails and
+// `repair` allows, TetGen's own exact check (-d) names the sheet triangles that cut
+// through each other though sheetmesh's checks passed them (a sheet crumpled within a
+// voxel, nearly flat on itself: the rough network at r = 3): the smaller of each pair is
+// removed from *plc, counted with the PLC's repairs, and the tries run again. What failed
+// is said in r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::
+// failed_plc_path).
+absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& options, bool repair,
                                             const Progress& progress, VolumeMeshResult* r) {
   std::vector<TetgenOptions> tries = {options};
   if (options.max_radius_edge_ratio > 0) {  // no -q: the constrained Delaunay mesh alone
@@ -179,17 +184,44 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(const Plc& plc, const TetgenOptions&
     tries.push_back(tries.back());
     tries.back().steiner_on_sheets = true;
   }
+  constexpr int kRepairRounds = 3;
   absl::Status last;
-  for (size_t i = 0; i < tries.size(); ++i) {
-    absl::StatusOr<TetMesh> mesh = RunTetgen(plc, tries[i], progress);
-    // Only a crash or an error of TetGen's own is tried again; limits and cancels are final.
-    if (mesh.ok() || mesh.status().code() != absl::StatusCode::kInternal) {
-      if (mesh.ok() && i > 0) r->tetgen_switches = TetgenSwitches(tries[i]);
-      return mesh;
+  for (int round = 0; round <= kRepairRounds; ++round) {
+    for (size_t i = 0; i < tries.size(); ++i) {
+      absl::StatusOr<TetMesh> mesh = RunTetgen(*plc, tries[i], progress);
+      // Only a crash or an error of TetGen's own is tried again; limits and cancels are final.
+      if (mesh.ok() || mesh.status().code() != absl::StatusCode::kInternal) {
+        if (mesh.ok() && (i > 0 || round > 0)) r->tetgen_switches = TetgenSwitches(tries[i]);
+        return mesh;
+      }
+      last = mesh.status();
+      r->tetgen_recovery.push_back(
+          absl::StrCat(TetgenSwitches(tries[i]), ": ", last.message().substr(0, 160)));
     }
-    last = mesh.status();
-    r->tetgen_recovery.push_back(
-        absl::StrCat(TetgenSwitches(tries[i]), ": ", last.message().substr(0, 160)));
+    if (!repair || round == kRepairRounds) break;
+    absl::StatusOr<std::vector<std::pair<uint32_t, uint32_t>>> pairs =
+        FindFacetIntersections(*plc, options, progress);
+    if (!pairs.ok() || pairs->empty()) break;
+    const size_t first = plc->facets.size() - plc->sheet_triangles.size();
+    auto area = [&](uint32_t facet) {
+      const Face& f = plc->sheet_triangles[facet - first];
+      return Area({plc->vertices[f[0]], plc->vertices[f[1]], plc->vertices[f[2]]});
+    };
+    std::vector<uint8_t> drop(plc->sheet_triangles.size(), 0);
+    double dropped_area = 0;
+    for (const auto& [a, b] : *pairs) {
+      if (b < first || (a >= first && drop[a - first]) || drop[b - first]) continue;
+      const uint32_t smaller = (a < first || area(b) < area(a)) ? b : a;
+      drop[smaller - first] = 1;
+      dropped_area += area(smaller);
+    }
+    const uint32_t dropped = DropSheetTriangles(drop, plc);
+    if (dropped == 0) break;
+    plc->repaired_triangles += dropped;
+    plc->repaired_area_voxels += dropped_area / (plc->voxel_length * plc->voxel_length);
+    r->tetgen_recovery.push_back(absl::StrCat("TetGen's intersection check (-d): ", pairs->size(),
+                                              " pairs of facets cut through each other; ",
+                                              dropped, " sheet triangles removed"));
   }
   return last;
 }
@@ -220,7 +252,7 @@ absl::Status MeshWithinBudget(const TriangleMesh& sheets, const Dims& dims,
     const absl::Time start = absl::Now();
     ++r->sizing_attempts;
     SM_ASSIGN_OR_RETURN(r->mesh,
-                        RunTetgenRecovering(*plc, options.tetgen, progress.Sub(0, 0.9), r));
+                        RunTetgenRecovering(plc, options.tetgen, plc_options->repair, progress.Sub(0, 0.9), r));
     r->tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
     const uint64_t made = r->mesh.tets.size();
     if (budget == 0 || made <= room) return absl::OkStatus();
@@ -317,7 +349,7 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
         std::min(tetgen.time_limit_seconds, std::max(kMinRoundSeconds, 20 * r->tetgen_seconds));
     tetgen.failed_plc_path.clear();
     VolumeMeshResult trial;
-    absl::StatusOr<TetMesh> mesh = RunTetgenRecovering(finer, tetgen, step.Sub(0, 0.7), &trial);
+    absl::StatusOr<TetMesh> mesh = RunTetgenRecovering(&finer, tetgen, /*repair=*/false, step.Sub(0, 0.7), &trial);
     if (!mesh.ok()) {
       if (mesh.status().code() == absl::StatusCode::kCancelled) return mesh.status();
       r->sliver_refinement.stopped =
@@ -376,6 +408,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
       Finish(plc, options, progress.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets, &r.improvement));
   SM_RETURN_IF_ERROR(RefineAtSlivers(options, progress.Sub(0.95, 0.99), &plc, &r));
   static_cast<PlcStats&>(r) = plc;
+  r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);
   r.conformity = CheckConformity(plc, r.mesh);
   if (r.conformity.orphan_faces > 0) {
     return absl::InternalError(

@@ -75,6 +75,9 @@ struct VolumeMeshStats : PlcStats {
   uint32_t rederived_facets = 0;      // sheet facets whose faces TetGen listed wrongly (taken
                                       // again from the tetrahedra)
   TetImproveReport improvement;
+  // The PLC's narrowest wedges (MeasureWedges, under tet.min_dihedral): where the mesh's
+  // smallest angle is at this bound, the input forces it.
+  WedgeBound wedges;
   // The sheet triangles bisected around slivers the sheets pinned (RefineAtSlivers).
   struct SliverRefinement {
     double min_dihedral_before = 0;  // degrees, before any round

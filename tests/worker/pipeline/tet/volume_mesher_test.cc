@@ -259,6 +259,7 @@ TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakes
   EXPECT_LE(untangled.untangle_max_move, forced.untangle_voxels);
   EXPECT_EQ(untangled.sheet_triangles.size(), 2u);
   forced.untangle_voxels = 0;
+  forced.repair = false;
   EXPECT_THAT(BuildPlc(clash, dims, {}, forced),
               StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("intersect")));
   // Without B, P snaps.
@@ -385,21 +386,20 @@ TEST(VolumeMesherTest, SheetsPiercingEachOtherMeetAlongTheirCrossingInTheMesh) {
   EXPECT_GT(r.untangle_splits, 0u);
   EXPECT_EQ(r.repaired_triangles, 0u);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
-  // Without untangling the clashes are reported, and nothing is passed to TetGen; removing
-  // one triangle of each pair (repair) is not enough for a full piercing.
+  // Without untangling or repair the clashes are reported, and nothing is passed to TetGen;
+  // with repair (the default) triangles are removed, round after round, until none clash.
   VolumeMeshOptions o;
   o.plc.untangle_voxels = 0;
+  o.plc.repair = false;
   EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, o),
               StatusIs(absl::StatusCode::kFailedPrecondition,
                        ::testing::AllOf(HasSubstr("intersect"), HasSubstr("triangles"))));
   o.plc.repair = true;
-  auto fixed = BuildVolumeMesh(m, {20, 20, 20}, {}, o);
-  if (!fixed.ok()) {
-    EXPECT_THAT(fixed,
-                StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("still intersect")));
-  } else {
-    EXPECT_GT(fixed->repaired_triangles, 0u);
-  }
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult fixed, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
+  EXPECT_GT(fixed.repaired_triangles, 0u);
+  EXPECT_GT(fixed.repaired_area_voxels, 0.0);
+  EXPECT_LT(fixed.conformity.sheet_triangles, m.faces.size());
+  EXPECT_EQ(fixed.conformity.conforming, fixed.conformity.sheet_triangles);
 }
 
 TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
@@ -424,6 +424,7 @@ TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
   // Without untangling the clash is refused, or, with repair, the triangle goes.
   VolumeMeshOptions o;
   o.plc.untangle_voxels = 0;
+  o.plc.repair = false;
   EXPECT_THAT(BuildVolumeMesh(m, {20, 20, 20}, {}, o),
               StatusIs(absl::StatusCode::kFailedPrecondition));
   o.plc.repair = true;

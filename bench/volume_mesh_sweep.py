@@ -66,19 +66,25 @@ def one(cli, name, raw, dims, value, mode, r, out_dir, flags):
                S=rep["similarity"]["similarity"], vol_s=rep["seconds"].get("volume", 0),
                tetgen_s=vm.get("tetgen_seconds", 0))
     row["per_tri"] = row["tets"] / max(1, row["tris"])
+    row["wedge"] = vm.get("input_wedges", {}).get("narrowest_degrees", 360)
+    row["repaired"] = vm.get("repaired_triangles", 0)
+    row["thin_splits"] = vm.get("untangled", {}).get("thin_splits", 0)
     return row
 
 
 def table(rows):
-    out = ["| volume | mode | r | result | min° | mean° | tets | sheet tris | tets/tri | S | volume s | TetGen s |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    out = ["| volume | mode | r | result | min° | mean° | tets | sheet tris | tets/tri | S | volume s | TetGen s "
+           "| input wedge° | removed tris |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for x in rows:
         if "error" in x:
-            out.append("| %s | %s | %g | **failed**: %s | | | | | | | | |" % (x["volume"], x["mode"], x["r"], x["error"]))
+            out.append("| %s | %s | %g | **failed**: %s | | | | | | | | | | |" % (
+                x["volume"], x["mode"], x["r"], x["error"]))
         else:
-            out.append("| %s | %s | %g | %s | %.2f | %.2f | %d | %d | %.1f | %.3f | %.2f | %.2f |" % (
+            out.append("| %s | %s | %g | %s | %.2f | %.2f | %d | %d | %.1f | %.3f | %.2f | %.2f | %.2f | %d |" % (
                 x["volume"], x["mode"], x["r"], "ok" if x["min"] >= 10 else "min < 10°", x["min"], x["mean"],
-                x["tets"], x["tris"], x["per_tri"], x["S"], x["vol_s"], x["tetgen_s"]))
+                x["tets"], x["tris"], x["per_tri"], x["S"], x["vol_s"], x["tetgen_s"], x.get("wedge", 360),
+                x.get("repaired", 0)))
     return out
 
 
@@ -88,6 +94,13 @@ def summary(rows):
     slivers = [x for x in ok if x["min"] < 10]
     lines = ["", "%d runs: %d meshes with min dihedral >= 10°, %d with slivers, %d failed" % (
         len(rows), len(ok) - len(slivers), len(slivers), len(failed))]
+    forced = [x for x in slivers if x.get("wedge", 360) < 10]
+    lines.append("of the meshes with slivers, %d have an input wedge under 10° (sheets or a sheet and the box "
+                 "meeting in an edge at that angle: no conforming mesh does better there)" % len(forced))
+    repaired = [x for x in ok if x.get("repaired", 0) > 0]
+    lines.append("runs with sheet triangles removed as a last resort: %d (%d triangles in all); with thin "
+                 "crossing splits: %d" % (len(repaired), sum(x["repaired"] for x in repaired),
+                                          sum(1 for x in ok if x.get("thin_splits", 0) > 0)))
     if ok:
         lines.append("min dihedral: lowest %.2f°, median %.2f°; mean dihedral lowest %.2f°" % (
             min(x["min"] for x in ok), statistics.median(x["min"] for x in ok), min(x["mean"] for x in ok)))

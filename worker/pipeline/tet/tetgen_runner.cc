@@ -207,7 +207,8 @@ absl::StatusOr<TetMesh> RunTetgen(const Plc& plc, const TetgenOptions& options,
   SM_ASSIGN_OR_RETURN(Scratch scratch, Scratch::Create(options.scratch_dir, options.keep_scratch));
   const std::string log = scratch.dir() + "/tetgen.log";
   const std::string switches = TetgenSwitches(options);
-  SM_ASSIGN_OR_RETURN(const ChildExit exit, RunInScratch(plc, options, switches, scratch, progress));
+  SM_ASSIGN_OR_RETURN(const ChildExit exit,
+                      RunInScratch(plc, options, switches, scratch, progress));
   const bool failed = exit.signaled || exit.code != 0;
   if (failed && !options.failed_plc_path.empty()) {
     WriteFileAtomically(options.failed_plc_path, plc.ToPoly()).IgnoreError();

@@ -220,8 +220,8 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& optio
     plc->repaired_triangles += dropped;
     plc->repaired_area_voxels += dropped_area / (plc->voxel_length * plc->voxel_length);
     r->tetgen_recovery.push_back(absl::StrCat("TetGen's intersection check (-d): ", pairs->size(),
-                                              " pairs of facets cut through each other; ",
-                                              dropped, " sheet triangles removed"));
+                                              " pairs of facets cut through each other; ", dropped,
+                                              " sheet triangles removed"));
   }
   return last;
 }
@@ -251,8 +251,8 @@ absl::Status MeshWithinBudget(const TriangleMesh& sheets, const Dims& dims,
     SM_RETURN_IF_ERROR(CheckMaxVolume(options.tetgen, r->box_volume, dims));
     const absl::Time start = absl::Now();
     ++r->sizing_attempts;
-    SM_ASSIGN_OR_RETURN(r->mesh,
-                        RunTetgenRecovering(plc, options.tetgen, plc_options->repair, progress.Sub(0, 0.9), r));
+    SM_ASSIGN_OR_RETURN(r->mesh, RunTetgenRecovering(plc, options.tetgen, plc_options->repair,
+                                                     progress.Sub(0, 0.9), r));
     r->tetgen_seconds = absl::ToDoubleSeconds(absl::Now() - start);
     const uint64_t made = r->mesh.tets.size();
     if (budget == 0 || made <= room) return absl::OkStatus();
@@ -349,7 +349,8 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
         std::min(tetgen.time_limit_seconds, std::max(kMinRoundSeconds, 20 * r->tetgen_seconds));
     tetgen.failed_plc_path.clear();
     VolumeMeshResult trial;
-    absl::StatusOr<TetMesh> mesh = RunTetgenRecovering(&finer, tetgen, /*repair=*/false, step.Sub(0, 0.7), &trial);
+    absl::StatusOr<TetMesh> mesh =
+        RunTetgenRecovering(&finer, tetgen, /*repair=*/false, step.Sub(0, 0.7), &trial);
     if (!mesh.ok()) {
       if (mesh.status().code() == absl::StatusCode::kCancelled) return mesh.status();
       r->sliver_refinement.stopped =

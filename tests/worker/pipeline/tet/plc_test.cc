@@ -426,5 +426,43 @@ TEST(PlcTest, AnEdgeAcrossACornerOfABoxFaceIsASegmentOfItsFacet) {
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
 }
 
+// A PLC of sheet triangles alone, in the box [0, 20]^3 (MeasureWedges reads no facets).
+Plc WedgePlc(const std::vector<Vec3>& vertices, const std::vector<Face>& triangles) {
+  Plc plc;
+  plc.box_lo = {0, 0, 0};
+  plc.box_hi = {20, 20, 20};
+  plc.vertices = vertices;
+  plc.sheet_triangles = triangles;
+  return plc;
+}
+
+TEST(PlcTest, TheNarrowestWedgeIsTheAngleFacetsMeetAtInAnEdge) {
+  const double deg = std::numbers::pi / 180;
+  // Two sheets meeting in the edge (5,5,10)-(5,15,10) at 5 degrees.
+  const Vec3 a(5, 5, 10), b(5, 15, 10);
+  const Vec3 c(15, 10, 10), d(5 + 10 * std::cos(5 * deg), 10, 10 + 10 * std::sin(5 * deg));
+  WedgeBound w = MeasureWedges(WedgePlc({a, b, c, d}, {{0, 1, 2}, {0, 1, 3}}), 10);
+  EXPECT_NEAR(w.narrowest_degrees, 5, 1e-9);
+  EXPECT_EQ(w.narrow_edges, 1u);
+  // One flat sheet: its inner edge has 180 degrees on either side; its rim edges none.
+  w = MeasureWedges(WedgePlc({a, b, c, Vec3(1, 10, 10)}, {{0, 1, 2}, {1, 0, 3}}), 10);
+  EXPECT_NEAR(w.narrowest_degrees, 180, 1e-9);
+  EXPECT_EQ(w.narrow_edges, 0u);
+  // A sheet leaving the box face z = 0 along its edge at 8 degrees (the wedge inside the
+  // box is 8, the other side 172), and one leaving it upright (90 on both sides).
+  const Vec3 f(5, 5, 0), g(5, 15, 0);
+  w = MeasureWedges(
+      WedgePlc({f, g, Vec3(5 + 10 * std::cos(8 * deg), 10, 10 * std::sin(8 * deg))}, {{0, 1, 2}}),
+      10);
+  EXPECT_NEAR(w.narrowest_degrees, 8, 1e-9);
+  EXPECT_EQ(w.narrow_edges, 1u);
+  w = MeasureWedges(WedgePlc({f, g, Vec3(5, 10, 10)}, {{0, 1, 2}}), 10);
+  EXPECT_NEAR(w.narrowest_degrees, 90, 1e-9);
+  EXPECT_EQ(w.narrow_edges, 0u);
+  // No edge shared: no bound.
+  w = MeasureWedges(WedgePlc({a, b, c}, {{0, 1, 2}}), 10);
+  EXPECT_EQ(w.narrowest_degrees, 360);
+}
+
 }  // namespace
 }  // namespace sheetmesh

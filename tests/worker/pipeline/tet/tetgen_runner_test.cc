@@ -113,5 +113,47 @@ TEST(TetgenRunnerTest, CancellationKillsTetgen) {
               StatusIs(absl::StatusCode::kCancelled));
 }
 
+TEST(TetgenRunnerTest, TetgensOwnCheckNamesTheFacetsThatCutThroughEachOther) {
+  // A clean PLC of one square sheet, then a triangle laid through it by hand (past every
+  // check of BuildPlc): TetGen's exact check names that pair, facets counted from 0.
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(Square(4, 16, 10, 2), {20, 20, 20}, {}));
+  SM_ASSERT_OK_AND_ASSIGN(auto none, FindFacetIntersections(plc, {}));
+  EXPECT_TRUE(none.empty());
+  const uint32_t base = static_cast<uint32_t>(plc.vertices.size());
+  plc.vertices.push_back({7, 7, 8});
+  plc.vertices.push_back({8, 7, 12});
+  plc.vertices.push_back({7.5, 8, 12});
+  const uint32_t t = static_cast<uint32_t>(plc.sheet_triangles.size());
+  plc.sheet_triangles.push_back({base, base + 1, base + 2});
+  plc.sheet_piece.push_back(1);
+  plc.sheet_thickness.push_back(1);
+  plc.facets.push_back({{{base, base + 1, base + 2}}, kFirstSheetMarker + static_cast<int32_t>(t)});
+  SM_ASSERT_OK_AND_ASSIGN(auto pairs, FindFacetIntersections(plc, {}));
+  ASSERT_FALSE(pairs.empty());
+  const uint32_t added = static_cast<uint32_t>(plc.facets.size() - 1);
+  for (const auto& [a, b] : pairs) {
+    EXPECT_LT(a, b);
+    EXPECT_EQ(b, added);
+    EXPECT_GE(a, 6u);  // a sheet facet, not the box's
+  }
+  // Removing the added triangle leaves the PLC as clean as it was, its markers in order.
+  std::vector<uint8_t> drop(plc.sheet_triangles.size(), 0);
+  drop[t] = 1;
+  EXPECT_EQ(DropSheetTriangles(drop, &plc), 1u);
+  EXPECT_EQ(plc.sheet_triangles.size(), t);
+  for (size_t k = 0; k < plc.sheet_triangles.size(); ++k) {
+    EXPECT_EQ(plc.facets[6 + k].marker, kFirstSheetMarker + static_cast<int32_t>(k));
+  }
+  SM_ASSERT_OK_AND_ASSIGN(auto after, FindFacetIntersections(plc, {}));
+  EXPECT_TRUE(after.empty());
+}
+
+TEST(TetgenRunnerTest, AMissingTetgenIsNotFoundForTheCheckToo) {
+  TetgenOptions o;
+  o.program = "/nonexistent/tetgen";
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(Square(4, 16, 10, 2), {20, 20, 20}, {}));
+  EXPECT_THAT(FindFacetIntersections(plc, o), StatusIs(absl::StatusCode::kNotFound));
+}
+
 }  // namespace
 }  // namespace sheetmesh

@@ -385,8 +385,9 @@ std::vector<ParamRow> VolumeMeshRows() {
                          "[67108864, 1099511627776]", "bytes", "TetGen's memory limit"));
   rows.push_back(Local(Text("tet.program", SM_MEMBER(volume.tetgen.program),
                             "the TetGen program (looked up on PATH)")));
-  rows.push_back(Bool("plc.repair", SM_MEMBER(volume.plc.repair),
-                      "drop the smaller of each pair of sheet triangles untangling left clashing (else fail)"));
+  rows.push_back(Bool(
+      "plc.repair", SM_MEMBER(volume.plc.repair),
+      "drop the smaller of each pair of sheet triangles untangling left clashing (else fail)"));
   rows.push_back(Number("plc.snap_voxels", SM_MEMBER(volume.plc.snap_voxels), "[0, 10]", "voxels",
                         "sheet vertices this close to the box move onto it"));
   rows.push_back(Number("plc.snap_clear_voxels", SM_MEMBER(volume.plc.snap_clear_voxels), "[0, 10]",

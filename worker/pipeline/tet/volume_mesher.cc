@@ -330,9 +330,18 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   const int rounds = options.sliver_rounds;
   constexpr double kMinGain = 0.1;           // degrees: a round that gains less is not kept
   constexpr double kMinRoundSeconds = 10.0;  // TetGen's least time limit in a round
+  constexpr double kWedgeTolerance = 1e-6;   // degrees
   const double aim = options.tetgen.min_dihedral_degrees;
   double worst = MeasureQuality(r->mesh).min_dihedral.min;
   r->sliver_refinement.min_dihedral_before = worst;
+  // Where the smallest angle is the input's own (two facets meeting in an edge at that
+  // angle), no round can raise it, and none would be kept: none is run.
+  const double wedge = MeasureWedges(*plc, aim).narrowest_degrees;
+  if (aim > 0 && worst < aim && worst >= wedge - kWedgeTolerance) {
+    r->sliver_refinement.stopped =
+        absl::StrCat("the input's narrowest wedge (", wedge, " degrees) is the minimum");
+    return absl::OkStatus();
+  }
   for (int round = 0; round < rounds && aim > 0 && worst < aim; ++round) {
     const Progress step = progress.Sub(double(round) / rounds, double(round + 1) / rounds);
     uint32_t slivers = 0;

@@ -433,5 +433,31 @@ TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
   EXPECT_EQ(r.conformity.sheet_triangles, 8u);
 }
 
+TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
+  // Two sheets meeting in an edge at 5 degrees: the tetrahedra in that wedge can do no
+  // better, the report says so, and no refinement round is spent on it.
+  const double deg = std::numbers::pi / 180;
+  TriangleMesh m;
+  m.vertices = {{5, 5, 10},
+                {5, 15, 10},
+                {15, 10, 10},
+                {5 + 10 * std::cos(5 * deg), 10, 10 + 10 * std::sin(5 * deg)}};
+  m.faces = {{0, 1, 2}, {0, 1, 3}};
+  m.face_piece = {0, 1};
+  m.face_thickness = {1, 1};
+  VolumeMeshOptions o;
+  // The mends that would open it (a vertex moved off the other sheet's plane, or onto it
+  // where it lies within a voxel) are off: this is about what cannot be mended.
+  o.plc.wedge_degrees = 0;
+  o.plc.contact_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
+  EXPECT_NEAR(r.wedges.narrowest_degrees, 5, 1e-6);
+  EXPECT_EQ(r.wedges.narrow_edges, 1u);
+  EXPECT_LE(r.quality.min_dihedral.min, 5 + 1e-6);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_EQ(r.sliver_refinement.rounds, 0u);
+  EXPECT_THAT(r.sliver_refinement.stopped, HasSubstr("narrowest wedge"));
+}
+
 }  // namespace
 }  // namespace sheetmesh

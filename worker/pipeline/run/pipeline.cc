@@ -241,7 +241,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                         BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   const TriangleMesh& mesh = result.mesh;
-  if (surface.target_faces > 0 && mesh.num_faces() > 1.05 * surface.target_faces) {
+  if (surface.target_faces > 0 &&
+      mesh.num_faces() > (1 + kTriangleTolerance) * surface.target_faces) {
     return absl::InvalidArgumentError(absl::StrCat("triangles = ", surface.target_faces,
                                                    " is below the fewest this sheet can be meshed "
                                                    "with: ",

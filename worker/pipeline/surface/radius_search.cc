@@ -71,7 +71,9 @@ class Evaluator {
 absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, double lo, double hi,
                                              uint64_t target, bool coarsest_below) {
   constexpr int kMaxTrials = 14;
-  auto within = [&](uint64_t n) { return std::abs(double(n) - double(target)) <= 0.05 * target; };
+  auto within = [&](uint64_t n) {
+    return std::abs(double(n) - double(target)) <= kTriangleTolerance * target;
+  };
   std::vector<RadiusTrial> seen;
   double r = std::clamp(start, lo, hi);
   RadiusChoice choice;
@@ -178,7 +180,7 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     SM_ASSIGN_OR_RETURN(RadiusTrial decimated, eval.Eval(fine.radius, true, n));
     RadiusChoice c = fine;
     c.decimate_to = n;
-    c.target_reached = std::abs(double(decimated.triangles) - n) <= 0.05 * n;
+    c.target_reached = std::abs(double(decimated.triangles) - n) <= kTriangleTolerance * n;
     if (!c.target_reached) {
       c.message = decimated.triangles > n
                       ? absl::StrCat("decimation stopped at ", decimated.triangles, " triangles")

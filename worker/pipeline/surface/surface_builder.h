@@ -27,6 +27,11 @@ enum class VertexPlacement {
                // sheets)
 };
 
+// How far a surface's triangle count may land from a count asked for (`--triangles`,
+// SurfaceOptions::target_faces), as a fraction of it: the radius search's aim and the
+// pipeline's check of the count it got.
+inline constexpr double kTriangleTolerance = 0.05;
+
 struct SurfaceOptions {
   ScvdOptions scvd;               // r, seed, Lloyd settings
   DualTriangleOptions triangles;  // candidate selection

@@ -320,15 +320,7 @@ bool Untangler::RetriangulatePatch(uint32_t a, uint32_t b, UntangleStats* stats)
     const std::vector<Vec3> normals(changed.size(), side);
     if (Clean(changed, normals, gone)) {
       for (uint32_t f : changed) st_.thickness[f] = static_cast<float>(thick / area);
-      SheetTriangles kept;
-      for (size_t f = 0; f < st_.faces.size(); ++f) {
-        if (gone[f]) continue;
-        kept.faces.push_back(st_.faces[f]);
-        kept.source.push_back(st_.source[f]);
-        kept.piece.push_back(st_.piece[f]);
-        kept.thickness.push_back(st_.thickness[f]);
-      }
-      st_ = std::move(kept);
+      st_ = Without(st_, gone);
       ++stats->retriangulated_patches;
       return true;
     }

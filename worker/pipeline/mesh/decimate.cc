@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
+#include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 
 namespace sheetmesh {
@@ -26,6 +27,22 @@ struct Quadric {
     for (int k = 0; k < 10; ++k) a[k] += o.a[k];
     return *this;
   }
+  // The point where the quadric is least, when that is well posed (a corner or a crease of
+  // planes, not a flat or a line of them).
+  bool Minimum(Vec3* p) const {
+    const double m00 = a[0], m01 = a[1], m02 = a[2], m11 = a[4], m12 = a[5], m22 = a[7];
+    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
+                 c02 = m01 * m12 - m02 * m11;
+    const double det = m00 * c00 + m01 * c01 + m02 * c02;
+    const double scale = m00 + m11 + m22;
+    if (!(std::abs(det) > 1e-9 * scale * scale * scale)) return false;
+    const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12,
+                 c22 = m00 * m11 - m01 * m01;
+    const double bx = -a[3], by = -a[6], bz = -a[8];
+    *p = Vec3((c00 * bx + c01 * by + c02 * bz) / det, (c01 * bx + c11 * by + c12 * bz) / det,
+              (c02 * bx + c12 * by + c22 * bz) / det);
+    return true;
+  }
   double At(const Vec3& p) const {
     const double x = p.x, y = p.y, z = p.z;
     return a[0] * x * x + 2 * a[1] * x * y + 2 * a[2] * x * z + 2 * a[3] * x + a[4] * y * y +
@@ -38,7 +55,9 @@ struct Candidate {
   uint32_t u, v;  // u goes into v
   uint32_t stamp_u, stamp_v;
   Vec3 at;
-  uint64_t tie;  // a fixed scramble of the edge's vertex ids
+  uint64_t tie;   // a fixed scramble of the edge's vertex ids
+  uint32_t a, b;  // the edge as pushed (Push(a, b)), to try its next option
+  uint8_t tried;  // its options tried before, this one among them
   // Ties (a flat sheet's edges all cost 0) go by the scramble: the same order every run, but
   // spread over the sheet — an order swept along the vertex numbering, or by edge length,
   // leaves collapses blocked early (a planar junction stopped at 120 of 100 triangles).
@@ -74,7 +93,11 @@ class Decimator {
         stamp_(pos_.size(), 0),
         gone_(pos_.size(), 0),
         locked_(pos_.size(), 0),
-        rim_(pos_.size(), 0) {
+        rim_(pos_.size(), 0),
+        on_box_(pos_.size(), 0) {
+    if (o_.keep_box) {
+      for (uint32_t v = 0; v < pos_.size(); ++v) on_box_[v] = BoxFaces(pos_[v]);
+    }
     for (uint32_t f = 0; f < mesh_.faces.size(); ++f) {
       for (uint32_t v : mesh_.faces[f]) faces_of_[v].push_back(f);
     }
@@ -133,7 +156,14 @@ class Decimator {
       }
       if (c.cost > o_.max_error) break;
       const int removed = Collapse(c);
-      if (removed < 0) continue;
+      if (removed < 0) {
+        // The edge's next option (with optimal placement: a body's least point may fold a
+        // face where an end would not), else none until its faces move.
+        const size_t queued = heap_.size();
+        if (o_.optimal_placement) Push(c.a, c.b, c.tried);
+        if (heap_.size() == queued) refused_.insert(EdgeKey(c.u, c.v));
+        continue;
+      }
       faces -= removed;
       ++s.collapses;
       s.largest_error = std::max(s.largest_error, c.cost);
@@ -175,6 +205,14 @@ class Decimator {
     return counts;
   }
 
+  // Whether v has an edge of three or more faces.
+  bool OnJunction(uint32_t v) const {
+    for (const auto& [w, n] : EdgeFaceCounts(v)) {
+      if (n >= 3) return true;
+    }
+    return false;
+  }
+
   // A vertex on junction curves (edges of three or more faces) that may slide along them:
   // it has no boundary edge (where a curve reaches a rim, the vertex stays). The faces'
   // quadrics, planes of every sheet meeting there, keep a curve straight and a point where
@@ -186,12 +224,32 @@ class Decimator {
     return true;
   }
 
+  // The box faces (bit 2k: low side of axis k, 2k + 1: high) `p` lies in.
+  uint8_t BoxFaces(const Vec3& p) const {
+    constexpr double kTolerance = 1e-9;
+    uint8_t bits = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(p[k] - o_.box_lo[k]) <= kTolerance) bits |= 1 << (2 * k);
+      if (std::abs(p[k] - o_.box_hi[k]) <= kTolerance) bits |= 1 << (2 * k + 1);
+    }
+    return bits;
+  }
+  // `p` moved into the box faces of `bits`.
+  Vec3 OntoBox(Vec3 p, uint8_t bits) const {
+    for (int k = 0; k < 3; ++k) {
+      if (bits & (1 << (2 * k))) p[k] = o_.box_lo[k];
+      if (bits & (1 << (2 * k + 1))) p[k] = o_.box_hi[k];
+    }
+    return p;
+  }
+
   // Queues the cheaper direction of collapsing edge (a, b), if any is allowed.
-  void Push(uint32_t a, uint32_t b) {
+  // Options in `tried` (bits) are left out: they were refused.
+  void Push(uint32_t a, uint32_t b, uint8_t tried = 0) {
     Quadric q = q_[a];
     q += q_[b];
     // Where the merged vertex may go: a locked vertex stays, a rim vertex stays on the rim.
-    std::array<std::pair<uint32_t, Vec3>, 3> options;
+    std::array<std::pair<uint32_t, Vec3>, 4> options;
     int n = 0;
     auto add = [&](uint32_t into, const Vec3& at) { options[n++] = {into, at}; };
     if (locked_[a] && locked_[b]) {
@@ -211,22 +269,40 @@ class Decimator {
     } else {
       add(b, pos_[a]);  // the survivor's index does not matter: positions do
       add(b, pos_[b]);
-      add(b, (pos_[a] + pos_[b]) * 0.5);
+      const Vec3 mid = (pos_[a] + pos_[b]) * 0.5;
+      add(b, mid);
+      Vec3 best_point;
+      // Not farther from the edge's middle than the edge is long: a quadric of nearly
+      // parallel planes has its least point far off, where the faces would fold.
+      if (o_.optimal_placement && q.Minimum(&best_point) &&
+          Norm2(best_point - mid) <= Norm2(pos_[a] - pos_[b])) {
+        add(b, best_point);
+      }
     }
     double best = 1e300;
     Vec3 at;
     uint32_t into = b;
+    int chosen = -1;
+    const uint8_t box = on_box_[a] | on_box_[b];
     for (int k = 0; k < n; ++k) {
+      if (tried & (1 << k)) continue;
+      // A vertex in a box face stays in it (where two faces meet, on their edge).
+      if (box != 0) {
+        options[k].second = OntoBox(options[k].second, box);
+        if ((BoxFaces(options[k].second) & box) != box) continue;
+      }
       const double cost = q.At(options[k].second);
       if (cost < best) {
         best = cost;
         into = options[k].first;
         at = options[k].second;
+        chosen = k;
       }
     }
+    if (chosen < 0) return;
     const uint32_t from = into == a ? b : a;
-    heap_.push(
-        {std::max(0.0, best), from, into, stamp_[from], stamp_[into], at, Scramble(EdgeKey(a, b))});
+    heap_.push({std::max(0.0, best), from, into, stamp_[from], stamp_[into], at,
+                Scramble(EdgeKey(a, b)), a, b, static_cast<uint8_t>(tried | (1 << chosen))});
   }
 
   // Collapses c.u into c.v at c.at; the faces removed, or -1 when not allowed.
@@ -302,9 +378,24 @@ class Decimator {
     q_[v] += q_[u];
     pos_[v] = c.at;
     rim_[v] = rim_[v] || rim_[u];
+    on_box_[v] |= on_box_[u];
     gone_[u] = 1;
     ++stamp_[v];
-    for (uint32_t w : Neighbours(v)) Push(w, v);
+    // A junction the collapse took away (a pinch where two parts of a body's surface met
+    // in an edge) holds its vertices no longer.
+    const std::vector<uint32_t> around = Neighbours(v);
+    for (uint32_t w : around) locked_[w] = locked_[w] && OnJunction(w);
+    locked_[v] = (locked_[v] || locked_[u]) && OnJunction(v);
+    // The edges around v may go now, and (with optimal placement) so may refused ones among
+    // its neighbours: their faces moved.
+    for (uint32_t w : around) {
+      refused_.erase(EdgeKey(w, v));
+      Push(w, v);
+      if (!o_.optimal_placement) continue;
+      for (uint32_t x : Neighbours(w)) {
+        if (x != v && refused_.erase(EdgeKey(w, x)) > 0) Push(w, x);
+      }
+    }
     return static_cast<int>(shared.size());
   }
 
@@ -344,6 +435,8 @@ class Decimator {
   std::vector<Quadric> q_;
   std::vector<uint32_t> stamp_;
   std::vector<uint8_t> gone_, locked_, rim_;
+  std::vector<uint8_t> on_box_;            // BoxFaces of each vertex (with keep_box)
+  absl::flat_hash_set<uint64_t> refused_;  // edges whose collapse was refused
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap_;
 };
 

@@ -17,6 +17,16 @@ struct DecimateOptions {
   double boundary_weight = 4.0;   // weight of the planes across boundary edges
   double max_normal_turn = 45.0;  // degrees a face's normal may turn in one collapse
   double max_error = 1e300;       // stop once the cheapest collapse costs more (voxels²)
+  // A vertex off rims and junctions may also go where its quadric is least (Garland &
+  // Heckbert's optimal placement), not only to an end or the middle of the edge; a refused
+  // collapse tries the edge's next option, and is tried again when a neighbouring collapse
+  // moves its faces. The closed surfaces of bodies use it (their corners and creases lie
+  // between the voxels'); sheets keep the plain rule their figures were measured with.
+  bool optimal_placement = false;
+  // Vertices lying in a face of the box [box_lo, box_hi] stay in it (a body closed by the
+  // box's face keeps that face flat), and one on two faces stays on their edge.
+  bool keep_box = false;
+  Vec3 box_lo, box_hi;
 };
 
 struct DecimateStats {

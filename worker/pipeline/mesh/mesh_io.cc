@@ -54,6 +54,8 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                   "\nproperty list uchar int vertex_indices\n");
   if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
   if (fpiece) out += "property int piece\n";
+  const bool fbody = fpiece && !mesh.body_pieces.empty();
+  if (fbody) out += "property uchar body\n";
   if (fthick) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   out += "end_header\n";
   out.reserve(out.size() + mesh.vertices.size() * 40 + mesh.faces.size() * 48);
@@ -83,6 +85,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                             mesh.face_thickness[f]);
     }
     if (fpiece) absl::StrAppend(&out, " ", mesh.face_piece[f]);
+    if (fbody) absl::StrAppend(&out, mesh.IsBodyFace(f) ? " 1" : " 0");
     if (fthick) {
       const std::array<int, 3> c = ThicknessColour(mesh.face_thickness[f], lo, hi);
       absl::StrAppend(&out, " ", c[0], " ", c[1], " ", c[2]);
@@ -131,6 +134,10 @@ std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, 
   if (mesh.face_piece.size() == mesh.faces.size()) {
     out += "<DataArray type=\"Int32\" Name=\"piece\" format=\"ascii\">\n";
     for (int32_t p : mesh.face_piece) absl::StrAppend(&out, p, "\n");
+    out += "</DataArray>\n";
+    // 1 on a body's faces (the closed surface around a piece), 0 on a sheet's.
+    out += "<DataArray type=\"UInt8\" Name=\"body\" format=\"ascii\">\n";
+    for (size_t f = 0; f < mesh.faces.size(); ++f) out += mesh.IsBodyFace(f) ? "1\n" : "0\n";
     out += "</DataArray>\n";
   }
   absl::StrAppend(&out, "</CellData>\n", unstructured ? "<Cells>\n" : "<Polys>\n",
@@ -401,6 +408,7 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
   PlyCursor cur(data, body, ascii, big);
   const double unit = PhysicalLength(1.0, placement);
   std::vector<float> face_thick, face_thick_vox, vert_thick;
+  std::vector<bool> face_body;
   for (const PlyElement& e : elements) {
     for (int64_t i = 0; i < e.count; ++i) {
       Vec3 p;
@@ -421,6 +429,7 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
             if (prop.name == "thickness") face_thick.push_back(static_cast<float>(v / unit));
             if (prop.name == "thickness_voxels") face_thick_vox.push_back(static_cast<float>(v));
             if (prop.name == "piece") mesh.face_piece.push_back(static_cast<int32_t>(v));
+            if (prop.name == "body") face_body.push_back(v != 0);
           }
           continue;
         }
@@ -461,6 +470,14 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
     mesh.face_thickness = std::move(face_thick);
   }
   if (mesh.face_piece.size() != mesh.faces.size()) mesh.face_piece.clear();
+  if (!mesh.face_piece.empty() && face_body.size() == mesh.faces.size()) {
+    for (size_t f = 0; f < face_body.size(); ++f) {
+      if (face_body[f]) mesh.body_pieces.push_back(mesh.face_piece[f]);
+    }
+    std::sort(mesh.body_pieces.begin(), mesh.body_pieces.end());
+    mesh.body_pieces.erase(std::unique(mesh.body_pieces.begin(), mesh.body_pieces.end()),
+                           mesh.body_pieces.end());
+  }
   if (vert_thick.size() == mesh.vertices.size()) mesh.vertex_thickness = std::move(vert_thick);
   return mesh;
 }

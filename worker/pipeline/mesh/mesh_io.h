@@ -19,16 +19,17 @@ double PhysicalLength(double voxels, const Placement& placement);
 
 // ASCII PLY (meshio 5's binary PLY reader takes no face properties; its ASCII one does).
 // Vertices x, y, z (physical) and, when present, thickness; faces vertex_indices, thickness
-// (physical), thickness_voxels, piece, and red/green/blue from the thickness for readers
+// (physical), thickness_voxels, piece, body (1 on a body's faces; only when the mesh has
+// bodies), and red/green/blue from the thickness for readers
 // that keep only colours (VTK's). The file appears atomically.
 absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
-// VTK XML PolyData (.vtp) with cell data thickness, thickness_voxels, piece and point data
+// VTK XML PolyData (.vtp) with cell data thickness, thickness_voxels, piece, body and point data
 // thickness. Atomic.
 absl::Status WriteVtp(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);
 // The same as an UnstructuredGrid of triangles (.vtu), for readers without PolyData
-// (meshio): cell data thickness, thickness_voxels, piece.
+// (meshio): cell data thickness, thickness_voxels, piece, body.
 absl::Status WriteSurfaceVtu(const std::string& path, const TriangleMesh& mesh,
                              const Placement& placement);
 

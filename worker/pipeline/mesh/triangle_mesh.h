@@ -1,5 +1,8 @@
-// TriangleMesh: the surface mesh of sheets — vertices in voxel index coordinates, faces,
-// and the per-face attributes the method carries (thickness, piece).
+// TriangleMesh: the surface mesh of sheets and bodies — vertices in voxel index
+// coordinates, faces, and the per-face attributes the method carries (thickness, piece).
+// A sheet is one layer of triangles whose thickness says how thick the piece is there; a
+// body (a piece as thick as it is wide) is the closed surface around its voxels, its faces
+// of thickness 0.
 #ifndef SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_
 #define SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_
 
@@ -19,9 +22,13 @@ struct TriangleMesh {
   std::vector<float> face_thickness;    // per face, voxels; empty when not computed
   std::vector<int32_t> face_piece;      // per face, object id; empty when not labelled
   std::vector<float> vertex_thickness;  // per vertex, voxels; empty unless computed
+  std::vector<int32_t> body_pieces;     // pieces meshed as bodies, sorted; the rest are sheets
 
   size_t num_vertices() const { return vertices.size(); }
   size_t num_faces() const { return faces.size(); }
+  // Whether `piece` is a body, face `f` one of a body's faces.
+  bool IsBody(int32_t piece) const;
+  bool IsBodyFace(size_t f) const;
 };
 
 // The key of the undirected edge {a, b}: the smaller id in the high half.

@@ -321,6 +321,17 @@ std::vector<ParamRow> SurfaceRows() {
                       "close the band along the rims with a strip of triangles"));
   rows.push_back(Bool("surface.close_cracks", SM_MEMBER(surface.triangles.close_cracks),
                       "close narrow notches the triangle selection leaves in the boundary"));
+  rows.push_back(Choice("surface.representation", SM_MEMBER(representation.mode),
+                        {{"auto", RepresentationMode::kAuto},
+                         {"sheet", RepresentationMode::kSheet},
+                         {"body", RepresentationMode::kBody}},
+                        "each piece as a sheet (one layer of triangles with thickness), a body "
+                        "(the closed surface around it, a region of the volume mesh) or auto: "
+                        "whichever scores better with the piece's share of the triangles"));
+  rows.push_back(Number("surface.body_min_thickness", SM_MEMBER(representation.body_min_thickness),
+                        "[0, 10000]", "voxels",
+                        "in auto, a piece thinner than this (mean thickness) stays a sheet "
+                        "without a trial as a body"));
   rows.push_back(Number(
       "surface.fold_angle", SM_MEMBER(surface.triangles.fold_angle_degrees), "[0, 180)", "degrees",
       "a candidate meeting a kept triangle below this dihedral angle is refused"));
@@ -339,7 +350,8 @@ std::vector<ParamRow> SimilarityRows() {
     r.set = [](const ParamValue& v, PipelineOptions& o) {
       o.score.height =
           std::get<std::string>(v) == "vertex" ? PrismHeight::kVertex : PrismHeight::kFace;
-      o.radius_search.height = o.score.height;  // a search scores with the same model
+      o.radius_search.height = o.score.height;   // a search scores with the same model
+      o.representation.height = o.score.height;  // and so does the choice of a piece's
     };
     rows.push_back(std::move(r));
   }

@@ -35,7 +35,7 @@ class StageTimer {
   absl::Time start_;
 };
 
-// Formula 5 for the mesh's prisms against the meshed set (and the raw phase, with
+// Formula 5 for the mesh's prisms and bodies against the meshed set (and the raw phase, with
 // extraction), the other prism model and the grid baselines.
 absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnalysis& sheet,
                                        const SheetPhase& phase, const PipelineOptions& options,
@@ -44,13 +44,12 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
       options.score.height == PrismHeight::kFace ? PrismHeight::kVertex : PrismHeight::kFace;
   SimilarityReport sim;
   sim.against_model = options.extract;
-  SM_ASSIGN_OR_RETURN(VoxelSet prisms,
-                      VoxelizePrisms(mesh, sheet.set.dims(), options.score.height));
+  SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizeMesh(mesh, sheet.set.dims(), options.score.height));
   sim.score = ScoreModel(prisms, sheet.set);
   if (options.score.hausdorff) {
     SM_ASSIGN_OR_RETURN(sim.score.hausdorff, HausdorffDistance(prisms, sheet.set, p.Sub(0.2, 0.6)));
   }
-  SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizePrisms(mesh, sheet.set.dims(), other));
+  SM_ASSIGN_OR_RETURN(VoxelSet shell, VoxelizeMesh(mesh, sheet.set.dims(), other));
   sim.shell_similarity = ScoreModel(shell, sheet.set).similarity;
   if (options.extract) sim.raw = ScoreModel(prisms, phase.sheet);
   for (int k : options.score.grid_rates) {
@@ -128,7 +127,9 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
   }
   stages.push_back("analyze");
   if (options.search_radius) stages.push_back("search-r");
-  stages.insert(stages.end(), {"surface", "similarity"});
+  stages.push_back("surface");
+  if (options.representation.mode != RepresentationMode::kSheet) stages.push_back("representation");
+  stages.push_back("similarity");
   if (options.volume_mesh) stages.push_back("volume");
   if (!options.output.dir.empty()) stages.push_back("write");
   return stages;
@@ -239,6 +240,12 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     StageTimer t(&report, "surface");
     SM_ASSIGN_OR_RETURN(result,
                         BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
+  }
+  if (options.representation.mode != RepresentationMode::kSheet) {
+    StageTimer t(&report, "representation");
+    SM_ASSIGN_OR_RETURN(report.representation,
+                        ChooseRepresentation(sheet, piece_of_voxel, options.representation,
+                                             &result.mesh, progress.Stage("representation")));
   }
   const TriangleMesh& mesh = result.mesh;
   if (surface.target_faces > 0 &&

@@ -18,6 +18,7 @@
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/radius_search.h"
+#include "worker/pipeline/surface/representation.h"
 #include "worker/pipeline/surface/surface_builder.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 #include "worker/pipeline/voxel/sheet_input.h"
@@ -55,6 +56,7 @@ struct PipelineOptions {
   SurfaceOptions surface;      // r = surface.scvd.radius_voxels unless searched
   bool search_radius = false;  // choose r with `radius_search`
   RadiusSearchOptions radius_search;
+  RepresentationOptions representation;  // each piece a sheet or a body
   ScoreOptions score;
   bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
   VolumeMeshOptions volume;
@@ -103,6 +105,7 @@ struct PipelineReport {
   std::vector<PieceGeology> geology;          // with extraction
   std::optional<RadiusChoice> radius_choice;  // when r was searched
   std::optional<SurfaceStats> surface;
+  std::optional<RepresentationReport> representation;  // unless every piece is a sheet
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
   std::vector<StageTime> timings;

@@ -68,6 +68,7 @@ std::string PipelineReport::ToJson() const {
     j["extraction"]["sheets"] = sheets;
   }
   if (surface) j["surface"] = surface->Fields();
+  if (representation) j["representation"] = representation->Fields();
   if (similarity) j["similarity"] = similarity->Fields();
   if (radius_choice) {
     j["radius_search"] = radius_choice->Fields();

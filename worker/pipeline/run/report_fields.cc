@@ -183,6 +183,13 @@ nlohmann::json VolumeMeshStats::Fields() const {
   j["nodes"] = nodes;
   j["tetrahedra"] = tetrahedra;
   j["sheet_faces"] = sheet_faces;
+  if (!bodies.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const BodyRegion& b : bodies) {
+      list.push_back({{"piece", b.piece}, {"tetrahedra", b.tetrahedra}, {"volume", b.volume}});
+    }
+    j["bodies"] = list;
+  }
   j["voxels_per_tetrahedron"] = voxels_per_tet;
   j["volume"] = quality.volume;
   j["tetgen_switches"] = tetgen_switches;

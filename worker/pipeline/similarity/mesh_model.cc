@@ -176,4 +176,21 @@ absl::StatusOr<VoxelSet> VoxelizeClosedSurface(const TriangleMesh& mesh, const D
   return std::move(b).Build();
 }
 
+absl::StatusOr<VoxelSet> VoxelizeMesh(const TriangleMesh& mesh, const Dims& dims,
+                                      PrismHeight height, const Progress& progress) {
+  SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(mesh, dims, height, progress));
+  if (mesh.body_pieces.empty()) return model;
+  TriangleMesh body;
+  body.vertices = mesh.vertices;
+  for (const int32_t piece : mesh.body_pieces) {
+    body.faces.clear();
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (mesh.face_piece[f] == piece) body.faces.push_back(mesh.faces[f]);
+    }
+    SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body, dims));
+    model = Union(model, inside);
+  }
+  return model;
+}
+
 }  // namespace sheetmesh

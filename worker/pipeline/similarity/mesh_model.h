@@ -32,6 +32,13 @@ absl::StatusOr<VoxelSet> VoxelizePrisms(const TriangleMesh& mesh, const Dims& di
 absl::StatusOr<VoxelSet> VoxelizeClosedSurface(const TriangleMesh& mesh, const Dims& dims,
                                                const Progress& progress = {});
 
+// The voxels `mesh` stands for: the prisms of its sheets' faces (`height`) and the inside
+// of each body (mesh.body_pieces), each body on its own so that two touching bodies do not
+// cancel where their faces coincide.
+absl::StatusOr<VoxelSet> VoxelizeMesh(const TriangleMesh& mesh, const Dims& dims,
+                                      PrismHeight height = PrismHeight::kFace,
+                                      const Progress& progress = {});
+
 // Builds a VoxelSet from linear indices (x + nx (y + ny z)), sorted and unique.
 VoxelSet VoxelSetFromSortedLinear(const Dims& dims, std::span<const uint64_t> keys);
 

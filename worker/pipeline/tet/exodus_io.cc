@@ -53,17 +53,19 @@ class ExodusFile {
   bool committed_ = false;
 };
 
-// The tetrahedron face on each face of the box: (element number from 1, Exodus side).
+// The tetrahedron face on each face of the box: (element number, Exodus side), tetrahedron t
+// being element element_of[t].
 // TETRA4 sides: 1 = (1,2,4), 2 = (2,3,4), 3 = (1,4,3), 4 = (1,3,2).
 std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m,
-                                                          const std::vector<int>& side) {
+                                                          const std::vector<int>& side,
+                                                          const std::vector<int>& element_of) {
   static const int kSide[4][3] = {{0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 2, 1}};
   std::map<FaceKey, std::pair<int, int>> owner;
   for (size_t t = 0; t < m.tets.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
       const Tet& q = m.tets[t];
       owner.emplace(SortedFace(q[kSide[k][0]], q[kSide[k][1]], q[kSide[k][2]]),
-                    std::make_pair(static_cast<int>(t + 1), k + 1));
+                    std::make_pair(element_of[t], k + 1));
     }
   }
   std::vector<std::vector<std::pair<int, int>>> sets(6);
@@ -79,8 +81,16 @@ std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m,
 
 absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   const auto sheets = SheetFacesByPiece(m);
+  // The tetrahedra by region (the rock, then each body), numbered in that order.
+  std::map<int32_t, std::vector<size_t>> regions;
+  regions[-1];
+  for (size_t t = 0; t < m.tets.size(); ++t) regions[m.Region(t)].push_back(t);
+  std::vector<int> element_of(m.tets.size());
+  int next = 1;
+  for (const auto& [piece, tets] : regions)
+    for (size_t t : tets) element_of[t] = next++;
   const std::vector<int> side = BoxSides(m);
-  const auto side_sets = BoxSideSets(m, side);
+  const auto side_sets = BoxSideSets(m, side, element_of);
   static const char* kSideName[6] = {"box_xmin", "box_xmax", "box_ymin",
                                      "box_ymax", "box_zmin", "box_zmax"};
   size_t sheet_elems = 0;
@@ -92,7 +102,7 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   SM_RETURN_IF_ERROR(
       file.Check(ex_put_init(ex, title.c_str(), 3, static_cast<int64_t>(m.nodes.size()),
                              static_cast<int64_t>(m.tets.size() + sheet_elems),
-                             static_cast<int64_t>(1 + sheets.size()), 6, 6),
+                             static_cast<int64_t>(regions.size() + sheets.size()), 6, 6),
                  "ex_put_init"));
   std::vector<double> x(m.nodes.size()), y(m.nodes.size()), z(m.nodes.size());
   for (size_t i = 0; i < m.nodes.size(); ++i) {
@@ -105,16 +115,24 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   char* coord_names[3] = {cx, cy, cz};
   SM_RETURN_IF_ERROR(file.Check(ex_put_coord_names(ex, coord_names), "ex_put_coord_names"));
 
-  // Element blocks: the rock, then each sheet.
-  SM_RETURN_IF_ERROR(
-      file.Check(ex_put_elem_block(ex, 1, "TETRA", static_cast<int64_t>(m.tets.size()), 4, 0),
-                 "ex_put_elem_block"));
+  // Element blocks: the rock (id 1), each body (TETRA, id 100 + piece), then each sheet
+  // (TRI3, id 100 + piece).
+  auto block_id = [](int32_t piece) { return piece < 0 ? 1 : 100 + piece; };
   std::vector<int> conn;
-  conn.reserve(m.tets.size() * 4);
-  for (const Tet& t : m.tets)
-    for (uint32_t v : t) conn.push_back(static_cast<int>(v + 1));
-  SM_RETURN_IF_ERROR(file.Check(ex_put_elem_conn(ex, 1, conn.data()), "ex_put_elem_conn"));
-  std::vector<std::string> block_names = {"rock"};
+  std::vector<std::string> block_names;
+  for (const auto& [piece, tets] : regions) {
+    SM_RETURN_IF_ERROR(file.Check(
+        ex_put_elem_block(ex, block_id(piece), "TETRA", static_cast<int64_t>(tets.size()), 4, 0),
+        "ex_put_elem_block"));
+    conn.clear();
+    for (size_t t : tets)
+      for (uint32_t v : m.tets[t]) conn.push_back(static_cast<int>(v + 1));
+    if (!tets.empty()) {
+      SM_RETURN_IF_ERROR(
+          file.Check(ex_put_elem_conn(ex, block_id(piece), conn.data()), "ex_put_elem_conn"));
+    }
+    block_names.push_back(piece < 0 ? std::string("rock") : absl::StrCat("body_", piece));
+  }
   for (const auto& [piece, faces] : sheets) {
     const int id = 100 + piece;
     SM_RETURN_IF_ERROR(
@@ -170,17 +188,20 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
     SM_RETURN_IF_ERROR(file.Check(ex_put_var_names(ex, "e", 3, var_names), "ex_put_var_names"));
     // On every block (0 on the rock): readers such as meshio take element variables only
     // when every block has them.
-    const int blocks = static_cast<int>(1 + sheets.size());
+    const int blocks = static_cast<int>(regions.size() + sheets.size());
     std::vector<int> truth(static_cast<size_t>(blocks) * 3, 1);
     SM_RETURN_IF_ERROR(
         file.Check(ex_put_elem_var_tab(ex, blocks, 3, truth.data()), "ex_put_elem_var_tab"));
     const double time = 0;
     SM_RETURN_IF_ERROR(file.Check(ex_put_time(ex, 1, &time), "ex_put_time"));
-    const std::vector<double> zeros(m.tets.size(), 0.0);
-    for (int v = 0; v < 3; ++v) {
-      SM_RETURN_IF_ERROR(file.Check(
-          ex_put_elem_var(ex, 1, v + 1, 1, static_cast<int64_t>(zeros.size()), zeros.data()),
-          "ex_put_elem_var"));
+    for (const auto& [piece, tets] : regions) {
+      const std::vector<double> zeros(tets.size(), 0.0);
+      for (int v = 0; v < 3 && !tets.empty(); ++v) {
+        SM_RETURN_IF_ERROR(
+            file.Check(ex_put_elem_var(ex, 1, v + 1, block_id(piece),
+                                       static_cast<int64_t>(zeros.size()), zeros.data()),
+                       "ex_put_elem_var"));
+      }
     }
     for (const auto& [piece, faces] : sheets) {
       for (int v = 0; v < 3; ++v) {

@@ -1,8 +1,11 @@
 // TetMesh: a tetrahedral mesh of the rock block whose sheet triangles are internal faces
-// tagged with their piece and thickness (ALGORITHM §10), in physical units.
+// tagged with their piece and thickness (ALGORITHM §10), in physical units. Pieces meshed as
+// bodies are regions of their own: their boundary faces are tagged like a sheet's (piece,
+// thickness 0) and the tetrahedra inside carry the piece.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -22,9 +25,17 @@ struct TetMesh {
   std::vector<int32_t> face_marker;            // per face: 1 = box, >= 10 sheet triangle
   std::vector<int32_t> face_piece;             // per face: sheet piece, -1 on the box
   std::vector<float> face_thickness;           // per face: sheet thickness (physical), 0 on the box
+  std::vector<int32_t> body_pieces;  // pieces that are bodies, sorted (their faces bound them)
+  std::vector<int32_t> tet_region;   // per tetrahedron: the body piece it fills, -1 in the
+                                     // rock; empty when there are no bodies
   double voxel_length = 1.0;  // one voxel in physical units: thickness in voxels = physical / it
 
   size_t num_sheet_faces() const;
+  bool IsBody(int32_t piece) const {
+    return std::binary_search(body_pieces.begin(), body_pieces.end(), piece);
+  }
+  // The region of tetrahedron t: a body piece, or -1 (the rock).
+  int32_t Region(size_t t) const { return tet_region.empty() ? -1 : tet_region[t]; }
 };
 
 // Signed volume of a tetrahedron: ((b - a) x (c - a)) . (d - a) / 6. (These few are inline:

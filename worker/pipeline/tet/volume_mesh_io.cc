@@ -20,12 +20,12 @@ std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& m) {
   return groups;
 }
 
-// Appends one VTU cell array: `tet` for every tetrahedron, then value(f) per face.
-template <class F>
-void AppendCellArray(std::string* out, const char* type, const char* name, const TetMesh& m,
-                     const char* tet, F value) {
+// Appends one VTU cell array: tet(t) per tetrahedron, then value(f) per face.
+template <class T, class F>
+void AppendCellArray(std::string* out, const char* type, const char* name, const TetMesh& m, T tet,
+                     F value) {
   absl::StrAppend(out, "<DataArray type=\"", type, "\" Name=\"", name, "\" format=\"ascii\">\n");
-  for (size_t i = 0; i < m.tets.size(); ++i) absl::StrAppend(out, tet, "\n");
+  for (size_t i = 0; i < m.tets.size(); ++i) absl::StrAppend(out, tet(i), "\n");
   for (size_t f = 0; f < m.faces.size(); ++f) absl::StrAppend(out, value(f), "\n");
   *out += "</DataArray>\n";
 }
@@ -61,7 +61,7 @@ std::vector<int> BoxSides(const TetMesh& m) {
 std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
   std::map<int32_t, std::vector<size_t>> groups;
   for (size_t f = 0; f < m.faces.size(); ++f)
-    if (m.face_piece[f] >= 0) groups[m.face_piece[f]].push_back(f);
+    if (m.face_piece[f] >= 0 && !m.IsBody(m.face_piece[f])) groups[m.face_piece[f]].push_back(f);
   return groups;
 }
 
@@ -91,22 +91,27 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   for (int32_t p : m.face_piece) top_piece = std::max(top_piece, p);
   const int32_t box_id = top_piece + 2;
   const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
-  AppendCellArray(&out, "Int32", "kind", m, "0",
-                  [&](size_t f) { return m.face_piece[f] >= 0 ? 1 : 2; });
-  AppendCellArray(&out, "Int32", "piece", m, "-1", [&](size_t f) { return m.face_piece[f]; });
-  AppendCellArray(&out, "Int32", "MaterialIDs", m, "0",
-                  [&](size_t f) { return m.face_piece[f] >= 0 ? m.face_piece[f] + 1 : box_id; });
-  AppendCellArray(&out, "Float32", "thickness", m, "0",
+  const auto zero = [](size_t) { return "0"; };
+  AppendCellArray(&out, "Int32", "kind", m, zero, [&](size_t f) {
+    return m.face_piece[f] < 0 ? 2 : (m.IsBody(m.face_piece[f]) ? 3 : 1);
+  });
+  AppendCellArray(
+      &out, "Int32", "piece", m, [&](size_t t) { return m.Region(t); },
+      [&](size_t f) { return m.face_piece[f]; });
+  AppendCellArray(
+      &out, "Int32", "MaterialIDs", m, [&](size_t t) { return m.Region(t) + 1; },
+      [&](size_t f) { return m.face_piece[f] >= 0 ? m.face_piece[f] + 1 : box_id; });
+  AppendCellArray(&out, "Float32", "thickness", m, zero,
                   [&](size_t f) { return G7(m.face_thickness[f]); });
-  AppendCellArray(&out, "Float32", "thickness_voxels", m, "0",
+  AppendCellArray(&out, "Float32", "thickness_voxels", m, zero,
                   [&](size_t f) { return G7(m.face_thickness[f] / vox); });
-  AppendCellArray(&out, "Float32", "aperture", m, "0",
+  AppendCellArray(&out, "Float32", "aperture", m, zero,
                   [&](size_t f) { return G7(m.face_thickness[f]); });
-  AppendCellArray(&out, "Float64", "permeability", m, "0", [&](size_t f) {
+  AppendCellArray(&out, "Float64", "permeability", m, zero, [&](size_t f) {
     const double a = m.face_thickness[f];
     return absl::StrFormat("%.9g", a * a / 12);
   });
-  AppendCellArray(&out, "Float64", "transmissivity", m, "0", [&](size_t f) {
+  AppendCellArray(&out, "Float64", "transmissivity", m, zero, [&](size_t f) {
     const double a = m.face_thickness[f];
     return absl::StrFormat("%.9g", a * a * a / 12);
   });
@@ -116,6 +121,9 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
 
 absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
   const auto groups = FaceGroups(m);
+  std::map<int32_t, std::vector<size_t>> regions;  // -1 = the rock, p = body piece p
+  for (size_t t = 0; t < m.tets.size(); ++t) regions[m.Region(t)].push_back(t);
+  if (regions.empty()) regions[-1];
   Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
   for (const Vec3& p : m.nodes)
     for (int k = 0; k < 3; ++k) {
@@ -123,33 +131,49 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
       hi[k] = std::max(hi[k], p[k]);
     }
   auto surface_tag = [](int32_t piece) { return piece < 0 ? 2 : 100 + piece; };
+  auto volume_tag = [](int32_t piece) { return piece < 0 ? 1 : 100 + piece; };
+  auto surface_name = [&](int32_t piece) {
+    if (piece < 0) return std::string("boundary");
+    return absl::StrCat(m.IsBody(piece) ? "body_" : "sheet_", piece,
+                        m.IsBody(piece) ? "_wall" : "");
+  };
   std::string out = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n";
-  absl::StrAppend(&out, 1 + groups.size(), "\n3 1 \"rock\"\n");
+  absl::StrAppend(&out, regions.size() + groups.size(), "\n");
+  for (const auto& [piece, tets] : regions) {
+    absl::StrAppend(&out, "3 ", volume_tag(piece), " \"",
+                    piece < 0 ? std::string("rock") : absl::StrCat("body_", piece), "\"\n");
+  }
   for (const auto& [piece, faces] : groups) {
-    absl::StrAppend(&out, "2 ", surface_tag(piece), " \"",
-                    piece < 0 ? std::string("boundary") : absl::StrCat("sheet_", piece), "\"\n");
+    absl::StrAppend(&out, "2 ", surface_tag(piece), " \"", surface_name(piece), "\"\n");
   }
   out += "$EndPhysicalNames\n$Entities\n";
-  absl::StrAppend(&out, "0 0 ", groups.size(), " 1\n");
+  absl::StrAppend(&out, "0 0 ", groups.size(), " ", regions.size(), "\n");
   for (const auto& [piece, faces] : groups) {
     absl::StrAppendFormat(&out, "%d %.12g %.12g %.12g %.12g %.12g %.12g 1 %d 0\n",
                           surface_tag(piece), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
                           surface_tag(piece));
   }
-  absl::StrAppendFormat(&out, "1 %.12g %.12g %.12g %.12g %.12g %.12g 1 1 0\n$EndEntities\n", lo.x,
-                        lo.y, lo.z, hi.x, hi.y, hi.z);
-  // All nodes in the volume's block; node tags are 1-based.
-  absl::StrAppend(&out, "$Nodes\n1 ", m.nodes.size(), " 1 ", m.nodes.size(), "\n3 1 0 ",
-                  m.nodes.size(), "\n");
+  for (const auto& [piece, tets] : regions) {
+    absl::StrAppendFormat(&out, "%d %.12g %.12g %.12g %.12g %.12g %.12g 1 %d 0\n",
+                          volume_tag(piece), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, volume_tag(piece));
+  }
+  out += "$EndEntities\n";
+  // All nodes in the rock's block; node tags are 1-based.
+  absl::StrAppend(&out, "$Nodes\n1 ", m.nodes.size(), " 1 ", m.nodes.size(), "\n3 ",
+                  volume_tag(regions.begin()->first), " 0 ", m.nodes.size(), "\n");
   for (size_t i = 0; i < m.nodes.size(); ++i) absl::StrAppend(&out, i + 1, "\n");
   for (const Vec3& p : m.nodes) absl::StrAppendFormat(&out, "%.12g %.12g %.12g\n", p.x, p.y, p.z);
   out += "$EndNodes\n$Elements\n";
   const size_t total = m.tets.size() + m.faces.size();
-  absl::StrAppend(&out, 1 + groups.size(), " ", total, " 1 ", total, "\n");
+  absl::StrAppend(&out, regions.size() + groups.size(), " ", total, " 1 ", total, "\n");
   size_t tag = 1;
-  absl::StrAppend(&out, "3 1 4 ", m.tets.size(), "\n");
-  for (const Tet& t : m.tets) {
-    absl::StrAppend(&out, tag++, " ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, " ", t[3] + 1, "\n");
+  for (const auto& [piece, tets] : regions) {
+    absl::StrAppend(&out, "3 ", volume_tag(piece), " 4 ", tets.size(), "\n");
+    for (size_t i : tets) {
+      const Tet& t = m.tets[i];
+      absl::StrAppend(&out, tag++, " ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, " ", t[3] + 1,
+                      "\n");
+    }
   }
   for (const auto& [piece, faces] : groups) {
     absl::StrAppend(&out, "2 ", surface_tag(piece), " 2 ", faces.size(), "\n");
@@ -185,11 +209,22 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
     absl::StrAppendFormat(&out, "%d, %.12g, %.12g, %.12g\n", i + 1, m.nodes[i].x, m.nodes[i].y,
                           m.nodes[i].z);
   }
-  out += "*ELEMENT, TYPE=C3D4, ELSET=ROCK\n";
+  // The tetrahedra by region: ELSET=ROCK, ELSET=BODY_<p> for each body.
+  std::map<int32_t, std::vector<size_t>> regions;
+  regions[-1];
+  for (size_t t = 0; t < m.tets.size(); ++t) regions[m.Region(t)].push_back(t);
+  std::vector<size_t> element_of(m.tets.size());
   size_t id = 1;
-  for (const Tet& t : m.tets) {
-    absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1,
-                    "\n");
+  for (const auto& [piece, tets] : regions) {
+    if (tets.empty()) continue;
+    absl::StrAppend(&out, "*ELEMENT, TYPE=C3D4, ELSET=",
+                    piece < 0 ? std::string("ROCK") : absl::StrCat("BODY_", piece), "\n");
+    for (size_t i : tets) {
+      const Tet& t = m.tets[i];
+      element_of[i] = id;
+      absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1,
+                      "\n");
+    }
   }
   for (const auto& [piece, faces] : sheets) {
     absl::StrAppend(&out, "*ELEMENT, TYPE=S3, ELSET=SHEET_", piece, "\n");
@@ -222,12 +257,14 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
       std::array<uint32_t, 3> key = {m.tets[t][kFace[k][0]], m.tets[t][kFace[k][1]],
                                      m.tets[t][kFace[k][2]]};
       std::sort(key.begin(), key.end());
-      owner.emplace(key, std::make_pair(t + 1, k + 1));
+      owner.emplace(key, std::make_pair(element_of[t], k + 1));
     }
   }
   for (const auto& [piece, faces] : FaceGroups(m)) {
     absl::StrAppend(&out, "*SURFACE, TYPE=ELEMENT, NAME=SURF_",
-                    piece < 0 ? std::string("BOUNDARY") : absl::StrCat("SHEET_", piece), "\n");
+                    piece < 0 ? std::string("BOUNDARY")
+                              : absl::StrCat(m.IsBody(piece) ? "BODY_" : "SHEET_", piece),
+                    "\n");
     for (size_t f : faces) {
       std::array<uint32_t, 3> key = m.faces[f];
       std::sort(key.begin(), key.end());
@@ -244,8 +281,16 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
       "** Materials: placeholder elastic constants (Young's modulus, Poisson's ratio);\n"
       "** replace them with the rock's and the fill's in the mesh's units.\n"
       "*MATERIAL, NAME=ROCK\n*ELASTIC\n30000., 0.25\n"
-      "*MATERIAL, NAME=FRACTURE\n*ELASTIC\n3000., 0.3\n"
-      "*SOLID SECTION, ELSET=ROCK, MATERIAL=ROCK\n";
+      "*MATERIAL, NAME=FRACTURE\n*ELASTIC\n3000., 0.3\n";
+  if (regions.size() > 1) out += "*MATERIAL, NAME=FILL\n*ELASTIC\n3000., 0.3\n";
+  for (const auto& [piece, tets] : regions) {
+    if (tets.empty()) continue;
+    if (piece < 0) {
+      out += "*SOLID SECTION, ELSET=ROCK, MATERIAL=ROCK\n";
+    } else {
+      absl::StrAppend(&out, "*SOLID SECTION, ELSET=BODY_", piece, ", MATERIAL=FILL\n");
+    }
+  }
   for (const auto& [piece, faces] : sheets) {
     double sum = 0;
     for (size_t f : faces) sum += m.face_thickness[f];

@@ -17,35 +17,39 @@
 namespace sheetmesh {
 
 // Cells: tetrahedra (VTK 10) then triangles (VTK 5). Cell data: kind (0 tetrahedron,
-// 1 sheet face, 2 boundary face), piece (-1 where none), MaterialIDs (0 rock, 1 + p for
-// sheet piece p, 1 + the largest piece + 1 for the box faces), thickness (physical) and
-// thickness_voxels, aperture (= thickness), permeability a^2/12 and transmissivity
-// a^3/12 (the cubic law, physical units; 0 off the sheets).
+// 1 sheet face, 2 boundary face, 3 a body's wall), piece (-1 where none; on a tetrahedron
+// the body it fills), MaterialIDs (0 rock, 1 + p for piece p — a body's tetrahedra and
+// walls, a sheet's faces — and 1 + the largest piece + 1 for the box faces), thickness (physical)
+// and thickness_voxels, aperture (= thickness), permeability a^2/12 and transmissivity a^3/12 (the
+// cubic law, physical units; 0 off the sheets).
 absl::Status WriteVtu(const std::string& path, const TetMesh& mesh);
 
-// ASCII MSH 4.1. Physical groups: 3D "rock" (tag 1); 2D "boundary" (tag 2) and
-// "sheet_<p>" (tag 100 + p) for every sheet piece p. $ElementData "thickness" (physical)
-// and "thickness_voxels" on the sheet triangles.
+// ASCII MSH 4.1. Physical groups: 3D "rock" (tag 1) and "body_<p>" (tag 100 + p) for every
+// body; 2D "boundary" (tag 2), "sheet_<p>" and "body_<p>_wall" (tag 100 + p) for every piece.
+// $ElementData "thickness" (physical) and "thickness_voxels" on the sheet triangles.
 absl::Status WriteGmsh(const std::string& path, const TetMesh& mesh);
 
-// Abaqus/CalculiX input: *NODE, *ELEMENT TYPE=C3D4 ELSET=ROCK, the sheet faces as S3
-// elements in ELSET=SHEET_<p>, node sets BOX_XMIN … BOX_ZMAX (and BOX), *SURFACE
-// definitions (SURF_SHEET_<p>, SURF_BOUNDARY) on the faces of the adjacent tetrahedra,
-// materials ROCK and FRACTURE (placeholder elastic constants, to be replaced), a
-// *SOLID SECTION for the rock and a *SHELL SECTION per sheet with the piece's mean
+// Abaqus/CalculiX input: *NODE, *ELEMENT TYPE=C3D4 ELSET=ROCK (and ELSET=BODY_<p> for each
+// body's tetrahedra), the sheet faces as S3 elements in ELSET=SHEET_<p>, node sets
+// BOX_XMIN … BOX_ZMAX (and BOX), *SURFACE definitions (SURF_SHEET_<p>, SURF_BODY_<p>,
+// SURF_BOUNDARY) on the faces of the adjacent tetrahedra, materials ROCK, FRACTURE and FILL
+// (placeholder elastic constants, to be replaced), a *SOLID SECTION for the rock and each
+// body and a *SHELL SECTION per sheet with the piece's mean
 // thickness (physical). Ready for a step (*STEP … *END STEP) appended or *INCLUDEd.
 absl::Status WriteAbaqus(const std::string& path, const TetMesh& mesh);
 
-// Exodus II: element blocks "rock" (TETRA, 4 nodes, id 1; meshio 5 maps no TETRA4) and "sheet_<p>"
-// (TRI3, id 100 + p), side sets box_xmin … box_zmax (ids 1–6) on the tetrahedra, node sets the
-// same, element variables aperture, permeability and transmissivity (0 on the rock).
+// Exodus II: element blocks "rock" (TETRA, 4 nodes, id 1; meshio 5 maps no TETRA4),
+// "body_<p>" (TETRA, id 100 + p) and "sheet_<p>" (TRI3, id 100 + p), side sets box_xmin … box_zmax
+// (ids 1–6) on the tetrahedra, node sets the same, element variables aperture, permeability and
+// transmissivity (0 on the rock).
 absl::Status WriteExodus(const std::string& path, const TetMesh& mesh);
 
 // Per face, which side of the mesh's bounding box it lies on (0 x min, 1 x max, 2 y min,
 // … 5 z max), or -1 (a sheet face, or a face off the box).
 std::vector<int> BoxSides(const TetMesh& mesh);
 
-// The sheet faces grouped by piece (the box faces, piece -1, left out).
+// The sheet faces grouped by piece (the box faces, piece -1, and the bodies' walls left
+// out).
 std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& mesh);
 
 }  // namespace sheetmesh

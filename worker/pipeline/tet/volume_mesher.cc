@@ -11,6 +11,7 @@
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/tet/tet_regions.h"
 
 namespace sheetmesh {
 namespace {
@@ -432,6 +433,20 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
         r.conformity.sheet_triangles, " sheet triangles are not made of tetrahedron faces (first: ",
         r.conformity.missing.empty() ? -1 : static_cast<int64_t>(r.conformity.missing[0]),
         ", area error ", r.conformity.worst_area_error, ")"));
+  }
+  r.mesh.body_pieces = sheets.body_pieces;
+  r.mesh.tet_region = AssignRegions(r.mesh, sheets, placement);
+  for (const int32_t piece : sheets.body_pieces) r.bodies.push_back({piece, 0, 0.0});
+  for (size_t t = 0; t < r.mesh.tet_region.size(); ++t) {
+    const int32_t piece = r.mesh.tet_region[t];
+    if (piece < 0) continue;
+    auto it = std::lower_bound(
+        r.bodies.begin(), r.bodies.end(), piece,
+        [](const VolumeMeshStats::BodyRegion& b, int32_t p) { return b.piece < p; });
+    const Tet& q = r.mesh.tets[t];
+    ++it->tetrahedra;
+    it->volume += std::abs(
+        TetVolume(r.mesh.nodes[q[0]], r.mesh.nodes[q[1]], r.mesh.nodes[q[2]], r.mesh.nodes[q[3]]));
   }
   // The sheets' thickness came in voxels: the mesh is physical.
   r.mesh.voxel_length = PhysicalLength(1.0, placement);

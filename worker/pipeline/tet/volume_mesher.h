@@ -54,7 +54,15 @@ struct Conformity {
 struct VolumeMeshStats : PlcStats {
   uint64_t nodes = 0;
   uint64_t tetrahedra = 0;
-  uint64_t sheet_faces = 0;   // tetrahedron faces on the sheets
+  uint64_t sheet_faces = 0;  // tetrahedron faces on the sheets (and the bodies' walls)
+  // Each body's region: its tetrahedra and their volume (physical units^3). A body whose
+  // walls the PLC's mends opened leaks into the rock and has none.
+  struct BodyRegion {
+    int32_t piece = 0;
+    uint64_t tetrahedra = 0;
+    double volume = 0;
+  };
+  std::vector<BodyRegion> bodies;
   double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;
@@ -97,9 +105,10 @@ struct VolumeMeshResult : VolumeMeshStats {
 };
 
 // Meshes the box of `dims` (placed by `placement`) with `sheets` (voxel index coordinates)
-// as internal faces. kFailedPrecondition when sheet triangles intersect (naming them);
-// kInternal when the output does not conform (naming the first sheet triangle not
-// covered) or the tetrahedra do not fill the box; TetGen's errors pass through.
+// as internal faces; the pieces that are bodies (sheets.body_pieces) bound regions of
+// their own (TetMesh::tet_region). kFailedPrecondition when sheet triangles intersect (naming
+// them); kInternal when the output does not conform (naming the first sheet triangle not covered)
+// or the tetrahedra do not fill the box; TetGen's errors pass through.
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
                                                  const Placement& placement,
                                                  const VolumeMeshOptions& options,

@@ -1,0 +1,176 @@
+// Bodies and the choice of representation against known answers: a closed surface around
+// voxels scores 1 at voxel resolution, a vug is a body and a thin sheet beside it stays a
+// sheet, each at its share of the triangles.
+#include "worker/pipeline/surface/representation.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "tests/testing/shapes.h"
+#include "tests/testing/status_matchers.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/surface/body_surface.h"
+#include "worker/pipeline/surface/surface_builder.h"
+
+namespace sheetmesh {
+namespace {
+
+// Every edge of `mesh` in exactly two faces, in opposite directions (closed and oriented).
+bool ClosedAndOriented(const TriangleMesh& mesh) {
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const Face& f : mesh.faces) {
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  }
+  for (const auto& [e, n] : directed) {
+    if (n != 1) return false;
+    auto back = directed.find({e.second, e.first});
+    if (back == directed.end() || back->second != 1) return false;
+  }
+  return true;
+}
+
+double SignedVolume(const TriangleMesh& mesh) {
+  double v = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto t = Corners(mesh, f);
+    v += Dot(t[0], Cross(t[1], t[2])) / 6;
+  }
+  return v;
+}
+
+double BodyScore(const TriangleMesh& body, const VoxelSet& voxels) {
+  return ScoreModel(*VoxelizeClosedSurface(body, voxels.dims()), voxels).similarity;
+}
+
+TEST(BodySurfaceTest, ABallAtVoxelResolutionIsExactClosedAndOutward) {
+  const VoxelSet ball = testing::ShapeSet({40, 40, 40}, [](double x, double y, double z) {
+    return std::hypot(x - 20, y - 19, z - 21) <= 12;
+  });
+  SM_ASSERT_OK_AND_ASSIGN(BodySurface b, MeshBody(ball, 7, 0));
+  EXPECT_TRUE(ClosedAndOriented(b.mesh));
+  EXPECT_NEAR(SignedVolume(b.mesh), double(ball.size()), 0.05 * ball.size());
+  EXPECT_DOUBLE_EQ(BodyScore(b.mesh, ball), 1.0);
+  EXPECT_THAT(b.mesh.face_piece, ::testing::Each(7));
+  EXPECT_THAT(b.mesh.face_thickness, ::testing::Each(0.0f));
+  EXPECT_EQ(b.faces_before, b.mesh.num_faces());
+  // Decimated to 300 faces: still closed, still the ball.
+  SM_ASSERT_OK_AND_ASSIGN(BodySurface d, MeshBody(ball, 7, 300));
+  EXPECT_LE(d.mesh.num_faces(), 300u);
+  EXPECT_TRUE(ClosedAndOriented(d.mesh));
+  EXPECT_GE(BodyScore(d.mesh, ball), 0.95);
+}
+
+TEST(BodySurfaceTest, APieceReachingTheBoxIsClosedInTheBoxFace) {
+  // A slab through the whole box along x and y: its surface lies in the box's faces there.
+  const VoxelSet slab =
+      testing::ShapeSet({30, 30, 30}, [](double, double, double z) { return z >= 10 && z < 20; });
+  SM_ASSERT_OK_AND_ASSIGN(BodySurface b, MeshBody(slab, 0, 0));
+  for (const Vec3& v : b.mesh.vertices) {
+    EXPECT_GE(v.x, -0.5);
+    EXPECT_LE(v.x, 29.5);
+    EXPECT_GE(v.y, -0.5);
+    EXPECT_LE(v.y, 29.5);
+  }
+  EXPECT_DOUBLE_EQ(BodyScore(b.mesh, slab), 1.0);
+  // Its 12 corners' worth of box: 8 triangles describe it exactly.
+  SM_ASSERT_OK_AND_ASSIGN(BodySurface d, MeshBody(slab, 0, 12));
+  EXPECT_LE(d.mesh.num_faces(), 12u);
+  EXPECT_DOUBLE_EQ(BodyScore(d.mesh, slab), 1.0);
+}
+
+TEST(BodySurfaceTest, AnEmptyPieceIsRefused) {
+  EXPECT_THAT(
+      MeshBody(VoxelSet(Dims{4, 4, 4}), 3, 0),
+      testing::StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("piece 3")));
+}
+
+// A vug 40 voxels across and a 2-voxel sheet in one volume, meshed at r with the surface's
+// defaults and then each piece in its representation.
+struct VugAndSheet {
+  SheetAnalysis sheet;
+  SurfaceResult surface;
+};
+
+VugAndSheet MeshVugAndSheet(double r) {
+  VugAndSheet out;
+  out.sheet = *AnalyzeSheet(testing::ShapeSet({110, 110, 70}, [](double x, double y, double z) {
+    const bool vug = std::abs(x - 30) < 20 && std::abs(y - 30) < 20 && std::abs(z - 35) < 20;
+    const bool sheet = z >= 34 && z < 36 && x >= 60 && x < 105 && y >= 5 && y < 105;
+    return vug || sheet;
+  }));
+  SurfaceOptions s;
+  s.scvd.radius_voxels = r;
+  // Formula 3 with the sheet's thickness: the vug's would leave the sheet a handful of cells.
+  s.scvd.mean_thickness_voxels = 2;
+  out.surface = *BuildSurface(out.sheet, s);
+  return out;
+}
+
+TEST(RepresentationTest, AVugIsABodyAndAThinSheetStaysASheet) {
+  VugAndSheet v = MeshVugAndSheet(9);
+  ASSERT_EQ(v.sheet.components.count(), 2u);
+  const size_t faces = v.surface.mesh.num_faces();
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport report,
+                          ChooseRepresentation(v.sheet, {}, {}, &v.surface.mesh));
+  ASSERT_EQ(report.pieces.size(), 2u);
+  EXPECT_EQ(report.bodies, 1u);
+  // Components are ordered by size: the vug (64,000 voxels) is 0, the sheet 1.
+  const PieceRepresentation& vug = report.pieces[0];
+  const PieceRepresentation& sheet = report.pieces[1];
+  EXPECT_TRUE(vug.body);
+  ASSERT_TRUE(vug.body_similarity.has_value());
+  EXPECT_GT(*vug.body_similarity, *vug.sheet_similarity);
+  EXPECT_GE(*vug.body_similarity, 0.95);
+  EXPECT_LE(vug.body_triangles, vug.sheet_triangles);
+  EXPECT_FALSE(sheet.body);
+  EXPECT_FALSE(sheet.body_similarity.has_value());  // 2 voxels: not tried
+  EXPECT_EQ(v.surface.mesh.body_pieces, std::vector<int32_t>{0});
+  EXPECT_LE(v.surface.mesh.num_faces(), faces);  // the budget holds
+  // The whole model: the vug's inside and the sheet's prisms.
+  SM_ASSERT_OK_AND_ASSIGN(VoxelSet model, VoxelizeMesh(v.surface.mesh, v.sheet.set.dims()));
+  EXPECT_GE(ScoreModel(model, v.sheet.set).similarity, 0.93);
+}
+
+TEST(RepresentationTest, AVugAt200TrianglesScoresOver095) {
+  const VoxelSet vug = testing::ShapeSet({60, 60, 60}, [](double x, double y, double z) {
+    return std::abs(x - 30) < 20 && std::abs(y - 30) < 20 && std::abs(z - 30) < 20;
+  });
+  SM_ASSERT_OK_AND_ASSIGN(BodySurface b, MeshBody(vug, 0, 200));
+  EXPECT_LE(b.mesh.num_faces(), 200u);
+  EXPECT_GE(BodyScore(b.mesh, vug), 0.95);
+}
+
+TEST(RepresentationTest, ForcedEitherWay) {
+  VugAndSheet sheets = MeshVugAndSheet(9);
+  const TriangleMesh before = sheets.surface.mesh;
+  RepresentationOptions o;
+  o.mode = RepresentationMode::kSheet;
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport r,
+                          ChooseRepresentation(sheets.sheet, {}, o, &sheets.surface.mesh));
+  EXPECT_EQ(r.bodies, 0u);
+  EXPECT_EQ(sheets.surface.mesh.faces, before.faces);
+  EXPECT_TRUE(sheets.surface.mesh.body_pieces.empty());
+
+  VugAndSheet bodies = MeshVugAndSheet(9);
+  o.mode = RepresentationMode::kBody;
+  SM_ASSERT_OK_AND_ASSIGN(r, ChooseRepresentation(bodies.sheet, {}, o, &bodies.surface.mesh));
+  EXPECT_EQ(r.bodies, 2u);
+  EXPECT_EQ(bodies.surface.mesh.body_pieces, (std::vector<int32_t>{0, 1}));
+  for (size_t f = 0; f < bodies.surface.mesh.num_faces(); ++f) {
+    EXPECT_TRUE(bodies.surface.mesh.IsBodyFace(f));
+  }
+}
+
+TEST(RepresentationTest, AMeshWithoutPiecesIsRefused) {
+  VugAndSheet v = MeshVugAndSheet(9);
+  v.surface.mesh.face_piece.clear();
+  EXPECT_THAT(ChooseRepresentation(v.sheet, {}, {}, &v.surface.mesh),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("piece")));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,33 @@
+// A piece meshed as a body: the closed surface around its voxels (not a mid-surface with
+// a thickness), for pieces as thick as they are wide — a vug, a dissolution slab — where one
+// layer of prisms cannot follow both walls. The volume mesh tetrahedralizes its inside as
+// a region of its own.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_BODY_SURFACE_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_BODY_SURFACE_H_
+
+#include <cstdint>
+#include <optional>
+
+#include "absl/status/statusor.h"
+#include "worker/pipeline/mesh/decimate.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh {
+
+struct BodySurface {
+  TriangleMesh mesh;                        // face_piece = the piece, face_thickness 0
+  uint64_t faces_before = 0;                // at voxel resolution, before decimation
+  std::optional<DecimateStats> decimation;  // when target_faces asked for fewer
+};
+
+// The boundary of `voxels` at voxel resolution (a dual surface between the voxels' centres
+// and their outside neighbours'), oriented outward, within the box of the set's dims
+// ([-0.5, n - 0.5] on each axis: a piece reaching the box is closed by faces lying in the
+// box's face), then decimated to `target_faces` when that is > 0 and fewer
+// than it has. Faces carry `piece` and thickness 0. kInvalidArgument for an empty set.
+absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t target_faces);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_BODY_SURFACE_H_

@@ -1,0 +1,77 @@
+// Each piece in the representation that costs least (beyond the paper): a one-layer sheet
+// with thickness is right where a piece is thin against its extent; a piece as thick as it
+// is wide (a vug, a dissolution slab) or with walls one mid-surface cannot follow is better
+// as a body, the closed surface around its voxels (body_surface.h). Each piece is scored
+// both ways with its share of the triangles (the sheet faces it has) and keeps the better.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_REPRESENTATION_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_REPRESENTATION_H_
+
+#include <cstdint>
+#include <nlohmann/json_fwd.hpp>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "common/progress.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/similarity/mesh_model.h"
+#include "worker/pipeline/surface/sheet_analysis.h"
+
+namespace sheetmesh {
+
+enum class RepresentationMode {
+  kAuto,   // each piece as whichever scores better (bodies only from body_min_thickness)
+  kSheet,  // every piece a sheet (the paper)
+  kBody,   // every piece a body
+};
+
+struct RepresentationOptions {
+  RepresentationMode mode = RepresentationMode::kAuto;
+  // In auto, a piece whose mean thickness τ is under this many voxels stays a sheet without
+  // a trial: a body that thin makes the volume mesh fill it with tetrahedra no thicker than
+  // it, over its whole extent, where a sheet needs none.
+  double body_min_thickness = 4.0;
+  PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
+};
+
+// One piece's choice, for the report.
+struct PieceRepresentation {
+  int32_t piece = 0;
+  uint64_t voxels = 0;
+  double thickness = 0;                    // mean τ of its voxels
+  uint64_t sheet_triangles = 0;            // its share of the budget
+  std::optional<double> sheet_similarity;  // formula 5 of its sheet against its voxels
+  std::optional<double> body_similarity;   // of its body, when one was tried
+  uint64_t body_triangles = 0;             // the body's faces, when tried
+  uint64_t body_triangles_before = 0;      // at voxel resolution, before decimation
+  bool body = false;                       // chosen as a body
+
+  nlohmann::json Fields() const;
+};
+
+struct RepresentationReport {
+  RepresentationMode mode = RepresentationMode::kAuto;
+  std::vector<PieceRepresentation> pieces;  // those with sheet faces, by piece id
+  uint32_t bodies = 0;
+
+  nlohmann::json Fields() const;
+};
+
+const char* RepresentationName(RepresentationMode mode);
+
+// Chooses each piece's representation and replaces the faces of those that become bodies
+// in `mesh` by their body's (mesh->body_pieces lists them). `piece_of_voxel`, when not
+// empty, labels each voxel of sheet.set with its piece (as given to BuildSurface); else
+// pieces are the components. Pieces with no sheet face (too small for the SCVD at this r)
+// stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness;
+// kCancelled if asked.
+absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& sheet,
+                                                          std::span<const int32_t> piece_of_voxel,
+                                                          const RepresentationOptions& options,
+                                                          TriangleMesh* mesh,
+                                                          const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_REPRESENTATION_H_

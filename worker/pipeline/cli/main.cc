@@ -49,7 +49,7 @@ ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
 // phantom
 ABSL_FLAG(std::string, preset, "",
           "phantom: sample (the demo volume), paper (1012x1024x931), thick_slab, rough_network, "
-          "rough_slab, shallow_network or grazing_sheet");
+          "rough_slab, shallow_network, grazing_sheet or vuggy_network");
 ABSL_FLAG(std::string, dims, "", "phantom: its size NXxNYxNZ");
 ABSL_FLAG(std::string, phantom_dims, "", "phantom: its size NXxNYxNZ (as --dims)");
 ABSL_FLAG(std::string, dtype, "", "phantom: voxel type uint8, uint16 or float32");

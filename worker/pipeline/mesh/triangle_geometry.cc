@@ -37,37 +37,67 @@ double DihedralAngleDegrees(const Vec3& p, const Vec3& q, const Vec3& r, const V
   return std::acos(c) * 180.0 / std::numbers::pi;
 }
 
-double PointTriangleDistance2(const Vec3& p, const Triangle& t) {
+Vec3 ClosestPointOnTriangle(const Vec3& p, const Triangle& t) {
   // Voronoi-region method (Ericson, Real-Time Collision Detection, 5.1.5), written out.
   const Vec3 &a = t[0], &b = t[1], &c = t[2];
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = Dot(ab, ap), d2 = Dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return Norm2(p - a);
+  if (d1 <= 0 && d2 <= 0) return a;
   const Vec3 bp = p - b;
   const double d3 = Dot(ab, bp), d4 = Dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return Norm2(p - b);
+  if (d3 >= 0 && d4 <= d3) return b;
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const double v = d1 / (d1 - d3);
-    return Norm2(p - (a + ab * v));
+    return a + ab * v;
   }
   const Vec3 cp = p - c;
   const double d5 = Dot(ab, cp), d6 = Dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return Norm2(p - c);
+  if (d6 >= 0 && d5 <= d6) return c;
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const double w = d2 / (d2 - d6);
-    return Norm2(p - (a + ac * w));
+    return a + ac * w;
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
     const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return Norm2(p - (b + (c - b) * w));
+    return b + (c - b) * w;
   }
   const double denom = va + vb + vc;
-  if (denom == 0) return std::min({Norm2(p - a), Norm2(p - b), Norm2(p - c)});
+  if (denom == 0) {
+    const double da = Norm2(p - a), db = Norm2(p - b), dc = Norm2(p - c);
+    return da <= db && da <= dc ? a : (db <= dc ? b : c);
+  }
   const double v = vb / denom, w = vc / denom;
-  return Norm2(p - (a + ab * v + ac * w));
+  return a + ab * v + ac * w;
+}
+
+double PointTriangleDistance2(const Vec3& p, const Triangle& t) {
+  return Norm2(p - ClosestPointOnTriangle(p, t));
+}
+
+bool InsideClosedSurface(const Vec3& p, const std::vector<Vec3>& vertices,
+                         const std::vector<Face>& faces) {
+  // Offsets keep the ray off edges and vertices lying on round coordinates.
+  const double py = p.y + 1.2345e-7 * (1 + std::abs(p.y));
+  const double pz = p.z + 2.3456e-7 * (1 + std::abs(p.z));
+  bool inside = false;
+  for (const Face& f : faces) {
+    const Vec3 &a = vertices[f[0]], &b = vertices[f[1]], &c = vertices[f[2]];
+    if (std::max({a.x, b.x, c.x}) < p.x) continue;
+    const Vec3 t[3] = {a, b, c};
+    double e[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& u = t[k];
+      const Vec3& v = t[(k + 1) % 3];
+      e[k] = (v.y - u.y) * (pz - u.z) - (v.z - u.z) * (py - u.y);
+    }
+    if (!((e[0] > 0 && e[1] > 0 && e[2] > 0) || (e[0] < 0 && e[1] < 0 && e[2] < 0))) continue;
+    const double x = (e[1] * a.x + e[2] * b.x + e[0] * c.x) / (e[0] + e[1] + e[2]);
+    if (x > p.x) inside = !inside;
+  }
+  return inside;
 }
 
 bool ProjectBarycentric(const Vec3& p, const Triangle& t, double* u, double* v, double* w) {

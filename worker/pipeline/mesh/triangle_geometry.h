@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <utility>
+#include <vector>
 
 #include "common/types.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
 
 namespace sheetmesh {
 
@@ -38,8 +40,14 @@ double AngleDegrees(const Vec3& a, const Vec3& b);
 // (ALGORITHM §5). Orientation-free. 180 when either triangle is degenerate.
 double DihedralAngleDegrees(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
-// Squared distance from `p` to the closed triangle.
+// The point of the closed triangle nearest `p`, and the squared distance to it.
+Vec3 ClosestPointOnTriangle(const Vec3& p, const Triangle& t);
 double PointTriangleDistance2(const Vec3& p, const Triangle& t);
+
+// Whether `p` lies inside the closed surface made of `faces` of `vertices`, by the parity
+// of the crossings of a ray along +x.
+bool InsideClosedSurface(const Vec3& p, const std::vector<Vec3>& vertices,
+                         const std::vector<Face>& faces);
 
 // Barycentric coordinates (u, v, w) of the projection of `p` onto the triangle's plane:
 // projection = u a + v b + w c. False for a degenerate triangle.

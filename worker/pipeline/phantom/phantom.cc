@@ -134,8 +134,13 @@ absl::Status Validate(const PhantomOptions& o) {
     return absl::InvalidArgumentError(
         absl::StrCat("phantom aperture_voxels ", o.aperture_voxels, " must be positive"));
   }
-  if (o.num_sheets < 0 || o.holes_per_sheet < 0 || o.fragmented_sheets < 0 || o.num_specks < -1) {
+  if (o.num_sheets < 0 || o.holes_per_sheet < 0 || o.fragmented_sheets < 0 || o.num_specks < -1 ||
+      o.vugs_per_sheet < 0) {
     return absl::InvalidArgumentError("phantom counts must not be negative");
+  }
+  if (o.vugs_per_sheet > 0 && !(o.vug_radius_voxels > 0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("phantom vug_radius_voxels ", o.vug_radius_voxels, " must be positive"));
   }
   if (!(o.extent_fraction > 0 && o.extent_fraction <= 1.5)) {
     return absl::InvalidArgumentError(
@@ -206,6 +211,25 @@ void FillSlab(const PhantomTruth& truth, const Plan& plan, int64_t z_begin, int6
           if (w < f[0] - f[1] - f[3] || w > f[0] + f[1] + f[2]) continue;
           row[x] = value;
           ++(*sheet_counts)[k];
+        }
+      }
+    }
+  }
+  // Vugs open the sheets into lenses.
+  for (const PhantomVug& vug : truth.vugs) {
+    const double r = std::max(vug.radius_along, vug.radius_across);
+    const int64_t z0 = std::max<int64_t>(z_begin, std::floor(vug.center.z - r));
+    const int64_t z1 = std::min<int64_t>(z_end, std::ceil(vug.center.z + r) + 1);
+    for (int64_t z = z0; z < z1; ++z) {
+      for (int64_t y = std::max<int64_t>(0, std::floor(vug.center.y - r));
+           y <= std::min<int64_t>(d.ny - 1, std::ceil(vug.center.y + r)); ++y) {
+        T* row = slab + ((z - slab_z0) * d.ny + y) * d.nx;
+        for (int64_t x = std::max<int64_t>(0, std::floor(vug.center.x - r));
+             x <= std::min<int64_t>(d.nx - 1, std::ceil(vug.center.x + r)); ++x) {
+          if (row[x] != value && vug.Contains(Vec3(x, y, z))) {
+            row[x] = value;
+            ++(*sheet_counts)[vug.sheet];
+          }
         }
       }
     }
@@ -368,6 +392,20 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
     sp.radius = options.speck_radius_voxels * rng.Uniform(0.6, 1.2);
     truth.specks.push_back(sp);
   }
+  // Drawn last, so that the sheets and specks of a seed are the same with vugs or without.
+  for (size_t k = 0; k < truth.sheets.size(); ++k) {
+    const PhantomSheet& s = truth.sheets[k];
+    for (int n = 0; n < options.vugs_per_sheet; ++n) {
+      PhantomVug vug;
+      vug.sheet = static_cast<int>(k);
+      vug.center = s.center + s.u * (rng.Uniform(-0.5, 0.5) * s.half_extent_u) +
+                   s.v * (rng.Uniform(-0.5, 0.5) * s.half_extent_v);
+      vug.normal = s.normal;
+      vug.radius_along = options.vug_radius_voxels * rng.Uniform(0.8, 1.2);
+      vug.radius_across = 0.5 * vug.radius_along;
+      truth.vugs.push_back(vug);
+    }
+  }
   return truth;
 }
 
@@ -438,6 +476,14 @@ std::string PhantomTruth::ToJson() const {
     sheets.push_back(js);
   }
   j["sheets"] = sheets;
+  nlohmann::json vugs_json = nlohmann::json::array();
+  for (const PhantomVug& v : vugs) {
+    vugs_json.push_back({{"sheet", v.sheet},
+                         {"center", VecJson(v.center)},
+                         {"radius_along", v.radius_along},
+                         {"radius_across", v.radius_across}});
+  }
+  j["vugs"] = vugs_json;
   nlohmann::json specks_json = nlohmann::json::array();
   for (const PhantomSpeck& sp : specks) {
     specks_json.push_back({{"center", VecJson(sp.center)}, {"radius", sp.radius}});

@@ -34,7 +34,12 @@ struct PhantomOptions {
   // When in [0, 1]: every sheet's centre at this fraction of the box's height (z), instead
   // of near the middle (a sheet running along a box face: grazing contacts with it).
   double center_z_fraction = -1;
-  int num_specks = 0;  // small blobs (-1: one per 20^3 voxels of box)
+  // Vugs: a lens on each of the first sheets where a thin fracture opens into a body as
+  // thick as it is wide (an ellipsoid on the sheet's plane, its radius across the sheet
+  // half its radius along it).
+  int vugs_per_sheet = 0;
+  double vug_radius_voxels = 12.0;  // along the sheet (drawn within 0.8-1.2 of it)
+  int num_specks = 0;               // small blobs (-1: one per 20^3 voxels of box)
   double speck_radius_voxels = 1.5;
   DType dtype = DType::kUInt8;
   double sheet_value = 255;  // value of sheet voxels
@@ -72,11 +77,29 @@ struct PhantomSpeck {
   double radius = 0;
 };
 
+// A vug: the ellipsoid of semi-axes radius_along (on the sheet's plane) and radius_across
+// (along its normal) around `center`, on sheet `sheet`.
+struct PhantomVug {
+  int sheet = 0;
+  Vec3 center;
+  Vec3 normal;
+  double radius_along = 0;
+  double radius_across = 0;
+
+  bool Contains(const Vec3& p) const {
+    const Vec3 d = p - center;
+    const double w = Dot(d, normal);
+    const double along2 = Norm2(d) - w * w;
+    return along2 / (radius_along * radius_along) + w * w / (radius_across * radius_across) <= 1;
+  }
+};
+
 // The geometry of a phantom, decided by the options and seed before any voxel is made.
 struct PhantomTruth {
   PhantomOptions options;
   std::vector<PhantomSheet> sheets;
   std::vector<PhantomSpeck> specks;
+  std::vector<PhantomVug> vugs;
   uint64_t sheet_voxels = 0;  // voxels of the sheet phase (sheets and specks, overlaps once)
   uint64_t speck_voxels = 0;
 

@@ -117,11 +117,24 @@ PhantomOptions GrazingSheet() {
   return o;
 }
 
+// A network of thin sheets each opening into a vug (a lens 20-30 voxels across, half as
+// thick): pieces that are sheets where thin and bodies where thick.
+PhantomOptions VuggyNetwork() {
+  PhantomOptions o = RoughNetwork();
+  o.seed = 19;
+  o.aperture_voxels = 3.0;
+  o.holes_per_sheet = 1;
+  o.vugs_per_sheet = 1;
+  o.vug_radius_voxels = 12.0;
+  o.num_specks = 60;
+  return o;
+}
+
 }  // namespace
 
 std::vector<std::string> PhantomPresetNames() {
-  return {"sample",     "paper",           "thick_slab",   "rough_network",
-          "rough_slab", "shallow_network", "grazing_sheet"};
+  return {"sample",     "paper",           "thick_slab",    "rough_network",
+          "rough_slab", "shallow_network", "grazing_sheet", "vuggy_network"};
 }
 
 absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
@@ -132,6 +145,7 @@ absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
   if (name == "rough_slab") return RoughSlab();
   if (name == "shallow_network") return ShallowNetwork();
   if (name == "grazing_sheet") return GrazingSheet();
+  if (name == "vuggy_network") return VuggyNetwork();
   return absl::InvalidArgumentError(
       absl::StrCat("--preset=", absl::string_view(name.data(), name.size()), " is not known; use ",
                    absl::StrJoin(PhantomPresetNames(), ", ")));

@@ -6,17 +6,23 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/body_surface.h"
 #include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/voxel/components.h"
 
 namespace sheetmesh {
 namespace {
 
-// The faces of `mesh` listed in `faces`, with only the vertices they use.
-TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& faces) {
+// The faces of `mesh` listed in `faces`, with only the vertices they use; `renumbered`, when
+// given, maps each vertex of `mesh` to its index there (UINT32_MAX where unused).
+TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& faces,
+                     std::vector<uint32_t>* renumbered = nullptr) {
   TriangleMesh out;
-  std::vector<uint32_t> index(mesh.vertices.size(), UINT32_MAX);
+  std::vector<uint32_t> local;
+  std::vector<uint32_t>& index = renumbered != nullptr ? *renumbered : local;
+  index.assign(mesh.vertices.size(), UINT32_MAX);
   const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
   for (const uint32_t f : faces) {
     Face face;
@@ -52,11 +58,126 @@ void Append(const TriangleMesh& part, TriangleMesh* mesh) {
   mesh->face_piece.insert(mesh->face_piece.end(), part.face_piece.begin(), part.face_piece.end());
 }
 
-// Each piece's voxels (linear indices, ascending) and the sum of their τ.
+// Each piece's voxels (linear indices, ascending) and their τ.
 struct PieceVoxels {
   std::vector<uint64_t> keys;
-  double thickness_sum = 0;
+  std::vector<uint16_t> tau;
 };
+
+// The sheet around a lens made a body: its faces with a corner inside the body go, and the
+// rim they leave moves onto the body's surface (the nearest point, where that is within
+// two of the sheet's mean edge lengths), so that the two meet without a gap or an
+// overlap: the volume mesh joins them where a sheet vertex lies on a body face.
+TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body) {
+  std::vector<uint8_t> inside(sheet.vertices.size(), 0);
+  for (const Face& f : sheet.faces) {
+    for (uint32_t v : f) {
+      if (inside[v] == 0)
+        inside[v] = InsideClosedSurface(sheet.vertices[v], body.vertices, body.faces) ? 2 : 1;
+    }
+  }
+  std::vector<uint32_t> kept;
+  std::vector<uint8_t> rim(sheet.vertices.size(), 0);
+  for (uint32_t f = 0; f < sheet.faces.size(); ++f) {
+    const Face& t = sheet.faces[f];
+    if (inside[t[0]] == 2 || inside[t[1]] == 2 || inside[t[2]] == 2) {
+      for (uint32_t v : t) rim[v] = 1;
+    } else {
+      kept.push_back(f);
+    }
+  }
+  const double reach = 2 * MeanEdgeLength(sheet);
+  std::vector<uint32_t> index;
+  TriangleMesh out = SubMesh(sheet, kept, &index);
+  for (uint32_t v = 0; v < sheet.vertices.size(); ++v) {
+    if (!rim[v] || index[v] == UINT32_MAX) continue;
+    Vec3 best = out.vertices[index[v]];
+    double nearest = reach * reach;
+    for (size_t f = 0; f < body.faces.size(); ++f) {
+      const Vec3 c = ClosestPointOnTriangle(sheet.vertices[v], Corners(body, f));
+      const double d = Norm2(c - sheet.vertices[v]);
+      if (d < nearest) nearest = d, best = c;
+    }
+    out.vertices[index[v]] = best;
+  }
+  return out;
+}
+
+double Median(std::vector<uint16_t> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// A thick part of a piece is at least this many voxels, and has at least this many sheet
+// faces over it: a closed surface needs four, a lens of fewer voxels is noise.
+constexpr uint64_t kMinLensVoxels = 64;
+constexpr size_t kMinLensFaces = 8;
+
+// Scores `sheet_faces` (the sheet over `own`) and the body of `own` with as many faces into
+// `choice`; returns the body.
+absl::StatusOr<BodySurface> Trial(const TriangleMesh& sheet_faces, const VoxelSet& own,
+                                  int32_t piece, PrismHeight height, PieceRepresentation* choice) {
+  const Dims& dims = own.dims();
+  SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(sheet_faces, dims, height));
+  choice->sheet_similarity = ScoreModel(prisms, own).similarity;
+  SM_ASSIGN_OR_RETURN(BodySurface body, MeshBody(own, piece, sheet_faces.num_faces()));
+  SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
+  choice->body_similarity = ScoreModel(inside, own).similarity;
+  choice->body_triangles = body.mesh.faces.size();
+  choice->body_triangles_before = body.faces_before;
+  return body;
+}
+
+// A body is at least this many of its mean edge lengths thick (its median τ): thinner,
+// the volume mesh fills it with tetrahedra as flat as it is thin against its triangles
+// (a 2-voxel sheet with a lens meshed whole as a body kept 1.7°).
+constexpr double kBodyThicknessPerEdge = 0.5;
+
+// Whether a body scored in `choice` beats its sheet, keeps to the sheet's share of the
+// triangles (its decimation may stop short of it where the outline needs more) and is
+// thick enough for its triangles.
+bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body) {
+  return choice.body_triangles <= (1 + kTriangleTolerance) * choice.sheet_triangles &&
+         choice.median_thickness >= kBodyThicknessPerEdge * MeanEdgeLength(body) &&
+         *choice.body_similarity > *choice.sheet_similarity;
+}
+
+// The thick parts of a piece: 6-connected sets of its voxels whose τ is at least `least`,
+// of kMinLensVoxels or more.
+absl::StatusOr<std::vector<VoxelSet>> ThickParts(const PieceVoxels& pv, const Dims& dims,
+                                                 double least) {
+  std::vector<uint64_t> thick;
+  for (size_t i = 0; i < pv.keys.size(); ++i) {
+    if (pv.tau[i] >= least) thick.push_back(pv.keys[i]);
+  }
+  std::vector<VoxelSet> parts;
+  if (thick.size() < kMinLensVoxels) return parts;
+  const VoxelSet set = VoxelSetFromSortedLinear(dims, thick);
+  SM_ASSIGN_OR_RETURN(Components c, LabelComponents(set, Connectivity::k6));
+  const std::vector<uint32_t> label = c.VoxelLabels(set);
+  std::vector<std::vector<uint64_t>> keys(c.count());
+  set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+    if (c.sizes[label[i]] < kMinLensVoxels) return;
+    keys[label[i]].push_back(static_cast<uint64_t>(x) +
+                             dims.nx * (y + static_cast<uint64_t>(dims.ny) * z));
+  });
+  for (const std::vector<uint64_t>& k : keys) {
+    if (!k.empty()) parts.push_back(VoxelSetFromSortedLinear(dims, k));
+  }
+  return parts;
+}
+
+// The faces of `mesh` whose centroid lies in a voxel of `part`, and the others.
+void SplitFaces(const TriangleMesh& mesh, const VoxelSet& part, std::vector<uint32_t>* in,
+                std::vector<uint32_t>* out) {
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto t = Corners(mesh, f);
+    const Vec3 c = (t[0] + t[1] + t[2]) / 3.0;
+    const bool inside = part.Contains(std::llround(c.x), std::llround(c.y), std::llround(c.z));
+    (inside ? in : out)->push_back(f);
+  }
+}
 
 }  // namespace
 
@@ -74,9 +195,11 @@ const char* RepresentationName(RepresentationMode mode) {
 
 nlohmann::json PieceRepresentation::Fields() const {
   nlohmann::json j = {{"piece", piece},
+                      {"part_of", part_of},
                       {"representation", body ? "body" : "sheet"},
                       {"voxels", voxels},
                       {"thickness_voxels", thickness},
+                      {"median_thickness_voxels", median_thickness},
                       {"sheet_triangles", sheet_triangles}};
   if (sheet_similarity) j["sheet_similarity"] = *sheet_similarity;
   if (body_similarity) {
@@ -114,22 +237,24 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
 
   const Dims& dims = sheet.set.dims();
   std::map<int32_t, PieceVoxels> voxels_of;
+  int32_t next_id = faces_of.rbegin()->first + 1;  // ids for thick parts cut out of pieces
   {
     std::vector<uint32_t> component;
     if (piece_of_voxel.empty()) component = sheet.components.VoxelLabels(sheet.set);
     sheet.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
       const int32_t p =
           piece_of_voxel.empty() ? static_cast<int32_t>(component[i]) : piece_of_voxel[i];
+      next_id = std::max(next_id, p + 1);
       auto it = faces_of.find(p);
       if (it == faces_of.end()) return;
       PieceVoxels& v = voxels_of[p];
       v.keys.push_back(static_cast<uint64_t>(x) +
                        dims.nx * (y + static_cast<uint64_t>(dims.ny) * z));
-      v.thickness_sum += sheet.thickness[i];
+      v.tau.push_back(sheet.thickness[i]);
     });
   }
 
-  TriangleMesh out;
+  TriangleMesh out, bodies;
   size_t done = 0;
   for (const auto& [piece, faces] : faces_of) {
     PieceRepresentation choice;
@@ -140,24 +265,68 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
     if (vit != voxels_of.end()) {
       const PieceVoxels& pv = vit->second;
       choice.voxels = pv.keys.size();
-      choice.thickness = pv.thickness_sum / pv.keys.size();
-      const bool try_body = options.mode == RepresentationMode::kBody ||
-                            choice.thickness >= options.body_min_thickness;
-      if (try_body) {
+      double sum = 0;
+      for (uint16_t t : pv.tau) sum += t;
+      choice.thickness = sum / pv.keys.size();
+      choice.median_thickness = Median(pv.tau);
+      const bool body_mode = options.mode == RepresentationMode::kBody;
+      if (body_mode || choice.median_thickness >= options.body_min_thickness) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
-        SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(sheet_part, dims, options.height));
-        choice.sheet_similarity = ScoreModel(prisms, own).similarity;
-        SM_ASSIGN_OR_RETURN(BodySurface body, MeshBody(own, piece, faces.size()));
-        SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
-        choice.body_similarity = ScoreModel(inside, own).similarity;
-        choice.body_triangles = body.mesh.faces.size();
-        choice.body_triangles_before = body.faces_before;
-        // In auto, a body must also keep to the piece's share of the triangles (its
-        // decimation may stop short of it where the piece's outline needs more).
-        const bool fits = choice.body_triangles <= (1 + kTriangleTolerance) * faces.size();
-        choice.body = options.mode == RepresentationMode::kBody ||
-                      (fits && *choice.body_similarity > *choice.sheet_similarity);
+        SM_ASSIGN_OR_RETURN(BodySurface body,
+                            Trial(sheet_part, own, piece, options.height, &choice));
+        choice.body = body_mode || BodyWins(choice, body.mesh);
         if (choice.body) sheet_part = std::move(body.mesh);
+      }
+      // Where a thin piece opens into a lens (a vug), the lens alone may be a body: its
+      // voxels at least twice as thick as the piece's median (and body_min_thickness).
+      const double least = std::max(options.body_min_thickness, 2 * choice.median_thickness);
+      if (!choice.body && !body_mode) {
+        SM_ASSIGN_OR_RETURN(std::vector<VoxelSet> parts, ThickParts(pv, dims, least));
+        // A lens is judged by the whole piece's score (its sheet faces' prisms reach past
+        // the lens, over thin sheet the body does not cover).
+        std::optional<VoxelSet> own;
+        double score = 0;
+        for (const VoxelSet& part : parts) {
+          std::vector<uint32_t> over, rest;
+          SplitFaces(sheet_part, part, &over, &rest);
+          if (over.size() < kMinLensFaces) continue;
+          if (!own) {
+            own = VoxelSetFromSortedLinear(dims, pv.keys);
+            SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(sheet_part, dims, options.height));
+            score = ScoreModel(prisms, *own).similarity;
+          }
+          PieceRepresentation lens;
+          lens.piece = next_id;
+          lens.part_of = piece;
+          lens.voxels = part.size();
+          lens.sheet_triangles = over.size();
+          double lens_sum = 0;
+          std::vector<uint16_t> lens_tau;
+          part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+            lens_tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
+            lens_sum += lens_tau.back();
+          });
+          lens.thickness = lens_sum / part.size();
+          lens.median_thickness = Median(std::move(lens_tau));
+          SM_ASSIGN_OR_RETURN(BodySurface body, MeshBody(part, next_id, over.size()));
+          lens.body_triangles = body.mesh.num_faces();
+          lens.body_triangles_before = body.faces_before;
+          TriangleMesh kept = JoinToBody(sheet_part, body.mesh);
+          SM_ASSIGN_OR_RETURN(VoxelSet with_body, VoxelizePrisms(kept, dims, options.height));
+          SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
+          const double body_score = ScoreModel(Union(with_body, inside), *own).similarity;
+          lens.sheet_similarity = score;
+          lens.body_similarity = body_score;
+          if (!BodyWins(lens, body.mesh)) continue;
+          lens.body = true;
+          score = body_score;
+          sheet_part = std::move(kept);
+          Append(body.mesh, &bodies);
+          bodies.body_pieces.push_back(next_id++);
+          report.pieces.push_back(lens);
+          ++report.bodies;
+        }
+        choice.sheet_triangles = sheet_part.num_faces();
       }
     }
     if (choice.body) {
@@ -168,7 +337,14 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
     report.pieces.push_back(choice);
     SM_RETURN_IF_ERROR(progress.Update(static_cast<double>(++done) / faces_of.size()));
   }
-  if (report.bodies > 0) *mesh = std::move(out);  // body_pieces ascending: the map's order
+  Append(bodies, &out);
+  out.body_pieces.insert(out.body_pieces.end(), bodies.body_pieces.begin(),
+                         bodies.body_pieces.end());
+  std::sort(out.body_pieces.begin(), out.body_pieces.end());
+  std::sort(
+      report.pieces.begin(), report.pieces.end(),
+      [](const PieceRepresentation& a, const PieceRepresentation& b) { return a.piece < b.piece; });
+  if (report.bodies > 0) *mesh = std::move(out);
   return report;
 }
 

@@ -28,9 +28,10 @@ enum class RepresentationMode {
 
 struct RepresentationOptions {
   RepresentationMode mode = RepresentationMode::kAuto;
-  // In auto, a piece whose mean thickness τ is under this many voxels stays a sheet without
-  // a trial: a body that thin makes the volume mesh fill it with tetrahedra no thicker than
-  // it, over its whole extent, where a sheet needs none.
+  // In auto, a piece whose median thickness τ is under this many voxels stays a sheet
+  // without a trial: a body that thin makes the volume mesh fill it with tetrahedra no
+  // thicker than it, over its whole extent, where a sheet needs none. (Nor does a body win
+  // where its median τ is under half its mean edge length.)
   double body_min_thickness = 4.0;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
 };
@@ -38,8 +39,11 @@ struct RepresentationOptions {
 // One piece's choice, for the report.
 struct PieceRepresentation {
   int32_t piece = 0;
+  int32_t part_of = -1;  // a thick part (a lens) cut out of this piece as a body of its own
   uint64_t voxels = 0;
   double thickness = 0;                    // mean τ of its voxels
+  double median_thickness = 0;             // median τ: a body must be as thick as half its
+                                           // triangles are wide
   uint64_t sheet_triangles = 0;            // its share of the budget
   std::optional<double> sheet_similarity;  // formula 5 of its sheet against its voxels
   std::optional<double> body_similarity;   // of its body, when one was tried
@@ -61,7 +65,13 @@ struct RepresentationReport {
 const char* RepresentationName(RepresentationMode mode);
 
 // Chooses each piece's representation and replaces the faces of those that become bodies
-// in `mesh` by their body's (mesh->body_pieces lists them). `piece_of_voxel`, when not
+// in `mesh` by their body's (mesh->body_pieces lists them). Where a piece stays a sheet
+// but opens into lenses (6-connected parts at least twice its median thickness and
+// body_min_thickness, of 64 voxels or more), each lens is tried in place of the sheet
+// faces over it (their centroids in its voxels), both scored over the whole piece, and,
+// where it wins, becomes a body with a new piece id (after every id in use; part_of names
+// the piece) while the sheet keeps the rest of its faces: the two meet where the sheet's
+// faces run into the body. `piece_of_voxel`, when not
 // empty, labels each voxel of sheet.set with its piece (as given to BuildSurface); else
 // pieces are the components. Pieces with no sheet face (too small for the SCVD at this r)
 // stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness;

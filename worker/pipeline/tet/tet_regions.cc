@@ -5,31 +5,9 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
+#include "worker/pipeline/mesh/triangle_geometry.h"
 
 namespace sheetmesh {
-
-bool InsideClosedSurface(const Vec3& p, const std::vector<Vec3>& vertices,
-                         const std::vector<Face>& faces) {
-  // Offsets keep the ray off edges and vertices lying on round coordinates.
-  const double py = p.y + 1.2345e-7 * (1 + std::abs(p.y));
-  const double pz = p.z + 2.3456e-7 * (1 + std::abs(p.z));
-  bool inside = false;
-  for (const Face& f : faces) {
-    const Vec3 &a = vertices[f[0]], &b = vertices[f[1]], &c = vertices[f[2]];
-    if (std::max({a.x, b.x, c.x}) < p.x) continue;
-    const Vec3 t[3] = {a, b, c};
-    double e[3];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& u = t[k];
-      const Vec3& v = t[(k + 1) % 3];
-      e[k] = (v.y - u.y) * (pz - u.z) - (v.z - u.z) * (py - u.y);
-    }
-    if (!((e[0] > 0 && e[1] > 0 && e[2] > 0) || (e[0] < 0 && e[1] < 0 && e[2] < 0))) continue;
-    const double x = (e[1] * a.x + e[2] * b.x + e[0] * c.x) / (e[0] + e[1] + e[2]);
-    if (x > p.x) inside = !inside;
-  }
-  return inside;
-}
 
 std::vector<int32_t> AssignRegions(const TetMesh& mesh, const TriangleMesh& surface,
                                    const Placement& placement) {

@@ -20,11 +20,6 @@ namespace sheetmesh {
 std::vector<int32_t> AssignRegions(const TetMesh& mesh, const TriangleMesh& surface,
                                    const Placement& placement);
 
-// Whether `p` (physical) lies inside the closed surface made of `faces` of `vertices`
-// (physical), by the parity of the crossings of a ray along +x.
-bool InsideClosedSurface(const Vec3& p, const std::vector<Vec3>& vertices,
-                         const std::vector<Face>& faces);
-
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_TET_TET_REGIONS_H_

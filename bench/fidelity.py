@@ -1,16 +1,18 @@
 #!/usr/bin/python3
-"""Fidelity per element: sheetmesh's one-layer surface against a peer at equal triangle count.
+"""Fidelity per element: sheetmesh's surface against a peer at equal triangle count.
 
 The peer is marching cubes (scikit-image) on the binary sheet phase, decimated with VTK's
 quadric decimation to the triangle count sheetmesh produced; it is a closed surface and is
 scored by the volume it encloses. Both are scored by sheetmesh's own scorer (formula 5).
 
 For each volume and triangle budget, sheetmesh's `surface --triangles N` picks r; the mesh
-at that r is timed and scored (formula 5, Dice, Hausdorff); the peer is decimated to the
+at that r, each piece a sheet or a body (surface.representation auto), is timed and scored
+(formula 5, Dice, Hausdorff), and so is the same run with every piece a sheet
+(surface.representation sheet, the one-layer surface alone); the peer is decimated to the
 same count, timed (marching cubes plus decimation) and scored the same way. Volumes: NETL
-and DPM (../shared/data, skipped when absent), the phantom sample, the extraction presets
-thick_slab and rough_network, a 192³ phantom, and a planar constant-aperture junction
-built here.
+and DPM (../shared/data, skipped when absent), the phantom sample, the presets thick_slab,
+rough_slab (walls rough and not parallel), rough_network and vuggy_network (thin sheets
+opening into vugs), a 192³ phantom, and a planar constant-aperture junction built here.
 
 Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--budgets 100,200,...] [--FLAG=VALUE]
 Other --FLAG=VALUE arguments go to sheetmesh's surface runs (e.g. --surface_fit_walls=false).
@@ -60,7 +62,9 @@ def volumes(cli, out_dir):
         ("phantom 192^3", ["--phantom_dims=192x192x192", "--seed=3", "--sheets=4",
                            "--aperture=5", "--specks=0"], (192, 192, 192)),
         ("preset thick_slab", ["--preset=thick_slab"], (100, 100, 111)),
+        ("preset rough_slab", ["--preset=rough_slab"], (100, 100, 111)),
         ("preset rough_network", ["--preset=rough_network"], (160, 160, 160)),
+        ("preset vuggy_network", ["--preset=vuggy_network"], (160, 160, 160)),
     ]:
         raw = os.path.join(out_dir, "%s_%dx%dx%d_u8.raw" % (name.replace(" ", "_").replace("^", ""), *dims))
         if not os.path.exists(raw):
@@ -83,19 +87,27 @@ def dims_flag(raw, dims):
     return [] if "_%dx%dx%d_" % dims in os.path.basename(raw) else ["--dims=%d,%d,%d" % dims]
 
 
-def ours(cli, raw, dims, value, budget, out_dir, extra):
+def ours(cli, raw, dims, value, budget, out_dir, extra, representation="auto"):
     """sheetmesh at `budget` triangles (`surface --triangles`, its search included in the
-    time): (triangles, S, shell S, Dice, Hausdorff, seconds, r, decimated)."""
-    d = os.path.join(out_dir, "ours_%d" % budget)
+    time): (triangles, S, shell S, Dice, Hausdorff, seconds, r, decimated, representation:
+    bodies and pieces)."""
+    d = os.path.join(out_dir, "ours_%s_%d" % (representation, budget))
     start = time.monotonic()
     run([cli, "surface", raw, "--labels=%g" % value, "-o", d, "--output_formats=ply",
-         "--similarity_grid_rates=", "--triangles=%d" % budget] + dims_flag(raw, dims) + extra)
+         "--similarity_grid_rates=", "--triangles=%d" % budget,
+         "--surface_representation=" + representation] + dims_flag(raw, dims) + extra)
     seconds = time.monotonic() - start
     rep = json.load(open(os.path.join(d, "report.json")))
     sim = rep["similarity"]
     search = rep["radius_search"]
+    pieces = rep.get("representation", {}).get("pieces", [])
+    bodies = [p for p in pieces if p["representation"] == "body"]
+    lenses = sum(1 for p in bodies if p.get("part_of", -1) >= 0)
+    kinds = "%d of %d%s" % (len(bodies), len(pieces) - lenses,
+                            " (%d lenses)" % lenses if lenses else "")
     return (rep["surface"]["triangles"], sim["similarity"], sim["shell_similarity"], sim["dice"],
-            sim.get("hausdorff_voxels"), seconds, search["chosen_r"], "decimated_to" in search)
+            sim.get("hausdorff_voxels"), seconds, search["chosen_r"], "decimated_to" in search,
+            kinds)
 
 
 def peer(cli, raw, dims, value, triangles, out_dir):
@@ -140,17 +152,19 @@ def main():
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
     os.makedirs(out_root, exist_ok=True)
     budgets = [int(b) for b in args.budgets.split(",")]
-    lines = ["| volume | budget | triangles (r; dec.: decimated) | S ours (shell) | S peer | Δ S | shortfall ratio "
+    lines = ["| volume | budget | triangles (r; dec.: decimated) | bodies of pieces | S ours (shell) "
+             "| S sheets only | S peer | Δ S | shortfall ratio "
              "| Dice ours / peer | Hausdorff ours / peer | s ours / peer |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, raw, dims, value in volumes(cli, out_root):
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
         last = None
         for budget in budgets:
             try:
-                tri, sim, shell, dice, haus, secs, r, dec = ours(cli, raw, dims, value, budget, vdir,
-                                                                 extra)
+                tri, sim, shell, dice, haus, secs, r, dec, kinds = ours(cli, raw, dims, value, budget,
+                                                                        vdir, extra)
+                sheet_only = ours(cli, raw, dims, value, budget, vdir, extra, "sheet")[1]
             except subprocess.CalledProcessError as e:
                 line = "| %s | %d | refused: %s |" % (name, budget, e.stderr.strip().splitlines()[-1])
                 print(line, flush=True)
@@ -161,10 +175,10 @@ def main():
             last = tri
             ptri, psim, pdice, phaus, full, psecs = peer(cli, raw, dims, value, tri, vdir)
             ratio = (1 - sim) / (1 - psim) if psim < 1 else float("inf")
-            line = ("| %s | %d | %d (%.2f%s) | %.4f (%.4f) | %.4f | %+.4f | %.2f | %.3f / %.3f | "
-                    "%.1f / %.1f | %.2f / %.2f |") % (
-                name, budget, tri, r, ", dec." if dec else "", sim, shell, psim, sim - psim, ratio, dice, pdice,
-                haus or 0, phaus or 0, secs, psecs)
+            line = ("| %s | %d | %d (%.2f%s) | %s | %.4f (%.4f) | %.4f | %.4f | %+.4f | %.2f | "
+                    "%.3f / %.3f | %.1f / %.1f | %.2f / %.2f |") % (
+                name, budget, tri, r, ", dec." if dec else "", kinds, sim, shell, sheet_only, psim,
+                sim - psim, ratio, dice, pdice, haus or 0, phaus or 0, secs, psecs)
             print(line, flush=True)
             lines.append(line)
     with open(os.path.join(out_root, "..", "fidelity.md"), "w") as f:

@@ -1,5 +1,6 @@
-// The surface in 3D: triangles coloured by the thickness they carry, turned and zoomed
-// with the mouse; the volume mesh's boundary (the box) as an optional wireframe.
+// The surface in 3D: sheet triangles coloured by the thickness they carry, bodies (pieces
+// meshed as closed surfaces) grey, turned and zoomed with the mouse; the volume mesh's
+// boundary (the box) as an optional wireframe.
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { PLYLoader } from "three/examples/jsm/loaders/PLYLoader.js";
@@ -13,19 +14,23 @@ function colourOf(t) {
 
 export function showSurface(container, plyBytes, dims) {
   const loader = new PLYLoader();
-  loader.setCustomPropertyNameMapping({ thickness: ["thickness"] });
+  loader.setCustomPropertyNameMapping({ thickness: ["thickness"], body: ["body"] });
   const geometry = loader.parse(plyBytes);
   const thick = geometry.getAttribute("thickness");
+  const body = geometry.getAttribute("body");
   const n = geometry.getAttribute("position").count;
+  const isBody = (i) => body && body.getX(i) > 0;
   let lo = Infinity, hi = -Infinity;
   for (let i = 0; thick && i < n; ++i) {
+    if (isBody(i)) continue;
     lo = Math.min(lo, thick.getX(i));
     hi = Math.max(hi, thick.getX(i));
   }
   const colours = new Float32Array(3 * n);
+  const grey = new THREE.Color(0x9aa0a6);
   for (let i = 0; i < n; ++i) {
     const t = thick && hi > lo ? (thick.getX(i) - lo) / (hi - lo) : 0.5;
-    const c = colourOf(t);
+    const c = isBody(i) ? grey : colourOf(t);
     colours.set([c.r, c.g, c.b], 3 * i);
   }
   geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));

@@ -28,6 +28,10 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
       "radius aspect %.2f/%.2f (min/mean)\n",
       q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
       q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+  for (const VolumeMeshStats::BodyRegion& b : v.bodies) {
+    out << absl::StrFormat("  body %d   %d tetrahedra, volume %.6g\n", b.piece, b.tetrahedra,
+                           b.volume);
+  }
 }
 
 }  // namespace
@@ -78,6 +82,18 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
       "(%d voxels) too small for a triangle\n",
       m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.pieces,
       m.skipped_components, m.skipped_voxels);
+  if (r.representation && r.representation->bodies > 0) {
+    out << absl::StrFormat(
+        "bodies      %d of the pieces meshed as closed surfaces (piece: "
+        "triangles, similarity as a body / as a sheet)\n",
+        r.representation->bodies);
+    for (const PieceRepresentation& p : r.representation->pieces) {
+      if (!p.body || !p.body_similarity || !p.sheet_similarity) continue;
+      out << absl::StrFormat("            %d%s: %d, %.4f / %.4f\n", p.piece,
+                             p.part_of >= 0 ? absl::StrCat(" (a lens of ", p.part_of, ")") : "",
+                             p.body_triangles, *p.body_similarity, *p.sheet_similarity);
+    }
+  }
   const SimilarityReport& sim = *r.similarity;
   out << absl::StrFormat("similarity  %.4f (C_in %d, C_out %d, C_image %d), Dice %.4f",
                          sim.score.similarity, sim.score.c_in, sim.score.c_out, sim.score.c_image,

@@ -50,6 +50,17 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
   absl::StrAppend(&out, "element vertex ", mesh.vertices.size(),
                   "\nproperty float x\nproperty float y\nproperty float z\n");
   if (vthick) out += "property float thickness\n";
+  // Which vertices are a body's (bodies and sheets share none): viewers that read no face
+  // properties colour by it.
+  std::vector<uint8_t> body_vertex;
+  if (fpiece && !mesh.body_pieces.empty()) {
+    body_vertex.assign(mesh.vertices.size(), 0);
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (mesh.IsBodyFace(f))
+        for (uint32_t v : mesh.faces[f]) body_vertex[v] = 1;
+    }
+    out += "property uchar body\n";
+  }
   absl::StrAppend(&out, "element face ", mesh.faces.size(),
                   "\nproperty list uchar int vertex_indices\n");
   if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
@@ -67,6 +78,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
       absl::StrAppendFormat(
           &out, " %.7g", static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
     }
+    if (!body_vertex.empty()) out += body_vertex[v] ? " 1" : " 0";
     out += '\n';
   }
   float lo = 0, hi = 0;

@@ -19,8 +19,8 @@ double PhysicalLength(double voxels, const Placement& placement);
 
 // ASCII PLY (meshio 5's binary PLY reader takes no face properties; its ASCII one does).
 // Vertices x, y, z (physical) and, when present, thickness; faces vertex_indices, thickness
-// (physical), thickness_voxels, piece, body (1 on a body's faces; only when the mesh has
-// bodies), and red/green/blue from the thickness for readers
+// (physical), thickness_voxels, piece, body (1 on a body's faces, and on its vertices; only
+// when the mesh has bodies), and red/green/blue from the thickness for readers
 // that keep only colours (VTK's). The file appears atomically.
 absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement);

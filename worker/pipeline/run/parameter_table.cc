@@ -330,7 +330,7 @@ std::vector<ParamRow> SurfaceRows() {
                         "whichever scores better with the piece's share of the triangles"));
   rows.push_back(Number("surface.body_min_thickness", SM_MEMBER(representation.body_min_thickness),
                         "[0, 10000]", "voxels",
-                        "in auto, a piece thinner than this (mean thickness) stays a sheet "
+                        "in auto, a piece thinner than this (median thickness) stays a sheet "
                         "without a trial as a body"));
   rows.push_back(Number(
       "surface.fold_angle", SM_MEMBER(surface.triangles.fold_angle_degrees), "[0, 180)", "degrees",

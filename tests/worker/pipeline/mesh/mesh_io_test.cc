@@ -48,6 +48,24 @@ TEST(MeshIoTest, PlyRoundTripKeepsGeometryAndAttributesInPhysicalUnits) {
   EXPECT_NEAR(phys.vertices[1].x, 11.0, 1e-5);
 }
 
+TEST(MeshIoTest, PlyAndVtpCarryWhichPiecesAreBodies) {
+  TempDir tmp;
+  TriangleMesh m = Sample();
+  m.body_pieces = {7};
+  ASSERT_THAT(WritePly(tmp.File("m.ply"), m, {}), IsOk());
+  SM_ASSERT_OK_AND_ASSIGN(TriangleMesh back, ReadMesh(tmp.File("m.ply")));
+  EXPECT_EQ(back.body_pieces, std::vector<int32_t>{7});
+  EXPECT_FALSE(back.IsBodyFace(0));
+  EXPECT_TRUE(back.IsBodyFace(1));
+  const std::string ply = *ReadFileToString(tmp.File("m.ply"));
+  EXPECT_THAT(ply, HasSubstr("property uchar body\n"));
+  ASSERT_THAT(WriteVtp(tmp.File("m.vtp"), m, {}), IsOk());
+  EXPECT_THAT(*ReadFileToString(tmp.File("m.vtp")), HasSubstr("Name=\"body\""));
+  // Without bodies, no body property.
+  ASSERT_THAT(WritePly(tmp.File("s.ply"), Sample(), {}), IsOk());
+  EXPECT_THAT(*ReadFileToString(tmp.File("s.ply")), ::testing::Not(HasSubstr("body")));
+}
+
 TEST(MeshIoTest, ObjAndAsciiPlyRead) {
   TempDir tmp;
   ASSERT_THAT(WriteObj(tmp.File("m.obj"), Sample(), {}), IsOk());

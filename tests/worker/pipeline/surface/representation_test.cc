@@ -15,6 +15,7 @@
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/body_surface.h"
 #include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
 namespace {
@@ -163,6 +164,48 @@ TEST(RepresentationTest, ForcedEitherWay) {
   for (size_t f = 0; f < bodies.surface.mesh.num_faces(); ++f) {
     EXPECT_TRUE(bodies.surface.mesh.IsBodyFace(f));
   }
+}
+
+// A 2-voxel sheet opening into a lens 40 voxels across and 20 thick: the lens becomes a
+// body of its own, the sheet stays a sheet around it and reaches it; the volume mesh
+// conforms to both and the lens is a region of about its voxels' volume.
+TEST(RepresentationTest, AThinSheetOpeningIntoALensIsASheetAndABody) {
+  const SheetAnalysis sheet =
+      *AnalyzeSheet(testing::ShapeSet({100, 100, 60}, [](double x, double y, double z) {
+        const bool plane = std::abs(z - 30) < 1.01 && x >= 5 && x < 95 && y >= 5 && y < 95;
+        const double e =
+            (std::pow(x - 50, 2) + std::pow(y - 50, 2)) / 400 + std::pow(z - 30, 2) / 100;
+        return plane || e <= 1;
+      }));
+  SurfaceOptions s;
+  s.scvd.radius_voxels = 2.66;
+  SurfaceResult surface = *BuildSurface(sheet, s);
+  const size_t faces = surface.mesh.num_faces();
+  const double sheet_only =
+      ScoreModel(*VoxelizeMesh(surface.mesh, sheet.set.dims()), sheet.set).similarity;
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport report,
+                          ChooseRepresentation(sheet, {}, {}, &surface.mesh));
+  ASSERT_EQ(report.pieces.size(), 2u);
+  EXPECT_FALSE(report.pieces[0].body);  // the sheet, median thickness 2: no trial whole
+  EXPECT_FALSE(report.pieces[0].body_similarity.has_value());
+  const PieceRepresentation& lens = report.pieces[1];
+  EXPECT_TRUE(lens.body);
+  EXPECT_EQ(lens.part_of, 0);
+  EXPECT_EQ(lens.piece, 1);
+  EXPECT_EQ(surface.mesh.body_pieces, std::vector<int32_t>{1});
+  EXPECT_LE(surface.mesh.num_faces(), faces);
+  const double both =
+      ScoreModel(*VoxelizeMesh(surface.mesh, sheet.set.dims()), sheet.set).similarity;
+  EXPECT_GT(both, sheet_only);
+  EXPECT_GE(both, 0.97);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult volume,
+                          BuildVolumeMesh(surface.mesh, sheet.set.dims(), {}, {}));
+  EXPECT_EQ(volume.conformity.conforming, volume.conformity.sheet_triangles);
+  EXPECT_EQ(volume.repaired_triangles, 0u);
+  ASSERT_EQ(volume.bodies.size(), 1u);
+  // The body is the lens's part at least 4 voxels thick (body_min_thickness).
+  EXPECT_NEAR(volume.bodies[0].volume, double(lens.voxels), 0.1 * lens.voxels);
+  EXPECT_GE(volume.quality.min_dihedral.min, 10.0);
 }
 
 TEST(RepresentationTest, AMeshWithoutPiecesIsRefused) {

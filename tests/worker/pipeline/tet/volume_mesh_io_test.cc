@@ -172,3 +172,97 @@ TEST(VolumeMeshIoTest, ThicknessIsPhysicalWithAnisotropicSpacing) {
 
 }  // namespace
 }  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// A box with a sheet (piece 0, z = 5) and a body (piece 5: the cube [8, 13]^3, closed and
+// outward), meshed: the body's tetrahedra are a region of their own in every writer.
+TetMesh MeshWithBody() {
+  TriangleMesh m;
+  m.vertices = {{3, 3, 5}, {16, 3, 5}, {16, 16, 5}, {3, 16, 5}};
+  m.faces = {{0, 1, 2}, {0, 2, 3}};
+  m.face_piece = {0, 0};
+  m.face_thickness = {2.f, 2.f};
+  const uint32_t b = 4;
+  for (int c = 0; c < 8; ++c) {
+    m.vertices.push_back({c & 1 ? 13.0 : 8.0, c & 2 ? 13.0 : 8.0, c & 4 ? 13.0 : 8.0});
+  }
+  // Each face of the cube as two triangles, outward.
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.faces.push_back({b + q[0], b + q[1], b + q[2]});
+    m.faces.push_back({b + q[0], b + q[2], b + q[3]});
+    for (int k = 0; k < 2; ++k) {
+      m.face_piece.push_back(5);
+      m.face_thickness.push_back(0.f);
+    }
+  }
+  m.body_pieces = {5};
+  auto r = BuildVolumeMesh(m, {20, 20, 20}, {}, {});
+  EXPECT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->bodies.size(), 1u);
+  if (!r->bodies.empty()) {
+    EXPECT_EQ(r->bodies[0].piece, 5);
+    EXPECT_NEAR(r->bodies[0].volume, 125.0, 1e-6);
+  }
+  return r->mesh;
+}
+
+TEST(VolumeMeshIoTest, ABodyIsARegionInEveryWriter) {
+  TempDir tmp;
+  const TetMesh m = MeshWithBody();
+  size_t body_tets = 0, wall_faces = 0;
+  for (size_t t = 0; t < m.tets.size(); ++t) body_tets += m.Region(t) == 5;
+  for (int32_t p : m.face_piece) wall_faces += p == 5;
+  ASSERT_GT(body_tets, 0u);
+  ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
+  ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
+  ASSERT_THAT(WriteAbaqus(tmp.File("m.inp"), m), IsOk());
+  ASSERT_THAT(WriteExodus(tmp.File("m.exo"), m), IsOk());
+  const auto vtu = Python(
+      "import meshio, numpy as np\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.vtu") +
+      "\")\n"
+      "mat = np.concatenate(m.cell_data[\"MaterialIDs\"])\n"
+      "kind = np.concatenate(m.cell_data[\"kind\"])\n"
+      "print(int(((kind == 0) & (mat == 6)).sum()), int((kind == 3).sum()))");
+  if (!vtu) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  EXPECT_EQ(*vtu, absl::StrCat(body_tets, " ", wall_faces, "\n"));
+  const auto msh = Python(
+      "import meshio\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.msh") +
+      "\")\n"
+      "n = sum(len(p) for b, p in zip(m.cells, m.cell_data[\"gmsh:physical\"])"
+      " if b.type == \"tetra\" and int(p[0]) == 105)\n"
+      "print(n, int(m.field_data[\"body_5\"][0]), int(m.field_data[\"body_5_wall\"][0]))");
+  EXPECT_EQ(*msh, absl::StrCat(body_tets, " 105 105\n"));
+  const auto inp = Python(
+      "import meshio\n"
+      "m = meshio.read(\"" +
+      tmp.File("m.inp") +
+      "\")\n"
+      "sizes = {k: sum(len(x) for x in v) for k, v in m.cell_sets.items()}\n"
+      "print(sizes.get(\"BODY_5\"), sizes.get(\"ROCK\"), \"SHEET_5\" in sizes)");
+  EXPECT_EQ(*inp, absl::StrCat(body_tets, " ", m.tets.size() - body_tets, " False\n"));
+  const std::string text = *ReadFileToString(tmp.File("m.inp"));
+  EXPECT_THAT(text, ::testing::HasSubstr("*SOLID SECTION, ELSET=BODY_5, MATERIAL=FILL\n"));
+  EXPECT_THAT(text, ::testing::HasSubstr("*SURFACE, TYPE=ELEMENT, NAME=SURF_BODY_5\n"));
+  // Exodus: blocks rock, body_5 (its tetrahedra) and sheet_0; no block of the body's walls.
+  const auto exo = Python(
+      "import netCDF4\n"
+      "ds = netCDF4.Dataset(\"" +
+      tmp.File("m.exo") +
+      "\")\n"
+      "names = [bytes(n.compressed()).decode() for n in ds.variables[\"eb_names\"][:]]\n"
+      "print(\" \".join(names), ds.dimensions[\"num_el_in_blk2\"].size)");
+  if (exo && exo->find("Error") == std::string::npos && !exo->empty()) {
+    EXPECT_EQ(*exo, absl::StrCat("rock body_5 sheet_0 ", body_tets, "\n"));
+  }
+}
+
+}  // namespace
+}  // namespace sheetmesh

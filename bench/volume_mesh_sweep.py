@@ -25,7 +25,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fidelity  # noqa: E402
 
 ROOT = fidelity.ROOT
-PRESETS = ["shallow_network", "rough_slab", "grazing_sheet"]  # besides fidelity.py's volumes
+PRESETS = ["shallow_network", "grazing_sheet"]  # besides fidelity.py's volumes
 
 
 def preset_volumes(cli, out_dir):
@@ -69,22 +69,24 @@ def one(cli, name, raw, dims, value, mode, r, out_dir, flags):
     row["wedge"] = vm.get("input_wedges", {}).get("narrowest_degrees", 360)
     row["repaired"] = vm.get("repaired_triangles", 0)
     row["thin_splits"] = vm.get("untangled", {}).get("thin_splits", 0)
+    row["bodies"] = len(vm.get("bodies", []))
+    row["body_tets"] = sum(b["tetrahedra"] for b in vm.get("bodies", []))
     return row
 
 
 def table(rows):
     out = ["| volume | mode | r | result | min° | mean° | tets | sheet tris | tets/tri | S | volume s | TetGen s "
-           "| input wedge° | removed tris |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "| input wedge° | removed tris | bodies (their tets) |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for x in rows:
         if "error" in x:
-            out.append("| %s | %s | %g | **failed**: %s | | | | | | | | | | |" % (
+            out.append("| %s | %s | %g | **failed**: %s | | | | | | | | | | | |" % (
                 x["volume"], x["mode"], x["r"], x["error"]))
         else:
-            out.append("| %s | %s | %g | %s | %.2f | %.2f | %d | %d | %.1f | %.3f | %.2f | %.2f | %.2f | %d |" % (
+            out.append("| %s | %s | %g | %s | %.2f | %.2f | %d | %d | %.1f | %.3f | %.2f | %.2f | %.2f | %d | %s |" % (
                 x["volume"], x["mode"], x["r"], "ok" if x["min"] >= 10 else "min < 10°", x["min"], x["mean"],
                 x["tets"], x["tris"], x["per_tri"], x["S"], x["vol_s"], x["tetgen_s"], x.get("wedge", 360),
-                x.get("repaired", 0)))
+                x.get("repaired", 0), "%d (%d)" % (x["bodies"], x["body_tets"]) if x.get("bodies") else ""))
     return out
 
 
@@ -111,6 +113,11 @@ def summary(rows):
         ratio = [x["vol_s"] / x["tetgen_s"] for x in ok if x["tetgen_s"] > 0]
         if ratio:
             lines.append("volume stage / TetGen: median %.1fx, worst %.1fx" % (statistics.median(ratio), max(ratio)))
+    with_bodies = [x for x in ok if x.get("bodies", 0) > 0]
+    if with_bodies:
+        lines.append("runs with bodies: %d, of them min >= 10°: %d; body regions with no tetrahedra: %d" % (
+            len(with_bodies), sum(1 for x in with_bodies if x["min"] >= 10),
+            sum(1 for x in with_bodies if x["body_tets"] == 0)))
     for x in failed:
         lines.append("failed: %s %s r=%g: %s" % (x["volume"], x["mode"], x["r"], x["error"]))
     return lines

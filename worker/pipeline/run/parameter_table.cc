@@ -332,6 +332,10 @@ std::vector<ParamRow> SurfaceRows() {
                         "[0, 10000]", "voxels",
                         "in auto, a piece thinner than this (median thickness) stays a sheet "
                         "without a trial as a body"));
+  rows.push_back(Number("surface.body_min_aspect", SM_MEMBER(representation.body_min_aspect),
+                        "[0, 100]", "",
+                        "in auto, a piece (or a lens of one) is tried as a body only where its "
+                        "median thickness is at least this fraction of its width"));
   rows.push_back(Number(
       "surface.fold_angle", SM_MEMBER(surface.triangles.fold_angle_degrees), "[0, 180)", "degrees",
       "a candidate meeting a kept triangle below this dihedral angle is refused"));

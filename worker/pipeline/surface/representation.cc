@@ -1,6 +1,7 @@
 #include "worker/pipeline/surface/representation.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -133,6 +134,23 @@ absl::StatusOr<BodySurface> Trial(const TriangleMesh& sheet_faces, const VoxelSe
 // the volume mesh fills it with tetrahedra as flat as it is thin against its triangles
 // (a 2-voxel sheet with a lens meshed whole as a body kept 1.7°).
 constexpr double kBodyThicknessPerEdge = 0.5;
+
+// Whether a part of `voxels` voxels with median thickness `median` is as thick as it is
+// wide, within `aspect`: its width the square root of its mid-surface's area.
+bool Stout(uint64_t voxels, double median, double aspect) {
+  return median > 0 && median >= aspect * std::sqrt(voxels / median);
+}
+
+// Whether a body of `voxels` voxels with median thickness `median` could be thick enough
+// for `faces` triangles, judged before building it: its two walls' area, 2 voxels / median,
+// in equilateral triangles of that count (a body whose triangles would be wider than
+// twice its thickness is not worth building).
+bool MayBeThickEnough(uint64_t voxels, double median, uint64_t faces) {
+  if (median <= 0 || faces == 0) return false;
+  const double area = 2.0 * voxels / median;
+  const double edge = std::sqrt(4 * area / (std::sqrt(3.0) * faces));
+  return median >= kBodyThicknessPerEdge * edge;
+}
 
 // Whether a body scored in `choice` beats its sheet, keeps to the sheet's share of the
 // triangles (its decimation may stop short of it where the outline needs more) and is
@@ -270,7 +288,9 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       choice.thickness = sum / pv.keys.size();
       choice.median_thickness = Median(pv.tau);
       const bool body_mode = options.mode == RepresentationMode::kBody;
-      if (body_mode || choice.median_thickness >= options.body_min_thickness) {
+      if (body_mode || (choice.median_thickness >= options.body_min_thickness &&
+                        Stout(choice.voxels, choice.median_thickness, options.body_min_aspect) &&
+                        MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
@@ -290,6 +310,17 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
           std::vector<uint32_t> over, rest;
           SplitFaces(sheet_part, part, &over, &rest);
           if (over.size() < kMinLensFaces) continue;
+          {
+            std::vector<uint16_t> tau;
+            part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+              tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
+            });
+            const double median = Median(std::move(tau));
+            if (!Stout(part.size(), median, options.body_min_aspect) ||
+                !MayBeThickEnough(part.size(), median, over.size())) {
+              continue;
+            }
+          }
           if (!own) {
             own = VoxelSetFromSortedLinear(dims, pv.keys);
             SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(sheet_part, dims, options.height));

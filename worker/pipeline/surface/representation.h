@@ -33,6 +33,12 @@ struct RepresentationOptions {
   // thicker than it, over its whole extent, where a sheet needs none. (Nor does a body win
   // where its median τ is under half its mean edge length.)
   double body_min_thickness = 4.0;
+  // In auto, a piece (or a lens of one) is tried as a body only where its median thickness
+  // is at least this fraction of its width (the square root of its mid-surface's area,
+  // voxels / median thickness): a fracture 4 voxels thick and 170 wide is a sheet however
+  // finely it is meshed, and as a body it would fill the volume mesh with tetrahedra as
+  // thin as it (DPM at r = 3 ran for minutes).
+  double body_min_aspect = 0.1;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
 };
 

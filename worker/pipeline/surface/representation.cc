@@ -1,6 +1,7 @@
 #include "worker/pipeline/surface/representation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -59,29 +60,65 @@ void Append(const TriangleMesh& part, TriangleMesh* mesh) {
   mesh->face_piece.insert(mesh->face_piece.end(), part.face_piece.begin(), part.face_piece.end());
 }
 
+// Merges vertices at exactly the same place (pieces split apart by SubMesh share their
+// junctions' vertices again).
+void WeldExact(TriangleMesh* mesh) {
+  std::map<std::array<double, 3>, uint32_t> first;
+  std::vector<uint32_t> to(mesh->vertices.size());
+  TriangleMesh out;
+  const bool vthick = mesh->vertex_thickness.size() == mesh->vertices.size();
+  for (uint32_t v = 0; v < mesh->vertices.size(); ++v) {
+    const Vec3& p = mesh->vertices[v];
+    auto [it, fresh] = first.try_emplace({p.x, p.y, p.z}, out.vertices.size());
+    if (fresh) {
+      out.vertices.push_back(p);
+      if (vthick) out.vertex_thickness.push_back(mesh->vertex_thickness[v]);
+    }
+    to[v] = it->second;
+  }
+  for (Face& f : mesh->faces)
+    for (uint32_t& v : f) v = to[v];
+  mesh->vertices = std::move(out.vertices);
+  if (vthick) mesh->vertex_thickness = std::move(out.vertex_thickness);
+}
+
 // Each piece's voxels (linear indices, ascending) and their τ.
 struct PieceVoxels {
   std::vector<uint64_t> keys;
   std::vector<uint16_t> tau;
 };
 
-// The sheet around a lens made a body: its faces with a corner inside the body go, and the
-// rim they leave moves onto the body's surface (the nearest point, where that is within
+// A sheet around a body (a lens made one, or any sheet crossing a body): its faces with a
+// corner inside the body go (but those of `skip_piece`, joined to it before), and the rim
+// they leave moves onto the body's surface (the nearest point, where that is within
 // two of the sheet's mean edge lengths), so that the two meet without a gap or an
 // overlap: the volume mesh joins them where a sheet vertex lies on a body face.
-TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body) {
+TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body,
+                        int32_t skip_piece = -1) {
+  Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
+  for (const Vec3& p : body.vertices) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+    }
+  }
+  auto in_box = [&](const Vec3& p) {
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+  };
   std::vector<uint8_t> inside(sheet.vertices.size(), 0);
   for (const Face& f : sheet.faces) {
     for (uint32_t v : f) {
-      if (inside[v] == 0)
-        inside[v] = InsideClosedSurface(sheet.vertices[v], body.vertices, body.faces) ? 2 : 1;
+      if (inside[v] != 0) continue;
+      const Vec3& p = sheet.vertices[v];
+      inside[v] = in_box(p) && InsideClosedSurface(p, body.vertices, body.faces) ? 2 : 1;
     }
   }
   std::vector<uint32_t> kept;
   std::vector<uint8_t> rim(sheet.vertices.size(), 0);
   for (uint32_t f = 0; f < sheet.faces.size(); ++f) {
     const Face& t = sheet.faces[f];
-    if (inside[t[0]] == 2 || inside[t[1]] == 2 || inside[t[2]] == 2) {
+    if (sheet.face_piece[f] != skip_piece &&
+        (inside[t[0]] == 2 || inside[t[1]] == 2 || inside[t[2]] == 2)) {
       for (uint32_t v : t) rim[v] = 1;
     } else {
       kept.push_back(f);
@@ -102,6 +139,19 @@ TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body) {
     out.vertices[index[v]] = best;
   }
   return out;
+}
+
+// Whether a face of a piece other than `piece` has its centroid in a voxel of `part`: a
+// sheet running through a body would have to end on its walls, and where several do (a
+// crossing of fractures cut into pieces) the joins clash; such a part stays a sheet.
+bool CrossedByOthers(const TriangleMesh& mesh, int32_t piece, const VoxelSet& part) {
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (mesh.face_piece[f] == piece) continue;
+    const auto t = Corners(mesh, f);
+    const Vec3 c = (t[0] + t[1] + t[2]) / 3.0;
+    if (part.Contains(std::llround(c.x), std::llround(c.y), std::llround(c.z))) return true;
+  }
+  return false;
 }
 
 double Median(std::vector<uint16_t> v) {
@@ -135,10 +185,25 @@ absl::StatusOr<BodySurface> Trial(const TriangleMesh& sheet_faces, const VoxelSe
 // (a 2-voxel sheet with a lens meshed whole as a body kept 1.7°).
 constexpr double kBodyThicknessPerEdge = 0.5;
 
-// Whether a part of `voxels` voxels with median thickness `median` is as thick as it is
-// wide, within `aspect`: its width the square root of its mid-surface's area.
-bool Stout(uint64_t voxels, double median, double aspect) {
-  return median > 0 && median >= aspect * std::sqrt(voxels / median);
+// The longest side of the bounding box of voxels given by linear index.
+double Width(std::span<const uint64_t> keys, const Dims& d) {
+  int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  for (const uint64_t k : keys) {
+    const int64_t c[3] = {static_cast<int64_t>(k % d.nx), static_cast<int64_t>(k / d.nx % d.ny),
+                          static_cast<int64_t>(k / d.nx / d.ny)};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  }
+  return keys.empty() ? 0.0 : double(std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) + 1);
+}
+
+// Whether a part with median thickness `median` and `width` (the longest side of its
+// bounding box) is as thick as it is wide, within `aspect`. A crossing of two thin sheets
+// is thick along a line as long as the sheets are wide: not stout.
+bool Stout(double median, double width, double aspect) {
+  return median > 0 && median >= aspect * width;
 }
 
 // Whether a body of `voxels` voxels with median thickness `median` could be thick enough
@@ -272,7 +337,12 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
     });
   }
 
-  TriangleMesh out, bodies;
+  TriangleMesh sheets, bodies;
+  struct Joined {
+    TriangleMesh mesh;
+    int32_t piece = -1;  // the piece whose sheet was joined to it already (a lens's)
+  };
+  std::vector<Joined> body_meshes;
   size_t done = 0;
   for (const auto& [piece, faces] : faces_of) {
     PieceRepresentation choice;
@@ -288,14 +358,21 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       choice.thickness = sum / pv.keys.size();
       choice.median_thickness = Median(pv.tau);
       const bool body_mode = options.mode == RepresentationMode::kBody;
-      if (body_mode || (choice.median_thickness >= options.body_min_thickness &&
-                        Stout(choice.voxels, choice.median_thickness, options.body_min_aspect) &&
-                        MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
+      if (body_mode ||
+          (choice.median_thickness >= options.body_min_thickness &&
+           Stout(choice.median_thickness, Width(pv.keys, dims), options.body_min_aspect) &&
+           MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
-        choice.body = body_mode || BodyWins(choice, body.mesh);
-        if (choice.body) sheet_part = std::move(body.mesh);
+        choice.body =
+            body_mode || (BodyWins(choice, body.mesh) && !CrossedByOthers(*mesh, piece, own));
+        if (choice.body) {
+          body_meshes.push_back({body.mesh, -1});
+          Append(body.mesh, &bodies);
+          bodies.body_pieces.push_back(piece);
+          sheet_part = TriangleMesh();
+        }
       }
       // Where a thin piece opens into a lens (a vug), the lens alone may be a body: its
       // voxels at least twice as thick as the piece's median (and body_min_thickness).
@@ -309,14 +386,17 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         for (const VoxelSet& part : parts) {
           std::vector<uint32_t> over, rest;
           SplitFaces(sheet_part, part, &over, &rest);
-          if (over.size() < kMinLensFaces) continue;
+          if (over.size() < kMinLensFaces || CrossedByOthers(*mesh, piece, part)) continue;
           {
             std::vector<uint16_t> tau;
             part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
               tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
             });
             const double median = Median(std::move(tau));
-            if (!Stout(part.size(), median, options.body_min_aspect) ||
+            Index3 lo, hi;
+            part.Bounds(&lo, &hi);
+            const double width = double(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1);
+            if (!Stout(median, width, options.body_min_aspect) ||
                 !MayBeThickEnough(part.size(), median, over.size())) {
               continue;
             }
@@ -352,6 +432,7 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
           lens.body = true;
           score = body_score;
           sheet_part = std::move(kept);
+          body_meshes.push_back({body.mesh, piece});
           Append(body.mesh, &bodies);
           bodies.body_pieces.push_back(next_id++);
           report.pieces.push_back(lens);
@@ -360,17 +441,20 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         choice.sheet_triangles = sheet_part.num_faces();
       }
     }
-    if (choice.body) {
-      out.body_pieces.push_back(piece);
-      ++report.bodies;
-    }
-    Append(sheet_part, &out);
+    if (choice.body) ++report.bodies;
+    Append(sheet_part, &sheets);
     report.pieces.push_back(choice);
     SM_RETURN_IF_ERROR(progress.Update(static_cast<double>(++done) / faces_of.size()));
   }
+  // Sheets that cross a body end on its walls (a fracture running into a vug), as a lens's
+  // own sheet does.
+  for (const Joined& b : body_meshes) {
+    if (!sheets.faces.empty()) sheets = JoinToBody(sheets, b.mesh, b.piece);
+  }
+  WeldExact(&sheets);
+  TriangleMesh out = std::move(sheets);
   Append(bodies, &out);
-  out.body_pieces.insert(out.body_pieces.end(), bodies.body_pieces.begin(),
-                         bodies.body_pieces.end());
+  out.body_pieces = bodies.body_pieces;
   std::sort(out.body_pieces.begin(), out.body_pieces.end());
   std::sort(
       report.pieces.begin(), report.pieces.end(),

@@ -34,11 +34,13 @@ struct RepresentationOptions {
   // where its median τ is under half its mean edge length.)
   double body_min_thickness = 4.0;
   // In auto, a piece (or a lens of one) is tried as a body only where its median thickness
-  // is at least this fraction of its width (the square root of its mid-surface's area,
-  // voxels / median thickness): a fracture 4 voxels thick and 170 wide is a sheet however
-  // finely it is meshed, and as a body it would fill the volume mesh with tetrahedra as
-  // thin as it (DPM at r = 3 ran for minutes).
-  double body_min_aspect = 0.1;
+  // is at least this fraction of its width (the longest side of its bounding box): a
+  // fracture 8 voxels thick and 100 wide is a sheet however finely it is meshed, and as a
+  // body it would fill the volume mesh with tetrahedra as thin as it (DPM's fractures as
+  // bodies at r = 3: the volume mesh ran for minutes); where two sheets cross, the thick
+  // part runs along the crossing as far as they are wide. The thick slabs are 0.37-0.44,
+  // a vug about 0.5.
+  double body_min_aspect = 0.25;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
 };
 
@@ -77,7 +79,8 @@ const char* RepresentationName(RepresentationMode mode);
 // faces over it (their centroids in its voxels), both scored over the whole piece, and,
 // where it wins, becomes a body with a new piece id (after every id in use; part_of names
 // the piece) while the sheet keeps the rest of its faces: the two meet where the sheet's
-// faces run into the body. `piece_of_voxel`, when not
+// faces run into the body. In auto, a piece or lens that another piece's sheet runs
+// through (a face's centroid in its voxels) stays a sheet. `piece_of_voxel`, when not
 // empty, labels each voxel of sheet.set with its piece (as given to BuildSurface); else
 // pieces are the components. Pieces with no sheet face (too small for the SCVD at this r)
 // stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness;

@@ -208,6 +208,47 @@ TEST(RepresentationTest, AThinSheetOpeningIntoALensIsASheetAndABody) {
   EXPECT_GE(volume.quality.min_dihedral.min, 10.0);
 }
 
+// Two pieces (as extraction labels them): a vug and a thin sheet running through it. A body
+// there would need the sheet to end on its walls from both sides; the vug stays a sheet.
+// Without the sheet the same vug is a body; and a long crossing-like bar, thick but 8 times
+// longer than thick, is not stout.
+TEST(RepresentationTest, APieceAnotherRunsThroughAndAThinBarStaySheets) {
+  auto vug = [](double x, double y, double z) {
+    return std::abs(x - 40) < 15 && std::abs(y - 40) < 15 && std::abs(z - 30) < 15;
+  };
+  auto plane = [](double x, double y, double z) {
+    return std::abs(z - 30) < 1.01 && x >= 5 && x < 95 && y >= 5 && y < 75;
+  };
+  const SheetAnalysis both = *AnalyzeSheet(testing::ShapeSet(
+      {100, 80, 60}, [&](double x, double y, double z) { return vug(x, y, z) || plane(x, y, z); }));
+  std::vector<int32_t> label(both.set.size());
+  both.set.ForEachVoxel(
+      [&](uint64_t i, int32_t x, int32_t y, int32_t z) { label[i] = vug(x, y, z) ? 0 : 1; });
+  SurfaceOptions s;
+  s.scvd.radius_voxels = 4;
+  s.scvd.mean_thickness_voxels = 2;
+  SurfaceResult crossed = *BuildSurface(both, s, label);
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport r,
+                          ChooseRepresentation(both, label, {}, &crossed.mesh));
+  EXPECT_EQ(r.bodies, 0u);
+
+  const SheetAnalysis alone = *AnalyzeSheet(testing::ShapeSet({100, 80, 60}, vug));
+  SurfaceResult single = *BuildSurface(alone, s);
+  SM_ASSERT_OK_AND_ASSIGN(r, ChooseRepresentation(alone, {}, {}, &single.mesh));
+  EXPECT_EQ(r.bodies, 1u);
+
+  // 80 x 10 x 10: thick (τ 10) but eight times longer.
+  const SheetAnalysis bar =
+      *AnalyzeSheet(testing::ShapeSet({100, 40, 40}, [](double x, double y, double z) {
+        return x >= 10 && x < 90 && std::abs(y - 20) < 5 && std::abs(z - 20) < 5;
+      }));
+  SurfaceResult bar_mesh = *BuildSurface(bar, s);
+  SM_ASSERT_OK_AND_ASSIGN(r, ChooseRepresentation(bar, {}, {}, &bar_mesh.mesh));
+  EXPECT_EQ(r.bodies, 0u);
+  ASSERT_EQ(r.pieces.size(), 1u);
+  EXPECT_FALSE(r.pieces[0].body_similarity.has_value());  // not tried
+}
+
 TEST(RepresentationTest, AMeshWithoutPiecesIsRefused) {
   VugAndSheet v = MeshVugAndSheet(9);
   v.surface.mesh.face_piece.clear();

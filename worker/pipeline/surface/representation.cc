@@ -141,15 +141,70 @@ TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body,
   return out;
 }
 
-// Whether a face of a piece other than `piece` has its centroid in a voxel of `part`: a
-// sheet running through a body would have to end on its walls, and where several do (a
-// crossing of fractures cut into pieces) the joins clash; such a part stays a sheet.
-bool CrossedByOthers(const TriangleMesh& mesh, int32_t piece, const VoxelSet& part) {
+// Whether a face of `sheet` cuts through a face of `body` (beyond touching it: each sheet
+// face is shrunk by a hair first, so a rim vertex joined onto the body does not count, and
+// a face with two corners joined onto it is a rim's chord, left to the volume mesh).
+// A join that leaves such a cut (a sheet face spanning a bump of the body, rims of two
+// sheets projected across each other) is refused: the volume mesh could only mend it by
+// removing triangles, and a body missing a wall triangle leaks into the rock.
+bool CutsThrough(const TriangleMesh& sheet, const TriangleMesh& body) {
+  constexpr double kHair = 1e-3;
+  Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
+  for (const Vec3& p : body.vertices) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+    }
+  }
+  for (size_t f = 0; f < sheet.faces.size(); ++f) {
+    const Triangle t = Corners(sheet, f);
+    Vec3 tlo, thi;
+    TriangleBox(t, 0, &tlo, &thi);
+    if (tlo.x > hi.x || tlo.y > hi.y || tlo.z > hi.z || thi.x < lo.x || thi.y < lo.y ||
+        thi.z < lo.z) {
+      continue;
+    }
+    // A rim face with two corners joined onto the body spans a chord of it, dipping inside
+    // by the sagitta where the body curves: the volume mesh's untangling splits it there.
+    int on_body = 0;
+    for (const Vec3& p : t) {
+      for (size_t g = 0; g < body.faces.size(); ++g) {
+        if (PointTriangleDistance2(p, Corners(body, g)) < 1e-12) {
+          ++on_body;
+          break;
+        }
+      }
+    }
+    if (on_body >= 2) continue;
+    const Triangle small = Shrink(t, kHair);
+    for (size_t g = 0; g < body.faces.size(); ++g) {
+      if (TrianglesIntersect(small, Corners(body, g), 0)) return true;
+    }
+  }
+  return false;
+}
+
+// Whether a face of a piece other than `piece` comes near `part`: a corner within `margin`
+// voxels of its bounding box. A sheet running through or ending on a body would have to be
+// joined to its walls, and where several are (a crossing of fractures cut into pieces, a
+// network's pieces meeting at a vug) the joins clash and the volume mesh must remove wall
+// triangles (a body then leaks into the rock); such a part stays a sheet.
+// Within this many voxels of a body, another piece's sheet would be joined to it (the volume
+// mesh mends contacts within 1.5).
+constexpr double kNearVoxels = 2.0;
+
+bool NearOthers(const TriangleMesh& mesh, int32_t piece, const VoxelSet& part, double margin) {
+  Index3 lo, hi;
+  part.Bounds(&lo, &hi);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     if (mesh.face_piece[f] == piece) continue;
-    const auto t = Corners(mesh, f);
-    const Vec3 c = (t[0] + t[1] + t[2]) / 3.0;
-    if (part.Contains(std::llround(c.x), std::llround(c.y), std::llround(c.z))) return true;
+    for (uint32_t v : mesh.faces[f]) {
+      const Vec3& p = mesh.vertices[v];
+      if (p.x >= lo.x - margin && p.x <= hi.x + margin && p.y >= lo.y - margin &&
+          p.y <= hi.y + margin && p.z >= lo.z - margin && p.z <= hi.z + margin) {
+        return true;
+      }
+    }
   }
   return false;
 }
@@ -365,8 +420,8 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
-        choice.body =
-            body_mode || (BodyWins(choice, body.mesh) && !CrossedByOthers(*mesh, piece, own));
+        choice.body = body_mode ||
+                      (BodyWins(choice, body.mesh) && !NearOthers(*mesh, piece, own, kNearVoxels));
         if (choice.body) {
           body_meshes.push_back({body.mesh, -1});
           Append(body.mesh, &bodies);
@@ -386,7 +441,9 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         for (const VoxelSet& part : parts) {
           std::vector<uint32_t> over, rest;
           SplitFaces(sheet_part, part, &over, &rest);
-          if (over.size() < kMinLensFaces || CrossedByOthers(*mesh, piece, part)) continue;
+          if (over.size() < kMinLensFaces || NearOthers(*mesh, piece, part, kNearVoxels)) {
+            continue;
+          }
           {
             std::vector<uint16_t> tau;
             part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
@@ -428,7 +485,7 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
           const double body_score = ScoreModel(Union(with_body, inside), *own).similarity;
           lens.sheet_similarity = score;
           lens.body_similarity = body_score;
-          if (!BodyWins(lens, body.mesh)) continue;
+          if (!BodyWins(lens, body.mesh) || CutsThrough(kept, body.mesh)) continue;
           lens.body = true;
           score = body_score;
           sheet_part = std::move(kept);

@@ -79,8 +79,9 @@ const char* RepresentationName(RepresentationMode mode);
 // faces over it (their centroids in its voxels), both scored over the whole piece, and,
 // where it wins, becomes a body with a new piece id (after every id in use; part_of names
 // the piece) while the sheet keeps the rest of its faces: the two meet where the sheet's
-// faces run into the body. In auto, a piece or lens that another piece's sheet runs
-// through (a face's centroid in its voxels) stays a sheet. `piece_of_voxel`, when not
+// faces run into the body. In auto, a piece or lens that another piece's sheet comes near
+// (a corner within 2 voxels of its bounding box) stays a sheet, and so does a
+// lens whose sheet would cut through it after the join. `piece_of_voxel`, when not
 // empty, labels each voxel of sheet.set with its piece (as given to BuildSurface); else
 // pieces are the components. Pieces with no sheet face (too small for the SCVD at this r)
 // stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness;

@@ -317,6 +317,86 @@ void SplitFaces(const TriangleMesh& mesh, const VoxelSet& part, std::vector<uint
   }
 }
 
+// What the choice has made so far: the bodies (one mesh, and each on its own for the
+// joins), the next free piece id and the report.
+struct Chosen {
+  struct Joined {
+    TriangleMesh mesh;
+    int32_t piece = -1;  // the piece whose sheet was joined to it already (a lens's)
+  };
+  TriangleMesh bodies;
+  std::vector<Joined> joined;
+  int32_t next_id = 0;  // for lenses cut out of pieces: after every id in use
+  RepresentationReport report;
+
+  void Add(const TriangleMesh& body, int32_t piece, int32_t joined_to) {
+    joined.push_back({body, joined_to});
+    Append(body, &bodies);
+    bodies.body_pieces.push_back(piece);
+  }
+};
+
+// Where `piece` (its voxels `pv`, median thickness `median`, its sheet `*sheet_part`) opens
+// into lenses, tries each as a body in place of the sheet faces over it, both scored over
+// the whole piece; a lens that wins joins the bodies and the sheet keeps the rest, joined
+// to it.
+absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, const PieceVoxels& pv,
+                       int32_t piece, double median, const RepresentationOptions& options,
+                       TriangleMesh* sheet_part, Chosen* chosen) {
+  const Dims& dims = sheet.set.dims();
+  // Voxels at least twice as thick as the piece's median (and body_min_thickness).
+  const double least = std::max(options.body_min_thickness, 2 * median);
+  SM_ASSIGN_OR_RETURN(std::vector<VoxelSet> parts, ThickParts(pv, dims, least));
+  std::optional<VoxelSet> own;
+  double score = 0;  // the piece's, as it stands
+  for (const VoxelSet& part : parts) {
+    std::vector<uint32_t> over, rest;
+    SplitFaces(*sheet_part, part, &over, &rest);
+    if (over.size() < kMinLensFaces || NearOthers(mesh, piece, part, kNearVoxels)) continue;
+    PieceRepresentation lens;
+    lens.piece = chosen->next_id;
+    lens.part_of = piece;
+    lens.voxels = part.size();
+    lens.sheet_triangles = over.size();
+    std::vector<uint16_t> tau;
+    double sum = 0;
+    part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
+      tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
+      sum += tau.back();
+    });
+    lens.thickness = sum / part.size();
+    lens.median_thickness = Median(std::move(tau));
+    Index3 lo, hi;
+    part.Bounds(&lo, &hi);
+    const double width = double(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1);
+    if (!Stout(lens.median_thickness, width, options.body_min_aspect) ||
+        !MayBeThickEnough(part.size(), lens.median_thickness, over.size())) {
+      continue;
+    }
+    if (!own) {
+      own = VoxelSetFromSortedLinear(dims, pv.keys);
+      SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(*sheet_part, dims, options.height));
+      score = ScoreModel(prisms, *own).similarity;
+    }
+    SM_ASSIGN_OR_RETURN(BodySurface body, MeshBody(part, lens.piece, over.size()));
+    lens.body_triangles = body.mesh.num_faces();
+    lens.body_triangles_before = body.faces_before;
+    TriangleMesh kept = JoinToBody(*sheet_part, body.mesh);
+    SM_ASSIGN_OR_RETURN(VoxelSet with_body, VoxelizePrisms(kept, dims, options.height));
+    SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
+    lens.sheet_similarity = score;
+    lens.body_similarity = ScoreModel(Union(with_body, inside), *own).similarity;
+    if (!BodyWins(lens, body.mesh) || CutsThrough(kept, body.mesh)) continue;
+    lens.body = true;
+    score = *lens.body_similarity;
+    *sheet_part = std::move(kept);
+    chosen->Add(body.mesh, chosen->next_id++, piece);
+    chosen->report.pieces.push_back(lens);
+    ++chosen->report.bodies;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 const char* RepresentationName(RepresentationMode mode) {
@@ -367,22 +447,22 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
                      mesh->face_piece.size(), " and ", mesh->face_thickness.size(), " for ",
                      mesh->faces.size(), " faces"));
   }
-  RepresentationReport report;
-  report.mode = options.mode;
+  Chosen chosen;
+  chosen.report.mode = options.mode;
   std::map<int32_t, std::vector<uint32_t>> faces_of;
   for (uint32_t f = 0; f < mesh->faces.size(); ++f) faces_of[mesh->face_piece[f]].push_back(f);
-  if (options.mode == RepresentationMode::kSheet || faces_of.empty()) return report;
+  if (options.mode == RepresentationMode::kSheet || faces_of.empty()) return chosen.report;
 
   const Dims& dims = sheet.set.dims();
   std::map<int32_t, PieceVoxels> voxels_of;
-  int32_t next_id = faces_of.rbegin()->first + 1;  // ids for thick parts cut out of pieces
+  chosen.next_id = faces_of.rbegin()->first + 1;
   {
     std::vector<uint32_t> component;
     if (piece_of_voxel.empty()) component = sheet.components.VoxelLabels(sheet.set);
     sheet.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
       const int32_t p =
           piece_of_voxel.empty() ? static_cast<int32_t>(component[i]) : piece_of_voxel[i];
-      next_id = std::max(next_id, p + 1);
+      chosen.next_id = std::max(chosen.next_id, p + 1);
       auto it = faces_of.find(p);
       if (it == faces_of.end()) return;
       PieceVoxels& v = voxels_of[p];
@@ -392,12 +472,8 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
     });
   }
 
-  TriangleMesh sheets, bodies;
-  struct Joined {
-    TriangleMesh mesh;
-    int32_t piece = -1;  // the piece whose sheet was joined to it already (a lens's)
-  };
-  std::vector<Joined> body_meshes;
+  const bool body_mode = options.mode == RepresentationMode::kBody;
+  TriangleMesh sheets;
   size_t done = 0;
   for (const auto& [piece, faces] : faces_of) {
     PieceRepresentation choice;
@@ -412,7 +488,6 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       for (uint16_t t : pv.tau) sum += t;
       choice.thickness = sum / pv.keys.size();
       choice.median_thickness = Median(pv.tau);
-      const bool body_mode = options.mode == RepresentationMode::kBody;
       if (body_mode ||
           (choice.median_thickness >= options.body_min_thickness &&
            Stout(choice.median_thickness, Width(pv.keys, dims), options.body_min_aspect) &&
@@ -423,101 +498,36 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         choice.body = body_mode ||
                       (BodyWins(choice, body.mesh) && !NearOthers(*mesh, piece, own, kNearVoxels));
         if (choice.body) {
-          body_meshes.push_back({body.mesh, -1});
-          Append(body.mesh, &bodies);
-          bodies.body_pieces.push_back(piece);
+          chosen.Add(body.mesh, piece, -1);
           sheet_part = TriangleMesh();
         }
       }
-      // Where a thin piece opens into a lens (a vug), the lens alone may be a body: its
-      // voxels at least twice as thick as the piece's median (and body_min_thickness).
-      const double least = std::max(options.body_min_thickness, 2 * choice.median_thickness);
       if (!choice.body && !body_mode) {
-        SM_ASSIGN_OR_RETURN(std::vector<VoxelSet> parts, ThickParts(pv, dims, least));
-        // A lens is judged by the whole piece's score (its sheet faces' prisms reach past
-        // the lens, over thin sheet the body does not cover).
-        std::optional<VoxelSet> own;
-        double score = 0;
-        for (const VoxelSet& part : parts) {
-          std::vector<uint32_t> over, rest;
-          SplitFaces(sheet_part, part, &over, &rest);
-          if (over.size() < kMinLensFaces || NearOthers(*mesh, piece, part, kNearVoxels)) {
-            continue;
-          }
-          {
-            std::vector<uint16_t> tau;
-            part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
-              tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
-            });
-            const double median = Median(std::move(tau));
-            Index3 lo, hi;
-            part.Bounds(&lo, &hi);
-            const double width = double(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1);
-            if (!Stout(median, width, options.body_min_aspect) ||
-                !MayBeThickEnough(part.size(), median, over.size())) {
-              continue;
-            }
-          }
-          if (!own) {
-            own = VoxelSetFromSortedLinear(dims, pv.keys);
-            SM_ASSIGN_OR_RETURN(VoxelSet prisms, VoxelizePrisms(sheet_part, dims, options.height));
-            score = ScoreModel(prisms, *own).similarity;
-          }
-          PieceRepresentation lens;
-          lens.piece = next_id;
-          lens.part_of = piece;
-          lens.voxels = part.size();
-          lens.sheet_triangles = over.size();
-          double lens_sum = 0;
-          std::vector<uint16_t> lens_tau;
-          part.ForEachVoxel([&](uint64_t, int32_t x, int32_t y, int32_t z) {
-            lens_tau.push_back(sheet.thickness[sheet.set.Find(x, y, z)]);
-            lens_sum += lens_tau.back();
-          });
-          lens.thickness = lens_sum / part.size();
-          lens.median_thickness = Median(std::move(lens_tau));
-          SM_ASSIGN_OR_RETURN(BodySurface body, MeshBody(part, next_id, over.size()));
-          lens.body_triangles = body.mesh.num_faces();
-          lens.body_triangles_before = body.faces_before;
-          TriangleMesh kept = JoinToBody(sheet_part, body.mesh);
-          SM_ASSIGN_OR_RETURN(VoxelSet with_body, VoxelizePrisms(kept, dims, options.height));
-          SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
-          const double body_score = ScoreModel(Union(with_body, inside), *own).similarity;
-          lens.sheet_similarity = score;
-          lens.body_similarity = body_score;
-          if (!BodyWins(lens, body.mesh) || CutsThrough(kept, body.mesh)) continue;
-          lens.body = true;
-          score = body_score;
-          sheet_part = std::move(kept);
-          body_meshes.push_back({body.mesh, piece});
-          Append(body.mesh, &bodies);
-          bodies.body_pieces.push_back(next_id++);
-          report.pieces.push_back(lens);
-          ++report.bodies;
-        }
+        SM_RETURN_IF_ERROR(TryLenses(sheet, *mesh, pv, piece, choice.median_thickness, options,
+                                     &sheet_part, &chosen));
         choice.sheet_triangles = sheet_part.num_faces();
       }
     }
-    if (choice.body) ++report.bodies;
+    if (choice.body) ++chosen.report.bodies;
     Append(sheet_part, &sheets);
-    report.pieces.push_back(choice);
+    chosen.report.pieces.push_back(choice);
     SM_RETURN_IF_ERROR(progress.Update(static_cast<double>(++done) / faces_of.size()));
   }
   // Sheets that cross a body end on its walls (a fracture running into a vug), as a lens's
   // own sheet does.
-  for (const Joined& b : body_meshes) {
+  for (const Chosen::Joined& b : chosen.joined) {
     if (!sheets.faces.empty()) sheets = JoinToBody(sheets, b.mesh, b.piece);
   }
   WeldExact(&sheets);
   TriangleMesh out = std::move(sheets);
-  Append(bodies, &out);
-  out.body_pieces = bodies.body_pieces;
+  Append(chosen.bodies, &out);
+  out.body_pieces = chosen.bodies.body_pieces;
   std::sort(out.body_pieces.begin(), out.body_pieces.end());
   std::sort(
-      report.pieces.begin(), report.pieces.end(),
+      chosen.report.pieces.begin(), chosen.report.pieces.end(),
       [](const PieceRepresentation& a, const PieceRepresentation& b) { return a.piece < b.piece; });
-  if (report.bodies > 0) *mesh = std::move(out);
-  return report;
+  if (chosen.report.bodies > 0) *mesh = std::move(out);
+  return chosen.report;
 }
 
 }  // namespace sheetmesh

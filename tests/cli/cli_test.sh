@@ -80,4 +80,20 @@ cp "$tmp/s_128x112x96_u8.raw" "$bad"
 code=0; "$cli" surface "$bad" --r 9 -o "$tmp/nonutf8" --similarity_hausdorff=false > /dev/null 2>&1 || code=$?
 [ "$code" -eq 0 ] || [ "$code" -eq 2 ] || fail "a non-UTF-8 path gave exit $code"
 [ "$code" -ne 0 ] || /usr/bin/python3 -c "import json; json.load(open('$tmp/nonutf8/report.json'))" || fail "report.json of a non-UTF-8 path does not parse"
+# A thick slab is a body: the surface says so, `score` on its PLY gives the report's
+# similarity (prisms of the sheets and the bodies' insides), and `volume` makes it a region.
+"$cli" phantom --preset=thick_slab --dims=48x48x52 -o "$tmp/slab_48x48x52_u8.raw" > /dev/null
+"$cli" surface "$tmp/slab_48x48x52_u8.raw" --labels=255 --r=6 -o "$tmp/slab" --output_formats=ply \
+  --similarity_hausdorff=false > "$tmp/slab.txt" || fail "surface of a thick slab"
+grep -q "^bodies      1 of the pieces" "$tmp/slab.txt" || fail "the thick slab is not a body"
+"$cli" score "$tmp/slab_48x48x52_u8.raw" "$tmp/slab/surface.ply" --labels=255 --json \
+  --similarity_hausdorff=false > "$tmp/slab_score.json" || fail "score of a surface with a body"
+/usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2]))
+sys.exit(0 if abs(r['similarity']['similarity'] - s['similarity']) < 1e-9 else 1)" \
+  "$tmp/slab/report.json" "$tmp/slab_score.json" || fail "score differs from the report with a body"
+"$cli" volume "$tmp/slab/surface.ply" --volume "$tmp/slab_48x48x52_u8.raw" -o "$tmp/slab_vol" \
+  --output_volume_formats=vtu > /dev/null || fail "volume of a surface with a body"
+/usr/bin/python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['volume_mesh']
+sys.exit(0 if len(v['bodies']) == 1 and v['bodies'][0]['tetrahedra'] > 0 else 1)" \
+  "$tmp/slab_vol/volume_report.json" || fail "the body is no region of the volume mesh"
 echo "cli: all commands behaved"

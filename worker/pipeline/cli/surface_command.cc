@@ -168,7 +168,8 @@ absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out) {
   if (options.closed) {
     SM_ASSIGN_OR_RETURN(model, VoxelizeClosedSurface(mesh, phase.info.dims));
   } else if (mesh.face_thickness.size() == mesh.faces.size()) {
-    SM_ASSIGN_OR_RETURN(model, VoxelizePrisms(mesh, phase.info.dims));
+    // A sheetmesh surface: its sheets' prisms and its bodies' insides (the PLY's `body`).
+    SM_ASSIGN_OR_RETURN(model, VoxelizeMesh(mesh, phase.info.dims));
   } else {
     return absl::InvalidArgumentError(
         absl::StrCat(options.mesh_path,

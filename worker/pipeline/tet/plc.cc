@@ -193,7 +193,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.untangle_max_move = u.max_move;
     clean = u.remaining_pairs == 0;
   }
-  SM_RETURN_IF_ERROR(ResolveClashes(v, clean, placement, options, &st, &plc, clashes));
+  SM_RETURN_IF_ERROR(
+      ResolveClashes(v, clean, sheets.body_pieces, placement, options, &st, &plc, clashes));
   if (options.short_edge_voxels > 0) {
     plc.collapsed_edges = CollapseShortEdges(st, v, on_face, options.short_edge_voxels);
   }

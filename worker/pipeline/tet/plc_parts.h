@@ -73,11 +73,13 @@ UntangleStats Untangle(SheetTriangles& st, std::vector<Vec3>& v,
 
 // Sheet triangles that cut through each other: listed in `clashes` (when not null, in
 // physical units); kFailedPrecondition naming the first five unless options.repair, which
-// drops the smaller of each pair (stats->repaired_triangles) and fails only if clashes
-// remain. With `checked_clean` the check is skipped (the snapping just made it).
+// drops the smaller of each pair (stats->repaired_triangles; of a body's wall, in
+// `body_pieces`, and a sheet, the sheet's) and fails only if clashes remain. With `checked_clean`
+// the check is skipped (the snapping just made it).
 absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
-                            const Placement& placement, const PlcOptions& options,
-                            SheetTriangles* st, PlcStats* stats, std::vector<Clash>* clashes);
+                            const std::vector<int32_t>& body_pieces, const Placement& placement,
+                            const PlcOptions& options, SheetTriangles* st, PlcStats* stats,
+                            std::vector<Clash>* clashes);
 
 // Flips sheet edges where that gives better triangles and drops flat rim triangles,
 // keeping only what makes no clash. Returns (flips, drops).

@@ -423,8 +423,9 @@ uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_fac
 }
 
 absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
-                            const Placement& placement, const PlcOptions& options,
-                            SheetTriangles* st, PlcStats* stats, std::vector<Clash>* clashes) {
+                            const std::vector<int32_t>& body_pieces, const Placement& placement,
+                            const PlcOptions& options, SheetTriangles* st, PlcStats* stats,
+                            std::vector<Clash>* clashes) {
   if (checked_clean) return absl::OkStatus();
   TriangleMesh kept;
   kept.faces = st->faces;
@@ -462,7 +463,11 @@ absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
   }
   // Repair, the last resort after untangling: drop the smaller triangle of each clashing
   // pair, again while any clash is left (a tangle of several can need more than one round;
-  // the rounds end, since each removes a triangle).
+  // the rounds end, since each removes a triangle). A body's wall is spared where it clashes
+  // with a sheet: without it the body's region leaks into the rock, a sheet only gets a hole.
+  auto is_body = [&](uint32_t f) {
+    return std::binary_search(body_pieces.begin(), body_pieces.end(), st->piece[f]);
+  };
   const size_t before = st->faces.size();
   std::vector<std::pair<uint32_t, uint32_t>> left = pairs;
   while (!left.empty()) {
@@ -470,8 +475,10 @@ absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
     for (const auto& [a, b] : left) {
       if (drop[a] || drop[b]) continue;
       const double area_a = Area(Corners(kept, a)), area_b = Area(Corners(kept, b));
-      drop[area_a < area_b ? a : b] = 1;
-      stats->repaired_area_voxels += std::min(area_a, area_b);
+      const bool body_a = is_body(a), body_b = is_body(b);
+      const uint32_t loser = body_a != body_b ? (body_a ? b : a) : (area_a < area_b ? a : b);
+      drop[loser] = 1;
+      stats->repaired_area_voxels += loser == a ? area_a : area_b;
     }
     *st = Without(*st, drop);
     kept.faces = st->faces;

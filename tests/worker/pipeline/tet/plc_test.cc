@@ -466,3 +466,53 @@ TEST(PlcTest, TheNarrowestWedgeIsTheAngleFacetsMeetAtInAnEdge) {
 
 }  // namespace
 }  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// A body (the cube [8, 13]^3, piece 5) pierced by one large sheet triangle (piece 0), with
+// untangling off: the repair removes the sheet's triangle, larger though it is, and keeps
+// every wall of the body (without one, its region would leak into the rock). Without the
+// body the same pair loses its smaller triangle.
+TEST(PlcTest, RepairSparesABodysWalls) {
+  TriangleMesh m;
+  for (int c = 0; c < 8; ++c) {
+    m.vertices.push_back({c & 1 ? 13.0 : 8.0, c & 2 ? 13.0 : 8.0, c & 4 ? 13.0 : 8.0});
+  }
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.faces.push_back({uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
+    m.faces.push_back({uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
+  }
+  m.face_piece.assign(12, 5);
+  m.face_thickness.assign(12, 0.f);
+  // The sheet triangle, in the plane z = 10.3 across the cube: area 200.
+  m.vertices.insert(m.vertices.end(), {{0, 0, 10.3}, {20, 0, 10.3}, {0, 20, 10.3}});
+  m.faces.push_back({8, 9, 10});
+  m.face_piece.push_back(0);
+  m.face_thickness.push_back(2.f);
+  PlcOptions o;
+  o.untangle_voxels = 0;
+  o.contact_voxels = 0;
+  o.wedge_degrees = 0;
+  o.short_edge_voxels = 0;
+  o.flip_fold_degrees = 0;
+  o.lattice = 0;
+  m.body_pieces = {5};
+  SM_ASSERT_OK_AND_ASSIGN(Plc with_body, BuildPlc(m, {24, 24, 24}, {}, o));
+  EXPECT_GE(with_body.repaired_triangles, 1u);
+  int walls = 0, sheet = 0;
+  for (int32_t p : with_body.sheet_piece) (p == 5 ? walls : sheet) += 1;
+  EXPECT_EQ(walls, 12);
+  EXPECT_EQ(sheet, 0);
+  m.body_pieces.clear();
+  SM_ASSERT_OK_AND_ASSIGN(Plc without, BuildPlc(m, {24, 24, 24}, {}, o));
+  walls = sheet = 0;
+  for (int32_t p : without.sheet_piece) (p == 5 ? walls : sheet) += 1;
+  EXPECT_LT(walls, 12);
+  EXPECT_EQ(sheet, 1);
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -88,6 +88,18 @@ struct PieceVoxels {
   std::vector<uint16_t> tau;
 };
 
+// The bounding box of `mesh`'s vertices.
+void Bounds(const TriangleMesh& mesh, Vec3* lo, Vec3* hi) {
+  *lo = Vec3(1e300, 1e300, 1e300);
+  *hi = Vec3(-1e300, -1e300, -1e300);
+  for (const Vec3& p : mesh.vertices) {
+    for (int k = 0; k < 3; ++k) {
+      (*lo)[k] = std::min((*lo)[k], p[k]);
+      (*hi)[k] = std::max((*hi)[k], p[k]);
+    }
+  }
+}
+
 // A sheet around a body (a lens made one, or any sheet crossing a body): its faces with a
 // corner inside the body go (but those of `skip_piece`, joined to it before), and the rim
 // they leave moves onto the body's surface (the nearest point, where that is within
@@ -95,13 +107,8 @@ struct PieceVoxels {
 // overlap: the volume mesh joins them where a sheet vertex lies on a body face.
 TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body,
                         int32_t skip_piece = -1) {
-  Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
-  for (const Vec3& p : body.vertices) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], p[k]);
-      hi[k] = std::max(hi[k], p[k]);
-    }
-  }
+  Vec3 lo, hi;
+  Bounds(body, &lo, &hi);
   auto in_box = [&](const Vec3& p) {
     return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
   };
@@ -149,13 +156,8 @@ TriangleMesh JoinToBody(const TriangleMesh& sheet, const TriangleMesh& body,
 // removing triangles, and a body missing a wall triangle leaks into the rock.
 bool CutsThrough(const TriangleMesh& sheet, const TriangleMesh& body) {
   constexpr double kHair = 1e-3;
-  Vec3 lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
-  for (const Vec3& p : body.vertices) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], p[k]);
-      hi[k] = std::max(hi[k], p[k]);
-    }
-  }
+  Vec3 lo, hi;
+  Bounds(body, &lo, &hi);
   for (size_t f = 0; f < sheet.faces.size(); ++f) {
     const Triangle t = Corners(sheet, f);
     Vec3 tlo, thi;

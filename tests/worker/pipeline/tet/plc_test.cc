@@ -475,18 +475,7 @@ namespace {
 // every wall of the body (without one, its region would leak into the rock). Without the
 // body the same pair loses its smaller triangle.
 TEST(PlcTest, RepairSparesABodysWalls) {
-  TriangleMesh m;
-  for (int c = 0; c < 8; ++c) {
-    m.vertices.push_back({c & 1 ? 13.0 : 8.0, c & 2 ? 13.0 : 8.0, c & 4 ? 13.0 : 8.0});
-  }
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.faces.push_back({uint32_t(q[0]), uint32_t(q[1]), uint32_t(q[2])});
-    m.faces.push_back({uint32_t(q[0]), uint32_t(q[2]), uint32_t(q[3])});
-  }
-  m.face_piece.assign(12, 5);
-  m.face_thickness.assign(12, 0.f);
+  TriangleMesh m = testing::Cube(8, 13, 5);
   // The sheet triangle, in the plane z = 10.3 across the cube: area 200.
   m.vertices.insert(m.vertices.end(), {{0, 0, 10.3}, {20, 0, 10.3}, {0, 20, 10.3}});
   m.faces.push_back({8, 9, 10});

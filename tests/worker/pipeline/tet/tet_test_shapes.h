@@ -36,6 +36,25 @@ inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 
   return m;
 }
 
+// The closed surface of the cube [lo, hi]^3 as a body (piece `piece`, thickness 0),
+// outward, 12 triangles.
+inline TriangleMesh Cube(double lo, double hi, int32_t piece) {
+  TriangleMesh m;
+  for (int c = 0; c < 8; ++c) {
+    m.vertices.push_back({c & 1 ? hi : lo, c & 2 ? hi : lo, c & 4 ? hi : lo});
+  }
+  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.faces.push_back({q[0], q[1], q[2]});
+    m.faces.push_back({q[0], q[2], q[3]});
+  }
+  m.face_piece.assign(12, piece);
+  m.face_thickness.assign(12, 0.f);
+  m.body_pieces = {piece};
+  return m;
+}
+
 inline TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
   const uint32_t off = static_cast<uint32_t>(a.vertices.size());
   a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());

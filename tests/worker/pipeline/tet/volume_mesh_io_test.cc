@@ -13,6 +13,7 @@
 #include "common/file_util.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -184,21 +185,7 @@ TetMesh MeshWithBody() {
   m.faces = {{0, 1, 2}, {0, 2, 3}};
   m.face_piece = {0, 0};
   m.face_thickness = {2.f, 2.f};
-  const uint32_t b = 4;
-  for (int c = 0; c < 8; ++c) {
-    m.vertices.push_back({c & 1 ? 13.0 : 8.0, c & 2 ? 13.0 : 8.0, c & 4 ? 13.0 : 8.0});
-  }
-  // Each face of the cube as two triangles, outward.
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& q : quads) {
-    m.faces.push_back({b + q[0], b + q[1], b + q[2]});
-    m.faces.push_back({b + q[0], b + q[2], b + q[3]});
-    for (int k = 0; k < 2; ++k) {
-      m.face_piece.push_back(5);
-      m.face_thickness.push_back(0.f);
-    }
-  }
+  m = testing::Append(m, testing::Cube(8, 13, 5));
   m.body_pieces = {5};
   auto r = BuildVolumeMesh(m, {20, 20, 20}, {}, {});
   EXPECT_TRUE(r.ok()) << r.status();

@@ -39,6 +39,8 @@ class Evaluator {
     SurfaceOptions o = surface_;
     o.scvd.radius_voxels = r;
     o.target_faces = decimate_to;
+    // Counting needs no heights: the fits change no face.
+    if (!score) o.fit_walls = false;
     SM_ASSIGN_OR_RETURN(SurfaceResult s, BuildSurface(sheet_, o));
     RadiusTrial t;
     t.radius = r;

@@ -18,6 +18,7 @@
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/surface/face_attributes.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/surface/vertex_fit.h"
 
 namespace sheetmesh {
 
@@ -41,6 +42,8 @@ struct SurfaceOptions {
   uint64_t target_faces = 0;   // > 0: the dual mesh is decimated to this many faces (decimate.h)
   bool fit_walls = true;       // each face's thickness fitted to the prisms' best formula-5 score
                                // (wall_fit.h; beyond the paper; false: the mean τ)
+  bool fit_vertices = true;    // with fit_walls: vertices moved along their normal and across
+                               // the rim where formula 5 rises (vertex_fit.h; beyond the paper)
   double error_density = 0;    // > 0: a second SCVD with ρ from the first surface's local fit
                                // error, this strong (error_density.h; beyond the paper)
   int smooth_iterations = 30;  // λ|μ smoothing pairs where the sheet is thicker than the
@@ -64,11 +67,12 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                        // face_thickness, face_piece, vertex_thickness set
-  std::vector<uint32_t> vertex_generator;   // SCVD generator of each vertex of the dual mesh
-                                            // (before any decimation)
-  std::optional<DecimateStats> decimation;  // when target_faces decimated the mesh
-  size_t smoothed_vertices = 0;             // vertices the thick-sheet smoothing moved
+  TriangleMesh mesh;                         // face_thickness, face_piece, vertex_thickness set
+  std::vector<uint32_t> vertex_generator;    // SCVD generator of each vertex of the dual mesh
+                                             // (before any decimation)
+  std::optional<DecimateStats> decimation;   // when target_faces decimated the mesh
+  std::optional<VertexFitStats> vertex_fit;  // when fit_vertices moved the vertices
+  size_t smoothed_vertices = 0;              // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
   Scvd scvd;
   DualTriangleStats triangle_stats;

@@ -242,6 +242,11 @@ nlohmann::json SurfaceStats::Fields() const {
                        {"collapses", decimation->collapses},
                        {"largest_error_voxels2", decimation->largest_error}};
   }
+  if (vertex_fit) {
+    j["vertex_fit"] = {{"vertices_tried", vertex_fit->vertices_tried},
+                       {"moves", vertex_fit->moves},
+                       {"voxels_gained", vertex_fit->voxels_gained}};
+  }
   j["scvd"] = {{"generators", generators},
                {"lloyd_iterations", lloyd_iterations},
                {"lloyd_converged", lloyd_converged},

@@ -164,6 +164,7 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   const TriangleMesh& mesh = result.mesh;
   SurfaceStats s;
   s.decimation = result.decimation;
+  s.vertex_fit = result.vertex_fit;
   s.smoothed_vertices = result.smoothed_vertices;
   s.error_density = result.error_density;
   s.generators = result.scvd.num_generators();

@@ -102,6 +102,7 @@ struct SurfaceStats {
   uint32_t skipped_components = 0;  // components too small for a triangle
   uint64_t skipped_voxels = 0;
   std::optional<DecimateStats> decimation;
+  std::optional<VertexFitStats> vertex_fit;
   uint64_t smoothed_vertices = 0;  // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;
 

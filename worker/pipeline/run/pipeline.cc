@@ -241,6 +241,14 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_ASSIGN_OR_RETURN(result,
                         BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
+  if (result.mesh.num_faces() == 0) {
+    // An empty mesh scores 0 and would give a volume mesh of the box alone: not a result.
+    return absl::InvalidArgumentError(
+        absl::StrCat("r = ", surface.scvd.radius_voxels, " voxels gave no triangle: each of the ",
+                     sheet.components.count(), " components of the sheet phase (the largest ",
+                     sheet.components.sizes.empty() ? 0 : sheet.components.sizes[0],
+                     " voxels) is too small for three cells of that size; lower r (--r)"));
+  }
   if (options.representation.mode != RepresentationMode::kSheet) {
     StageTimer t(&report, "representation");
     SM_ASSIGN_OR_RETURN(report.representation,

@@ -27,6 +27,25 @@ absl::Status CheckNotGrayscale(const SheetInput& input, const SheetPhase& phase)
       "bright; --threshold=V; --labels=V; --window=LO:HI)"));
 }
 
+// Otsu's threshold splits the histogram in two, and either side may be the larger: on a
+// segmented volume (0 and 255) the dark side is the rock. A phase that is most of the
+// volume is no sheet: refused, naming the other side.
+absl::Status CheckOtsuMinority(const SheetInput& input, const SheetPhase& phase) {
+  if (input.threshold != "otsu" || !phase.threshold) return absl::OkStatus();
+  const int64_t voxels =
+      phase.mask ? static_cast<int64_t>(phase.mask->size()) : phase.info.dims.num_voxels();
+  if (voxels <= 0 || 2 * static_cast<int64_t>(phase.stats.selected) <= voxels) {
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(absl::StrCat(
+      input.path, ": Otsu's threshold ", *phase.threshold, " makes ",
+      std::llround(100.0 * phase.stats.selected / voxels), "% of the ", phase.mask ? "mask's " : "",
+      voxels, " voxels (those ", input.threshold_above ? "at or above" : "below",
+      " it) the sheet phase, and sheets are the minor phase: take the other side "
+      "(--threshold_above=",
+      input.threshold_above ? "false" : "true", "), or for a segmented volume --labels=V"));
+}
+
 }  // namespace
 
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress) {
@@ -60,6 +79,7 @@ absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progres
                                              out.mask ? &*out.mask : nullptr, &out.stats, select));
   SM_RETURN_IF_ERROR(CheckNotEmpty(out.sheet, out.info, out.selection, out.stats));
   SM_RETURN_IF_ERROR(CheckNotGrayscale(input, out));
+  SM_RETURN_IF_ERROR(CheckOtsuMinority(input, out));
   out.read_seconds = absl::ToDoubleSeconds(absl::Now() - start);
   return out;
 }

@@ -37,9 +37,10 @@ struct SheetPhase {
 };
 
 // Opens the volume (and mask), selects S slab by slab (after a pass for Otsu's threshold
-// when asked). kInvalidArgument when S is empty
-// (the message names the file, the selection and the value range) or the mask's dims
-// differ; reader errors pass through; kCancelled if asked.
+// when asked). kInvalidArgument when S is empty (the message names the file, the selection
+// and the value range), when the default selection or Otsu's side makes S most of the
+// volume (or mask), or when the mask's dims differ; reader errors pass through;
+// kCancelled if asked.
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});
 
 }  // namespace sheetmesh

@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "common/file_util.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
-#include "common/file_util.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/volume/raw_io.h"
@@ -155,6 +155,21 @@ TEST(PipelineTest, EmptySelectionFailsNamingTheFile) {
   o.input.selection = PhaseSelection::Labels({7});
   EXPECT_THAT(RunPipeline(o), StatusIs(absl::StatusCode::kInvalidArgument,
                                        ::testing::HasSubstr("p_64x56x48_u8.raw")));
+}
+
+TEST(PipelineTest, AnRThatGivesNoTriangleFailsNamingR) {
+  // Once a success with 0 triangles, similarity 0 and a volume mesh of the box alone.
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = 40;
+  o.volume_mesh = true;
+  EXPECT_THAT(RunPipeline(o), StatusIs(absl::StatusCode::kInvalidArgument,
+                                       ::testing::AllOf(::testing::HasSubstr("r = 40 voxels"),
+                                                        ::testing::HasSubstr("no triangle"),
+                                                        ::testing::HasSubstr("lower r"))));
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/volume.vtu")));
 }
 
 TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {

@@ -13,6 +13,7 @@ namespace sheetmesh {
 namespace {
 
 using ::sheetmesh::testing::StatusIs;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 // Two separated classes: the threshold lies between them.
@@ -76,10 +77,12 @@ TEST(ThresholdTest, OtsuSelectsTheDarkSheetOfANoisyScan) {
   EXPECT_GT(*phase->threshold, 90);
   EXPECT_LT(*phase->threshold, 150);
   EXPECT_EQ(static_cast<int64_t>(phase->sheet.size()), truth);  // 5 sigma apart: exact
+  // The bright side is the rock, most of the volume: no sheet phase.
   in.threshold_above = true;
-  phase = LoadSheetPhase(in);
-  ASSERT_TRUE(phase.ok());
-  EXPECT_EQ(static_cast<int64_t>(phase->sheet.size()), d.num_voxels() - truth);
+  EXPECT_THAT(LoadSheetPhase(in),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr("gray_40x30x20_f32.raw"), HasSubstr("% of the 24000 voxels"),
+                             HasSubstr("--threshold_above=false"))));
   in.threshold = "100";
   in.threshold_above = false;
   phase = LoadSheetPhase(in);
@@ -88,6 +91,34 @@ TEST(ThresholdTest, OtsuSelectsTheDarkSheetOfANoisyScan) {
   in.threshold = "half";
   EXPECT_THAT(LoadSheetPhase(in),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("'half'")));
+}
+
+// A segmented volume (sheets 255 in rock 0) read with Otsu's threshold: the dark side is the
+// rock, 90% of the box. Refused with the way out; the bright side is the sheets.
+TEST(ThresholdTest, OtsuOnASegmentedVolumeRefusesTheRockAsTheSheetPhase) {
+  const Dims d{20, 20, 20};
+  DenseVolume v = DenseVolume::Zeros(d, DType::kUInt8);
+  int64_t sheet = 0;
+  for (int64_t z = 0; z < d.nz; ++z)
+    for (int64_t y = 0; y < d.ny; ++y)
+      for (int64_t x = 0; x < d.nx; ++x)
+        if (z == 9 || z == 10) v.Set(x, y, z, 255), ++sheet;
+  const std::string path = ::testing::TempDir() + "/segmented_20x20x20_u8.raw";
+  v.info.dims = d;
+  auto sink = CreateVolumeWriter(path, v.info, VolumeFormat::kRaw);
+  ASSERT_TRUE(sink.ok());
+  ASSERT_TRUE(WriteDense(v, **sink).ok());
+  SheetInput in;
+  in.path = path;
+  in.threshold = "otsu";
+  EXPECT_THAT(LoadSheetPhase(in),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr("segmented_20x20x20_u8.raw"), HasSubstr("90% of the 8000"),
+                             HasSubstr("--threshold_above=true"), HasSubstr("--labels=V"))));
+  in.threshold_above = true;
+  auto phase = LoadSheetPhase(in);
+  ASSERT_TRUE(phase.ok()) << phase.status();
+  EXPECT_EQ(static_cast<int64_t>(phase->sheet.size()), sheet);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ export function thicknessHistogram(canvas, values, bins = 20) {
   const counts = new Array(bins).fill(0);
   for (const v of values) counts[Math.min(bins - 1, Math.floor(((v - lo) / (hi - lo)) * bins))]++;
   const labels = counts.map((_, i) => (lo + ((i + 0.5) * (hi - lo)) / bins).toFixed(2));
+  canvas.dataset.counts = JSON.stringify(counts);  // what is drawn, for tests and scripts
   return new Chart(canvas, {
     type: "bar",
     data: { labels, datasets: [{ label: "triangles", data: counts, backgroundColor: "#4a7bd0" }] },
@@ -40,7 +41,25 @@ export function faceThickness(bytes) {
   const binary = header.some((l) => l.startsWith("format binary_little_endian"));
   const size = { char: 1, uchar: 1, short: 2, ushort: 2, int: 4, uint: 4, float: 4, double: 8, int8: 1, uint8: 1, int32: 4, uint32: 4, float32: 4, float64: 8 };
   const out = [];
-  if (!binary) return out;
+  if (!binary) {
+    // ASCII: one element per line after the header, its properties in order.
+    const text = new TextDecoder().decode(bytes);
+    const lines = text.slice(text.indexOf("\n", text.indexOf("end_header")) + 1).split("\n");
+    let line = 0;
+    for (const e of elements) {
+      for (let i = 0; i < e.count && line < lines.length; ++i, ++line) {
+        if (e.name !== "face") continue;
+        const w = lines[line].trim().split(/\s+/).map(Number);
+        let k = 0;
+        for (const p of e.props) {
+          if (p[1] === "list") k += 1 + w[k];
+          else if (p[2] === "thickness_voxels") out.push(w[k++]);
+          else k++;
+        }
+      }
+    }
+    return out;
+  }
   const view = new DataView(bytes);
   let at = head.indexOf("\n", end) + 1;
   const read = (type) => {

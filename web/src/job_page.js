@@ -88,7 +88,7 @@ async function results(root, job) {
   const boundary = el("input", { id: "boundary", type: "checkbox", disabled: !report.volume_mesh });
   root.append(el("h3", {}, "Surface"), el("label", {}, boundary, " volume mesh boundary"), view);
   const { showSurface } = await import("./viewer.js");
-  const viewer = showSurface(view, bytes, report.input && report.input.dims);
+  const viewer = showSurface(view, bytes, report.input);
   boundary.addEventListener("change", () => viewer.setBoundary(boundary.checked));
   view.dataset.ready = "1";
   return viewer;

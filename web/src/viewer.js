@@ -12,7 +12,9 @@ function colourOf(t) {
   return c;
 }
 
-export function showSurface(container, plyBytes, dims) {
+// `input` is the report's input (dims, spacing, origin): the PLY's coordinates are physical,
+// voxel (i, j, k) at origin + spacing · (i, j, k).
+export function showSurface(container, plyBytes, input) {
   const loader = new PLYLoader();
   loader.setCustomPropertyNameMapping({ thickness: ["thickness"], body: ["body"] });
   const geometry = loader.parse(plyBytes);
@@ -50,16 +52,21 @@ export function showSurface(container, plyBytes, dims) {
   sun.position.set(1, 2, 3);
   scene.add(sun);
 
-  const [nx, ny, nz] = dims || [1, 1, 1];
+  const dims = (input && input.dims) || [1, 1, 1];
+  const spacing = (input && input.spacing) || [1, 1, 1];
+  const origin = (input && input.origin) || [0, 0, 0];
+  // The box the voxels fill, in the mesh's units.
+  const lo3 = [0, 1, 2].map((k) => origin[k] - 0.5 * spacing[k]);
+  const size = [0, 1, 2].map((k) => dims[k] * spacing[k]);
   const box = new THREE.LineSegments(
-    new THREE.EdgesGeometry(new THREE.BoxGeometry(nx, ny, nz)),
+    new THREE.EdgesGeometry(new THREE.BoxGeometry(size[0], size[1], size[2])),
     new THREE.LineBasicMaterial({ color: 0x555555 }));
-  box.position.set(nx / 2 - 0.5, ny / 2 - 0.5, nz / 2 - 0.5);
+  box.position.set(lo3[0] + size[0] / 2, lo3[1] + size[1] / 2, lo3[2] + size[2] / 2);
   box.visible = false;
   scene.add(box);
 
-  const centre = new THREE.Vector3(nx / 2, ny / 2, nz / 2);
-  const span = Math.max(nx, ny, nz);
+  const centre = box.position.clone();
+  const span = Math.max(...size);
   const camera = new THREE.PerspectiveCamera(40, width / height, span / 100, span * 20);
   camera.position.set(centre.x + span * 1.2, centre.y - span * 1.4, centre.z + span * 1.1);
   camera.up.set(0, 0, 1);

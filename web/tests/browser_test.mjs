@@ -135,7 +135,18 @@ async function main() {
     const want = value === undefined ? "–" : digits === null ? String(value) : Number(value).toFixed(digits);
     check(text === want, `${key} shown ${text}, report.json ${want}`);
   }
-  check(await page.isVisible("#histogram"), "the thickness histogram is drawn");
+  check(await page.isVisible("#histogram"), "the thickness histogram is shown");
+  // Its bars hold every triangle of the surface, and they are drawn: pixels of the bars' colour.
+  const counts = JSON.parse((await page.getAttribute("#histogram", "data-counts")) || "[]");
+  const total = counts.reduce((a, b) => a + b, 0);
+  check(total === report.surface.triangles, `the histogram counts ${total} triangles, report.json ${report.surface.triangles}`);
+  const barPixels = await page.$eval("#histogram", (c) => {
+    const px = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < px.length; i += 4) n += px[i] === 0x4a && px[i + 1] === 0x7b && px[i + 2] === 0xd0;
+    return n;
+  });
+  check(barPixels > 500, `the histogram's bars are drawn (${barPixels} pixels of their colour)`);
   const previews = await page.$$eval(".previews img", (imgs) => imgs.map((i) => i.naturalWidth));
   check(previews.length === 4 && previews.every((w) => w > 0), `four previews load (${previews})`);
 
@@ -152,6 +163,20 @@ async function main() {
     return seen.size;
   });
   check(colours > 10, `the 3D view is drawn (${colours} colours)`);
+  // The share of the view the mesh covers (pixels off the background).
+  const coverage = () => page.$eval("#view3d canvas", (c) => {
+    const copy = document.createElement("canvas");
+    copy.width = c.width;
+    copy.height = c.height;
+    const g = copy.getContext("2d");
+    g.drawImage(c, 0, 0);
+    const px = g.getImageData(0, 0, c.width, c.height).data;
+    let off = 0;
+    for (let i = 0; i < px.length; i += 4) off += Math.abs(px[i] - 0xf4) + Math.abs(px[i + 1] - 0xf5) + Math.abs(px[i + 2] - 0xf7) > 24;
+    return off / (px.length / 4);
+  });
+  const covered = await coverage();
+  check(covered > 0.03, `the surface fills the view (${(100 * covered).toFixed(1)}% of it)`);
   // Turn it with the mouse: the picture changes.
   const before = await page.locator("#view3d canvas").screenshot();
   const box = await page.locator("#view3d canvas").boundingBox();
@@ -170,6 +195,23 @@ async function main() {
   check(digest === rep.digest.hash, `the downloaded report.json has the artifact's digest (${digest.slice(0, 12)})`);
   const resumedShown = await page.evaluate(() => sessionStorage.getItem("sheetmesh.last_upload"));
   check(resumedShown !== null && JSON.parse(resumedShown).resumed_from === 600000, `the upload resumed at 600000 (${resumedShown})`);
+
+  // The same volume with a physical voxel size (5 µm): the mesh is in mm, and the view is
+  // framed on it as before, not on the voxel counts.
+  const physical = await (await api("/v1/jobs", {
+    method: "POST", headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({
+      input: { volume_digest: { hash, size_bytes: String(bytes.length) }, file_name: path.basename(volume),
+        format: { spacing: [0.005, 0.005, 0.005], unit: "mm" } },
+      parameters: { r: 7, labels: [255] },
+    }),
+  })).json();
+  check(typeof physical.name === "string", `a job with a 0.005 mm voxel starts (${JSON.stringify(physical).slice(0, 200)})`);
+  await page.goto(`${base}/#/${physical.name}`);
+  await page.waitForSelector('#view3d[data-ready="1"]', { timeout: 180000 });
+  const coveredPhysical = await coverage();
+  check(coveredPhysical > 0.5 * covered && coveredPhysical < 2 * covered,
+    `with a 0.005 mm voxel the surface fills ${(100 * coveredPhysical).toFixed(1)}% of the view (${(100 * covered).toFixed(1)}% in voxels)`);
   // A second job on the same volume with extraction and the volume mesh: its pieces table
   // and Table 3's rows as report.json has them (the upload is found complete at once).
   await page.goto(base + "/#/");

@@ -201,6 +201,7 @@ async function main() {
   const physical = await (await api("/v1/jobs", {
     method: "POST", headers: { "Content-Type": "application/json" },
     body: JSON.stringify({
+      request_id: randomUUID(),
       input: { volume_digest: { hash, size_bytes: String(bytes.length) }, file_name: path.basename(volume),
         format: { spacing: [0.005, 0.005, 0.005], unit: "mm" } },
       parameters: { r: 7, labels: [255] },

@@ -26,6 +26,7 @@
 #include "client/parameter_flags.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
+#include "common/progress_line.h"
 #include "common/status_macros.h"
 #include "google/protobuf/util/json_util.h"
 
@@ -94,11 +95,9 @@ std::string NewRequestId() {
 std::string StateName(v1::JobState s) { return v1::JobState_Name(s); }
 
 // "stage 3/6 surface 42%", or "starting" for a job leased that has not begun its first stage.
-std::string StageText(const v1::JobProgress& p, bool percent = true) {
-  if (p.stage_index() == 0) return "starting";
-  std::string s = absl::StrFormat("stage %d/%d %s", p.stage_index(), p.stage_count(), p.stage());
-  if (percent) absl::StrAppendFormat(&s, " %3.0f%%", 100 * p.fraction());
-  return s;
+std::string StageText(const v1::JobProgress& p) {
+  return ProgressLine::StageText(p.stage_index(), p.stage_count(), p.stage(), p.fraction(),
+                                 absl::InfiniteDuration());
 }
 
 void PrintJob(const v1::Job& j) {
@@ -117,36 +116,27 @@ void PrintJob(const v1::Job& j) {
   std::cout << "\n";
 }
 
-// Progress as a bar on a terminal, as lines otherwise.
+// Progress as a bar on a terminal, as lines otherwise; each other state on a line of its own.
 class Reporter {
  public:
-  Reporter() : tty_(::isatty(1)) {}
+  Reporter() : line_(std::cout, ::isatty(1)) {}
   void Update(const v1::WatchJobResponse& m) {
     const v1::Job& j = m.job();
-    const v1::JobProgress& p = j.progress();
-    const bool running = j.state() == v1::RUNNING;
-    if (tty_) {
-      const int width = 30;
-      const int fill = running ? static_cast<int>(p.fraction() * width)
-                               : (j.state() == v1::SUCCEEDED ? width : 0);
-      std::cout << absl::StrFormat("\r%-9s [%s%s] %-32s", StateName(j.state()),
-                                   std::string(fill, '#'), std::string(width - fill, ' '),
-                                   running ? StageText(p) : "")
-                << std::flush;
+    if (j.state() == v1::RUNNING) {
+      const v1::JobProgress& p = j.progress();
+      line_.Show(StateName(j.state()), p.stage_index(), p.stage_count(), p.stage(), p.fraction());
+      state_.clear();
       return;
     }
-    const std::string line = running ? absl::StrCat(StateName(j.state()), " ", StageText(p, false))
-                                     : StateName(j.state());
-    if (line != last_) std::cout << line << std::endl;
-    last_ = line;
+    if (StateName(j.state()) == state_) return;
+    state_ = StateName(j.state());
+    line_.Finish(state_);
   }
-  void Done() {
-    if (tty_) std::cout << "\n";
-  }
+  void Done() { line_.Finish(""); }
 
  private:
-  bool tty_;
-  std::string last_;
+  ProgressLine line_;
+  std::string state_;
 };
 
 absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::string& dir,

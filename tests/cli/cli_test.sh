@@ -30,7 +30,12 @@ PY
 cat > "$tmp/cfg.json" <<'JSON'
 {"separate": {"D_ang": 140}, "r": 8, "volume_mesh": true}
 JSON
-"$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/cfg.json" --r 6 -o "$tmp/run" --similarity_hausdorff=false > "$tmp/run.txt"
+"$cli" run "$tmp/s_128x112x96_u8.raw" --config "$tmp/cfg.json" --r 6 -o "$tmp/run" --similarity_hausdorff=false > "$tmp/run.txt" 2> "$tmp/run_progress.txt"
+# Progress on stderr, a line per stage (piped), in order, ending with the write; stdout as before.
+grep -q "^stage 1/[0-9]* read" "$tmp/run_progress.txt" || fail "run showed no progress: $(cat "$tmp/run_progress.txt")"
+sed -n 's#^stage \([0-9]*\)/.*#\1#p' "$tmp/run_progress.txt" | sort -n -c || fail "run's stages out of order"
+tail -1 "$tmp/run_progress.txt" | grep -q "write 100%" || fail "run's progress did not end with the write"
+grep -q "^stage" "$tmp/run.txt" && fail "progress went to stdout"
 grep -q "surface     r = 6" "$tmp/run.txt" || fail "the flag --r must override the config's r"
 grep -q "volume mesh" "$tmp/run.txt" || fail "the config's volume_mesh must apply"
 for f in model.vdb pieces.csv volume.vtu volume.msh volume.inp report.json; do [ -f "$tmp/run/$f" ] || fail "run wrote no $f"; done

@@ -1,11 +1,17 @@
 #include "worker/pipeline/cli/surface_command.h"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <iostream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/json_text.h"
+#include "common/progress_line.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
@@ -34,10 +40,38 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
   }
 }
 
+// The run's progress on stderr (stdout keeps the results): a bar on a terminal, lines
+// otherwise, each stage numbered among the stages the run plans.
+class StderrProgress : public ProgressObserver {
+ public:
+  explicit StderrProgress(const PipelineOptions& options)
+      : stages_(PlannedStages(options)), line_(std::cerr, ::isatty(2)) {}
+  bool OnProgress(absl::string_view stage, double fraction, absl::string_view) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    const auto it = std::find(stages_.begin() + index_, stages_.end(), stage);
+    if (it != stages_.end()) index_ = static_cast<int>(it - stages_.begin());
+    line_.Show("", index_ + 1, static_cast<int>(stages_.size()), stage, fraction);
+    return true;
+  }
+  void Finish() {
+    std::lock_guard<std::mutex> lock(mu_);
+    line_.Finish("");
+  }
+
+ private:
+  const std::vector<std::string> stages_;
+  std::mutex mu_;
+  int index_ = 0;
+  ProgressLine line_;
+};
+
 }  // namespace
 
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
-  SM_ASSIGN_OR_RETURN(PipelineReport r, RunPipeline(options));
+  StderrProgress progress(options);
+  absl::StatusOr<PipelineReport> run = RunPipeline(options, Progress(&progress, ""));
+  progress.Finish();
+  SM_ASSIGN_OR_RETURN(PipelineReport r, std::move(run));
   out << absl::StrFormat("sheet       %d voxels of %s\n", r.sheet_voxels,
                          r.options.input.selection.ToString());
   if (r.extraction) {

@@ -112,9 +112,9 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
       r.options.surface.scvd.radius_voxels, m.generators, m.lloyd_iterations, m.vertices,
       m.triangles, m.element_size_voxels);
   out << absl::StrFormat(
-      "topology    %d boundary loops, %d non-manifold edges, %d pieces; %d components "
+      "topology    %d boundary loops, %d non-manifold edges, %d connected parts; %d components "
       "(%d voxels) too small for a triangle\n",
-      m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.pieces,
+      m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.connected_parts,
       m.skipped_components, m.skipped_voxels);
   if (r.representation && r.representation->bodies > 0) {
     out << absl::StrFormat(

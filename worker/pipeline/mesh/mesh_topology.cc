@@ -116,7 +116,7 @@ TopologyReport AnalyzeTopology(const TriangleMesh& mesh) {
   for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
     if (on_boundary[v] && boundary.Find(v) == v) ++r.boundary_loops;
   }
-  for (uint32_t f = 0; f < mesh.faces.size(); ++f) r.pieces += pieces.Find(f) == f;
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) r.connected_parts += pieces.Find(f) == f;
   return r;
 }
 

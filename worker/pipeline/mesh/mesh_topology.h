@@ -1,5 +1,5 @@
 // Topology of a triangle mesh: edges and their faces, manifoldness, boundary loops,
-// pieces, orientation, duplicate and degenerate faces, self-intersections.
+// connected parts, orientation, duplicate and degenerate faces, self-intersections.
 #ifndef SHEETMESH_WORKER_PIPELINE_MESH_MESH_TOPOLOGY_H_
 #define SHEETMESH_WORKER_PIPELINE_MESH_MESH_TOPOLOGY_H_
 
@@ -42,7 +42,8 @@ struct TopologyReport {
   size_t duplicate_faces = 0;     // faces with the same vertex set as an earlier face
   size_t degenerate_faces = 0;    // repeated vertex or zero area
   size_t boundary_loops = 0;      // connected groups of boundary edges
-  size_t pieces = 0;              // groups of faces connected through edges
+  size_t connected_parts = 0;     // groups of faces connected through edges (not the
+                                  // extraction's pieces: one piece may be several)
   size_t inconsistent_edges = 0;  // two-face edges walked in the same direction by both
   size_t unused_vertices = 0;
   std::vector<std::pair<uint32_t, uint32_t>> nonmanifold_edge_list;

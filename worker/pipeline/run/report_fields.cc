@@ -23,7 +23,7 @@ nlohmann::json TopologyReport::Fields() const {
           {"boundary_edges", boundary_edges},
           {"nonmanifold_edges", nonmanifold_edges},
           {"boundary_loops", boundary_loops},
-          {"pieces", pieces},
+          {"connected_parts", connected_parts},
           {"inconsistent_edges", inconsistent_edges},
           {"duplicate_faces", duplicate_faces},
           {"degenerate_faces", degenerate_faces},

@@ -27,7 +27,7 @@ TEST(MeshTopologyTest, GridWithAHoleHasTwoBoundaryLoops) {
   const TopologyReport plain = AnalyzeTopology(Grid(4));
   EXPECT_EQ(plain.boundary_loops, 1u);
   EXPECT_EQ(plain.nonmanifold_edges, 0u);
-  EXPECT_EQ(plain.pieces, 1u);
+  EXPECT_EQ(plain.connected_parts, 1u);
   EXPECT_EQ(plain.inconsistent_edges, 0u);
   EXPECT_EQ(plain.edges, 4u * 5 * 2 + 16u);
   const TopologyReport holed = AnalyzeTopology(Grid(4, 1, 1));

@@ -62,7 +62,7 @@ TEST(SurfaceBuilderTest, FlatSlabGivesOneLayerWithZNormals) {
   ASSERT_GT(b.surface.mesh.num_faces(), 20u);
   ExpectCleanMesh(b);
   EXPECT_EQ(b.topo.nonmanifold_edges, 0u);
-  EXPECT_EQ(b.topo.pieces, 1u);
+  EXPECT_EQ(b.topo.connected_parts, 1u);
   EXPECT_EQ(b.topo.boundary_loops, 1u);
   for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
     const Vec3 n = UnitNormal(Corners(b.surface.mesh, f));
@@ -79,7 +79,7 @@ TEST(SurfaceBuilderTest, TiltedSlabKeepsEveryVertexOnTheSheet) {
   const Built b = Build(PlaneSlab({64, 64, 64}, {32, 32, 32}, n, 5), 7);
   ExpectCleanMesh(b);
   EXPECT_EQ(b.topo.nonmanifold_edges, 0u);
-  EXPECT_EQ(b.topo.pieces, 1u);
+  EXPECT_EQ(b.topo.connected_parts, 1u);
   for (const Vec3& v : b.surface.mesh.vertices) {
     EXPECT_LE(std::abs(Dot(v - Vec3(32, 32, 32), n)), 2.5 + 0.5) << v.x << "," << v.y << "," << v.z;
   }
@@ -109,7 +109,7 @@ TEST(SurfaceBuilderTest, DiscWithAHoleHasTwoBoundaryLoops) {
   const Built b = Build(annulus, 5);
   ExpectCleanMesh(b);
   EXPECT_EQ(b.topo.boundary_loops, 2u);
-  EXPECT_EQ(b.topo.pieces, 1u);
+  EXPECT_EQ(b.topo.connected_parts, 1u);
   // The hole stays a hole: no triangle covers its centre.
   for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
     const Triangle tri = Corners(b.surface.mesh, f);

@@ -98,7 +98,9 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   ExodusFile file(path + ".part");
   SM_RETURN_IF_ERROR(file.Create());
   const int ex = file.id();
-  const std::string title = absl::StrCat("sheetmesh ", SHEETMESH_VERSION, " volume mesh");
+  // The title holds 80 characters: the units fit.
+  const std::string title =
+      absl::StrCat("sheetmesh ", SHEETMESH_VERSION, " volume mesh, ", m.UnitsText()).substr(0, 80);
   SM_RETURN_IF_ERROR(
       file.Check(ex_put_init(ex, title.c_str(), 3, static_cast<int64_t>(m.nodes.size()),
                              static_cast<int64_t>(m.tets.size() + sheet_elems),

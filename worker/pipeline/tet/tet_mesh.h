@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -29,6 +30,11 @@ struct TetMesh {
   std::vector<int32_t> tet_region;   // per tetrahedron: the body piece it fills, -1 in the
                                      // rock; empty when there are no bodies
   double voxel_length = 1.0;  // one voxel in physical units: thickness in voxels = physical / it
+  std::string unit;           // the length unit of nodes and thickness ("mm"); empty: unknown
+
+  // "lengths in mm (a voxel is 0.005 mm)", or "lengths in voxels" where the unit is unknown
+  // and a voxel is 1: what every writer states in its header.
+  std::string UnitsText() const;
 
   size_t num_sheet_faces() const;
   bool IsBody(int32_t piece) const {

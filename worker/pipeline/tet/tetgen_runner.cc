@@ -137,12 +137,6 @@ absl::StatusOr<TetMesh> ReadOutput(const std::string& stem, const Plc& plc) {
 
 }  // namespace
 
-size_t TetMesh::num_sheet_faces() const {
-  size_t n = 0;
-  for (int32_t m : face_marker) n += m >= kFirstSheetMarker;
-  return n;
-}
-
 std::string TetgenSwitches(const TetgenOptions& o) {
   std::string s = "-pzQ";
   if (o.max_radius_edge_ratio > 0) {

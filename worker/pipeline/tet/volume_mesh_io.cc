@@ -68,7 +68,8 @@ std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
 absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   const size_t cells = m.tets.size() + m.faces.size();
   std::string out = absl::StrCat(
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+      "<?xml version=\"1.0\"?>\n<!-- sheetmesh ", SHEETMESH_VERSION, ": ", m.UnitsText(),
+      " -->\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
       "byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"",
       m.nodes.size(), "\" NumberOfCells=\"", cells,
       "\">\n<Points>\n"
@@ -137,7 +138,10 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
     return absl::StrCat(m.IsBody(piece) ? "body_" : "sheet_", piece,
                         m.IsBody(piece) ? "_wall" : "");
   };
-  std::string out = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n";
+  // A section readers skip (Gmsh and meshio pass over sections they do not know).
+  std::string out =
+      absl::StrCat("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nsheetmesh ", SHEETMESH_VERSION,
+                   ": ", m.UnitsText(), "\n$EndComments\n$PhysicalNames\n");
   absl::StrAppend(&out, regions.size() + groups.size(), "\n");
   for (const auto& [piece, tets] : regions) {
     absl::StrAppend(&out, "3 ", volume_tag(piece), " \"",
@@ -204,7 +208,8 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
 absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
   const auto sheets = SheetFacesByPiece(m);
   std::string out = absl::StrCat("*HEADING\nsheetmesh ", SHEETMESH_VERSION,
-                                 " volume mesh: rock tetrahedra with sheet faces\n*NODE\n");
+                                 " volume mesh: rock tetrahedra with sheet faces\n** ",
+                                 m.UnitsText(), "\n*NODE\n");
   for (size_t i = 0; i < m.nodes.size(); ++i) {
     absl::StrAppendFormat(&out, "%d, %.12g, %.12g, %.12g\n", i + 1, m.nodes[i].x, m.nodes[i].y,
                           m.nodes[i].z);

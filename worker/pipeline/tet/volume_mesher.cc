@@ -450,6 +450,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, con
   }
   // The sheets' thickness came in voxels: the mesh is physical.
   r.mesh.voxel_length = PhysicalLength(1.0, placement);
+  r.mesh.unit = placement.unit;
   for (float& t : r.mesh.face_thickness) t = static_cast<float>(t * r.mesh.voxel_length);
   r.quality = MeasureQuality(r.mesh);
   r.nodes = r.mesh.nodes.size();

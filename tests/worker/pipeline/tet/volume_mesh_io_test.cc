@@ -11,6 +11,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
+#include "common/version.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
@@ -249,6 +250,46 @@ TEST(VolumeMeshIoTest, ABodyIsARegionInEveryWriter) {
   if (exo && exo->find("Error") == std::string::npos && !exo->empty()) {
     EXPECT_EQ(*exo, absl::StrCat("rock body_5 sheet_0 ", body_tets, "\n"));
   }
+}
+
+TEST(VolumeMeshIoTest, EveryFormatStatesItsLengthUnit) {
+  // A 5 µm voxel in mm: the nodes are in mm, and each file says so where its format allows.
+  Placement placement;
+  placement.spacing = {0.005, 0.005, 0.005};
+  placement.unit = "mm";
+  const TetMesh m = SampleMesh(placement);
+  EXPECT_EQ(m.UnitsText(), "lengths in mm (a voxel is 0.005 mm)");
+  TempDir tmp;
+  ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
+  ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
+  ASSERT_THAT(WriteAbaqus(tmp.File("m.inp"), m), IsOk());
+  ASSERT_THAT(WriteExodus(tmp.File("m.exo"), m), IsOk());
+  EXPECT_THAT(*ReadFileToString(tmp.File("m.vtu")),
+              ::testing::HasSubstr("<!-- sheetmesh " SHEETMESH_VERSION
+                                   ": lengths in mm (a voxel is 0.005 mm) -->\n<VTKFile"));
+  EXPECT_THAT(*ReadFileToString(tmp.File("m.msh")),
+              ::testing::HasSubstr("$Comments\nsheetmesh " SHEETMESH_VERSION
+                                   ": lengths in mm (a voxel is 0.005 mm)\n$EndComments\n"));
+  EXPECT_THAT(*ReadFileToString(tmp.File("m.inp")),
+              ::testing::HasSubstr("\n** lengths in mm (a voxel is 0.005 mm)\n*NODE\n"));
+  // The files still read as before: the comments are skipped.
+  const auto back = Python(
+      "import meshio, netCDF4\n"
+      "a = meshio.read(\"" +
+      tmp.File("m.vtu") +
+      "\")\n"
+      "b = meshio.read(\"" +
+      tmp.File("m.msh") +
+      "\")\n"
+      "ds = netCDF4.Dataset(\"" +
+      tmp.File("m.exo") +
+      "\")\n"
+      "print(len(a.points) == len(b.points), ds.title)");
+  if (!back) GTEST_SKIP() << "python3-meshio is not installed for /usr/bin/python3";
+  EXPECT_EQ(*back, "True sheetmesh " SHEETMESH_VERSION
+                   " volume mesh, lengths in mm (a voxel is 0.005 mm)\n");
+  // Where the volume gives no unit and a voxel is 1, the lengths are voxels.
+  EXPECT_EQ(SampleMesh().UnitsText(), "lengths in voxels");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
@@ -277,6 +278,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   }
 
   VolumeMeshResult volume;
+  absl::Status volume_failed;
   if (options.volume_mesh) {
     StageTimer t(&report, "volume");
     VolumeMeshOptions vo = options.volume;
@@ -284,9 +286,22 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     if (!options.output.dir.empty() && MakeDirs(options.output.dir).ok()) {
       vo.tetgen.failed_plc_path = options.output.dir + "/tetgen_failed.poly";
     }
-    SM_ASSIGN_OR_RETURN(volume, BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement, vo,
-                                                progress.Stage("volume")));
-    report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
+    absl::StatusOr<VolumeMeshResult> built =
+        BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement, vo, progress.Stage("volume"));
+    if (built.ok()) {
+      volume = *std::move(built);
+      report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
+    } else {
+      // Cancelled or out of time: stop. Otherwise the surface and its score stand.
+      const absl::StatusCode code = built.status().code();
+      if (options.output.dir.empty() || code == absl::StatusCode::kCancelled ||
+          code == absl::StatusCode::kDeadlineExceeded) {
+        return built.status();
+      }
+      volume_failed = built.status();
+      report.failed_stage = "volume";
+      report.error = std::string(built.status().message());
+    }
   }
 
   if (!options.output.dir.empty()) {
@@ -294,6 +309,12 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, phase.sheet, mesh, model,
                                     dropped, report.volume_mesh ? &volume.mesh : nullptr, &report));
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
+  }
+  if (!volume_failed.ok()) {
+    return absl::Status(
+        volume_failed.code(),
+        absl::StrCat(volume_failed.message(), " (the volume stage failed; kept in ",
+                     options.output.dir, ": ", absl::StrJoin(report.files, ", "), ")"));
   }
   return report;
 }

@@ -111,6 +111,10 @@ struct PipelineReport {
   std::vector<StageTime> timings;
   std::vector<std::string> files;     // written, relative to output.dir
   std::vector<std::string> previews;  // each preview's description, as JSON text
+  // A later stage that failed after the surface was made and scored (the volume mesh): its
+  // name and error; what was done before it is written all the same.
+  std::string failed_stage;
+  std::string error;
 
   // The report as JSON (the report.json artifact): the sections this report has.
   std::string ToJson() const;
@@ -118,7 +122,9 @@ struct PipelineReport {
 
 // Runs the job. Every stage reports through `progress.Stage(name)`. Errors of any stage
 // pass through with their codes; kCancelled if asked. Files appear atomically; a failed
-// run leaves no half-written file.
+// run leaves no half-written file. When the volume stage fails (for another reason than a
+// cancel or the time limit) and output.dir is set, the surface, its score, previews and a
+// report naming the failed stage are written first, and the error says so.
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress = {});
 

@@ -77,6 +77,7 @@ std::string PipelineReport::ToJson() const {
     j["radius_search"]["target_similarity"] = options.radius_search.target_similarity;
   }
   if (volume_mesh) j["volume_mesh"] = volume_mesh->Fields();
+  if (!failed_stage.empty()) j["failed"] = {{"stage", failed_stage}, {"error", error}};
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;
   j["seconds"] = times;

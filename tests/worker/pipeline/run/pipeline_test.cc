@@ -172,6 +172,32 @@ TEST(PipelineTest, AnRThatGivesNoTriangleFailsNamingR) {
   EXPECT_FALSE(std::filesystem::exists(tmp.File("out/volume.vtu")));
 }
 
+TEST(PipelineTest, AFailedVolumeStageKeepsTheSurfaceAndSaysSo) {
+  // Once the folder was not even made: the surface, its score and previews were lost.
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = 6;
+  o.volume_mesh = true;
+  o.volume.max_tetrahedra = 10;  // below what any volume mesh of these sheets needs
+  EXPECT_THAT(RunPipeline(o),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       ::testing::AllOf(::testing::HasSubstr("max_tetrahedra = 10"),
+                                        ::testing::HasSubstr("the volume stage failed; kept in"),
+                                        ::testing::HasSubstr("surface.ply"))));
+  for (const char* f : {"surface.ply", "report.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
+  }
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/volume.vtu")));
+  SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("out/report.json")));
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j["failed"]["stage"], "volume");
+  EXPECT_THAT(j["failed"]["error"].get<std::string>(), ::testing::HasSubstr("max_tetrahedra"));
+  EXPECT_GT(j["similarity"]["similarity"].get<double>(), 0.5);
+  EXPECT_FALSE(j.contains("volume_mesh"));
+}
+
 TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   PipelineOptions o;

@@ -307,10 +307,12 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Bool("surface.fit_walls", SM_MEMBER(surface.fit_walls),
                       "fit each face's thickness to the best formula-5 score of the prisms "
                       "together (false: the mean τ of the voxels it passes through)"));
-  rows.push_back(Bool("surface.fit_vertices", SM_MEMBER(surface.fit_vertices),
-                      "with fit_walls: move vertices along their normal, and rims across the "
-                      "rim or onto a face of the box within 1.5 voxels, where formula 5 of the "
-                      "prisms rises (vertices on and beside junctions stay)"));
+  rows.push_back(
+      Choice("surface.fit_vertices", SM_MEMBER(surface.fit_vertices),
+             {{"none", VertexFit::kNone}, {"rim", VertexFit::kRim}, {"all", VertexFit::kAll}},
+             "with fit_walls, vertices moved where formula 5 of the prisms rises: rim, rims across "
+             "themselves and onto a face of the box within 1.5 voxels; all, every vertex along its "
+             "normal too (a higher score, a volume mesh with more slivers); junctions stay"));
   rows.push_back(Number("surface.error_density", SM_MEMBER(surface.error_density), "[0, 100]", "",
                         "> 0: a second SCVD whose density ρ (formula 2) rises by this much where "
                         "the first surface misses the sheet; the better by formula 5 is kept"));

@@ -120,8 +120,10 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     std::vector<float> search(mesh.face_thickness.size());
     for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
     mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
-    if (options.fit_vertices) {
-      out.vertex_fit = FitVertexPositions(&mesh, sheet.set);
+    if (options.fit_vertices != VertexFit::kNone) {
+      VertexFitOptions fit;
+      fit.along_normal = options.fit_vertices == VertexFit::kAll;
+      out.vertex_fit = FitVertexPositions(&mesh, sheet.set, fit);
       // The heights again, for the faces as they lie now.
       if (out.vertex_fit->moves > 0)
         mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);

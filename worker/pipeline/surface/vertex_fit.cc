@@ -239,7 +239,7 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
       if (fixed[v] || faces_of[v].empty() || !dirty[v]) continue;
       ++stats.vertices_tried;
       const uint32_t vs[1] = {v};
-      for (const Vec3& dir : {normal_of[v], out_of[v]}) {
+      for (const Vec3& dir : {options.along_normal ? normal_of[v] : Vec3(), out_of[v]}) {
         along(vs, dir);
         if (const auto gain = try_positions(vs, false)) moved(vs, *gain);
       }

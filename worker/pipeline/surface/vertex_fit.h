@@ -12,7 +12,11 @@
 namespace sheetmesh {
 
 struct VertexFitOptions {
-  int passes = 3;               // sweeps over the vertices
+  int passes = 3;  // sweeps over the vertices
+  // Moves along the normal too (the mid-surface off the sheet's middle). Off by default:
+  // over the volume mesh sweep they tilt faces into creases that cost the volume mesh its
+  // angles (bench/RESULTS.md, issue 42).
+  bool along_normal = false;
   double step = 0.5;            // voxels: a move is one or two steps
   double max_offset = 1.5;      // voxels a vertex may end from where it started
   double max_normal_turn = 30;  // degrees a face's normal may turn from where it started
@@ -30,9 +34,9 @@ struct VertexFitStats {
 };
 
 // Moves vertices of a sheet mesh where formula 5 of all the prisms together (face heights
-// `mesh.face_thickness`) rises: each vertex in turn tries one or two steps along its normal
-// (a mid-surface off the sheet's middle) and, on a rim, across the rim (the outline of the
-// outermost voxels; each rim edge's two ends together too), and takes the move that gains
+// `mesh.face_thickness`) rises: each rim vertex in turn tries one or two steps across the rim
+// (the outline of the outermost voxels; each rim edge's two ends together too) and, with
+// `along_normal`, every vertex along its normal, and takes the move that gains
 // most, as long as no face turns, folds or sharpens past the options' bounds. A rim within
 // `box_reach` of a face of the box goes onto it unless that loses. Vertices on and beside
 // junctions of sheets stay, a coordinate in a face of the box stays, and no vertex comes

@@ -52,7 +52,10 @@ TEST(FitVertexPositionsTest, AMidSurfaceOffTheMiddleMovesBackOntoIt) {
   TriangleMesh mesh = FlatGrid(8, 39, 8, 39, 12.5, 4, 4.0f);
   const double before = Similarity(mesh, set);
   EXPECT_LT(before, 0.6);
-  const VertexFitStats stats = FitVertexPositions(&mesh, set);
+  VertexFitOptions o;
+  EXPECT_EQ(FitVertexPositions(&mesh, set, o).moves, 0u) << "only rims move by default";
+  o.along_normal = true;
+  const VertexFitStats stats = FitVertexPositions(&mesh, set, o);
   EXPECT_GE(stats.moves, mesh.vertices.size()) << "every vertex was one voxel off";
   for (const Vec3& v : mesh.vertices) EXPECT_DOUBLE_EQ(v.z, 11.5);
   EXPECT_DOUBLE_EQ(Similarity(mesh, set), 1.0);
@@ -95,7 +98,9 @@ TEST(FitVertexPositionsTest, VerticesOnAndBesideAJunctionAndCoordinatesInTheBoxF
     mesh.face_piece.push_back(0);
   }
   const std::vector<Vec3> start = mesh.vertices;
-  FitVertexPositions(&mesh, set);
+  VertexFitOptions o;
+  o.along_normal = true;
+  FitVertexPositions(&mesh, set, o);
   for (uint32_t v = 0; v < 25; ++v) {
     const uint32_t row = v / 5;
     if (row >= 1 && row <= 3) {
@@ -137,6 +142,7 @@ TEST(FitVertexPositionsTest, NoFaceTurnsOrSharpensPastTheBounds) {
   }
   const double before = Similarity(mesh, set);
   VertexFitOptions o;
+  o.along_normal = true;
   FitVertexPositions(&mesh, set, o);
   EXPECT_GT(Similarity(mesh, set), before);
   for (size_t f = 0; f < mesh.faces.size(); ++f) {

@@ -309,10 +309,14 @@ std::vector<ParamRow> SurfaceRows() {
                       "together (false: the mean τ of the voxels it passes through)"));
   rows.push_back(
       Choice("surface.fit_vertices", SM_MEMBER(surface.fit_vertices),
-             {{"none", VertexFit::kNone}, {"rim", VertexFit::kRim}, {"all", VertexFit::kAll}},
+             {{"auto", VertexFit::kAuto},
+              {"none", VertexFit::kNone},
+              {"rim", VertexFit::kRim},
+              {"all", VertexFit::kAll}},
              "with fit_walls, vertices moved where formula 5 of the prisms rises: rim, rims across "
              "themselves and onto a face of the box within 1.5 voxels; all, every vertex along its "
-             "normal too (a higher score, a volume mesh with more slivers); junctions stay"));
+             "normal too; auto: rim, or none with volume_mesh (the moves cost the volume mesh "
+             "angles); junctions stay"));
   rows.push_back(Number("surface.error_density", SM_MEMBER(surface.error_density), "[0, 100]", "",
                         "> 0: a second SCVD whose density ρ (formula 2) rises by this much where "
                         "the first surface misses the sheet; the better by formula 5 is kept"));

@@ -228,6 +228,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   report.components = sheet.components.count();
 
   SurfaceOptions surface = options.surface;
+  if (surface.fit_vertices == VertexFit::kAuto) {
+    // Measured over the volume mesh sweep: moved vertices leave the volume mesh more slivers
+    // (bench/RESULTS.md, issue 42); where a volume mesh follows, its angles come first.
+    surface.fit_vertices = options.volume_mesh ? VertexFit::kNone : VertexFit::kRim;
+  }
   if (options.search_radius) {
     StageTimer t(&report, "search-r");
     SM_ASSIGN_OR_RETURN(report.radius_choice, SearchRadius(sheet, surface, options.radius_search,

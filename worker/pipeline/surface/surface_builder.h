@@ -35,6 +35,8 @@ inline constexpr double kTriangleTolerance = 0.05;
 
 // Which vertices the fit to formula 5 moves (vertex_fit.h).
 enum class VertexFit {
+  kAuto,  // kRim where the surface is the result, kNone where a volume mesh follows (the
+          // pipeline decides; BuildSurface takes it as kRim)
   kNone,
   kRim,  // rims across themselves and onto the box's faces
   kAll,  // and every vertex along its normal
@@ -49,8 +51,8 @@ struct SurfaceOptions {
   uint64_t target_faces = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
   bool fit_walls = true;      // each face's thickness fitted to the prisms' best formula-5 score
                               // (wall_fit.h; beyond the paper; false: the mean τ)
-  VertexFit fit_vertices = VertexFit::kRim;  // with fit_walls: vertices moved where
-                                             // formula 5 rises (vertex_fit.h; beyond the paper)
+  VertexFit fit_vertices = VertexFit::kAuto;  // with fit_walls: vertices moved where
+                                              // formula 5 rises (vertex_fit.h; beyond the paper)
   double error_density = 0;    // > 0: a second SCVD with ρ from the first surface's local fit
                                // error, this strong (error_density.h; beyond the paper)
   int smooth_iterations = 30;  // λ|μ smoothing pairs where the sheet is thicker than the

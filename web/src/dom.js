@@ -18,9 +18,10 @@ export function el(tag, attrs = {}, ...children) {
   return e;
 }
 
-export function progressBar(fraction, label) {
-  const bar = el("div", { class: "bar", role: "progressbar", "aria-valuemin": 0, "aria-valuemax": 100,
-    "aria-valuenow": Math.round(100 * fraction) });
+// `state` (a job's) colours the bar: red when FAILED, grey when CANCELLED.
+export function progressBar(fraction, label, state = "") {
+  const bar = el("div", { class: `bar ${state.toLowerCase()}`.trim(), role: "progressbar", "aria-valuemin": 0,
+    "aria-valuemax": 100, "aria-valuenow": Math.round(100 * fraction), "data-state": state || undefined });
   bar.append(el("div", { class: "fill", style: `width:${(100 * fraction).toFixed(1)}%` }), el("span", {}, label));
   return bar;
 }

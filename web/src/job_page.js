@@ -101,7 +101,7 @@ export function jobPage(app, name) {
   app.replaceChildren(el("section", {}, el("h2", {}, name), head, body));
   let viewer = null;
   const render = (j) => {
-    head.replaceChildren(progressBar(jobFraction(j), jobLabel(j)),
+    head.replaceChildren(progressBar(jobFraction(j), jobLabel(j), j.state),
       el("p", { id: "job_state", "data-state": j.state }, j.state,
         j.state === "QUEUED" || j.state === "RUNNING" ? el("button", { onclick: () => api.cancelJob(name).catch(showError) }, "Cancel") : ""),
       j.error && j.error.message ? el("p", { class: "error", id: "job_error" }, j.error.message) : "");

@@ -68,7 +68,7 @@ async function refreshList() {
     const rows = (resp.jobs || []).map((j) => el("tr", { "data-job": j.name },
       el("td", {}, el("a", { href: `#/${j.name}` }, j.name.replace("jobs/", ""))),
       el("td", {}, (j.input && j.input.file_name) || (j.input && j.input.volume_path) || ""),
-      el("td", {}, progressBar(jobFraction(j), jobLabel(j))),
+      el("td", {}, progressBar(jobFraction(j), jobLabel(j), j.state)),
       el("td", {}, j.create_time ? new Date(j.create_time).toLocaleString() : "")));
     table.tBodies[0].replaceChildren(...rows);
     const live = (resp.jobs || []).some((j) => j.state === "QUEUED" || j.state === "RUNNING");

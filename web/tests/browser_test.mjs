@@ -213,6 +213,21 @@ async function main() {
   const coveredPhysical = await coverage();
   check(coveredPhysical > 0.5 * covered && coveredPhysical < 2 * covered,
     `with a 0.005 mm voxel the surface fills ${(100 * coveredPhysical).toFixed(1)}% of the view (${(100 * covered).toFixed(1)}% in voxels)`);
+  // A job that fails (no voxel has the value 7) looks failed: a red bar and the error.
+  const failing = await (await api("/v1/jobs", {
+    method: "POST", headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({
+      request_id: randomUUID(),
+      input: { volume_digest: { hash, size_bytes: String(bytes.length) }, file_name: path.basename(volume) },
+      parameters: { r: 7, labels: [7] },
+    }),
+  })).json();
+  await page.goto(`${base}/#/${failing.name}`);
+  await page.waitForSelector('#job_state[data-state="FAILED"]', { timeout: 120000 });
+  const failedFill = await page.$eval("#job_head .bar .fill", (f) => getComputedStyle(f).backgroundColor);
+  check(failedFill === "rgb(200, 69, 60)", `a failed job's bar is red (${failedFill})`);
+  const failedError = await page.textContent("#job_error");
+  check(failedError.includes("7"), `a failed job shows its error (${failedError.slice(0, 120)})`);
   // A second job on the same volume with extraction and the volume mesh: its pieces table
   // and Table 3's rows as report.json has them (the upload is found complete at once).
   await page.goto(base + "/#/");

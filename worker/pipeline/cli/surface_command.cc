@@ -34,6 +34,10 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
       "radius aspect %.2f/%.2f (min/mean)\n",
       q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
       q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+  if (v.delivered_similarity) {
+    out << absl::StrFormat("  sheets    as the volume mesh has them: similarity %.4f\n",
+                           *v.delivered_similarity);
+  }
   for (const VolumeMeshStats::BodyRegion& b : v.bodies) {
     out << absl::StrFormat("  body %d   %d tetrahedra, volume %.6g\n", b.piece, b.tetrahedra,
                            b.volume);

@@ -295,6 +295,12 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
         BuildVolumeMesh(mesh, phase.info.dims, phase.info.placement, vo, progress.Stage("volume"));
     if (built.ok()) {
       volume = *std::move(built);
+      // The sheets the user gets in the volume mesh, scored as the surface was.
+      SM_ASSIGN_OR_RETURN(
+          VoxelSet delivered,
+          VoxelizeMesh(volume.mesh.SheetSurface(phase.info.placement), sheet.set.dims(),
+                       PrismHeight::kFace));  // the volume mesh carries a thickness per face
+      volume.delivered_similarity = ScoreModel(delivered, sheet.set).similarity;
       report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
     } else {
       // Cancelled or out of time: stop. Otherwise the surface and its score stand.

@@ -190,6 +190,7 @@ nlohmann::json VolumeMeshStats::Fields() const {
     }
     j["bodies"] = list;
   }
+  if (delivered_similarity) j["similarity_of_its_sheets"] = *delivered_similarity;
   j["voxels_per_tetrahedron"] = voxels_per_tet;
   j["volume"] = quality.volume;
   j["tetgen_switches"] = tetgen_switches;

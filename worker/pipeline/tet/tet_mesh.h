@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/types.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
 
 namespace sheetmesh {
 
@@ -35,6 +36,11 @@ struct TetMesh {
   // "lengths in mm (a voxel is 0.005 mm)", or "lengths in voxels" where the unit is unknown
   // and a voxel is 1: what every writer states in its header.
   std::string UnitsText() const;
+
+  // The faces on sheets and bodies' walls as a surface in voxel coordinates (nodes through
+  // the inverse of `placement`, thickness in voxels), with the body pieces: what the volume
+  // mesh carries of the surface, for scoring it as the surface is scored.
+  TriangleMesh SheetSurface(const Placement& placement) const;
 
   size_t num_sheet_faces() const;
   bool IsBody(int32_t piece) const {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,10 @@ struct VolumeMeshStats : PlcStats {
     double volume = 0;
   };
   std::vector<BodyRegion> bodies;
+  // Formula 5 of the sheets as the volume mesh has them (its sheet faces and bodies' walls,
+  // after the PLC's snaps and repairs), set by the pipeline: the surface the user gets in
+  // the volume mesh, beside the score of the surface it was made from.
+  std::optional<double> delivered_similarity;
   double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;

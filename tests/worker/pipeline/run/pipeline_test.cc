@@ -198,6 +198,24 @@ TEST(PipelineTest, AFailedVolumeStageKeepsTheSurfaceAndSaysSo) {
   EXPECT_FALSE(j.contains("volume_mesh"));
 }
 
+TEST(PipelineTest, TheReportScoresTheSheetsTheVolumeMeshHas) {
+  // The volume mesh snaps rims onto the box and mends clashes: its sheets are not exactly
+  // the surface scored. The report scores them too, with physical spacing undone.
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.input.open.spacing = Vec3{0.005, 0.005, 0.005};
+  o.surface.scvd.radius_voxels = 6;
+  o.volume_mesh = true;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  ASSERT_TRUE(r.volume_mesh && r.volume_mesh->delivered_similarity);
+  EXPECT_NEAR(*r.volume_mesh->delivered_similarity, r.similarity->score.similarity, 0.03);
+  EXPECT_GT(*r.volume_mesh->delivered_similarity, 0.5);
+  const nlohmann::json j = nlohmann::json::parse(r.ToJson());
+  EXPECT_DOUBLE_EQ(j["volume_mesh"]["similarity_of_its_sheets"].get<double>(),
+                   *r.volume_mesh->delivered_similarity);
+}
+
 TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   PipelineOptions o;

@@ -151,30 +151,27 @@ async function main() {
   check(previews.length === 4 && previews.every((w) => w > 0), `four previews load (${previews})`);
 
   await page.waitForSelector('#view3d[data-ready="1"]', { timeout: 60000 });
-  const colours = await page.$eval("#view3d canvas", (c) => {
+  // The 3D view's pixels (a WebGL canvas, copied onto a 2D one to read), as [r, g, b] runs.
+  const viewPixels = () => page.$eval("#view3d canvas", (c) => {
     const copy = document.createElement("canvas");
     copy.width = c.width;
     copy.height = c.height;
     const g = copy.getContext("2d");
     g.drawImage(c, 0, 0);
-    const px = g.getImageData(0, 0, c.width, c.height).data;
-    const seen = new Set();
-    for (let i = 0; i < px.length; i += 4 * 7) seen.add((px[i] << 16) | (px[i + 1] << 8) | px[i + 2]);
-    return seen.size;
+    return Array.from(g.getImageData(0, 0, c.width, c.height).data);
   });
+  const px0 = await viewPixels();
+  const seen = new Set();
+  for (let i = 0; i < px0.length; i += 4 * 7) seen.add((px0[i] << 16) | (px0[i + 1] << 8) | px0[i + 2]);
+  const colours = seen.size;
   check(colours > 10, `the 3D view is drawn (${colours} colours)`);
   // The share of the view the mesh covers (pixels off the background).
-  const coverage = () => page.$eval("#view3d canvas", (c) => {
-    const copy = document.createElement("canvas");
-    copy.width = c.width;
-    copy.height = c.height;
-    const g = copy.getContext("2d");
-    g.drawImage(c, 0, 0);
-    const px = g.getImageData(0, 0, c.width, c.height).data;
+  const coverage = async () => {
+    const px = await viewPixels();
     let off = 0;
     for (let i = 0; i < px.length; i += 4) off += Math.abs(px[i] - 0xf4) + Math.abs(px[i + 1] - 0xf5) + Math.abs(px[i + 2] - 0xf7) > 24;
     return off / (px.length / 4);
-  });
+  };
   const covered = await coverage();
   check(covered > 0.03, `the surface fills the view (${(100 * covered).toFixed(1)}% of it)`);
   // Turn it with the mouse: the picture changes.

@@ -35,6 +35,16 @@ std::string SmallPhantom(const TempDir& tmp) {
   return path;
 }
 
+// A run of the small phantom at r with the volume mesh, written to tmp/out.
+PipelineOptions VolumeRun(const TempDir& tmp, double r) {
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.surface.scvd.radius_voxels = r;
+  o.volume_mesh = true;
+  return o;
+}
+
 class Stages : public ProgressObserver {
  public:
   bool OnProgress(absl::string_view stage, double, absl::string_view) override {
@@ -160,11 +170,7 @@ TEST(PipelineTest, EmptySelectionFailsNamingTheFile) {
 TEST(PipelineTest, AnRThatGivesNoTriangleFailsNamingR) {
   // Once a success with 0 triangles, similarity 0 and a volume mesh of the box alone.
   TempDir tmp;
-  PipelineOptions o;
-  o.input.path = SmallPhantom(tmp);
-  o.output.dir = tmp.File("out");
-  o.surface.scvd.radius_voxels = 40;
-  o.volume_mesh = true;
+  const PipelineOptions o = VolumeRun(tmp, 40);
   EXPECT_THAT(RunPipeline(o), StatusIs(absl::StatusCode::kInvalidArgument,
                                        ::testing::AllOf(::testing::HasSubstr("r = 40 voxels"),
                                                         ::testing::HasSubstr("no triangle"),
@@ -175,11 +181,7 @@ TEST(PipelineTest, AnRThatGivesNoTriangleFailsNamingR) {
 TEST(PipelineTest, AFailedVolumeStageKeepsTheSurfaceAndSaysSo) {
   // Once the folder was not even made: the surface, its score and previews were lost.
   TempDir tmp;
-  PipelineOptions o;
-  o.input.path = SmallPhantom(tmp);
-  o.output.dir = tmp.File("out");
-  o.surface.scvd.radius_voxels = 6;
-  o.volume_mesh = true;
+  PipelineOptions o = VolumeRun(tmp, 6);
   o.volume.max_tetrahedra = 10;  // below what any volume mesh of these sheets needs
   EXPECT_THAT(RunPipeline(o),
               StatusIs(absl::StatusCode::kInvalidArgument,
@@ -202,11 +204,8 @@ TEST(PipelineTest, TheReportScoresTheSheetsTheVolumeMeshHas) {
   // The volume mesh snaps rims onto the box and mends clashes: its sheets are not exactly
   // the surface scored. The report scores them too, with physical spacing undone.
   TempDir tmp;
-  PipelineOptions o;
-  o.input.path = SmallPhantom(tmp);
+  PipelineOptions o = VolumeRun(tmp, 6);
   o.input.open.spacing = Vec3{0.005, 0.005, 0.005};
-  o.surface.scvd.radius_voxels = 6;
-  o.volume_mesh = true;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
   ASSERT_TRUE(r.volume_mesh && r.volume_mesh->delivered_similarity);
   EXPECT_NEAR(*r.volume_mesh->delivered_similarity, r.similarity->score.similarity, 0.03);

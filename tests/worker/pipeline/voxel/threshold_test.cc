@@ -16,6 +16,16 @@ using ::sheetmesh::testing::StatusIs;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
+// `v` written as a raw file named `name` in the test's temporary folder; its path.
+std::string WriteRawVolume(DenseVolume& v, const Dims& d, const std::string& name) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  v.info.dims = d;
+  auto sink = CreateVolumeWriter(path, v.info, VolumeFormat::kRaw);
+  EXPECT_TRUE(sink.ok()) << sink.status();
+  if (sink.ok()) EXPECT_TRUE(WriteDense(v, **sink).ok());
+  return path;
+}
+
 // Two separated classes: the threshold lies between them.
 TEST(ThresholdTest, OtsuSplitsTwoClassesBetweenThem) {
   std::vector<uint64_t> h(256, 0);
@@ -60,11 +70,7 @@ TEST(ThresholdTest, OtsuSelectsTheDarkSheetOfANoisyScan) {
         truth += sheet;
         v.Set(x, y, z, (sheet ? 60.0 : 180.0) + noise(rng));
       }
-  const std::string path = ::testing::TempDir() + "/gray_40x30x20_f32.raw";
-  v.info.dims = d;
-  auto sink = CreateVolumeWriter(path, v.info, VolumeFormat::kRaw);
-  ASSERT_TRUE(sink.ok());
-  ASSERT_TRUE(WriteDense(v, **sink).ok());
+  const std::string path = WriteRawVolume(v, d, "gray_40x30x20_f32.raw");
 
   SheetInput in;
   in.path = path;
@@ -103,11 +109,7 @@ TEST(ThresholdTest, OtsuOnASegmentedVolumeRefusesTheRockAsTheSheetPhase) {
     for (int64_t y = 0; y < d.ny; ++y)
       for (int64_t x = 0; x < d.nx; ++x)
         if (z == 9 || z == 10) v.Set(x, y, z, 255), ++sheet;
-  const std::string path = ::testing::TempDir() + "/segmented_20x20x20_u8.raw";
-  v.info.dims = d;
-  auto sink = CreateVolumeWriter(path, v.info, VolumeFormat::kRaw);
-  ASSERT_TRUE(sink.ok());
-  ASSERT_TRUE(WriteDense(v, **sink).ok());
+  const std::string path = WriteRawVolume(v, d, "segmented_20x20x20_u8.raw");
   SheetInput in;
   in.path = path;
   in.threshold = "otsu";

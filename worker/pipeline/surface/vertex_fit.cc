@@ -9,6 +9,7 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
 #include "worker/pipeline/surface/prism_columns.h"
 
 namespace sheetmesh {
@@ -60,15 +61,21 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
     start_normal[f] = UnitNormal(Corners(mesh, f));
     start_angle[f] = MinAngleDegrees(Corners(mesh, f));
   }
-  // Edges by the faces that share them: a junction's vertices stay; a rim edge moves across
-  // the rim, away from its face in the face's plane.
-  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
-  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
-    const Face& t = mesh.faces[f];
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = std::min(t[k], t[(k + 1) % 3]), b = std::max(t[k], t[(k + 1) % 3]);
-      edge_faces[uint64_t(a) << 32 | b].push_back(f);
+  // Edges by the faces that share them, in key order (sums must not follow a hash table's
+  // order, which differs between processes): a junction's vertices stay; a rim edge moves
+  // across the rim, away from its face in the face's plane.
+  std::vector<std::pair<uint64_t, std::vector<uint32_t>>> edges;
+  {
+    absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
+    for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+      const Face& t = mesh.faces[f];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = std::min(t[k], t[(k + 1) % 3]), b = std::max(t[k], t[(k + 1) % 3]);
+        edge_faces[uint64_t(a) << 32 | b].push_back(f);
+      }
     }
+    edges.assign(edge_faces.begin(), edge_faces.end());
+    std::sort(edges.begin(), edges.end());
   }
   std::vector<uint8_t> fixed(nv, 0);
   struct RimEdge {
@@ -77,7 +84,7 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
   };
   std::vector<RimEdge> rim;
   std::vector<Vec3> out_of(nv);  // across the rim at a vertex: its rim edges' directions
-  for (const auto& [key, fs] : edge_faces) {
+  for (const auto& [key, fs] : edges) {
     const uint32_t a = static_cast<uint32_t>(key >> 32), b = static_cast<uint32_t>(key);
     if (fs.size() >= 3) fixed[a] = fixed[b] = 1;
     if (fs.size() != 1) continue;
@@ -89,7 +96,7 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
     out_of[a] += m;
     out_of[b] += m;
   }
-  edge_faces = {};
+  edges = {};
   // Beside a junction too (`junction_rings` rings of faces): a vertex moved there narrows the wedge
   // between the sheets, which the volume mesh has to fill (measured: a 2° tetrahedron at DPM's
   // crossing).
@@ -102,18 +109,9 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
       }
     }
   }
-  std::sort(rim.begin(), rim.end(), [](const RimEdge& x, const RimEdge& y) {
-    return std::pair(x.a, x.b) < std::pair(y.a, y.b);
-  });
-  // Along the normal: the faces' area vectors, each turned to agree with the sum so far.
-  std::vector<Vec3> normal_of(nv);
+  // Along the normal (mesh/vertex_normals); across the rim in the tangent plane.
+  const std::vector<Vec3> normal_of = VertexNormals(mesh.vertices, mesh.faces);
   for (uint32_t v = 0; v < nv; ++v) {
-    Vec3 normal;
-    for (uint32_t f : faces_of[v]) {
-      const Vec3 a = AreaVector(Corners(mesh, f));
-      normal += Dot(normal, a) < 0 ? -a : a;
-    }
-    normal_of[v] = Normalized(normal);
     out_of[v] = Normalized(out_of[v] - normal_of[v] * Dot(out_of[v], normal_of[v]));
   }
   const Dims& d = set.dims();

@@ -80,6 +80,9 @@ func TestFlags(t *testing.T) {
 	if err != nil || len(o.corsOrigins) != 2 || o.corsOrigins[0] != "https://a.example" || o.maxChunkBytes != 8<<20 {
 		t.Fatalf("%+v %v", o, err)
 	}
+	if _, err := parseFlags([]string{"--version"}); err != errVersion {
+		t.Errorf("--version: %v", err)
+	}
 	for _, bad := range [][]string{{"--max_chunk_mb=0"}, {"--server_ca=x.pem"}, {"stray"}, {"--no_such_flag"}} {
 		if _, err := parseFlags(bad); err == nil {
 			t.Errorf("%v accepted", bad)

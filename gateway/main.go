@@ -16,6 +16,7 @@ package main
 
 import (
 	"context"
+	"errors"
 	"flag"
 	"fmt"
 	"log"
@@ -30,6 +31,12 @@ import (
 	"google.golang.org/grpc"
 	"google.golang.org/grpc/credentials"
 )
+
+// version is set at link time from the project's version (tools/build_gateway.sh).
+var version = "unknown"
+
+// errVersion: the command line asked for --version.
+var errVersion = errors.New("version")
 
 type options struct {
 	listen, server, serverCA, serverName, webRoot, portFile string
@@ -63,8 +70,12 @@ func parseFlags(args []string) (options, error) {
 	fs.StringVar(&o.linkKeyFile, "link_key_file", "", "32-byte key sealing artifact links (shared by gateways behind one address; default: one made at start)")
 	fs.DurationVar(&o.linkTTL, "link_ttl", 10*time.Minute, "how long an artifact link opens its artifact")
 	fs.IntVar(&o.maxWatchesPerClient, "max_watches_per_client", 32, "open watches of one client address")
+	showVersion := fs.Bool("version", false, "print the version and exit")
 	if err := fs.Parse(args); err != nil {
 		return o, err
+	}
+	if *showVersion {
+		return o, errVersion
 	}
 	if fs.NArg() != 0 {
 		return o, fmt.Errorf("unexpected argument %q", fs.Arg(0))
@@ -114,6 +125,10 @@ func main() {
 	o, err := parseFlags(os.Args[1:])
 	if err != nil {
 		if err == flag.ErrHelp {
+			os.Exit(0)
+		}
+		if err == errVersion {
+			fmt.Println("sheetmesh-gateway", version)
 			os.Exit(0)
 		}
 		fmt.Fprintln(os.Stderr, "sheetmesh-gateway:", err)

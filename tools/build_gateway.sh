@@ -39,7 +39,10 @@ rm -rf "$src/gateway/webdist"
 cp -r web/dist "$src/gateway/webdist"
 
 export GO111MODULE=off GOPATH="$gopath:/usr/share/gocode" GOCACHE="$out/gocache" GOFLAGS=
-(cd "$src/gateway" && go vet . && go build -trimpath -o "$out/sheetmesh-gateway" .)
+# The version is the project's (CMakeLists.txt's project line), as the C++ programs have it.
+version=$(sed -n 's/^project(sheetmesh VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)
+(cd "$src/gateway" && go vet . &&
+  go build -trimpath -ldflags "-X main.version=${version:-unknown}" -o "$out/sheetmesh-gateway" .)
 if [ "${SHEETMESH_GATEWAY_TEST:-0}" = 1 ]; then
   (cd "$src/gateway" && go test -count=1 .)
 fi

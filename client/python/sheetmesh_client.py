@@ -10,7 +10,8 @@ there (or in ``$SHEETMESH_PYTHON_STUBS``).
         print(job.state, [a.name for a in job.artifacts])
 
 Errors are ``grpc.RpcError`` from the server (``e.code()``, ``e.details()`` name the field
-and value) or ``SheetmeshError`` for what the client itself checks.
+and value), ``ValueError`` for a parameter or format field the client cannot send (an unknown
+name, a value of the wrong type) and ``SheetmeshError`` for what else the client checks.
 """
 
 import hashlib
@@ -244,11 +245,14 @@ class SheetmeshClient:
         """Creates a job on an uploaded volume (``volume_digest``), on uploaded files
         (``volume_files``, from upload_volume_files) or on one on the server's storage
         (``volume_path``). ``parameters`` is a PipelineParameters or a dict of its fields,
-        e.g. ``{"r": 5, "extract": True}``."""
+        e.g. ``{"r": 5, "extract": True}``; ``volume_format`` a VolumeFormat or a dict of its
+        fields, e.g. ``{"dims": "512x512x400", "dtype": "uint16"}``."""
         if sum(x is not None for x in (volume_digest, volume_path, volume_files)) != 1:
             raise ValueError("give exactly one of volume_digest, volume_files and volume_path")
         if isinstance(parameters, dict):
-            parameters = parameters_pb2.PipelineParameters(**parameters)
+            parameters = _message(parameters_pb2.PipelineParameters, parameters, "parameter")
+        if isinstance(volume_format, dict):
+            volume_format = _message(parameters_pb2.VolumeFormat, volume_format, "volume format field")
         job_input = jobs_pb2.JobInput(file_name=file_name, format=volume_format)
         if volume_digest is not None:
             job_input.volume_digest.CopyFrom(volume_digest)
@@ -307,17 +311,34 @@ class SheetmeshClient:
             paths.append(self.download(a.digest, pathlib.Path(folder) / pathlib.Path(a.name).name))
         return paths
 
-    def mesh(self, volume, folder, reference=False, on_update=None, volume_format=None, **parameters):
-        """Uploads (or, with ``reference``, names) a volume, runs a job with ``parameters``,
-        waits for it and downloads its files into ``folder``. Returns the finished job;
-        raises SheetmeshError when it did not succeed."""
+    def mesh(self, volume, folder, reference=False, on_update=None, volume_format=None, **fields):
+        """Uploads (or, with ``reference``, names) a volume, runs a job, waits for it and
+        downloads its files into ``folder``. Returns the finished job; raises SheetmeshError
+        when it did not succeed. ``volume`` is a file or a folder (a stack of slices, or a
+        file with its detached header: name the file to open with ``main=``). ``fields`` are
+        the job's parameters (``r=5``, ``extract=True``) and the volume format's fields
+        (``dims="512x512x400"``, ``dtype="uint16"``, ``spacing=[0.005] * 3``, ``unit="mm"``) by
+        name."""
         volume = pathlib.Path(volume)
+        main = fields.pop("main", "")
+        formats = {k: fields.pop(k) for k in list(fields) if k in _FORMAT_FIELDS}
+        if formats:
+            if volume_format is not None:
+                raise ValueError("give the volume format either as volume_format or as fields "
+                                 "(%s), not both" % ", ".join(sorted(formats)))
+            volume_format = formats
         if reference:
             job = self.create_job(volume_path=str(volume.resolve()), file_name=volume.name,
-                                  parameters=parameters, volume_format=volume_format)
+                                  parameters=fields, volume_format=volume_format)
+        elif volume.is_dir():
+            files = self.upload_volume_files(volume, main=main)
+            job = self.create_job(volume_files=files, file_name=volume.name, parameters=fields,
+                                  volume_format=volume_format)
         else:
+            if not volume.exists():
+                raise SheetmeshError("%s: no such file or folder" % volume)
             digest = self.upload(volume)
-            job = self.create_job(volume_digest=digest, file_name=volume.name, parameters=parameters,
+            job = self.create_job(volume_digest=digest, file_name=volume.name, parameters=fields,
                                   volume_format=volume_format)
         job = self.watch(job.name, on_update)
         if job.state != jobs_pb2.SUCCEEDED:
@@ -344,6 +365,37 @@ class SheetmeshClient:
         if len(raw) >= 2 and raw[0] == 0x08:
             return {1: "SERVING", 2: "NOT_SERVING"}.get(raw[1], "UNKNOWN")
         return "UNKNOWN"
+
+
+_FORMAT_FIELDS = frozenset(f.name for f in parameters_pb2.VolumeFormat.DESCRIPTOR.fields)
+
+
+def _message(cls, fields, what):
+    """``cls(**fields)`` with the errors a user can mend named: an unknown field (with the
+    fields there are), a value of the wrong type. Dims may be written "512x512x400"."""
+    known = {f.name for f in cls.DESCRIPTOR.fields}
+    fields = dict(fields)
+    for name in fields:
+        if name not in known:
+            raise ValueError("unknown %s %r; the %ss are: %s"
+                             % (what, name, what, ", ".join(sorted(known))))
+    if isinstance(fields.get("dims"), str):
+        text = fields["dims"]
+        try:
+            fields["dims"] = [int(x) for x in text.lower().split("x")]
+        except ValueError:
+            fields["dims"] = None
+        if not fields["dims"] or len(fields["dims"]) != 3:
+            raise ValueError("dims=%r: give three sizes, as \"512x512x400\" or [512, 512, 400]" % text)
+    try:
+        return cls(**fields)
+    except (TypeError, ValueError) as e:
+        for name, value in fields.items():
+            try:
+                cls(**{name: value})
+            except (TypeError, ValueError) as one:
+                raise ValueError("%s %s=%r: %s" % (what, name, value, one)) from None
+        raise ValueError("%s: %s" % (what, e)) from None
 
 
 def _job_name(name):

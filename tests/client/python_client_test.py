@@ -156,6 +156,44 @@ class PythonClientTest(unittest.TestCase):
         self.assertEqual(e.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
         self.assertIn("parameters.r = -1", e.exception.details())
 
+    def test_unknown_fields_and_values_of_the_wrong_type_are_named(self):
+        for fields, said in (({"dimz": [64, 64, 64]}, "unknown parameter 'dimz'"),
+                             ({"r": "five"}, "parameter r='five'"),
+                             ({"dims": "64x64"}, "dims='64x64': give three sizes")):
+            with self.assertRaises(ValueError) as e:
+                self.client.mesh(self.volume, self.tmp / "never", **fields)
+            self.assertIn(said, str(e.exception))
+        self.assertFalse((self.tmp / "never").exists())
+
+    def test_mesh_takes_the_volume_format_by_name(self):
+        plain = self.tmp / "scan.raw"  # no dims in the name: the format says them
+        shutil.copy(self.volume, plain)
+        job = self.client.mesh(plain, self.tmp / "named_out", dims="64x64x64", dtype="uint8",
+                               spacing=[0.005] * 3, unit="mm", r=5)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+        report = json.loads((self.tmp / "named_out" / "report.json").read_text())
+        self.assertEqual(report["input"]["dims"], [64, 64, 64])
+        self.assertEqual(report["input"]["unit"], "mm")
+
+    def test_mesh_takes_a_folder_of_slices(self):
+        try:
+            from PIL import Image
+        except ImportError:
+            self.skipTest("/usr/bin/python3 has no PIL to write the slices")
+        import numpy as np
+        voxels = np.fromfile(self.volume, dtype=np.uint8).reshape(64, 64, 64)
+        folder = self.tmp / "slices"
+        folder.mkdir()
+        for z in range(64):
+            Image.fromarray(voxels[z]).save(folder / ("s%d.png" % z))
+        job = self.client.mesh(folder, self.tmp / "slices_out", r=5)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+        report = json.loads((self.tmp / "slices_out" / "report.json").read_text())
+        self.assertEqual(report["input"]["dims"], [64, 64, 64])
+        with self.assertRaises(SheetmeshError) as e:
+            self.client.mesh(self.tmp / "no_such_folder", self.tmp / "never")
+        self.assertIn("no_such_folder: no such file or folder", str(e.exception))
+
     def test_failed_job_raises_with_the_readers_message(self):
         junk = self.tmp / "junk.nrrd"
         junk.write_text("NRRD0004\ntype: complex\n\n")

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Writes the parameter table (`sheetmesh-pipeline params --markdown`) into README.md
-# between its markers. Usage: tools/readme_parameters.sh [BUILD_DIR]
+# between its markers, and its defaults (`params --json`) into
+# web/src/parameter_defaults.json, where the front-end's form takes them from.
+# Usage: tools/readme_parameters.sh [BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
 table=$("$build/worker/pipeline/sheetmesh-pipeline" params --markdown)
+"$build/worker/pipeline/sheetmesh-pipeline" params --json > web/src/parameter_defaults.json
 /usr/bin/python3 - "$table" <<'PY'
 import re, sys
 table = sys.argv[1]

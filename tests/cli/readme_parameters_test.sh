@@ -1,15 +1,21 @@
 #!/usr/bin/env bash
 # README's parameter list is the parameter table's own (`sheetmesh-pipeline params
-# --markdown`), between its two markers.
-# Usage: readme_parameters_test.sh PIPELINE_BIN README
+# --markdown`), between its two markers, and the front-end's defaults are the table's
+# (`params --json`).
+# Usage: readme_parameters_test.sh PIPELINE_BIN README WEB_DEFAULTS_JSON
 set -euo pipefail
-pipeline=$1 readme=$2
+pipeline=$1 readme=$2 web_defaults=$3
 want=$("$pipeline" params --markdown)
 have=$(sed -n '/^<!-- parameters: sheetmesh-pipeline params --markdown -->$/,/^<!-- end of parameters -->$/p' "$readme" | sed '1d;$d')
 if [ "$want" != "$have" ]; then
   echo "README's parameter list differs from the table; refresh it with:" >&2
   echo "  tools/readme_parameters.sh" >&2
   diff <(echo "$want") <(echo "$have") >&2 || true
+  exit 1
+fi
+if [ "$("$pipeline" params --json)" != "$(cat "$web_defaults")" ]; then
+  echo "$web_defaults differs from the table's defaults; refresh it with:" >&2
+  echo "  tools/readme_parameters.sh" >&2
   exit 1
 fi
 echo "README lists the $(echo "$want" | tail -n +3 | wc -l) parameters of the table"

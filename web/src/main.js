@@ -5,6 +5,9 @@ import * as api from "./api.js";
 import { uploadFile } from "./upload.js";
 import { jobPage } from "./job_page.js";
 import { el, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
+// The parameter table's defaults (`sheetmesh-pipeline params --json`, written by
+// tools/readme_parameters.sh): the form starts where every other interface starts.
+import defaults from "./parameter_defaults.json";
 
 const app = document.getElementById("app");
 // --- the jobs page -----------------------------------------------------------------------
@@ -17,10 +20,12 @@ function parametersForm() {
     el("label", {}, "Budget ", el("select", { id: "budget" },
       el("option", { value: "r" }, "r (element size, voxels)"),
       el("option", { value: "triangles" }, "triangles"))),
-    el("input", { id: "budget_value", type: "number", step: "any", min: "0", value: "7" }),
-    el("label", {}, "Sheet labels ", el("input", { id: "labels", value: "255", size: 8 })),
-    el("label", {}, el("input", { id: "extract", type: "checkbox" }), " extraction"),
-    el("label", {}, el("input", { id: "volume_mesh", type: "checkbox" }), " volume mesh"),
+    el("input", { id: "budget_value", type: "number", step: "any", min: "0", value: String(defaults.r) }),
+    el("label", {}, "Sheet labels ",
+      el("input", { id: "labels", value: "", size: 12, placeholder: "every non-zero voxel" })),
+    el("label", {}, el("input", { id: "extract", type: "checkbox", checked: defaults.extract }), " extraction"),
+    el("label", {}, el("input", { id: "volume_mesh", type: "checkbox", checked: defaults.volume_mesh }),
+      " volume mesh"),
     el("label", {}, el("input", { id: "no_cache", type: "checkbox" }), " run again (no cache)"));
 }
 
@@ -31,8 +36,8 @@ function readParameters() {
   if (v !== "") p[kind] = kind === "triangles" ? String(Math.round(Number(v))) : Number(v);
   const labels = document.getElementById("labels").value.split(/[ ,]+/).filter((s) => s !== "");
   if (labels.length) p.labels = labels.map(Number);
-  if (document.getElementById("extract").checked) p.extract = true;
-  if (document.getElementById("volume_mesh").checked) p.volume_mesh = true;
+  p.extract = document.getElementById("extract").checked;
+  p.volume_mesh = document.getElementById("volume_mesh").checked;
   return p;
 }
 

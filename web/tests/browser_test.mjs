@@ -108,6 +108,17 @@ async function main() {
     document.getElementById("drop").dispatchEvent(new DragEvent("drop", { dataTransfer: dt, bubbles: true, cancelable: true }));
   }, [bytes.toString("base64"), path.basename(volume)]);
   check((await page.textContent("#chosen")).includes(path.basename(volume)), "the dropped file is taken");
+  // The form starts at the parameter table's defaults, as every other interface does.
+  const defaults = JSON.parse(spawnSync(pipelineBin, ["params", "--json"], { encoding: "utf8" }).stdout);
+  const form = await page.evaluate(() => ({
+    r: Number(document.getElementById("budget_value").value),
+    labels: document.getElementById("labels").value,
+    extract: document.getElementById("extract").checked,
+    volume_mesh: document.getElementById("volume_mesh").checked,
+  }));
+  check(form.r === defaults.r && form.labels === "" && form.extract === defaults.extract &&
+    form.volume_mesh === defaults.volume_mesh,
+  `the form starts at the table's defaults (${JSON.stringify(form)})`);
   await page.selectOption("#budget", "r");
   await page.fill("#budget_value", "7");
   await page.fill("#labels", "255");

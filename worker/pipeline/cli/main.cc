@@ -66,8 +66,10 @@ constexpr char kUsage[] =
     "sheetmesh-pipeline COMMAND [ARGS] [FLAGS]\n\n"
     "commands:\n"
     "  info VOLUME             dims, sheet voxels, thickness and components of a volume\n"
-    "  surface VOLUME -o DIR   mesh the sheets: --r R, or --target_similarity S, or --search_best\n"
-    "  run VOLUME -o DIR       extract the major sheets (Fig. 3), then mesh and score them;\n"
+    "  surface VOLUME -o DIR   mesh every sheet voxel as it is (run with --extract=false): --r R,\n"
+    "                          or --target_similarity S, or --search_best\n"
+    "  run VOLUME -o DIR       extract the major sheets (Fig. 3), then mesh and score them (the\n"
+    "                          service's jobs run this);\n"
     "                          --volume_mesh adds the TetGen volume mesh\n"
     "  volume SURFACE.ply -o DIR  tetrahedralize the box (--volume VOL or --box) around a surface\n"
     "  score VOLUME MESH       score a .ply/.obj against the volume (--closed for closed "
@@ -110,10 +112,12 @@ absl::StatusOr<Dims> ParseDims(const std::string& flag, const std::string& text)
 }
 
 // Defaults, then --config, then the parameter flags given.
-absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool extract_default) {
+// The surface command is run without the extraction; every other command takes the table's
+// defaults, as the service does.
+absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool surface_command) {
   ParameterBuilder builder;
   PipelineOptions base;
-  base.extract = extract_default;
+  if (surface_command) base.extract = false;
   if (!absl::GetFlag(FLAGS_config).empty()) {
     SM_ASSIGN_OR_RETURN(std::string text, ReadFileToString(absl::GetFlag(FLAGS_config)));
     SM_RETURN_IF_ERROR(builder.AddJson(text, absl::GetFlag(FLAGS_config)));
@@ -254,7 +258,7 @@ absl::Status Dispatch(const std::string& command, const std::vector<std::string>
                       const ParameterFlags& flags) {
   if (command == "phantom") return Phantom(args);
   if (command == "params") return Params();
-  SM_ASSIGN_OR_RETURN(PipelineOptions o, Options(flags, /*extract_default=*/command == "run"));
+  SM_ASSIGN_OR_RETURN(PipelineOptions o, Options(flags, /*surface_command=*/command == "surface"));
   if (command == "info") return Info(args, o);
   if (command == "convert") return Convert(args, o);
   if (command == "surface" || command == "run") return Surface(args, command, o);

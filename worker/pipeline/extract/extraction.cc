@@ -247,12 +247,14 @@ class Workflow {
     SM_RETURN_IF_ERROR(Step("refine", o_.refine, [&](ExtractionStep* s) { return Refine(s); }));
     if (refined_.empty()) {
       return absl::InvalidArgumentError(
-          "refinement erased the whole sheet phase; lower refine_open_radius");
+          "refinement erased the whole sheet phase; lower refine.open_radius");
     }
     SM_RETURN_IF_ERROR(Step("detect", o_.detect, [&](ExtractionStep* s) { return Detect(s); }));
     if (objects_.set.empty()) {
       return absl::InvalidArgumentError(
-          absl::StrCat("no object has M = ", m_, " voxels or more; lower min_object_voxels"));
+          absl::StrCat("no object has M = ", m_,
+                       " voxels or more; lower M, or mesh every sheet voxel without the "
+                       "extraction (extract = false)"));
     }
     SM_RETURN_IF_ERROR(
         Step("separate", o_.separate, [&](ExtractionStep* s) { return Separate(s); }));
@@ -261,8 +263,8 @@ class Workflow {
     if (pieces_.set.empty()) {
       return absl::InvalidArgumentError(
           absl::StrCat("no piece has M = ", m_,
-                       " voxels or more after separation; lower min_object_voxels or "
-                       "raise D_ang"));
+                       " voxels or more after separation; lower M or raise separate.D_ang, or "
+                       "mesh every sheet voxel without the extraction (extract = false)"));
     }
     SM_RETURN_IF_ERROR(Step("recover", o_.recover, [&](ExtractionStep* s) { return Recover(s); }));
     pieces_.RelabelBySize();

@@ -51,7 +51,7 @@ struct OutputOptions {
 
 struct PipelineOptions {
   SheetInput input;
-  bool extract = false;  // run the feature extraction (Fig. 3) first
+  bool extract = true;  // run the feature extraction (Fig. 3) first; the surface command: false
   ExtractionOptions extraction;
   SurfaceOptions surface;      // r = surface.scvd.radius_voxels unless searched
   bool search_radius = false;  // choose r with `radius_search`

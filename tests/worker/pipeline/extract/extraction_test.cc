@@ -114,8 +114,8 @@ TEST(ExtractionTest, AnEmptyOrAllMinorPhaseIsAnErrorNotAnEmptyModel) {
   VoxelSet specks(d);
   for (int k = 0; k < 4; ++k)
     specks = Union(specks, BoxSet(d, {6 * k + 2, 4, 4}, {6 * k + 4, 6, 6}));
-  EXPECT_THAT(ExtractFeatures(specks, {}), StatusIs(absl::StatusCode::kInvalidArgument,
-                                                    ::testing::HasSubstr("min_object_voxels")));
+  EXPECT_THAT(ExtractFeatures(specks, {}),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("lower M")));
 }
 
 TEST(ExtractionTest, DpmJunctionGivesItsThreeSlabs) {

@@ -43,6 +43,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
   const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
   const bool fthick = mesh.face_thickness.size() == mesh.faces.size();
   const bool fpiece = mesh.face_piece.size() == mesh.faces.size();
+  const bool faperture = fthick && mesh.face_aperture.size() == mesh.faces.size();
   std::string out =
       absl::StrCat("ply\nformat ascii 1.0\ncomment sheetmesh ", SHEETMESH_VERSION, "\n");
   if (!placement.unit.empty()) absl::StrAppend(&out, "comment unit ", placement.unit, "\n");
@@ -64,6 +65,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
   absl::StrAppend(&out, "element face ", mesh.faces.size(),
                   "\nproperty list uchar int vertex_indices\n");
   if (fthick) out += "property float thickness\nproperty float thickness_voxels\n";
+  if (faperture) out += "property float aperture\nproperty float aperture_voxels\n";
   if (fpiece) out += "property int piece\n";
   const bool fbody = fpiece && !mesh.body_pieces.empty();
   if (fbody) out += "property uchar body\n";
@@ -95,6 +97,11 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
       absl::StrAppendFormat(&out, " %.7g %.7g",
                             static_cast<float>(PhysicalLength(mesh.face_thickness[f], placement)),
                             mesh.face_thickness[f]);
+    }
+    if (faperture) {
+      absl::StrAppendFormat(&out, " %.7g %.7g",
+                            static_cast<float>(PhysicalLength(mesh.face_aperture[f], placement)),
+                            mesh.face_aperture[f]);
     }
     if (fpiece) absl::StrAppend(&out, " ", mesh.face_piece[f]);
     if (fbody) absl::StrAppend(&out, mesh.IsBodyFace(f) ? " 1" : " 0");
@@ -141,6 +148,12 @@ std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, 
     out +=
         "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness_voxels\" format=\"ascii\">\n";
     for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", t);
+    out += "</DataArray>\n";
+  }
+  if (mesh.face_aperture.size() == mesh.faces.size()) {
+    out += "<DataArray type=\"Float32\" Name=\"aperture\" format=\"ascii\">\n";
+    for (float t : mesh.face_aperture)
+      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
     out += "</DataArray>\n";
   }
   if (mesh.face_piece.size() == mesh.faces.size()) {
@@ -419,7 +432,7 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
   TriangleMesh mesh;
   PlyCursor cur(data, body, ascii, big);
   const double unit = PhysicalLength(1.0, placement);
-  std::vector<float> face_thick, face_thick_vox, vert_thick;
+  std::vector<float> face_thick, face_thick_vox, face_aperture_vox, vert_thick;
   std::vector<bool> face_body;
   for (const PlyElement& e : elements) {
     for (int64_t i = 0; i < e.count; ++i) {
@@ -440,6 +453,7 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
           } else if (e.name == "face") {
             if (prop.name == "thickness") face_thick.push_back(static_cast<float>(v / unit));
             if (prop.name == "thickness_voxels") face_thick_vox.push_back(static_cast<float>(v));
+            if (prop.name == "aperture_voxels") face_aperture_vox.push_back(static_cast<float>(v));
             if (prop.name == "piece") mesh.face_piece.push_back(static_cast<int32_t>(v));
             if (prop.name == "body") face_body.push_back(v != 0);
           }
@@ -476,6 +490,9 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
     }
   }
   // Attributes only count when every element has them.
+  if (face_aperture_vox.size() == mesh.faces.size()) {
+    mesh.face_aperture = std::move(face_aperture_vox);
+  }
   if (face_thick_vox.size() == mesh.faces.size()) {
     mesh.face_thickness = std::move(face_thick_vox);
   } else if (face_thick.size() == mesh.faces.size()) {

@@ -243,6 +243,13 @@ nlohmann::json SurfaceStats::Fields() const {
                        {"collapses", decimation->collapses},
                        {"largest_error_voxels2", decimation->largest_error}};
   }
+  if (apertures) {
+    j["apertures"] = {{"covered_faces_given_their_sheets", apertures->covered},
+                      {"hole_faces", apertures->holes},
+                      {"junction_faces", apertures->junction},
+                      {"junction_faces_lowered", apertures->junction_lowered},
+                      {"junction_faces_raised", apertures->junction_raised}};
+  }
   if (vertex_fit) {
     j["vertex_fit"] = {{"vertices_tried", vertex_fit->vertices_tried},
                        {"moves", vertex_fit->moves},

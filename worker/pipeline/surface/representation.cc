@@ -39,12 +39,14 @@ TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& face
     }
     out.faces.push_back(face);
     out.face_thickness.push_back(mesh.face_thickness[f]);
+    if (!mesh.face_aperture.empty()) out.face_aperture.push_back(mesh.face_aperture[f]);
     out.face_piece.push_back(mesh.face_piece[f]);
   }
   return out;
 }
 
-// Appends `part` to `mesh` (vertices renumbered; vertex thickness 0 where `part` has none).
+// Appends `part` to `mesh` (vertices renumbered; vertex thickness and face aperture 0 where
+// one of them has none and the other has).
 void Append(const TriangleMesh& part, TriangleMesh* mesh) {
   const uint32_t base = static_cast<uint32_t>(mesh->vertices.size());
   mesh->vertices.insert(mesh->vertices.end(), part.vertices.begin(), part.vertices.end());
@@ -53,6 +55,15 @@ void Append(const TriangleMesh& part, TriangleMesh* mesh) {
                                   part.vertex_thickness.end());
   } else {
     mesh->vertex_thickness.resize(mesh->vertices.size(), 0.0f);
+  }
+  if (!part.face_aperture.empty() || !mesh->face_aperture.empty()) {
+    mesh->face_aperture.resize(mesh->faces.size(), 0.0f);
+    if (part.face_aperture.empty()) {
+      mesh->face_aperture.resize(mesh->faces.size() + part.faces.size(), 0.0f);
+    } else {
+      mesh->face_aperture.insert(mesh->face_aperture.end(), part.face_aperture.begin(),
+                                 part.face_aperture.end());
+    }
   }
   for (const Face& f : part.faces) mesh->faces.push_back({f[0] + base, f[1] + base, f[2] + base});
   mesh->face_thickness.insert(mesh->face_thickness.end(), part.face_thickness.begin(),

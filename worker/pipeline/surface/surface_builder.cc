@@ -10,6 +10,7 @@
 #include "worker/pipeline/mesh/smooth.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/surface/error_density.h"
+#include "worker/pipeline/surface/face_apertures.h"
 #include "worker/pipeline/surface/face_attributes.h"
 #include "worker/pipeline/surface/wall_fit.h"
 
@@ -117,6 +118,7 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
   mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
   if (options.fit_walls) {
     // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
+    std::vector<float> measured = mesh.face_thickness;
     std::vector<float> search(mesh.face_thickness.size());
     for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
     mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
@@ -125,9 +127,14 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
       fit.along_normal = options.fit_vertices == VertexFit::kAll;
       out.vertex_fit = FitVertexPositions(&mesh, sheet.set, fit);
       // The heights again, for the faces as they lie now.
-      if (out.vertex_fit->moves > 0)
+      if (out.vertex_fit->moves > 0) {
         mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
+        measured = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+      }
     }
+    // The fitted heights score best together; a flow model takes each face's aperture as its
+    // sheet's (0 only over a hole, a junction's face not the crossing sheets' sum).
+    out.apertures = SetFaceApertures(&mesh, measured);
   }
   if (out.decimation) {
     // The vertices are no longer generators: each takes its faces' mean thickness.
@@ -167,6 +174,7 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   SurfaceStats s;
   s.decimation = result.decimation;
   s.vertex_fit = result.vertex_fit;
+  s.apertures = result.apertures;
   s.smoothed_vertices = result.smoothed_vertices;
   s.error_density = result.error_density;
   s.generators = result.scvd.num_generators();

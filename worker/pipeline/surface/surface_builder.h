@@ -16,6 +16,7 @@
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/scvd/scvd.h"
+#include "worker/pipeline/surface/face_apertures.h"
 #include "worker/pipeline/surface/face_attributes.h"
 #include "worker/pipeline/surface/sheet_analysis.h"
 #include "worker/pipeline/surface/vertex_fit.h"
@@ -76,12 +77,13 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                         // face_thickness, face_piece, vertex_thickness set
-  std::vector<uint32_t> vertex_generator;    // SCVD generator of each vertex of the dual mesh
-                                             // (before any decimation)
-  std::optional<DecimateStats> decimation;   // when target_faces decimated the mesh
-  std::optional<VertexFitStats> vertex_fit;  // when fit_vertices moved the vertices
-  size_t smoothed_vertices = 0;              // vertices the thick-sheet smoothing moved
+  TriangleMesh mesh;                           // face_thickness, face_piece, vertex_thickness set
+  std::vector<uint32_t> vertex_generator;      // SCVD generator of each vertex of the dual mesh
+                                               // (before any decimation)
+  std::optional<DecimateStats> decimation;     // when target_faces decimated the mesh
+  std::optional<VertexFitStats> vertex_fit;    // when fit_vertices moved the vertices
+  std::optional<FaceApertureStats> apertures;  // when fit_walls fitted the heights
+  size_t smoothed_vertices = 0;                // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
   Scvd scvd;
   DualTriangleStats triangle_stats;
@@ -112,6 +114,7 @@ struct SurfaceStats {
   uint64_t skipped_voxels = 0;
   std::optional<DecimateStats> decimation;
   std::optional<VertexFitStats> vertex_fit;
+  std::optional<FaceApertureStats> apertures;
   uint64_t smoothed_vertices = 0;  // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;
 

@@ -398,10 +398,17 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
 
 }  // namespace
 
-absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
+absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, const Dims& dims,
                                                  const Placement& placement,
                                                  const VolumeMeshOptions& options,
                                                  const Progress& progress) {
+  // The sheet faces carry their aperture into the volume mesh, where a flow model takes it.
+  TriangleMesh with_apertures;
+  if (surface.face_aperture.size() == surface.faces.size() && !surface.faces.empty()) {
+    with_apertures = surface;
+    with_apertures.face_thickness = surface.face_aperture;
+  }
+  const TriangleMesh& sheets = with_apertures.faces.empty() ? surface : with_apertures;
   VolumeMeshResult r;
   // A TetGen that may add no points on facets needs the box faces seeded, else they
   // stay two triangles each.

@@ -215,11 +215,35 @@ TEST(PipelineTest, TheReportScoresTheSheetsTheVolumeMeshHas) {
                    *r.volume_mesh->delivered_similarity);
 }
 
+TEST(PipelineTest, SheetFacesCarryAnApertureThatIsZeroOnlyOverAHole) {
+  // The fitted heights leave faces at 0 where neighbours cover them; the aperture beside
+  // them (surface.ply's aperture_voxels) is 0 only over a hole, and the report counts both.
+  TempDir tmp;
+  PipelineOptions o = VolumeRun(tmp, 3);
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  SM_ASSERT_OK_AND_ASSIGN(TriangleMesh surface, ReadMesh(tmp.File("out/surface.ply")));
+  ASSERT_EQ(surface.face_aperture.size(), surface.faces.size());
+  size_t zero_thickness = 0, zero_aperture = 0;
+  for (size_t f = 0; f < surface.faces.size(); ++f) {
+    if (surface.IsBodyFace(f)) continue;
+    zero_thickness += surface.face_thickness[f] == 0;
+    zero_aperture += surface.face_aperture[f] == 0;
+  }
+  const nlohmann::json j = nlohmann::json::parse(r.ToJson())["surface"]["apertures"];
+  EXPECT_GT(zero_thickness, 0u) << "r = 3 leaves covered faces at 0 on this phantom";
+  EXPECT_EQ(zero_aperture, j["hole_faces"].get<size_t>());
+  // Covered faces, and junction faces fitted at 0, were given their sheet's aperture.
+  EXPECT_GE(zero_thickness - zero_aperture, j["covered_faces_given_their_sheets"].get<size_t>());
+  EXPECT_GT(j["covered_faces_given_their_sheets"].get<size_t>(), 0u);
+  EXPECT_GT(j["junction_faces"].get<size_t>(), 0u);
+}
+
 TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   PipelineOptions o;
   o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
   o.input.selection = PhaseSelection::Labels({255});
+  o.extract = false;  // the image's own components, every one
   o.surface.scvd.radius_voxels = 7;
   o.score.hausdorff = false;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));

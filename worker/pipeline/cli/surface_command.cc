@@ -120,6 +120,13 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
       "(%d voxels) too small for a triangle\n",
       m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.connected_parts,
       m.skipped_components, m.skipped_voxels);
+  if (m.apertures) {
+    const FaceApertureStats& a = *m.apertures;
+    out << absl::StrFormat(
+        "apertures   per face, beside the fitted thickness: %d junction faces at their own "
+        "sheet's (%d lowered, %d raised), %d covered faces given their sheet's, %d over holes\n",
+        a.junction, a.junction_lowered, a.junction_raised, a.covered, a.holes);
+  }
   if (r.representation && r.representation->bodies > 0) {
     out << absl::StrFormat(
         "bodies      %d of the pieces meshed as closed surfaces (piece: "

@@ -139,8 +139,19 @@ class Reporter {
   std::string state_;
 };
 
+// A job's artifacts into `dir` (only the one named `only`, unless empty): every output of a
+// job that SUCCEEDED, what a FAILED job's run kept. A job that has not ended, or ended with
+// none, is kFailedPrecondition.
 absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::string& dir,
                          const std::string& only) {
+  if (job.artifacts().empty()) {
+    const bool ended =
+        job.state() == v1::SUCCEEDED || job.state() == v1::FAILED || job.state() == v1::CANCELLED;
+    return absl::FailedPreconditionError(
+        ended ? absl::StrCat(job.name(), " is ", StateName(job.state()), " and kept no file")
+              : absl::StrCat(job.name(), " is ", StateName(job.state()),
+                             "; its files come when it ends"));
+  }
   if (!only.empty() && std::none_of(job.artifacts().begin(), job.artifacts().end(),
                                     [&](const v1::Artifact& a) { return a.name() == only; })) {
     std::string names;
@@ -241,6 +252,11 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
         static_cast<absl::StatusCode>(done.error().code() ? done.error().code() : 2),
         absl::StrCat(done.name(), " ", StateName(done.state()), ": ", done.error().message()));
     failed.SetPayload(kJobFailed, absl::Cord(done.name()));
+    if (done.artifacts_size() > 0) {
+      std::cout << "downloading the " << done.artifacts_size() << " files it kept to " << out
+                << "\n";
+      SM_RETURN_IF_ERROR(DownloadAll(c, done, out, ""));
+    }
     return failed;
   }
   std::cout << "downloading " << done.artifacts_size() << " files to " << out << "\n";
@@ -354,11 +370,6 @@ int Main(int argc, char** argv) {
                                   absl::GetFlag(FLAGS_o).empty() ? "." : absl::GetFlag(FLAGS_o),
                                   absl::GetFlag(FLAGS_name))
                     : job.status();
-      if (st.ok() && job->state() != v1::SUCCEEDED) {
-        st =
-            absl::FailedPreconditionError(absl::StrCat(job->name(), " is ", StateName(job->state()),
-                                                       "; its files come when it has SUCCEEDED"));
-      }
     }
   } else if (command == "health") {
     auto h = (*client)->Health();

@@ -99,9 +99,14 @@ func (g *gateway) download(w http.ResponseWriter, r *http.Request, job, name str
 		}
 	}
 	if art == nil {
-		if j.State != pb.JobState_SUCCEEDED {
+		if j.State == pb.JobState_QUEUED || j.State == pb.JobState_RUNNING {
 			writeErrorCode(w, codes.FailedPrecondition, fmt.Sprintf(
-				"%s is %s: artifacts come when it has SUCCEEDED", job, j.State))
+				"%s is %s: artifacts come when it has ended", job, j.State))
+			return
+		}
+		if len(names) == 0 {
+			writeErrorCode(w, codes.FailedPrecondition, fmt.Sprintf(
+				"%s is %s and kept no artifact", job, j.State))
 			return
 		}
 		writeErrorCode(w, codes.NotFound, fmt.Sprintf("%s has no artifact %q (it has: %s)",

@@ -49,9 +49,13 @@ void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
                  const std::vector<v1::Artifact>& artifacts) {
   job->set_state(state);
   *job->mutable_end_time() = NowTimestamp();
+  // A failed job keeps what its run kept (the surface when the volume stage failed); a
+  // cancelled one keeps nothing.
+  if (state != v1::CANCELLED) {
+    for (const v1::Artifact& a : artifacts) *job->add_artifacts() = a;
+  }
   if (state == v1::SUCCEEDED) {
     job->clear_error();
-    for (const v1::Artifact& a : artifacts) *job->add_artifacts() = a;
   } else {
     *job->mutable_error() = error;
   }

@@ -303,7 +303,9 @@ class SheetmeshClient:
         raise SheetmeshError("the watch of %s kept breaking; the job goes on" % name)
 
     def download_artifacts(self, job, folder, only=None):
-        """Downloads a finished job's files into ``folder``; returns their paths."""
+        """Downloads a job's files into ``folder`` and returns their paths: every output of
+        a job that SUCCEEDED, what a FAILED job's run kept (the surface, its score and the
+        previews when the volume stage failed)."""
         paths = []
         for a in job.artifacts:
             if only and a.name != only:
@@ -314,11 +316,12 @@ class SheetmeshClient:
     def mesh(self, volume, folder, reference=False, on_update=None, volume_format=None, **fields):
         """Uploads (or, with ``reference``, names) a volume, runs a job, waits for it and
         downloads its files into ``folder``. Returns the finished job; raises SheetmeshError
-        when it did not succeed. ``volume`` is a file or a folder (a stack of slices, or a
-        file with its detached header: name the file to open with ``main=``). ``fields`` are
-        the job's parameters (``r=5``, ``extract=True``) and the volume format's fields
-        (``dims="512x512x400"``, ``dtype="uint16"``, ``spacing=[0.005] * 3``, ``unit="mm"``) by
-        name."""
+        when it did not succeed (its ``job``, and ``kept``: the paths of the files the run
+        kept, downloaded into ``folder`` too). ``volume`` is a file or a folder (a stack of
+        slices, or a file with its detached header: name the file to open with ``main=``).
+        ``fields`` are the job's parameters (``r=5``, ``extract=True``) and the volume
+        format's fields (``dims="512x512x400"``, ``dtype="uint16"``, ``spacing=[0.005] * 3``,
+        ``unit="mm"``) by name."""
         volume = pathlib.Path(volume)
         main = fields.pop("main", "")
         formats = {k: fields.pop(k) for k in list(fields) if k in _FORMAT_FIELDS}
@@ -342,7 +345,12 @@ class SheetmeshClient:
                                   volume_format=volume_format)
         job = self.watch(job.name, on_update)
         if job.state != jobs_pb2.SUCCEEDED:
-            raise SheetmeshError("%s %s: %s" % (job.name, state_name(job.state), job.error.message))
+            kept = self.download_artifacts(job, folder)
+            error = SheetmeshError("%s %s: %s%s" % (
+                job.name, state_name(job.state), job.error.message,
+                " (kept %d files in %s)" % (len(kept), folder) if kept else ""))
+            error.job, error.kept = job, kept
+            raise error
         self.download_artifacts(job, folder)
         return job
 

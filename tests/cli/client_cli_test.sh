@@ -125,4 +125,9 @@ expect_error 1 "no file 'nope.ply'" "$cli" artifacts get "$job3" -o "$tmp/x" --n
 expect_error 1 "UNAVAILABLE" "$cli" health --server=127.0.0.1:1
 expect_error 2 "junk.nrrd" bash -c "printf 'NRRD0004\ntype: complex\n\n' > '$tmp/junk.nrrd' && '$cli' mesh '$tmp/junk.nrrd' -o '$tmp/x' $s"
 expect_error 2 "usage" "$cli" jobs get $s
+# A failed volume stage: the job FAILED, and what its run kept is downloaded all the same.
+expect_error 2 "kept as artifacts: surface.ply" "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/kept" \
+  --r=5 --volume_mesh --max_tetrahedra=10 $s
+for f in surface.ply report.json; do [ -f "$tmp/kept/$f" ] || fail "the failed job's kept $f was not downloaded"; done
+[ ! -e "$tmp/kept/volume.vtu" ] || fail "a failed volume stage gave a volume.vtu"
 echo "client CLI test passed"

@@ -202,6 +202,18 @@ class PythonClientTest(unittest.TestCase):
         self.assertIn("FAILED", str(e.exception))
         self.assertIn("junk.nrrd", str(e.exception))
 
+    def test_a_failed_volume_stage_raises_with_the_files_it_kept(self):
+        out = self.tmp / "kept_out"
+        with self.assertRaises(SheetmeshError) as e:
+            self.client.mesh(self.volume, out, r=5, volume_mesh=True, max_tetrahedra=10)
+        self.assertIn("FAILED", str(e.exception))
+        self.assertIn("kept", str(e.exception))
+        names = {p.name for p in e.exception.kept}
+        self.assertTrue({"surface.ply", "report.json"} <= names, names)
+        self.assertNotIn("volume.vtu", names)
+        report = json.loads((out / "report.json").read_text())
+        self.assertEqual(report["failed"]["stage"], "volume")
+
     def test_upload_resumes_after_a_broken_stream(self):
         path = self.tmp / "blob.bin"
         data = os.urandom(3 * (1 << 20) + 5)

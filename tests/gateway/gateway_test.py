@@ -358,7 +358,7 @@ class GatewayTest(unittest.TestCase):
             self.assert_error(resp, data, 409, "FAILED_PRECONDITION")
             # Its artifacts are not there yet.
             resp, data = self.request("GET", "/v1/%s/artifacts/report.json" % first["name"])
-            self.assert_error(resp, data, 409, "FAILED_PRECONDITION", "SUCCEEDED")
+            self.assert_error(resp, data, 409, "FAILED_PRECONDITION", "artifacts come when it has ended")
         finally:
             self.cancel_all()
         self.assertEqual(self.json_call("GET", "/v1/" + first["name"])["state"], "CANCELLED")

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "absl/strings/str_cat.h"
@@ -248,6 +249,42 @@ TEST_F(ServiceTest, IdenticalWorkIsAnsweredFromTheCache) {
   EXPECT_TRUE(fourth->cached_from().empty());
   EXPECT_EQ(WaitFinished(third->name()).state(), v1::SUCCEEDED);
   EXPECT_EQ(WaitFinished(fourth->name()).state(), v1::SUCCEEDED);
+}
+
+TEST_F(ServiceTest, AFailedVolumeStageFailsTheJobWithWhatItKept) {
+  // Once a failed job had no artifacts, though its surface, score and previews were done.
+  StartServer();
+  const std::string vol = WritePhantom(dir_.path(), "rock", 48, 8);
+  auto d = client_->Upload(vol);
+  ASSERT_TRUE(d.ok());
+  v1::CreateJobRequest r = UploadRequest(*d, std::filesystem::path(vol).filename(), "kept");
+  r.mutable_parameters()->set_volume_mesh(true);
+  r.mutable_parameters()->set_max_tetrahedra(10);  // below what any volume mesh needs
+  auto job = client_->CreateJob(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  const v1::Job done = WaitFinished(job->name());
+  ASSERT_EQ(done.state(), v1::FAILED);
+  EXPECT_THAT(done.error().message(), HasSubstr("max_tetrahedra = 10"));
+  EXPECT_THAT(done.error().message(), HasSubstr("kept as artifacts: surface.ply"));
+  ASSERT_FALSE(options_.data_dir.empty());
+  EXPECT_THAT(done.error().message(), ::testing::Not(HasSubstr(options_.data_dir)));
+  std::set<std::string> names;
+  for (const v1::Artifact& a : done.artifacts()) names.insert(a.name());
+  EXPECT_TRUE(names.count("surface.ply") && names.count("report.json")) << done.DebugString();
+  EXPECT_FALSE(names.count("volume.vtu"));
+  for (const v1::Artifact& a : done.artifacts()) {
+    if (a.name() != "report.json") continue;
+    ASSERT_TRUE(client_->Download(a.digest(), dir_.File("kept_report.json")).ok());
+    auto text = ReadFileToString(dir_.File("kept_report.json"));
+    ASSERT_TRUE(text.ok());
+    EXPECT_EQ(nlohmann::json::parse(*text)["failed"]["stage"], "volume");
+  }
+  // A failed job answers no identical request from the cache.
+  r.set_request_id("kept-again");
+  auto again = client_->CreateJob(r);
+  ASSERT_TRUE(again.ok());
+  EXPECT_TRUE(again->cached_from().empty());
+  EXPECT_EQ(WaitFinished(again->name()).state(), v1::FAILED);
 }
 
 TEST_F(ServiceTest, ListPagesDeleteAndGet) {

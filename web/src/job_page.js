@@ -66,6 +66,9 @@ function linkedImage(job, name) {
 
 async function results(root, job) {
   const names = (job.artifacts || []).map((a) => a.name);
+  if (job.state === "FAILED") {
+    root.append(el("p", { id: "kept", class: "kept" }, `Kept before it failed: ${names.length} files.`));
+  }
   root.append(el("h3", {}, "Downloads"), el("ul", { id: "downloads" }, (job.artifacts || []).map((a) =>
     el("li", {}, el("a", { href: "#", "data-name": a.name, onclick: (e) => download(e, job.name, a.name) }, a.name),
       ` ${Number(a.digest.size_bytes).toLocaleString()} bytes, ${a.media_type}`))));
@@ -115,7 +118,8 @@ export function jobPage(app, name) {
         last = await api.getJob(name);
         render(last);
       }
-      if (last.state === "SUCCEEDED") viewer = await results(body, last);
+      // A failed job shows what its run kept (the surface when the volume stage failed).
+      if ((last.artifacts || []).length) viewer = await results(body, last);
     } catch (e) {
       if (!abort.signal.aborted) showError(e);
     }

@@ -236,6 +236,25 @@ async function main() {
   check(failedFill === "rgb(200, 69, 60)", `a failed job's bar is red (${failedFill})`);
   const failedError = await page.textContent("#job_error");
   check(failedError.includes("7"), `a failed job shows its error (${failedError.slice(0, 120)})`);
+  check((await page.$("#downloads")) === null, "a job that failed before any output lists no downloads");
+  // A job whose volume stage fails keeps its surface, score and previews: shown and listed.
+  const volumeFails = await (await api("/v1/jobs", {
+    method: "POST", headers: { "Content-Type": "application/json" },
+    body: JSON.stringify({
+      request_id: randomUUID(),
+      input: { volume_digest: { hash, size_bytes: String(bytes.length) }, file_name: path.basename(volume) },
+      parameters: { r: 7, volume_mesh: true, max_tetrahedra: "10" },
+    }),
+  })).json();
+  await page.goto(`${base}/#/${volumeFails.name}`);
+  await page.waitForSelector('#job_state[data-state="FAILED"]', { timeout: 180000 });
+  await page.waitForSelector("#downloads", { timeout: 60000 });
+  const kept = await page.$$eval("#downloads a", (a) => a.map((x) => x.dataset.name));
+  const keptText = await page.textContent("#kept");
+  check(kept.includes("surface.ply") && kept.includes("report.json") && !kept.includes("volume.vtu") &&
+    keptText.includes(`${kept.length} files`), `a failed volume stage lists what it kept (${kept.join(", ")})`);
+  await page.waitForSelector('#view3d[data-ready="1"]', { timeout: 60000 });
+  check(true, "the kept surface is shown in 3D");
   // A second job on the same volume with extraction and the volume mesh: its pieces table
   // and Table 3's rows as report.json has them (the upload is found complete at once).
   await page.goto(base + "/#/");

@@ -194,9 +194,7 @@ absl::Status RemoteJobHost::Finish(const std::string& job, const std::string& wo
   req.set_worker(worker);
   req.set_state(runtime::EndStateOf(result));
   *req.mutable_error() = runtime::ErrorOf(result);
-  if (result.ok()) {
-    for (const v1::Artifact& a : artifacts) *req.add_artifacts() = a;
-  }
+  for (const v1::Artifact& a : artifacts) *req.add_artifacts() = a;
   v1::Job done;
   auto ctx = Context();
   absl::Status st = FromGrpc(workers_->FinishJob(ctx.get(), req, &done), "finishing " + job);

@@ -93,8 +93,8 @@ class JobHost {
                                                    const std::string& worker,
                                                    const std::string& path,
                                                    const std::string& media_type) = 0;
-  // Ends the job: SUCCEEDED with `artifacts` when result is OK, CANCELLED when it is
-  // kCancelled, FAILED otherwise.
+  // Ends the job with its `artifacts`: SUCCEEDED when result is OK, CANCELLED when it is
+  // kCancelled, FAILED otherwise (a failed job's artifacts are what its run kept).
   virtual absl::Status Finish(const std::string& job, const std::string& worker,
                               const absl::Status& result,
                               const std::vector<v1::Artifact>& artifacts) = 0;

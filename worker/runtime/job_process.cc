@@ -125,8 +125,10 @@ int InspectChild(const PipelineOptions& options, const std::string& display,
 int ChildMain(const std::string& spec_path) {
   ChildObserver observer;
   uint64_t memory = 0;
-  auto fail = [&](absl::StatusCode code, const std::string& message) {
-    Tell({{"result", {{"code", static_cast<int>(code)}, {"message", message}}}});
+  // `kept`: the files a failed run kept in the output folder (KeptFiles).
+  auto fail = [&](absl::StatusCode code, const std::string& message,
+                  const std::vector<std::string>& kept = {}) {
+    Tell({{"result", {{"code", static_cast<int>(code)}, {"message", message}, {"kept", kept}}}});
     return 1;
   };
   try {
@@ -168,7 +170,8 @@ int ChildMain(const std::string& spec_path) {
     options->output.dir = out;
     absl::StatusOr<PipelineReport> report = RunPipeline(*options, Progress(&observer, "read"));
     if (!report.ok()) {
-      return fail(report.status().code(), AsClientSees(report.status(), display, volume));
+      return fail(report.status().code(), AsClientSees(report.status(), display, volume),
+                  KeptFiles(report.status()));
     }
     Tell({{"result", {{"code", 0}, {"files", report->files}}}});
     return 0;
@@ -357,7 +360,9 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
   if (!result) return Died(*exit, stage, limits, log);
   const int code = result->value("code", static_cast<int>(absl::StatusCode::kInternal));
   if (code != 0) {
-    return absl::Status(static_cast<absl::StatusCode>(code), result->value("message", ""));
+    return WithKeptFiles(
+        absl::Status(static_cast<absl::StatusCode>(code), result->value("message", "")),
+        result->value("kept", std::vector<std::string>{}));
   }
   return *result;
 }

@@ -52,22 +52,32 @@ std::string MediaTypeOf(const std::string& name) {
   return "application/octet-stream";
 }
 
-absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::string& worker,
-                                                 JobHost& host, const JobRunOptions& run) {
+namespace {
+
+// Stores the outputs `files` of `job` (in `dir`) as its artifacts.
+absl::StatusOr<std::vector<v1::Artifact>> StoreArtifacts(const v1::Job& job,
+                                                         const std::string& worker, JobHost& host,
+                                                         const std::string& dir,
+                                                         const std::vector<std::string>& files) {
+  std::vector<v1::Artifact> artifacts;
+  for (const std::string& name : files) {
+    if (name.find('/') != std::string::npos || name == ".." || name.empty()) {
+      return absl::InternalError(absl::StrCat("the job named an output '", name, "'"));
+    }
+    SM_ASSIGN_OR_RETURN(v1::Artifact a,
+                        host.PutArtifact(job.name(), worker, dir + "/" + name, MediaTypeOf(name)));
+    a.set_name(name);
+    artifacts.push_back(std::move(a));
+  }
+  return artifacts;
+}
+
+// The pipeline's outputs for `job`: their names in `dir`.
+absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const std::string& worker,
+                                                    JobHost& host, const JobRunOptions& run,
+                                                    const std::string& dir) {
   SM_ASSIGN_OR_RETURN(LocalVolume volume, host.ResolveInput(job));
   SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
-  const std::string dir =
-      (std::filesystem::path(run.scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}}))
-          .string();
-  std::error_code ec;
-  std::filesystem::remove_all(dir, ec);
-  struct Cleanup {
-    std::string dir;
-    ~Cleanup() {
-      std::error_code e;
-      std::filesystem::remove_all(dir, e);
-    }
-  } cleanup{dir};
   options.output.dir = dir;
   HostObserver observer(host, job.name(), worker, PlannedStages(options));
   std::vector<std::string> files;
@@ -113,17 +123,43 @@ absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::
     }
     files = report->files;
   }
-  std::vector<v1::Artifact> artifacts;
-  for (const std::string& name : files) {
-    if (name.find('/') != std::string::npos || name == ".." || name.empty()) {
-      return absl::InternalError(absl::StrCat("the job named an output '", name, "'"));
+  return files;
+}
+
+}  // namespace
+
+JobOutcome RunJob(const v1::Job& job, const std::string& worker, JobHost& host,
+                  const JobRunOptions& run) {
+  const std::string dir =
+      (std::filesystem::path(run.scratch_dir) / absl::StrReplaceAll(job.name(), {{"/", "-"}}))
+          .string();
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+  struct Cleanup {
+    std::string dir;
+    ~Cleanup() {
+      std::error_code e;
+      std::filesystem::remove_all(dir, e);
     }
-    SM_ASSIGN_OR_RETURN(v1::Artifact a,
-                        host.PutArtifact(job.name(), worker, dir + "/" + name, MediaTypeOf(name)));
-    a.set_name(name);
-    artifacts.push_back(std::move(a));
+  } cleanup{dir};
+  JobOutcome outcome;
+  absl::StatusOr<std::vector<std::string>> files = RunOutputs(job, worker, host, run, dir);
+  std::vector<std::string> kept = files.ok() ? *files : KeptFiles(files.status());
+  if (!files.ok()) {
+    // The client knows no scratch folder: the kept files are the job's artifacts.
+    outcome.status = absl::Status(
+        files.status().code(),
+        absl::StrReplaceAll(files.status().message(), {{"kept in " + dir, "kept as artifacts"}}));
   }
-  return artifacts;
+  absl::StatusOr<std::vector<v1::Artifact>> artifacts =
+      StoreArtifacts(job, worker, host, dir, kept);
+  if (!artifacts.ok()) {
+    // A failed job keeps its error; a finished one fails storing its outputs.
+    if (outcome.status.ok()) outcome.status = artifacts.status();
+    return outcome;
+  }
+  outcome.artifacts = *std::move(artifacts);
+  return outcome;
 }
 
 }  // namespace sheetmesh::runtime

@@ -23,12 +23,19 @@ struct JobRunOptions {
   JobLimits limits;                  // the child's limits (memory, CPU, wall)
 };
 
-// Runs `job` for `worker`, writing outputs under options.scratch_dir (removed afterwards).
-// Returns the stored artifacts; errors of the pipeline pass through with their codes
+// How a job ended: OK with its artifacts, or an error with the artifacts of what the run
+// kept (a failed volume stage keeps the surface, its score, the previews and the report).
+struct JobOutcome {
+  absl::Status status;
+  std::vector<v1::Artifact> artifacts;
+};
+
+// Runs `job` for `worker`, writing outputs under options.scratch_dir (removed afterwards),
+// and stores the outputs as artifacts. Errors of the pipeline pass through with their codes
 // (kCancelled when the host asked to stop), and an isolated run that crashes or passes a
 // limit fails naming why (job_process.h).
-absl::StatusOr<std::vector<v1::Artifact>> RunJob(const v1::Job& job, const std::string& worker,
-                                                 JobHost& host, const JobRunOptions& options);
+JobOutcome RunJob(const v1::Job& job, const std::string& worker, JobHost& host,
+                  const JobRunOptions& options);
 
 }  // namespace sheetmesh::runtime
 

@@ -3,8 +3,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <iostream>
 #include <condition_variable>
+#include <iostream>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
@@ -90,7 +90,7 @@ void WorkerPool::Work(int index) {
       lost_[job.name()] = false;
     }
     ++busy_;
-    absl::StatusOr<std::vector<v1::Artifact>> result = RunJob(job, worker, host, options_.run);
+    const JobOutcome result = RunJob(job, worker, host, options_.run);
     bool lost;
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -100,21 +100,19 @@ void WorkerPool::Work(int index) {
     }
     if (lost) {
       // Someone else owns the job now (or it was deleted): report nothing.
-    } else if (aborting_.load() && !result.ok() &&
-               result.status().code() == absl::StatusCode::kCancelled) {
+    } else if (aborting_.load() && result.status.code() == absl::StatusCode::kCancelled) {
       host_->Release(job.name(), worker).IgnoreError();  // runs again after restart
     } else {
       // A refused finish leaves the job to its lease, which expires and runs it again: say
       // why, where the operator looks.
       const absl::Status finished =
-          host_->Finish(job.name(), worker, result.status(),
-                        result.ok() ? *result : std::vector<v1::Artifact>{});
+          host_->Finish(job.name(), worker, result.status, result.artifacts);
       if (!finished.ok()) {
         std::cerr << "sheetmesh worker " << worker << ": " << job.name()
                   << " could not be finished: " << finished << std::endl;
         // Results the server refuses (not a server that is away) fail the job, saying why,
         // rather than running it again to the same refusal.
-        if (result.ok() && finished.code() != absl::StatusCode::kUnavailable &&
+        if (result.status.ok() && finished.code() != absl::StatusCode::kUnavailable &&
             finished.code() != absl::StatusCode::kDeadlineExceeded) {
           host_
               ->Finish(job.name(), worker,

@@ -4,8 +4,10 @@
 #include <mutex>
 #include <optional>
 
+#include "absl/strings/cord.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
@@ -169,6 +171,21 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
 
 }  // namespace
 
+constexpr char kKeptFiles[] = "sheetmesh.dev/kept-files";
+
+std::vector<std::string> KeptFiles(const absl::Status& status) {
+  const auto kept = status.GetPayload(kKeptFiles);
+  if (!kept) return {};
+  return absl::StrSplit(std::string(*kept), '\n', absl::SkipEmpty());
+}
+
+absl::Status WithKeptFiles(absl::Status status, const std::vector<std::string>& files) {
+  if (!status.ok() && !files.empty()) {
+    status.SetPayload(kKeptFiles, absl::Cord(absl::StrJoin(files, "\n")));
+  }
+  return status;
+}
+
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress) {
   if (options.time_limit_seconds <= 0) return RunStages(options, progress);
@@ -322,10 +339,12 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
   }
   if (!volume_failed.ok()) {
-    return absl::Status(
-        volume_failed.code(),
-        absl::StrCat(volume_failed.message(), " (the volume stage failed; kept in ",
-                     options.output.dir, ": ", absl::StrJoin(report.files, ", "), ")"));
+    return WithKeptFiles(
+        absl::Status(
+            volume_failed.code(),
+            absl::StrCat(volume_failed.message(), " (the volume stage failed; kept in ",
+                         options.output.dir, ": ", absl::StrJoin(report.files, ", "), ")")),
+        report.files);
   }
   return report;
 }

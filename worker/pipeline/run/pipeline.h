@@ -124,9 +124,15 @@ struct PipelineReport {
 // pass through with their codes; kCancelled if asked. Files appear atomically; a failed
 // run leaves no half-written file. When the volume stage fails (for another reason than a
 // cancel or the time limit) and output.dir is set, the surface, its score, previews and a
-// report naming the failed stage are written first, and the error says so.
+// report naming the failed stage are written first, and the error says so and lists them
+// (KeptFiles).
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress = {});
+
+// The files a failed run kept in output.dir (their names, in the order written): empty
+// unless the status is the error of a run that kept some. WithKeptFiles attaches them.
+std::vector<std::string> KeptFiles(const absl::Status& status);
+absl::Status WithKeptFiles(absl::Status status, const std::vector<std::string>& files);
 
 }  // namespace sheetmesh
 

@@ -1,16 +1,18 @@
-// The thickness histogram of the surface's triangles.
+// The aperture (or thickness) histogram of the surface's triangles.
 import { BarController, BarElement, CategoryScale, Chart, LinearScale, Tooltip } from "chart.js";
 
 Chart.register(BarController, BarElement, CategoryScale, LinearScale, Tooltip);
 
-export function thicknessHistogram(canvas, values, bins = 20) {
+// `axis` names what is counted, with its unit ("aperture (mm)").
+export function thicknessHistogram(canvas, values, axis = "thickness (voxels)", bins = 20) {
   if (!values.length) return null;
   let lo = Math.min(...values), hi = Math.max(...values);
   if (hi <= lo) hi = lo + 1;
   const counts = new Array(bins).fill(0);
   for (const v of values) counts[Math.min(bins - 1, Math.floor(((v - lo) / (hi - lo)) * bins))]++;
-  const labels = counts.map((_, i) => (lo + ((i + 0.5) * (hi - lo)) / bins).toFixed(2));
+  const labels = counts.map((_, i) => Number((lo + ((i + 0.5) * (hi - lo)) / bins).toPrecision(3)).toString());
   canvas.dataset.counts = JSON.stringify(counts);  // what is drawn, for tests and scripts
+  canvas.dataset.axis = axis;
   return new Chart(canvas, {
     type: "bar",
     data: { labels, datasets: [{ label: "triangles", data: counts, backgroundColor: "#4a7bd0" }] },
@@ -19,15 +21,16 @@ export function thicknessHistogram(canvas, values, bins = 20) {
       responsive: false,
       plugins: { tooltip: { enabled: true } },
       scales: {
-        x: { title: { display: true, text: "thickness (voxels)" } },
+        x: { title: { display: true, text: axis } },
         y: { title: { display: true, text: "triangles" }, beginAtZero: true },
       },
     },
   });
 }
 
-// Per-face thickness from a binary little-endian or ASCII PLY written by sheetmesh.
-export function faceThickness(bytes) {
+// A per-face property (`name`, e.g. "aperture" or "thickness_voxels") of a binary
+// little-endian or ASCII PLY written by sheetmesh; [] where the PLY has none.
+export function faceValues(bytes, name) {
   const head = new TextDecoder().decode(bytes.slice(0, Math.min(bytes.byteLength, 4096)));
   const end = head.indexOf("end_header");
   if (end < 0) return [];
@@ -53,7 +56,7 @@ export function faceThickness(bytes) {
         let k = 0;
         for (const p of e.props) {
           if (p[1] === "list") k += 1 + w[k];
-          else if (p[2] === "thickness_voxels") out.push(w[k++]);
+          else if (p[2] === name) out.push(w[k++]);
           else k++;
         }
       }
@@ -85,7 +88,7 @@ export function faceThickness(bytes) {
           for (let j = 0; j < k; ++j) read(p[3]);
         } else {
           const v = read(p[1]);
-          if (e.name === "face" && p[2] === "thickness_voxels") out.push(v);
+          if (e.name === "face" && p[2] === name) out.push(v);
         }
       }
     }

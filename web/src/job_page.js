@@ -1,6 +1,6 @@
 // One job: live progress, then its figures, tables, histogram, 3D view and downloads.
 import * as api from "./api.js";
-import { faceThickness, thicknessHistogram } from "./charts.js";
+import { faceValues, thicknessHistogram } from "./charts.js";
 import { el, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
 
 const fmt = (v, d = 4) => (v === undefined || v === null || Number.isNaN(v) ? "–" : Number(v).toFixed(d));
@@ -19,11 +19,20 @@ function numbers(report) {
     el("tbody", {}, rows.map(([key, label, v]) => el("tr", {}, el("th", {}, label), el("td", { "data-key": key }, String(v))))));
 }
 
+// The report's length unit, for labels: "mm", or "voxels" without a physical size.
+function unitOf(report) {
+  const input = report.input || {};
+  const spacing = input.spacing || [1, 1, 1];
+  if (input.unit) return input.unit;
+  return spacing.every((s) => s === 1) ? "voxels" : "volume units";
+}
+
 function piecesTable(report) {
   const pieces = report.pieces || [];
+  const unit = unitOf(report);
   if (!pieces.length) return el("p", {}, "No pieces table (run with extraction for dip, dip direction and aperture per piece).");
   return el("table", { id: "pieces" },
-    el("thead", {}, el("tr", {}, ["piece", "sheet", "voxels", "triangles", "dip (°)", "dip direction (°)", "mean aperture", "max aperture"].map((h) => el("th", {}, h)))),
+    el("thead", {}, el("tr", {}, ["piece", "sheet", "voxels", "triangles", "dip (°)", "dip direction (°)", `mean aperture (${unit})`, `max aperture (${unit})`].map((h) => el("th", {}, h)))),
     el("tbody", {}, pieces.map((p) => el("tr", {},
       el("td", {}, p.piece), el("td", {}, p.sheet ?? ""), el("td", {}, p.voxels), el("td", {}, p.triangles),
       el("td", {}, fmt(p.dip_degrees ?? p.dip, 1)), el("td", {}, fmt(p.dip_direction_degrees ?? p.dip_direction, 1)),
@@ -43,6 +52,18 @@ function qualityTable(report) {
       el("tr", {}, el("th", {}, "nodes"), el("td", { colspan: 2, "data-key": "nodes" }, String(vm.nodes))),
       row("dihedral angle (°)", "min_dihedral_degrees"), row("radius aspect", "radius_aspect"),
       row("gamma", "gamma"), row("edge aspect", "edge_aspect")));
+}
+
+// The 3D view's colours: its thickness range in the volume's unit, blue to red; bodies grey.
+function colourLegend(range, unit) {
+  const stops = [0, 0.25, 0.5, 0.75, 1].map((t) => `hsl(${Math.round((1 - t) * 0.66 * 360)}, 85%, 50%)`);
+  const fmtLen = (v) => (Number.isFinite(v) ? Number(v.toPrecision(3)).toString() : "–");
+  return el("div", { id: "legend3d", class: "legend" },
+    el("span", {}, `thickness ${fmtLen(range.lo)} ${unit}`),
+    el("span", { class: "ramp", style: `background: linear-gradient(to right, ${stops.join(", ")})` }),
+    el("span", {}, `${fmtLen(range.hi)} ${unit}`),
+    range.bodies ? el("span", { class: "swatch body" }, "") : "",
+    range.bodies ? el("span", {}, "bodies (closed surfaces)") : "");
 }
 
 // A download through a fresh short-lived link (the token never goes into a URL).
@@ -84,14 +105,25 @@ async function results(root, job) {
   const ply = names.find((n) => n.endsWith(".ply"));
   if (!ply) return;
   const bytes = await (await api.fetchArtifact(job.name, ply)).arrayBuffer();
+  // The aperture a flow model takes, in the volume's unit; a PLY without it: the thickness.
+  const unit = unitOf(report);
+  const physical = unit !== "voxels";
+  let field = physical ? "aperture" : "aperture_voxels";
+  let values = faceValues(bytes, field);
+  if (!values.length) {
+    field = physical ? "thickness" : "thickness_voxels";
+    values = faceValues(bytes, field);
+  }
+  const what = field.startsWith("aperture") ? "aperture" : "thickness";
   const canvas = el("canvas", { id: "histogram", width: 560, height: 240 });
-  root.append(el("h3", {}, "Thickness"), canvas);
-  thicknessHistogram(canvas, faceThickness(bytes));
+  root.append(el("h3", {}, what[0].toUpperCase() + what.slice(1)), canvas);
+  thicknessHistogram(canvas, values, `${what} per triangle (${unit})`);
   const view = el("div", { id: "view3d", class: "view3d" });
   const boundary = el("input", { id: "boundary", type: "checkbox", disabled: !report.volume_mesh });
   root.append(el("h3", {}, "Surface"), el("label", {}, boundary, " volume mesh boundary"), view);
   const { showSurface } = await import("./viewer.js");
   const viewer = showSurface(view, bytes, report.input);
+  root.append(colourLegend(viewer.range, unit));
   boundary.addEventListener("change", () => viewer.setBoundary(boundary.checked));
   view.dataset.ready = "1";
   return viewer;

@@ -77,7 +77,9 @@ export function showSurface(container, plyBytes, input) {
   controls.addEventListener("change", draw);
   draw();
   return {
-    range: [lo, hi],
+    // The thickness the colours run over (the PLY's, in the mesh's unit), and whether
+    // there are bodies (grey).
+    range: { lo, hi, bodies: n > 0 && Array.from({ length: n }, (_, i) => isBody(i)).some(Boolean) },
     setBoundary(on) {
       box.visible = on;
       draw();

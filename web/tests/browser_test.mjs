@@ -158,6 +158,10 @@ async function main() {
     return n;
   });
   check(barPixels > 500, `the histogram's bars are drawn (${barPixels} pixels of their colour)`);
+  const axis = await page.getAttribute("#histogram", "data-axis");
+  check(axis === "aperture per triangle (voxels)", `the histogram says what it counts and in what unit (${axis})`);
+  const legend = await page.textContent("#legend3d");
+  check(/thickness [0-9.]+ voxels.*[0-9.]+ voxels/.test(legend), `the 3D view has a colour legend with its unit (${legend})`);
   const previews = await page.$$eval(".previews img", (imgs) => imgs.map((i) => i.naturalWidth));
   check(previews.length === 4 && previews.every((w) => w > 0), `four previews load (${previews})`);
 
@@ -219,6 +223,12 @@ async function main() {
   await page.goto(`${base}/#/${physical.name}`);
   await page.waitForSelector('#view3d[data-ready="1"]', { timeout: 180000 });
   const coveredPhysical = await coverage();
+  const physicalAxis = await page.getAttribute("#histogram", "data-axis");
+  const physicalLegend = await page.textContent("#legend3d");
+  const piecesHead = await page.textContent("#pieces thead");
+  check(physicalAxis === "aperture per triangle (mm)" && /[0-9.]+ mm.*[0-9.]+ mm/.test(physicalLegend) &&
+    piecesHead.includes("mean aperture (mm)"),
+  `with a 0.005 mm voxel, the histogram, the legend and the pieces table say mm (${physicalAxis}; ${physicalLegend}; ${piecesHead})`);
   check(coveredPhysical > 0.5 * covered && coveredPhysical < 2 * covered,
     `with a 0.005 mm voxel the surface fills ${(100 * coveredPhysical).toFixed(1)}% of the view (${(100 * covered).toFixed(1)}% in voxels)`);
   // A job that fails (no voxel has the value 7) looks failed: a red bar and the error.

@@ -5,9 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <csetjmp>
+#include <optional>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
+#include "worker/pipeline/preview/bitmap_font.h"
 
 namespace sheetmesh {
 namespace {
@@ -127,6 +131,56 @@ std::vector<size_t> LargestSheet(const TriangleMesh& mesh) {
   return out;
 }
 
+// A length given in voxels, in the volume's unit: "0.0123 mm"; "2.5 voxels" where the
+// volume has no physical size.
+std::string LengthText(double voxels, const Placement& placement) {
+  if (placement.unit.empty()) {
+    const bool unit_voxels = placement.spacing == Vec3{1, 1, 1};
+    return absl::StrFormat("%.3g%s", unit_voxels ? voxels : PhysicalLength(voxels, placement),
+                           unit_voxels ? " voxels" : "");
+  }
+  return absl::StrFormat("%.3g %s", PhysicalLength(voxels, placement), placement.unit);
+}
+
+// One line of a legend: a swatch of `swatch` (unless it is unset) and its text.
+struct LegendLine {
+  std::optional<std::array<uint8_t, 3>> swatch;
+  std::string text;
+};
+
+// Adds the legend `lines` below `im` on `background` in `ink`, widening the picture (with
+// `background`) where a line needs it.
+void AppendLegend(RgbImage* im, const std::vector<LegendLine>& lines,
+                  const std::array<uint8_t, 3>& background, const std::array<uint8_t, 3>& ink) {
+  constexpr int kMargin = 6, kLine = kGlyphHeight + 5, kSwatch = kGlyphHeight + 1;
+  int width = im->width;
+  for (const LegendLine& l : lines) {
+    width = std::max(width, 2 * kMargin + (l.swatch ? kSwatch + 5 : 0) + TextWidth(l.text));
+  }
+  RgbImage out;
+  out.width = width;
+  out.height = im->height + 2 * kMargin + kLine * static_cast<int>(lines.size());
+  out.rgb.resize(3 * static_cast<size_t>(out.width) * out.height);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) out.Set(x, y, background);
+  for (int y = 0; y < im->height; ++y) {
+    std::copy_n(&im->rgb[3 * static_cast<size_t>(y) * im->width], 3 * im->width,
+                &out.rgb[3 * static_cast<size_t>(y) * out.width]);
+  }
+  int y = im->height + kMargin;
+  for (const LegendLine& l : lines) {
+    int x = kMargin;
+    if (l.swatch) {
+      for (int dy = 0; dy < kSwatch; ++dy)
+        for (int dx = 0; dx < kSwatch; ++dx) out.Set(x + dx, y + dy - 1, *l.swatch);
+      x += kSwatch + 5;
+    }
+    DrawText(&out, x, y, l.text, ink);
+    y += kLine;
+  }
+  *im = std::move(out);
+}
+
 void PngToString(png_structp png, png_bytep data, png_size_t n) {
   static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), n);
 }
@@ -138,7 +192,8 @@ void PngError(png_structp png, png_const_charp msg) {
 
 }  // namespace
 
-Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis) {
+Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
+                     const Placement& placement) {
   const SliceFrame f = FrameOf(phase.dims(), axis);
   Preview p;
   p.file = absl::StrCat("preview_slice_", kAxisName[axis], ".png");
@@ -192,8 +247,20 @@ Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis) 
       }
     }
   }
+  const int64_t extent[3] = {phase.dims().nx, phase.dims().ny, phase.dims().nz};
+  const int slice_height = im.height;
+  AppendLegend(&im,
+               {{kPreviewPhase, "sheet phase"},
+                {kPreviewMidSurface, "mesh: mid-surface"},
+                {kPreviewPrismWall, "mesh: prism walls (thickness)"},
+                {std::nullopt, absl::StrFormat("%s = %d of %d; %s across, %s %s", kAxisName[axis],
+                                               f.index, extent[axis], kAxisName[f.cols_axis],
+                                               kAxisName[f.rows_axis], f.z_up ? "up" : "down")},
+                {std::nullopt, absl::StrCat("1 voxel = ", LengthText(1, placement))}},
+               kPreviewBackground, kPreviewLegendInk);
   p.fields = {{"kind", "slice"},
               {"axis", kAxisName[axis]},
+              {"slice_height", slice_height},
               {"index", f.index},
               {"columns", kAxisName[f.cols_axis]},
               {"rows", kAxisName[f.rows_axis]},
@@ -208,7 +275,7 @@ Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis) 
   return p;
 }
 
-Preview ThicknessPreview(const TriangleMesh& mesh) {
+Preview ThicknessPreview(const TriangleMesh& mesh, const Placement& placement) {
   Preview p;
   p.file = "preview_thickness.png";
   // The largest sheet: faces joined across edges of exactly two faces of one piece (a
@@ -217,7 +284,10 @@ Preview ThicknessPreview(const TriangleMesh& mesh) {
   std::vector<size_t> faces = LargestSheet(mesh);
   const int32_t piece =
       faces.empty() || mesh.face_piece.size() != mesh.num_faces() ? -1 : mesh.face_piece[faces[0]];
-  const bool thick = mesh.face_thickness.size() == mesh.num_faces();
+  // The aperture a flow model takes, where the mesh has one; else the thickness.
+  const bool aperture = mesh.face_aperture.size() == mesh.num_faces();
+  const std::vector<float>& values = aperture ? mesh.face_aperture : mesh.face_thickness;
+  const bool thick = values.size() == mesh.num_faces();
   RgbImage& im = p.image;
   if (faces.empty()) {
     im.width = im.height = 64;
@@ -245,7 +315,7 @@ Preview ThicknessPreview(const TriangleMesh& mesh) {
   // Colours over the 2nd to 98th percentile of the faces' thickness (a few slivers at a
   // junction would wash the map out otherwise); the full range is reported too.
   std::vector<double> ths;
-  for (size_t t : faces) ths.push_back(thick ? mesh.face_thickness[t] : 1.0);
+  for (size_t t : faces) ths.push_back(thick ? values[t] : 1.0);
   std::sort(ths.begin(), ths.end());
   lo_t = ths[static_cast<size_t>(0.02 * (ths.size() - 1))];
   hi_t = ths[static_cast<size_t>(0.98 * (ths.size() - 1))];
@@ -263,7 +333,7 @@ Preview ThicknessPreview(const TriangleMesh& mesh) {
     const auto a = at(tri[0]), b = at(tri[1]), c = at(tri[2]);
     const double area = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
     if (area == 0) continue;
-    const double th = thick ? mesh.face_thickness[t] : 1.0;
+    const double th = thick ? values[t] : 1.0;
     const auto colour = Ramp(hi_t > lo_t ? (th - lo_t) / (hi_t - lo_t) : 0.5);
     const int x0 = static_cast<int>(std::floor(std::min({a[0], b[0], c[0]})));
     const int x1 = static_cast<int>(std::ceil(std::max({a[0], b[0], c[0]})));
@@ -287,7 +357,15 @@ Preview ThicknessPreview(const TriangleMesh& mesh) {
     const auto c = Ramp(static_cast<double>(x - margin) / std::max(1, im.width - 2 * margin - 1));
     for (int y = bar_top; y < bar_top + bar; ++y) im.Set(x, y, c);
   }
+  const char* what = aperture ? "aperture" : "thickness";
+  AppendLegend(
+      &im,
+      {{std::nullopt, absl::StrFormat("%s of piece %d, %s to %s", what, piece,
+                                      LengthText(lo_t, placement), LengthText(hi_t, placement))},
+       {std::nullopt, "(colours: 2nd to 98th percentile, thin left, thick right)"}},
+      {255, 255, 255}, {40, 40, 40});
   p.fields = {{"kind", "thickness"},
+              {"field", what},
               {"piece", piece},
               {"faces", faces.size()},
               {"normal", {n.x, n.y, n.z}},

@@ -22,6 +22,7 @@ inline constexpr std::array<uint8_t, 3> kPreviewBackground = {32, 36, 44};
 inline constexpr std::array<uint8_t, 3> kPreviewPhase = {120, 190, 255};
 inline constexpr std::array<uint8_t, 3> kPreviewMidSurface = {255, 60, 40};
 inline constexpr std::array<uint8_t, 3> kPreviewPrismWall = {255, 190, 40};
+inline constexpr std::array<uint8_t, 3> kPreviewLegendInk = {225, 228, 235};
 
 // An RGB picture, rows top to bottom.
 struct RgbImage {
@@ -46,14 +47,17 @@ struct Preview {
 // square blocks of `scale` voxels' width (scale ≥ 1 for volumes up to 1024 across, below
 // 1 beyond, the nearest voxel taken); the slice of x or y has z upwards. Phase voxels in
 // kPreviewPhase, the rest kPreviewBackground, the mesh's mid-surface and prism walls
-// drawn over them.
-Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis);
+// drawn over them. Below the slice (the picture widened where it needs), a legend: each
+// colour's meaning, the slice's place and the voxel's size in `placement`'s unit.
+Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
+                     const Placement& placement = {});
 
 // The largest sheet (the faces joined across edges of two faces of one piece, the group of
-// largest area) seen along its mean normal, each triangle filled with the colour of its thickness
-// (blue thin to yellow thick), a colour bar along the bottom. Empty mesh: a blank picture saying so
-// in fields.
-Preview ThicknessPreview(const TriangleMesh& mesh);
+// largest area) seen along its mean normal, each triangle filled with the colour of its
+// aperture (its thickness where the mesh has no aperture; blue thin to yellow thick), a colour
+// bar along the bottom labelled with its ends in `placement`'s unit. Empty mesh: a blank
+// picture saying so in fields.
+Preview ThicknessPreview(const TriangleMesh& mesh, const Placement& placement = {});
 
 // The PNG encoding of `image` (8-bit RGB).
 absl::StatusOr<std::string> EncodePng(const RgbImage& image);

@@ -65,10 +65,10 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
 
 // The previews of `phase` (the input's sheet phase) and `mesh`, described in the report.
 absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const TriangleMesh& mesh,
-                           PipelineReport* report) {
+                           const Placement& placement, PipelineReport* report) {
   for (int k = 0; k < 4; ++k) {
     const absl::Time start = absl::Now();
-    Preview p = k < 3 ? SlicePreview(phase, mesh, k) : ThicknessPreview(mesh);
+    Preview p = k < 3 ? SlicePreview(phase, mesh, k, placement) : ThicknessPreview(mesh, placement);
     SM_ASSIGN_OR_RETURN(std::string png, EncodePng(p.image));
     p.fields["seconds"] = absl::ToDoubleSeconds(absl::Now() - start);  // drawn and encoded
     SM_RETURN_IF_ERROR(WriteFileAtomically((std::filesystem::path(dir) / p.file).string(), png));
@@ -111,7 +111,7 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
   if (volume != nullptr) {
     SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files));
   }
-  if (options.output.previews) SM_RETURN_IF_ERROR(WritePreviews(dir, phase, mesh, report));
+  if (options.output.previews) SM_RETURN_IF_ERROR(WritePreviews(dir, phase, mesh, pl, report));
   report->files.push_back("report.json");
   return WriteFileAtomically(path("report.json"), report->ToJson());
 }

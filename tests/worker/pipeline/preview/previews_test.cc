@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <png.h>
 
+#include <set>
+
 #include "tests/testing/meshes.h"
 
 namespace sheetmesh {
@@ -37,9 +39,10 @@ TEST(PreviewsTest, SliceAcrossASlabShowsItsPhaseAndItsPrism) {
   EXPECT_EQ(p.file, "preview_slice_x.png");
   EXPECT_EQ(p.fields["index"], 10);
   const int k = p.fields["pixels_per_voxel"].get<int>();
-  ASSERT_EQ(k, 8);  // 512 / 20 is above 8: capped
-  EXPECT_EQ(p.image.width, 20 * k);
-  EXPECT_EQ(p.image.height, 10 * k);
+  ASSERT_EQ(k, 8);                   // 512 / 20 is above 8: capped
+  EXPECT_GE(p.image.width, 20 * k);  // wider where the legend needs
+  EXPECT_EQ(p.fields["slice_height"], 10 * k);
+  EXPECT_GT(p.image.height, 10 * k);  // the legend below
   // Row of voxel z (z up): the top row is z = 9.
   auto at = [&](int y, int z) { return Pixel(p.image, y * k + 1, (9 - z) * k + 1); };
   EXPECT_EQ(at(0, 5), kPreviewBackground);
@@ -51,6 +54,24 @@ TEST(PreviewsTest, SliceAcrossASlabShowsItsPhaseAndItsPrism) {
   EXPECT_EQ(Pixel(p.image, 10 * k + 3, (9 - 5) * k + k / 2), kPreviewMidSurface);
   EXPECT_EQ(Pixel(p.image, 10 * k + 3, static_cast<int>((9 - 6.5 + 0.5) * k)), kPreviewPrismWall);
   EXPECT_GT(p.fields["cut_triangles"].get<int>(), 0);
+}
+
+TEST(PreviewsTest, TheSliceSaysWhatItsColoursMeanAndHowLargeAVoxelIs) {
+  const Slab s;
+  Placement mm;
+  mm.spacing = {0.005, 0.005, 0.005};
+  mm.unit = "mm";
+  const Preview p = SlicePreview(s.phase, s.mesh, /*axis=*/0, mm);
+  const int top = p.fields["slice_height"].get<int>();
+  // Below the slice, a swatch of each colour the slice uses, then text in the legend's ink.
+  std::set<std::array<uint8_t, 3>> below;
+  for (int y = top; y < p.image.height; ++y)
+    for (int x = 0; x < p.image.width; ++x) below.insert(Pixel(p.image, x, y));
+  for (const auto& c : {kPreviewPhase, kPreviewMidSurface, kPreviewPrismWall, kPreviewLegendInk})
+    EXPECT_TRUE(below.count(c)) << int(c[0]) << "," << int(c[1]) << "," << int(c[2]);
+  // The last line reads "1 voxel = 0.005 mm": as wide as that text, drawn in ink.
+  const Preview in_voxels = SlicePreview(s.phase, s.mesh, /*axis=*/0);
+  EXPECT_NE(p.image.rgb, in_voxels.image.rgb) << "the voxel's size is in the legend";
 }
 
 TEST(PreviewsTest, SliceAlongTheSlabIsAllPhaseInsideItsOutline) {
@@ -70,6 +91,14 @@ TEST(PreviewsTest, ThicknessMapColoursByThicknessAndEncodesAsPng) {
   EXPECT_EQ(p.fields["faces"], s.mesh.num_faces());
   EXPECT_THAT(p.fields["thickness_range_voxels"].get<std::vector<double>>(),
               ::testing::ElementsAre(1.0, 7.0));
+  EXPECT_EQ(p.fields["field"], "thickness");
+  // With apertures, the map is of them.
+  s.mesh.face_aperture.assign(s.mesh.num_faces(), 2.0f);
+  s.mesh.face_aperture[0] = 4.0f;
+  const Preview a = ThicknessPreview(s.mesh);
+  EXPECT_EQ(a.fields["field"], "aperture");
+  EXPECT_THAT(a.fields["thickness_range_voxels"].get<std::vector<double>>(),
+              ::testing::ElementsAre(2.0, 4.0));
   absl::StatusOr<std::string> png = EncodePng(p.image);
   ASSERT_TRUE(png.ok()) << png.status();
   // Decode it again with libpng: the size and a pixel survive.

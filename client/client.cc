@@ -20,14 +20,18 @@
 #include "common/file_util.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
+#include "sheetmesh/v1/job_states.h"
 
 namespace sheetmesh::client {
-namespace {
 
-absl::Status FromGrpc(const grpc::Status& s) {
+absl::Status FromGrpc(const grpc::Status& s, absl::string_view what) {
   if (s.ok()) return absl::OkStatus();
-  return absl::Status(static_cast<absl::StatusCode>(s.error_code()), s.error_message());
+  return absl::Status(
+      static_cast<absl::StatusCode>(s.error_code()),
+      what.empty() ? s.error_message() : absl::StrCat(what, ": ", s.error_message()));
 }
+
+namespace {
 
 constexpr int64_t kPiece = int64_t{1} << 20;
 
@@ -344,7 +348,7 @@ absl::StatusOr<v1::Job> SheetmeshClient::Watch(
     }
     const grpc::Status st = reader->Finish();
     const v1::JobState s = last.state();
-    if (s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED) return last;
+    if (v1::IsTerminal(s)) return last;
     if (!st.ok() && st.error_code() != grpc::StatusCode::UNAVAILABLE) return FromGrpc(st);
     if (retry >= 30) return absl::UnavailableError("the watch kept breaking; the job goes on");
     std::this_thread::sleep_for(std::chrono::seconds(1));

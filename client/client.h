@@ -9,11 +9,16 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
 #include "sheetmesh/v1/blobs.grpc.pb.h"
 #include "sheetmesh/v1/jobs.grpc.pb.h"
 #include "sheetmesh/v1/volumes.grpc.pb.h"
 
 namespace sheetmesh::client {
+
+// A gRPC status as an absl one, the same code, its message after "`what`: " (the one
+// conversion for every caller of the services: this client and the remote worker).
+absl::Status FromGrpc(const grpc::Status& status, absl::string_view what = "");
 
 struct ClientOptions {
   std::string address = "127.0.0.1:50051";

@@ -24,11 +24,13 @@
 #include "absl/time/clock.h"
 #include "client/client.h"
 #include "client/parameter_flags.h"
+#include "common/exit_codes.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "common/progress_line.h"
 #include "common/status_macros.h"
 #include "google/protobuf/util/json_util.h"
+#include "sheetmesh/v1/job_states.h"
 
 ABSL_FLAG(std::string, server, "127.0.0.1:50051", "the server's host:port");
 ABSL_FLAG(std::string, token, "", "bearer token (or $SHEETMESH_TOKEN)");
@@ -71,19 +73,8 @@ constexpr char kUserInput[] = "sheetmesh/user-input";
 // naming a file it may not); 1 for the rest (the server, the network, a job or blob the
 // server does not have).
 int ExitCodeOf(const absl::Status& st) {
-  switch (st.code()) {
-    case absl::StatusCode::kInvalidArgument:
-    case absl::StatusCode::kOutOfRange:
-    case absl::StatusCode::kDataLoss:
-      return 2;
-    case absl::StatusCode::kResourceExhausted:
-    case absl::StatusCode::kFailedPrecondition:
-    case absl::StatusCode::kPermissionDenied:
-    case absl::StatusCode::kNotFound:
-      return st.GetPayload(kJobFailed).has_value() || st.GetPayload(kUserInput).has_value() ? 2 : 1;
-    default:
-      return 1;
-  }
+  return sheetmesh::ExitCodeOf(
+      st, st.GetPayload(kJobFailed).has_value() || st.GetPayload(kUserInput).has_value());
 }
 
 std::string NewRequestId() {
@@ -145,8 +136,7 @@ class Reporter {
 absl::Status DownloadAll(SheetmeshClient& c, const v1::Job& job, const std::string& dir,
                          const std::string& only) {
   if (job.artifacts().empty()) {
-    const bool ended =
-        job.state() == v1::SUCCEEDED || job.state() == v1::FAILED || job.state() == v1::CANCELLED;
+    const bool ended = v1::IsTerminal(job.state());
     return absl::FailedPreconditionError(
         ended ? absl::StrCat(job.name(), " is ", StateName(job.state()), " and kept no file")
               : absl::StrCat(job.name(), " is ", StateName(job.state()),

@@ -40,10 +40,6 @@ absl::Status CheckRequestId(const std::string& id) {
 
 }  // namespace
 
-bool Terminal(v1::JobState s) {
-  return s == v1::SUCCEEDED || s == v1::FAILED || s == v1::CANCELLED;
-}
-
 absl::StatusOr<std::string> CacheKey(const std::string& tenant, const v1::CreateJobRequest& r,
                                      const std::string& resolved, const std::string& parameters) {
   std::string identity;
@@ -72,18 +68,6 @@ absl::StatusOr<std::string> CacheKey(const std::string& tenant, const v1::Create
   // A tenant's results are reused for that tenant only.
   return Sha256Hex(absl::StrCat(SHEETMESH_VERSION, "\n", tenant, "\n", identity, "\n",
                                 r.input().file_name(), "\n", parameters));
-}
-
-absl::StatusOr<v1::Job> FreshJob(const ServiceContext& ctx, const std::string& tenant,
-                                 const std::string& name) {
-  SM_ASSIGN_OR_RETURN(v1::Job job, ctx.jobs->Get(name));
-  if (job.tenant() != tenant) {
-    return absl::NotFoundError(absl::StrCat(name, " does not exist"));
-  }
-  if (job.state() == v1::RUNNING) {
-    if (auto p = ctx.host->Progress(job.name())) *job.mutable_progress() = *p;
-  }
-  return job;
 }
 
 JobServiceImpl::JobServiceImpl(const ServiceContext* ctx)

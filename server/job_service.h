@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "server/job_view.h"
 #include "server/service_context.h"
 #include "sheetmesh/v1/jobs.grpc.pb.h"
 
@@ -21,13 +22,6 @@ class WatchHub;
 absl::StatusOr<std::string> CacheKey(const std::string& tenant, const v1::CreateJobRequest& request,
                                      const std::string& resolved_path,
                                      const std::string& canonical_parameters);
-
-// The stored job with the running job's live progress; kNotFound (as for a job that does
-// not exist) when it is not `tenant`'s.
-absl::StatusOr<v1::Job> FreshJob(const ServiceContext& ctx, const std::string& tenant,
-                                 const std::string& name);
-
-bool Terminal(v1::JobState state);
 
 // WatchJob runs on gRPC's callback API (a watch costs no thread while it waits); the rest
 // are synchronous handlers.

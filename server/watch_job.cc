@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "absl/time/clock.h"
-#include "server/job_service.h"
+#include "server/job_view.h"
 #include "server/status_util.h"
 
 namespace sheetmesh::server {
@@ -45,7 +45,7 @@ class WatchHub::Reactor final : public grpc::ServerWriteReactor<v1::WatchJobResp
     queue_.push_back(std::move(msg));
     last_ = job->SerializeAsString();
     stage_sent_ = job->state() == v1::RUNNING ? job->progress().stage_index() : 0;
-    terminal_ = Terminal(job->state());
+    terminal_ = v1::IsTerminal(job->state());
     Send();
   }
 
@@ -91,7 +91,7 @@ class WatchHub::Reactor final : public grpc::ServerWriteReactor<v1::WatchJobResp
     msg.set_heartbeat(!changed || cur == last_);
     last_ = cur;
     queue_.push_back(std::move(msg));
-    terminal_ = Terminal(job->state());
+    terminal_ = v1::IsTerminal(job->state());
     Send();
   }
 

@@ -3,12 +3,13 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "common/excerpt.h"
-#include "server/blob_service.h"
 #include "server/auth.h"
+#include "server/blob_service.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
 #include "server/local_job_host.h"
 #include "server/status_util.h"
+#include "sheetmesh/v1/job_states.h"
 
 namespace sheetmesh::server {
 namespace {
@@ -121,7 +122,7 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
   if (grpc::Status a = Authorize(*context); !a.ok()) return a;
   if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
   const v1::JobState state = request->state();
-  if (state != v1::SUCCEEDED && state != v1::FAILED && state != v1::CANCELLED) {
+  if (!v1::IsTerminal(state)) {
     return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                         absl::StrCat("state ", v1::JobState_Name(state),
                                      " does not end a job (SUCCEEDED, FAILED or CANCELLED)"));

@@ -141,8 +141,8 @@ class GatewayTest(unittest.TestCase):
         return states
 
     def check_previews(self, job, report):
-        """The PNG previews exist, decode, have the size the report states, and their phase
-        pixels are the sample's phase in that slice."""
+        """The PNG previews exist, decode, have the size the report states, their phase
+        pixels are the sample's phase in that slice, and a legend is drawn below it."""
         arts = {a["name"]: a for a in job["artifacts"]}
         previews = {p["file"]: p for p in report["previews"]}
         self.assertEqual(set(previews), {"preview_slice_x.png", "preview_slice_y.png", "preview_slice_z.png",
@@ -164,6 +164,10 @@ class GatewayTest(unittest.TestCase):
             k = int(p["pixels_per_voxel"])
             truth = np.repeat(np.repeat(cut, k, axis=0), k, axis=1)
             colours = p["colours"]
+            # The slice on top, the legend below it (the picture as wide as either needs).
+            legend = img[p["slice_height"]:]
+            img = img[:truth.shape[0], :truth.shape[1]]
+            self.assertTrue(np.any(np.all(legend == colours["phase"], axis=2)), "%s: no legend" % name)
             drawn = np.all(img == colours["mid_surface"], axis=2) | np.all(img == colours["prism_wall"], axis=2)
             shown = np.all(img == colours["phase"], axis=2)
             background = np.all(img == colours["background"], axis=2)

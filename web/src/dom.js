@@ -18,6 +18,11 @@ export function el(tag, attrs = {}, ...children) {
   return e;
 }
 
+// SUCCEEDED, FAILED or CANCELLED: the job has ended (the one test of it in the front-end).
+export function isTerminal(state) {
+  return state === "SUCCEEDED" || state === "FAILED" || state === "CANCELLED";
+}
+
 // `state` (a job's) colours the bar: red when FAILED, grey when CANCELLED.
 export function progressBar(fraction, label, state = "") {
   const bar = el("div", { class: `bar ${state.toLowerCase()}`.trim(), role: "progressbar", "aria-valuemin": 0,

@@ -1,7 +1,7 @@
 // One job: live progress, then its figures, tables, histogram, 3D view and downloads.
 import * as api from "./api.js";
 import { faceValues, thicknessHistogram } from "./charts.js";
-import { el, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
+import { el, isTerminal, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
 
 const fmt = (v, d = 4) => (v === undefined || v === null || Number.isNaN(v) ? "–" : Number(v).toFixed(d));
 
@@ -138,14 +138,14 @@ export function jobPage(app, name) {
   const render = (j) => {
     head.replaceChildren(progressBar(jobFraction(j), jobLabel(j), j.state),
       el("p", { id: "job_state", "data-state": j.state }, j.state,
-        j.state === "QUEUED" || j.state === "RUNNING" ? el("button", { onclick: () => api.cancelJob(name).catch(showError) }, "Cancel") : ""),
+        !isTerminal(j.state) ? el("button", { onclick: () => api.cancelJob(name).catch(showError) }, "Cancel") : ""),
       j.error && j.error.message ? el("p", { class: "error", id: "job_error" }, j.error.message) : "");
   };
   (async () => {
     try {
       let last = await api.getJob(name);
       render(last);
-      if (last.state === "QUEUED" || last.state === "RUNNING") {
+      if (!isTerminal(last.state)) {
         await api.watchJob(name, (j) => { last = j; render(j); }, abort.signal);
         last = await api.getJob(name);
         render(last);

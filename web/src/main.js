@@ -4,7 +4,7 @@ import "./style.css";
 import * as api from "./api.js";
 import { uploadFile } from "./upload.js";
 import { jobPage } from "./job_page.js";
-import { el, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
+import { el, isTerminal, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
 // The parameter table's defaults (`sheetmesh-pipeline params --json`, written by
 // tools/readme_parameters.sh): the form starts where every other interface starts.
 import defaults from "./parameter_defaults.json";
@@ -76,7 +76,7 @@ async function refreshList() {
       el("td", {}, progressBar(jobFraction(j), jobLabel(j), j.state)),
       el("td", {}, j.create_time ? new Date(j.create_time).toLocaleString() : "")));
     table.tBodies[0].replaceChildren(...rows);
-    const live = (resp.jobs || []).some((j) => j.state === "QUEUED" || j.state === "RUNNING");
+    const live = (resp.jobs || []).some((j) => !isTerminal(j.state));
     listTimer = setTimeout(refreshList, live ? 1000 : 5000);
   } catch (e) {
     showError(e);

@@ -14,15 +14,8 @@
 #include "google/protobuf/util/time_util.h"
 
 namespace sheetmesh::remote {
-namespace {
 
-absl::Status FromGrpc(const grpc::Status& s, const std::string& what) {
-  if (s.ok()) return absl::OkStatus();
-  return absl::Status(static_cast<absl::StatusCode>(s.error_code()),
-                      absl::StrCat(what, ": ", s.error_message()));
-}
-
-}  // namespace
+using client::FromGrpc;
 
 absl::StatusOr<std::unique_ptr<RemoteJobHost>> RemoteJobHost::Connect(RemoteJobHostOptions o) {
   if (o.scratch_dir.empty()) return absl::InvalidArgumentError("--scratch_dir is required");

@@ -17,6 +17,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "common/exit_codes.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
@@ -124,24 +125,6 @@ absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool surfac
   }
   SM_ASSIGN_OR_RETURN(PipelineOptions o, builder.Build(base));
   return flags.given.Build(o);
-}
-
-// 2: the input or the parameters are wrong, and the user can mend them (a bad or cut file,
-// one too big for the memory budget, a file that is missing or may not be read, sheets that
-// clash); 1: the rest (the machine, a bug).
-int ExitCodeOf(const absl::Status& status) {
-  switch (status.code()) {
-    case absl::StatusCode::kInvalidArgument:
-    case absl::StatusCode::kResourceExhausted:
-    case absl::StatusCode::kNotFound:
-    case absl::StatusCode::kPermissionDenied:
-    case absl::StatusCode::kFailedPrecondition:
-    case absl::StatusCode::kOutOfRange:
-    case absl::StatusCode::kDataLoss:
-      return 2;
-    default:
-      return 1;
-  }
 }
 
 absl::Status Usage(absl::string_view what) {
@@ -333,7 +316,7 @@ int Main(int argc, char** argv) {
   if (!status.ok()) {
     std::cerr << "sheetmesh-pipeline " << command << ": " << absl::StatusCodeToString(status.code())
               << ": " << status.message() << "\n";
-    return ExitCodeOf(status);
+    return ExitCodeOf(status, /*about_user_input=*/true);  // its files are the user's
   }
   return 0;
 }

@@ -34,13 +34,12 @@ void Count(const VoxelSet& before, const VoxelSet& after, ExtractionStep* s) {
   s->removed = before.size() - common;
 }
 
-// An extension's SCVD radius of 0 follows the separation's.
+}  // namespace
+
 ExtendOptions Following(ExtendOptions e, const SeparationOptions& separation) {
   if (e.scvd_radius_voxels == 0) e.scvd_radius_voxels = separation.radius_voxels;
   return e;
 }
-
-}  // namespace
 
 namespace {
 

@@ -116,6 +116,10 @@ absl::StatusOr<ExtractionResult> ExtractFeatures(const VoxelSet& input,
                                                  const ExtractionOptions& options,
                                                  const Progress& progress = {});
 
+// An extension's options with an SCVD radius of 0 following the separation's (detect.scvd_r
+// and recover.scvd_r of 0 take separate.r): the one place that rule lives.
+ExtendOptions Following(ExtendOptions extend, const SeparationOptions& separation);
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_EXTRACT_EXTRACTION_H_

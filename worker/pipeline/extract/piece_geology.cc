@@ -8,7 +8,7 @@
 #include "common/orientation.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
-#include "worker/pipeline/surface/face_attributes.h"
+#include "worker/pipeline/similarity/face_attributes.h"
 
 namespace sheetmesh {
 

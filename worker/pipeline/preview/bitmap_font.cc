@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "worker/pipeline/preview/previews.h"
+#include "worker/pipeline/preview/rgb_image.h"
 
 namespace sheetmesh {
 namespace {

@@ -7,10 +7,9 @@
 #include <cstdint>
 
 #include "absl/strings/string_view.h"
+#include "worker/pipeline/preview/rgb_image.h"
 
 namespace sheetmesh {
-
-struct RgbImage;
 
 inline constexpr int kGlyphWidth = 5, kGlyphHeight = 7, kGlyphAdvance = 6;
 

@@ -13,6 +13,7 @@
 #include "absl/status/statusor.h"
 #include "nlohmann/json.hpp"
 #include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/preview/rgb_image.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {
@@ -23,18 +24,6 @@ inline constexpr std::array<uint8_t, 3> kPreviewPhase = {120, 190, 255};
 inline constexpr std::array<uint8_t, 3> kPreviewMidSurface = {255, 60, 40};
 inline constexpr std::array<uint8_t, 3> kPreviewPrismWall = {255, 190, 40};
 inline constexpr std::array<uint8_t, 3> kPreviewLegendInk = {225, 228, 235};
-
-// An RGB picture, rows top to bottom.
-struct RgbImage {
-  int width = 0, height = 0;
-  std::vector<uint8_t> rgb;  // 3 * width * height
-
-  void Set(int x, int y, const std::array<uint8_t, 3>& c) {
-    if (x < 0 || y < 0 || x >= width || y >= height) return;
-    uint8_t* p = &rgb[3 * (static_cast<size_t>(y) * width + x)];
-    p[0] = c[0], p[1] = c[1], p[2] = c[2];
-  }
-};
 
 // One preview: its file and what its pixels show (the report lists these).
 struct Preview {

@@ -26,7 +26,7 @@ auto& Read(const Ref& ref, const PipelineOptions& o) {
 }
 
 inline ParamRow Row(std::string key, ParamType type, const char* range, std::string unit,
-             std::string doc) {
+                    std::string doc) {
   ParamRow r;
   r.spec.key = std::move(key);
   r.spec.type = type;
@@ -37,7 +37,8 @@ inline ParamRow Row(std::string key, ParamType type, const char* range, std::str
 }
 
 template <class Ref>
-inline ParamRow Number(std::string key, Ref ref, const char* range, std::string unit, std::string doc) {
+inline ParamRow Number(std::string key, Ref ref, const char* range, std::string unit,
+                       std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kNumber, range, std::move(unit), std::move(doc));
   r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
     return ParamValue(static_cast<double>(Read(ref, o)));
@@ -49,7 +50,8 @@ inline ParamRow Number(std::string key, Ref ref, const char* range, std::string 
 }
 
 template <class Ref>
-inline ParamRow Integer(std::string key, Ref ref, const char* range, std::string unit, std::string doc) {
+inline ParamRow Integer(std::string key, Ref ref, const char* range, std::string unit,
+                        std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kInteger, range, std::move(unit), std::move(doc));
   r.get = [ref](const PipelineOptions& o) -> std::optional<ParamValue> {
     return ParamValue(static_cast<int64_t>(Read(ref, o)));
@@ -83,7 +85,7 @@ inline ParamRow Text(std::string key, Ref ref, std::string doc) {
 // A member of enum (or string) type E, spelt by `choices`.
 template <class Ref, class E = MemberOf<Ref>>
 inline ParamRow Choice(std::string key, Ref ref, std::vector<std::pair<std::string, E>> choices,
-                std::string doc) {
+                       std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kChoice, nullptr, "", std::move(doc));
   for (const auto& [name, _] : choices) r.spec.choices.push_back(name);
   r.get = [ref, choices](const PipelineOptions& o) -> std::optional<ParamValue> {
@@ -101,8 +103,9 @@ inline ParamRow Choice(std::string key, Ref ref, std::vector<std::pair<std::stri
 }
 
 // Output files: a list of names, each one a bool member.
-inline ParamRow Formats(std::string key, std::vector<std::pair<std::string, bool OutputOptions::*>> files,
-                 std::string doc) {
+inline ParamRow Formats(std::string key,
+                        std::vector<std::pair<std::string, bool OutputOptions::*>> files,
+                        std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kChoices, nullptr, "", std::move(doc));
   r.spec.allow_empty = true;
   for (const auto& [name, _] : files) r.spec.choices.push_back(name);
@@ -124,7 +127,7 @@ inline ParamRow Formats(std::string key, std::vector<std::pair<std::string, bool
 
 // An optional input override of three numbers (spacing, origin).
 inline ParamRow Triple(std::string key, std::optional<Vec3> OpenOptions::*member, const char* range,
-                std::string unit, std::string doc) {
+                       std::string unit, std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kNumbers, range, std::move(unit), std::move(doc));
   r.spec.count = 3;
   r.get = [member](const PipelineOptions& o) -> std::optional<ParamValue> {

@@ -4,10 +4,9 @@
 #define SHEETMESH_WORKER_PIPELINE_RUN_PARAMETER_ROWS_H_
 
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "worker/pipeline/run/parameters.h"
 
@@ -42,8 +41,7 @@ const std::vector<Renamed>& RenamedParameters();
 // The value as JSON text: 5, true, "paper", [2,3,4].
 std::string ShowValue(const ParamValue& v);
 // kInvalidArgument "DISPLAY = VALUE WHY".
-absl::Status BadValue(const std::string& display, const std::string& value,
-                      absl::string_view why);
+absl::Status BadValue(const std::string& display, const std::string& value, absl::string_view why);
 // What a value of `s` must be ("must be a number in (0, 1000]").
 std::string Expected(const ParamSpec& s);
 // The JSON value as `s`'s type, or nullopt when it is not of that type.

@@ -1,5 +1,6 @@
 // The table of parameters: one row per setting of PipelineOptions. Adding a parameter is
 // one row here (and its proto field; the tests check that both exist and agree).
+#include "absl/strings/str_cat.h"
 #include "worker/pipeline/run/parameter_row_helpers.h"
 #include "worker/pipeline/voxel/threshold.h"
 
@@ -223,8 +224,8 @@ std::vector<ParamRow> SurfaceRows() {
   }
   {
     ParamRow r = Row("triangles", ParamType::kInteger, "[1, 1e9]", "",
-                     "search the r whose mesh has this many triangles, within 5% (unset: r as "
-                     "given)");
+                     absl::StrCat("search the r whose mesh has this many triangles, within ",
+                                  100 * kTriangleTolerance, "% (unset: r as given)"));
     r.spec.exclusive = "radius search";
     r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
       if (!o.search_radius || o.radius_search.goal != RadiusGoal::kTriangles) return std::nullopt;

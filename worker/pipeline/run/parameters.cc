@@ -15,6 +15,7 @@
 #include "common/assert.h"
 #include "common/json_text.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/run/parameter_rows.h"
 #include "worker/pipeline/run/parameters_json.h"
 
@@ -63,7 +64,7 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
 void ResolveFollowers(PipelineOptions& o) {
   ExtractionOptions& x = o.extraction;
   for (ExtendOptions* e : {&x.detect_extend, &x.recover_extend}) {
-    if (e->scvd_radius_voxels == 0) e->scvd_radius_voxels = x.separation.radius_voxels;
+    *e = Following(*e, x.separation);
   }
 }
 

@@ -17,7 +17,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
-#include "worker/pipeline/run/pipeline.h"
+#include "worker/pipeline/run/pipeline_options.h"
 
 namespace sheetmesh {
 

@@ -15,6 +15,7 @@
 #include "worker/pipeline/preview/previews.h"
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
+#include "worker/pipeline/surface/error_density.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
 #include "worker/pipeline/voxel/label_volume.h"
@@ -261,8 +262,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   SurfaceResult result;
   {
     StageTimer t(&report, "surface");
-    SM_ASSIGN_OR_RETURN(result,
-                        BuildSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
+    SM_ASSIGN_OR_RETURN(
+        result, BuildRequestedSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   if (result.mesh.num_faces() == 0) {
     // An empty mesh scores 0 and would give a volume mesh of the box alone: not a result.

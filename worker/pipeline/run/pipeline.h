@@ -15,6 +15,7 @@
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
+#include "worker/pipeline/run/pipeline_options.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/radius_search.h"
@@ -25,44 +26,6 @@
 #include "worker/pipeline/voxel/thickness.h"
 
 namespace sheetmesh {
-
-struct ScoreOptions {
-  PrismHeight height = PrismHeight::kFace;  // the mesh model of the headline similarity
-  bool hausdorff = true;                    // also the symmetric Hausdorff distance
-  std::vector<int> grid_rates = {2, 3, 4};  // grid-model baselines of Table 2 (empty: none)
-};
-
-struct OutputOptions {
-  std::string dir;          // where files go (created); empty: write nothing
-  bool ply = true;          // surface.ply
-  bool vtp = true;          // surface.vtp
-  bool surface_vtu = true;  // surface.vtu (the same as an unstructured grid)
-  bool obj = true;          // surface.obj
-  bool model = true;        // with extraction: model.vdb (mask + labels) and
-                            // model_labels_<dims>_u16.raw, and pieces.csv
-  bool dropped = false;     // with extraction: dropped_labels_<dims>_u16.raw, the voxels of
-                            // the phase the model lacks labelled by why (DroppedBy)
-  bool vtu = true;          // with a volume mesh: volume.vtu
-  bool msh = true;          // volume.msh (Gmsh 4.1)
-  bool inp = true;          // volume.inp (Abaqus/CalculiX)
-  bool exo = true;          // volume.exo (Exodus II)
-  bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
-};
-
-struct PipelineOptions {
-  SheetInput input;
-  bool extract = true;  // run the feature extraction (Fig. 3) first; the surface command: false
-  ExtractionOptions extraction;
-  SurfaceOptions surface;      // r = surface.scvd.radius_voxels unless searched
-  bool search_radius = false;  // choose r with `radius_search`
-  RadiusSearchOptions radius_search;
-  RepresentationOptions representation;  // each piece a sheet or a body
-  ScoreOptions score;
-  bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
-  VolumeMeshOptions volume;
-  OutputOptions output;
-  double time_limit_seconds = 0;  // the run ends kDeadlineExceeded past this (0: none)
-};
 
 // Stage names in the order RunPipeline reports them through Progress::Stage.
 std::vector<std::string> PlannedStages(const PipelineOptions& options);

@@ -9,7 +9,7 @@
 
 #include "absl/status/status.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
-#include "worker/pipeline/run/pipeline.h"
+#include "worker/pipeline/run/pipeline_options.h"
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {

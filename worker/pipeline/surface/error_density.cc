@@ -61,4 +61,14 @@ absl::StatusOr<SurfaceResult> BuildErrorDrivenSurface(const SheetAnalysis& sheet
   return std::move(kept);
 }
 
+absl::StatusOr<SurfaceResult> BuildRequestedSurface(const SheetAnalysis& sheet,
+                                                    const SurfaceOptions& options,
+                                                    std::span<const int32_t> piece_of_voxel,
+                                                    const Progress& progress) {
+  if (options.error_density > 0) {
+    return BuildErrorDrivenSurface(sheet, options, piece_of_voxel, progress);
+  }
+  return BuildSurface(sheet, options, piece_of_voxel, progress);
+}
+
 }  // namespace sheetmesh

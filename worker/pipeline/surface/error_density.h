@@ -30,6 +30,13 @@ absl::StatusOr<SurfaceResult> BuildErrorDrivenSurface(const SheetAnalysis& sheet
                                                       std::span<const int32_t> piece_of_voxel,
                                                       const Progress& progress);
 
+// The surface `options` ask for: BuildErrorDrivenSurface when options.error_density > 0,
+// else BuildSurface.
+absl::StatusOr<SurfaceResult> BuildRequestedSurface(const SheetAnalysis& sheet,
+                                                    const SurfaceOptions& options,
+                                                    std::span<const int32_t> piece_of_voxel = {},
+                                                    const Progress& progress = {});
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_ERROR_DENSITY_H_

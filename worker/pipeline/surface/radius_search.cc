@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/surface/error_density.h"
 
 namespace sheetmesh {
 namespace {
@@ -41,7 +42,7 @@ class Evaluator {
     o.target_faces = decimate_to;
     // Counting needs no heights: the fits change no face.
     if (!score) o.fit_walls = false;
-    SM_ASSIGN_OR_RETURN(SurfaceResult s, BuildSurface(sheet_, o));
+    SM_ASSIGN_OR_RETURN(SurfaceResult s, BuildRequestedSurface(sheet_, o));
     RadiusTrial t;
     t.radius = r;
     t.triangles = s.mesh.num_faces();
@@ -132,8 +133,9 @@ absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, doub
   choice.radius = best->radius;
   choice.target_reached = within(best->triangles);
   if (!choice.target_reached) {
-    choice.message = absl::StrCat("no r gave ", target, " triangles within 5%: the nearest, ",
-                                  best->triangles, ", at r = ", best->radius);
+    choice.message =
+        absl::StrCat("no r gave ", target, " triangles within ", 100 * kTriangleTolerance,
+                     "%: the nearest, ", best->triangles, ", at r = ", best->radius);
   }
   return choice;
 }
@@ -184,10 +186,11 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     c.decimate_to = n;
     c.target_reached = std::abs(double(decimated.triangles) - n) <= kTriangleTolerance * n;
     if (!c.target_reached) {
-      c.message = decimated.triangles > n
-                      ? absl::StrCat("decimation stopped at ", decimated.triangles, " triangles")
-                      : absl::StrCat("no r gave ", n, " triangles within 5%: the finest, ",
-                                     decimated.triangles, ", at r = ", c.radius);
+      c.message =
+          decimated.triangles > n
+              ? absl::StrCat("decimation stopped at ", decimated.triangles, " triangles")
+              : absl::StrCat("no r gave ", n, " triangles within ", 100 * kTriangleTolerance,
+                             "%: the finest, ", decimated.triangles, ", at r = ", c.radius);
     }
     if (plain.ok() && plain->target_reached) {
       SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(plain->radius, true));

@@ -12,8 +12,8 @@
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/similarity/mesh_model.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
 #include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
 

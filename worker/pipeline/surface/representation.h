@@ -16,7 +16,7 @@
 #include "common/progress.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/similarity/mesh_model.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
 

@@ -9,9 +9,8 @@
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/smooth.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
-#include "worker/pipeline/surface/error_density.h"
+#include "worker/pipeline/similarity/face_attributes.h"
 #include "worker/pipeline/surface/face_apertures.h"
-#include "worker/pipeline/surface/face_attributes.h"
 #include "worker/pipeline/surface/wall_fit.h"
 
 namespace sheetmesh {
@@ -32,9 +31,6 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                            const SurfaceOptions& options,
                                            std::span<const int32_t> piece_of_voxel,
                                            const Progress& progress) {
-  if (options.error_density > 0) {
-    return BuildErrorDrivenSurface(sheet, options, piece_of_voxel, progress);
-  }
   SurfaceResult out;
   absl::Time t0 = absl::Now();
   SM_ASSIGN_OR_RETURN(

@@ -16,10 +16,10 @@
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
 #include "worker/pipeline/scvd/scvd.h"
+#include "worker/pipeline/similarity/face_attributes.h"
 #include "worker/pipeline/surface/face_apertures.h"
-#include "worker/pipeline/surface/face_attributes.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
 #include "worker/pipeline/surface/vertex_fit.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
 
@@ -125,7 +125,8 @@ struct SurfaceStats {
 // The stats of `result`, its lengths made physical by `placement`.
 SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& placement);
 
-// Meshes `sheet`. `piece_of_voxel`, when not empty, labels each voxel with its object id
+// Meshes `sheet` with one SCVD (options.error_density is BuildRequestedSurface's, in
+// error_density.h). `piece_of_voxel`, when not empty, labels each voxel with its object id
 // (faces take their vertices' majority); otherwise faces carry their component id.
 // Errors of BuildScvd pass through (kInvalidArgument for r <= 0 or r beyond the volume);
 // kCancelled if asked.

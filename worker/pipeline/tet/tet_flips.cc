@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "worker/pipeline/tet/tet_improve.h"
+#include "worker/pipeline/tet/tet_quality.h"
 
 namespace sheetmesh {
 namespace {

@@ -8,6 +8,7 @@
 
 #include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/tet/tet_cavity.h"
+#include "worker/pipeline/tet/tet_quality.h"
 
 namespace sheetmesh {
 namespace {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "absl/container/flat_hash_set.h"
-#include "worker/pipeline/tet/tet_improve.h"
+#include "worker/pipeline/tet/tet_improve_options.h"
 #include "worker/pipeline/tet/tet_mesh_editor.h"
 #include "worker/pipeline/tet/tet_smoothing.h"
 #include "worker/pipeline/tet/vertex_freedom.h"

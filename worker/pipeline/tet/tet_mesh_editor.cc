@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <atomic>
 
-#include "worker/pipeline/tet/tet_improve.h"
+#include "worker/pipeline/tet/tet_quality.h"
 
 namespace sheetmesh {
 

@@ -6,6 +6,24 @@
 
 namespace sheetmesh {
 
+double MinDihedralDegrees(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 ab = b - a, ac = c - a, ad = d - a;
+  if (Dot(Cross(ab, ac), ad) <= 0) return -1.0;
+  // Outward normals of the faces opposite d, c, b and a (the tetrahedron is positive).
+  Vec3 n[4] = {Cross(ac, ab), Cross(ab, ad), Cross(ad, ac), Cross(c - b, d - b)};
+  for (Vec3& v : n) {
+    const double len = Norm(v);
+    if (!(len > 0)) return -1.0;
+    v = v / len;
+  }
+  // The dihedral angle between faces i and j is π minus the angle between their normals;
+  // the smallest angle has the largest -n_i·n_j.
+  double worst = -1.0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) worst = std::max(worst, -Dot(n[i], n[j]));
+  return std::acos(std::clamp(worst, -1.0, 1.0)) * (180.0 / std::numbers::pi);
+}
+
 TetShape MeasureTet(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   TetShape s;
   const Vec3 p[4] = {a, b, c, d};

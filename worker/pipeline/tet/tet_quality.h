@@ -11,6 +11,10 @@
 
 namespace sheetmesh {
 
+// The smallest dihedral angle of the tetrahedron (a, b, c, d) in degrees, or a negative
+// number when it is inverted or flat (TetVolume <= 0).
+double MinDihedralDegrees(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
 // The four measures of one tetrahedron. A regular tetrahedron has 70.53°, 1, 1, 1.
 struct TetShape {
   double min_dihedral_degrees = 0;

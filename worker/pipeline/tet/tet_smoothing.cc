@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "common/status_macros.h"
-#include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_quality.h"
 
 namespace sheetmesh {

@@ -34,11 +34,11 @@ bool SmoothVertex(TetMeshEditor& ed, const VertexFreedom& fr, uint32_t v,
 // One sweep of smoothing over `todo` (ids of vertices that may move, increasing) on all
 // cores. The sweep goes in rounds: a round takes, in id order, the waiting vertices that
 // share no tetrahedron with one taken before it (so no move sees another's: each looks at
-// its own star only), and the others wait for the next round. As a round forms, `wants(v)` says whether v still needs a
-// move (a neighbour's move may have lifted its star). After a round, in id order, each
-// moved vertex's star is measured again and `done(v, moved)` is called for every vertex of
-// the round. So the result depends on neither the number of threads nor their timing.
-// Returns kCancelled if `progress` asks (between rounds; the mesh stays valid).
+// its own star only), and the others wait for the next round. As a round forms, `wants(v)` says
+// whether v still needs a move (a neighbour's move may have lifted its star). After a round, in id
+// order, each moved vertex's star is measured again and `done(v, moved)` is called for every vertex
+// of the round. So the result depends on neither the number of threads nor their timing. Returns
+// kCancelled if `progress` asks (between rounds; the mesh stays valid).
 absl::Status SmoothVertices(TetMeshEditor& ed, const VertexFreedom& fr, std::vector<uint32_t> todo,
                             const SmoothingOptions& options,
                             const std::function<bool(uint32_t)>& wants,

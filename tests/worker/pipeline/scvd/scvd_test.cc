@@ -9,7 +9,7 @@
 
 #include "tests/testing/shapes.h"
 #include "tests/testing/status_matchers.h"
-#include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
 namespace {

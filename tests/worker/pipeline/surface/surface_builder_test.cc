@@ -13,6 +13,7 @@
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/surface/error_density.h"
 
 namespace sheetmesh {
 namespace {
@@ -34,7 +35,7 @@ Built Build(VoxelSet set, double r, SurfaceOptions o = {}) {
   EXPECT_TRUE(a.ok()) << a.status();
   b.sheet = std::move(a).value();
   o.scvd.radius_voxels = r;
-  auto s = BuildSurface(b.sheet, o);
+  auto s = BuildRequestedSurface(b.sheet, o);
   EXPECT_TRUE(s.ok()) << s.status();
   b.surface = std::move(s).value();
   b.topo = AnalyzeTopology(b.surface.mesh);

@@ -1,7 +1,7 @@
 // Attributes of sheet triangles measured on the image: thickness (paper §2.3.2: the mean
 // τ of the sheet voxels a triangle passes through) and the object each triangle belongs to.
-#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_FACE_ATTRIBUTES_H_
-#define SHEETMESH_WORKER_PIPELINE_SURFACE_FACE_ATTRIBUTES_H_
+#ifndef SHEETMESH_WORKER_PIPELINE_SIMILARITY_FACE_ATTRIBUTES_H_
+#define SHEETMESH_WORKER_PIPELINE_SIMILARITY_FACE_ATTRIBUTES_H_
 
 #include <cstdint>
 #include <span>
@@ -36,4 +36,4 @@ std::vector<int32_t> FaceLabels(const TriangleMesh& mesh, std::span<const int32_
 
 }  // namespace sheetmesh
 
-#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_FACE_ATTRIBUTES_H_
+#endif  // SHEETMESH_WORKER_PIPELINE_SIMILARITY_FACE_ATTRIBUTES_H_

@@ -1,4 +1,4 @@
-#include "worker/pipeline/surface/sheet_analysis.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
 
 #include "common/status_macros.h"
 

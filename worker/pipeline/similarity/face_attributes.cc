@@ -1,4 +1,4 @@
-#include "worker/pipeline/surface/face_attributes.h"
+#include "worker/pipeline/similarity/face_attributes.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,7 +1,7 @@
 // SheetAnalysis: what every meshing step needs to know about a sheet set — per-voxel
 // thickness τ and its mean t̄, face neighbours, 6-connected components — computed once.
-#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_SHEET_ANALYSIS_H_
-#define SHEETMESH_WORKER_PIPELINE_SURFACE_SHEET_ANALYSIS_H_
+#ifndef SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_ANALYSIS_H_
+#define SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_ANALYSIS_H_
 
 #include <cstdint>
 #include <vector>
@@ -28,4 +28,4 @@ absl::StatusOr<SheetAnalysis> AnalyzeSheet(VoxelSet set, const Progress& progres
 
 }  // namespace sheetmesh
 
-#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_SHEET_ANALYSIS_H_
+#endif  // SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_ANALYSIS_H_

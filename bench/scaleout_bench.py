@@ -105,6 +105,29 @@ def failover(build, tmp, root, slow, lease, jobs_pb2):
         stack.close()
 
 
+def cancel_latency(build, tmp, root, slow, jobs_pb2, runs=5):
+    """Seconds from CancelJob to CANCELLED for a job a remote sheetmesh-worker runs (the
+    cancel reaches it through the job store and its lease): each of `runs` jobs cancelled
+    a second into its run."""
+    from sheetmesh_client import SheetmeshClient
+    stack = Stack(build, tmp / "cancel", root, ["--local_workers=false"], workers=1)
+    took = []
+    try:
+        client = SheetmeshClient(stack.address)
+        for _ in range(runs):
+            job = client.create_job(volume_path=str(slow), parameters={"extract": True}, no_cache=True)
+            wait(client, job.name, lambda j: j.state == jobs_pb2.RUNNING)
+            time.sleep(1)
+            t = time.perf_counter()
+            client.cancel_job(job.name)
+            wait(client, job.name, lambda j: j.state == jobs_pb2.CANCELLED)
+            took.append(time.perf_counter() - t)
+        client.close()
+        return took
+    finally:
+        stack.close()
+
+
 def leasing(build, tmp, root, sample, n, postgres, jobs_pb2):
     import grpc
     from sheetmesh_client import SheetmeshClient
@@ -153,7 +176,9 @@ def main():
     ap.add_argument("build", nargs="?", default=str(ROOT / "build"))
     ap.add_argument("--jobs", type=int, default=12)
     ap.add_argument("--lease_jobs", type=int, default=400)
+    ap.add_argument("--only", default="", help="throughput, failover, cancel, leasing (comma-separated; default all)")
     a = ap.parse_args()
+    parts = set(a.only.split(",")) if a.only else {"throughput", "failover", "cancel", "leasing"}
     build = pathlib.Path(a.build).resolve()
     sys.path.insert(0, str(build / "python"))
     from sheetmesh_client import SheetmeshClient
@@ -173,6 +198,8 @@ def main():
         for label, flags, workers in (("embedded default (in-process, one per core)", [], 0),
                                       ("one sheetmesh-worker", ["--local_workers=false"], 1),
                                       ("two sheetmesh-workers", ["--local_workers=false"], 2)):
+            if "throughput" not in parts:
+                break
             stack = Stack(build, tmp / label.split()[0], root, flags, workers)
             try:
                 client = SheetmeshClient(stack.address)
@@ -181,9 +208,15 @@ def main():
                 print("throughput, %s: %.1f jobs per minute (%d jobs)" % (label, rate, a.jobs))
             finally:
                 stack.close()
-        for lease in (3, 10):
+        for lease in (3, 10) if "failover" in parts else ():
             print("failover, --lease_seconds %d: the killed worker's job RUNNING again %.1f s after the kill"
                   % (lease, failover(build, tmp, root, slow, lease, jobs_pb2)))
+        if "cancel" in parts:
+            took = sorted(cancel_latency(build, tmp, root, slow, jobs_pb2))
+            print("cancel of a job a sheetmesh-worker runs: CANCELLED %.2f s after CancelJob (median of %d; "
+                  "%.2f-%.2f s)" % (took[len(took) // 2], len(took), took[0], took[-1]))
+        if "leasing" not in parts:
+            return
         pg = subprocess.run(["bash", str(ROOT / "tools/pg_cluster.sh"), "start", str(tmp / "pg")], check=True,
                             capture_output=True, text=True).stdout.strip()
         for name, conninfo in (("SQLite", None), ("PostgreSQL", pg)):

@@ -85,7 +85,9 @@ grpc::Status WorkerServiceImpl::RenewLease(grpc::ServerContext* context,
     return grpc::Status::OK;
   }
   if (!st.ok()) return ToGrpcStatus(st);
-  response->set_stop(MustStop(request->name()));
+  const absl::StatusOr<bool> cancelled = ctx_->jobs->CancelRequested(request->name());
+  response->set_stop(!cancelled.ok() || *cancelled);
+  response->set_cancelled(cancelled.ok() && *cancelled);
   return grpc::Status::OK;
 }
 

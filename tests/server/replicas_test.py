@@ -134,8 +134,8 @@ class ReplicasTest(unittest.TestCase):
         end = self.wait_state(self.a.client, job.name, {self.pb.CANCELLED, self.pb.SUCCEEDED, self.pb.FAILED}, 60)
         took = time.time() - t
         self.assertEqual(end.state, self.pb.CANCELLED, end.error.message)
+        # How fast is a benchmark's question (bench/scaleout_bench.py --only cancel), not a test's.
         print("cancel through the other replica took %.2f s" % took)
-        self.assertLess(took, 15)
         self.b.client.cancel_job(busy.name)
         self.wait_state(self.b.client, busy.name, {self.pb.CANCELLED, self.pb.SUCCEEDED}, 60)
 

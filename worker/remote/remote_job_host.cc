@@ -72,9 +72,12 @@ absl::Status RemoteJobHost::Renew(const std::string& job, const std::string& wor
   v1::RenewLeaseResponse resp;
   auto ctx = Context();
   SM_RETURN_IF_ERROR(FromGrpc(workers_->RenewLease(ctx.get(), req, &resp), "renewing " + job));
+  if (resp.stop() && resp.cancelled()) {
+    return absl::CancelledError(absl::StrCat(job, " was cancelled"));
+  }
   if (resp.stop()) {
     return absl::FailedPreconditionError(
-        absl::StrCat(job, ": the server says stop (cancelled, or the lease went elsewhere)"));
+        absl::StrCat(job, ": the server says stop (the job ended, or its lease went elsewhere)"));
   }
   return absl::OkStatus();
 }

@@ -80,7 +80,8 @@ class JobHost {
   virtual absl::StatusOr<std::optional<v1::Job>> Lease(const std::string& worker,
                                                        absl::Duration wait) = 0;
   // Extends the lease. kNotFound / kFailedPrecondition when the job is gone, finished, or
-  // leased to another worker: the worker must stop.
+  // leased to another worker: the worker must stop and report nothing. kCancelled when the
+  // job was cancelled and the lease is still the worker's: stop it and end it CANCELLED.
   virtual absl::Status Renew(const std::string& job, const std::string& worker) = 0;
   // Progress of a leased job. Returns false when the job should stop (cancelled, lease
   // lost).

@@ -35,7 +35,7 @@ class PoolObserverHost : public JobHost {
     if (pool_->aborting_.load()) return false;
     {
       std::lock_guard<std::mutex> lock(pool_->mu_);
-      if (pool_->lost_[job]) return false;
+      if (pool_->lost_[job] || pool_->cancelled_[job]) return false;
     }
     return pool_->host_->ReportProgress(job, worker, u);
   }
@@ -88,19 +88,23 @@ void WorkerPool::Work(int index) {
       std::lock_guard<std::mutex> lock(mu_);
       running_[job.name()] = worker;
       lost_[job.name()] = false;
+      cancelled_[job.name()] = false;
     }
     ++busy_;
     const JobOutcome result = RunJob(job, worker, host, options_.run);
-    bool lost;
+    bool lost, cancelled;
     {
       std::lock_guard<std::mutex> lock(mu_);
       lost = lost_[job.name()];
+      cancelled = cancelled_[job.name()];
       running_.erase(job.name());
       lost_.erase(job.name());
+      cancelled_.erase(job.name());
     }
     if (lost) {
       // Someone else owns the job now (or it was deleted): report nothing.
-    } else if (aborting_.load() && result.status.code() == absl::StatusCode::kCancelled) {
+    } else if (aborting_.load() && !cancelled &&
+               result.status.code() == absl::StatusCode::kCancelled) {
       host_->Release(job.name(), worker).IgnoreError();  // runs again after restart
     } else {
       // A refused finish leaves the job to its lease, which expires and runs it again: say
@@ -139,10 +143,12 @@ void WorkerPool::Renew() {
       running = running_;
     }
     for (const auto& [job, worker] : running) {
-      if (!host_->Renew(job, worker).ok()) {
-        std::lock_guard<std::mutex> lock(mu_);
-        lost_[job] = true;
-      }
+      const absl::Status renewed = host_->Renew(job, worker);
+      if (renewed.ok()) continue;
+      std::lock_guard<std::mutex> lock(mu_);
+      // A cancel stops the job, which then ends CANCELLED (as when a progress report hears
+      // of it first); only a lost lease reports nothing (once, that waited out the lease).
+      (absl::IsCancelled(renewed) ? cancelled_ : lost_)[job] = true;
     }
   }
 }

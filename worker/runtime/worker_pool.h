@@ -61,6 +61,7 @@ class WorkerPool {
   std::mutex mu_;
   std::map<std::string, std::string> running_;  // job -> worker
   std::map<std::string, bool> lost_;            // job -> lease lost
+  std::map<std::string, bool> cancelled_;       // job -> cancelled, heard at a renewal
   friend class PoolObserverHost;
 };
 

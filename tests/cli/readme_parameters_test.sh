@@ -18,4 +18,10 @@ if [ "$("$pipeline" params --json)" != "$(cat "$web_defaults")" ]; then
   echo "  tools/readme_parameters.sh" >&2
   exit 1
 fi
+# The proto's comments say what each field means; its default is the table's alone.
+proto=$(dirname "$readme")/proto/sheetmesh/v1/parameters.proto
+if grep -n "(default\|(defaults\|default [0-9a-z\"]" "$proto" >&2; then
+  echo "$proto states a default (above); the table alone does: say what the field means" >&2
+  exit 1
+fi
 echo "README lists the $(echo "$want" | tail -n +3 | wc -l) parameters of the table"

@@ -205,7 +205,17 @@ TEST(DurabilityTest, UploadInterruptedByAKillResumesAfterRestart) {
       req.set_data(bytes.substr(static_cast<size_t>(i) << 20, size_t{1} << 20));
       ASSERT_TRUE(writer->Write(req));
     }
-    absl::SleepFor(absl::Milliseconds(300));
+    // Killed once the server has written its first 8 MiB out (what it reports durable).
+    v1::QueryWriteStatusRequest q;
+    q.set_resource_name(resource);
+    v1::QueryWriteStatusResponse qs;
+    const absl::Time deadline = absl::Now() + absl::Seconds(30);
+    while (absl::Now() < deadline) {
+      ASSERT_TRUE(
+          server.client().blobs()->QueryWriteStatus(server.client().Context().get(), q, &qs).ok());
+      if (qs.committed_size() >= 8 << 20) break;
+      absl::SleepFor(absl::Milliseconds(20));
+    }
     server.Kill(SIGKILL);
     EXPECT_FALSE(writer->Finish().ok());
   }

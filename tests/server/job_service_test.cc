@@ -149,9 +149,18 @@ TEST_F(ServiceTest, CancelStopsTheRunningStageAndFreesTheWorker) {
   auto job = client_->CreateJob(r);
   ASSERT_TRUE(job.ok()) << job.status();
   // Into the extraction, the long stage.
-  const v1::Job running = WaitRunning(*client_, job->name(), 2);
+  v1::Job running = WaitRunning(*client_, job->name(), 2);
   ASSERT_EQ(running.state(), v1::RUNNING);
-  absl::SleepFor(absl::Milliseconds(500));
+  // Inside the stage, not at its start: its progress moved.
+  const absl::Time deadline = absl::Now() + absl::Seconds(60);
+  while (running.state() == v1::RUNNING && running.progress().fraction() == 0 &&
+         absl::Now() < deadline) {
+    absl::SleepFor(absl::Milliseconds(20));
+    auto again = client_->GetJob(job->name());
+    ASSERT_TRUE(again.ok());
+    running = *again;
+  }
+  ASSERT_EQ(running.state(), v1::RUNNING);
   auto cancelled = client_->CancelJob(job->name());
   ASSERT_TRUE(cancelled.ok()) << cancelled.status();
   const v1::Job end = WaitFinished(job->name());

@@ -153,9 +153,14 @@ TEST_F(ServiceTest, UploadStreamsAreLimitedPerClientNamingTheLimit) {
     req.set_data(bytes.substr(0, 10));
     ASSERT_TRUE(writers.back()->Write(req));
   }
-  absl::SleepFor(absl::Milliseconds(300));  // the three are open on the server
+  // Once the three are open on the server, a fourth is refused (until then one may pass: it
+  // is abandoned, and tried again).
   const std::string extra = "one too many";
-  grpc::Status st = AbandonUpload(*client_, ResourceOf("x", DigestOfBytes(extra)), extra, 3);
+  grpc::Status st;
+  const absl::Time deadline = absl::Now() + absl::Seconds(30);
+  do {
+    st = AbandonUpload(*client_, ResourceOf("x", DigestOfBytes(extra)), extra, 3);
+  } while (st.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED && absl::Now() < deadline);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_THAT(st.error_message(), HasSubstr("--max_upload_streams_per_client"));
   writers[0]->WritesDone();

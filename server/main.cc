@@ -18,6 +18,7 @@
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
 #include "server/server.h"
+#include "worker/runtime/job_limit_flags.h"
 #include "worker/runtime/job_process.h"
 
 ABSL_FLAG(std::string, address, "127.0.0.1:50051",
@@ -75,13 +76,7 @@ ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
 ABSL_FLAG(bool, cache, true, "reuse results of identical work");
 ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish");
 ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
-ABSL_FLAG(bool, isolate_jobs, true,
-          "run each job's pipeline in a child process with the limits below (false: in a "
-          "worker thread)");
-ABSL_FLAG(double, job_memory_gb, 0,
-          "each job's memory limit, GiB (0: three quarters of the machine's memory)");
-ABSL_FLAG(int64_t, job_cpu_seconds, 0, "each job's CPU time limit, seconds (0: none)");
-ABSL_FLAG(int64_t, job_time_limit_seconds, 86400, "each job's wall-clock limit, seconds");
+// --isolate_jobs and the job limits: worker/runtime/job_limit_flags.cc.
 
 namespace {
 
@@ -121,14 +116,8 @@ sheetmesh::server::ServerOptions OptionsFromFlags() {
   o.max_attempts = absl::GetFlag(FLAGS_max_attempts);
   o.heartbeat = absl::Seconds(absl::GetFlag(FLAGS_heartbeat_seconds));
   o.cache = absl::GetFlag(FLAGS_cache);
-  o.isolate_jobs = absl::GetFlag(FLAGS_isolate_jobs);
-  const double gb = absl::GetFlag(FLAGS_job_memory_gb);
-  o.job_limits.memory_bytes = gb > 0 ? static_cast<uint64_t>(gb * double(uint64_t{1} << 30))
-                                     : sheetmesh::runtime::DefaultJobMemory();
-  o.job_limits.cpu_seconds =
-      static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_job_cpu_seconds)));
-  o.job_limits.wall =
-      absl::Seconds(std::max<int64_t>(1, absl::GetFlag(FLAGS_job_time_limit_seconds)));
+  o.isolate_jobs = sheetmesh::runtime::IsolateJobsFromFlags();
+  o.job_limits = sheetmesh::runtime::JobLimitsFromFlags();
   return o;
 }
 
@@ -149,6 +138,7 @@ int main(int argc, char** argv) {
   if (sheetmesh::WantsHelp(argc, argv)) {
     std::cout << "sheetmesh-server --data_dir=DIR [flags]\n\n";
     sheetmesh::PrintFlagsOf("server/main.cc", std::cout);
+    sheetmesh::PrintFlagsOf(sheetmesh::runtime::kJobLimitFlagsFile, std::cout);
     return 0;
   }
   sheetmesh::ParseFlagsOrExit(argc, argv, "sheetmesh-server");

@@ -19,6 +19,7 @@
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "worker/remote/remote_job_host.h"
+#include "worker/runtime/job_limit_flags.h"
 #include "worker/runtime/job_process.h"
 #include "worker/runtime/worker_pool.h"
 
@@ -33,11 +34,7 @@ ABSL_FLAG(std::string, allowed_root, "",
 ABSL_FLAG(int, workers, 1, "jobs run at once");
 ABSL_FLAG(std::string, name, "", "this worker's name in leases (default: host and pid)");
 ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish");
-ABSL_FLAG(bool, isolate_jobs, true, "run each job in a child process with the limits below");
-ABSL_FLAG(double, job_memory_gb, 0,
-          "each job's memory limit, GiB (0: three quarters of the machine's memory)");
-ABSL_FLAG(int64_t, job_cpu_seconds, 0, "each job's CPU time limit, seconds (0: none)");
-ABSL_FLAG(int64_t, job_time_limit_seconds, 86400, "each job's wall-clock limit, seconds");
+// --isolate_jobs and the job limits: worker/runtime/job_limit_flags.cc.
 ABSL_FLAG(int, renew_seconds, 5, "lease renewal period (below a third of the server's lease)");
 
 int main(int argc, char** argv) {
@@ -50,6 +47,7 @@ int main(int argc, char** argv) {
   if (sheetmesh::WantsHelp(argc, argv)) {
     std::cout << "sheetmesh-worker --server=HOST:PORT --scratch_dir=DIR [flags]\n\n";
     sheetmesh::PrintFlagsOf("worker/remote/main.cc", std::cout);
+    sheetmesh::PrintFlagsOf(sheetmesh::runtime::kJobLimitFlagsFile, std::cout);
     return 0;
   }
   sheetmesh::ParseFlagsOrExit(argc, argv, "sheetmesh-worker");
@@ -95,14 +93,8 @@ int main(int argc, char** argv) {
   wo.name = absl::GetFlag(FLAGS_name).empty() ? sheetmesh::runtime::UniqueWorkerName("remote")
                                               : absl::GetFlag(FLAGS_name);
   wo.run.scratch_dir = ho.scratch_dir + "/jobs";
-  wo.run.isolate = absl::GetFlag(FLAGS_isolate_jobs);
-  const double gb = absl::GetFlag(FLAGS_job_memory_gb);
-  wo.run.limits.memory_bytes = gb > 0 ? static_cast<uint64_t>(gb * double(uint64_t{1} << 30))
-                                      : sheetmesh::runtime::DefaultJobMemory();
-  wo.run.limits.cpu_seconds =
-      static_cast<uint64_t>(std::max<int64_t>(0, absl::GetFlag(FLAGS_job_cpu_seconds)));
-  wo.run.limits.wall =
-      absl::Seconds(std::max<int64_t>(1, absl::GetFlag(FLAGS_job_time_limit_seconds)));
+  wo.run.isolate = sheetmesh::runtime::IsolateJobsFromFlags();
+  wo.run.limits = sheetmesh::runtime::JobLimitsFromFlags();
   wo.renew_interval = absl::Seconds(std::max(1, absl::GetFlag(FLAGS_renew_seconds)));
   if (absl::Status st = sheetmesh::MakeDirs(wo.run.scratch_dir); !st.ok()) {
     std::cerr << "sheetmesh-worker: " << st << "\n";

@@ -113,11 +113,14 @@ absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const st
         volume.data_files ? volume.data_file_roots : std::vector<std::string>{};
     absl::StatusOr<PipelineReport> report = RunPipeline(options, Progress(&observer, "read"));
     if (!report.ok()) {
-      // Name the volume the client knows, not the server's path for it.
+      // Name the volume the client knows, not the server's path for it; the files the run
+      // kept stay named.
       if (!volume.display_name.empty() && volume.display_name != volume.path) {
-        return absl::Status(
-            report.status().code(),
-            absl::StrReplaceAll(report.status().message(), {{volume.path, volume.display_name}}));
+        return WithKeptFiles(
+            absl::Status(report.status().code(),
+                         absl::StrReplaceAll(report.status().message(),
+                                             {{volume.path, volume.display_name}})),
+            KeptFiles(report.status()));
       }
       return report.status();
     }

@@ -61,7 +61,10 @@ def volumes(cli, data):
 def cases(vol):
     return [("surface_r7", ["surface", vol, "--labels=255", "--r=7"]),
             ("surface_r4_paper", ["surface", vol, "--labels=255", "--r=4", "--surface_method=paper"]),
-            ("run_r7_volume", ["run", vol, "--labels=255", "--r=7", "--volume_mesh"])]
+            ("run_r7_volume", ["run", vol, "--labels=255", "--r=7", "--volume_mesh"]),
+            # The budget: r searched, the mesh decimated to it (with extraction's pieces).
+            ("surface_t600", ["surface", vol, "--labels=255", "--triangles=600"]),
+            ("run_t600", ["run", vol, "--labels=255", "--triangles=600"])]
 
 
 def do_run(build, out, old):

@@ -8,9 +8,11 @@
 
 namespace sheetmesh::server {
 
-google::protobuf::Timestamp NowTimestamp() {
-  return google::protobuf::util::TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(absl::Now()));
+google::protobuf::Timestamp TimestampOf(absl::Time t) {
+  return google::protobuf::util::TimeUtil::MillisecondsToTimestamp(absl::ToUnixMillis(t));
 }
+
+google::protobuf::Timestamp NowTimestamp() { return TimestampOf(absl::Now()); }
 
 std::string JobIdOf(const std::string& name) {
   return name.rfind("jobs/", 0) == 0 ? name.substr(5) : name;
@@ -46,9 +48,9 @@ absl::StatusOr<v1::Job> ParseStoredJob(const std::string& bytes) {
 }
 
 void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
-                 const std::vector<v1::Artifact>& artifacts) {
+                 const std::vector<v1::Artifact>& artifacts, absl::Time now) {
   job->set_state(state);
-  *job->mutable_end_time() = NowTimestamp();
+  *job->mutable_end_time() = TimestampOf(now);
   // A failed job keeps what its run kept (the surface when the volume stage failed); a
   // cancelled one keeps nothing.
   if (state != v1::CANCELLED) {
@@ -61,22 +63,22 @@ void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
   }
 }
 
-void ApplyCancelBeforeStart(v1::Job* job) {
+void ApplyCancelBeforeStart(v1::Job* job, absl::Time now) {
   job->set_state(v1::CANCELLED);
-  *job->mutable_end_time() = NowTimestamp();
+  *job->mutable_end_time() = TimestampOf(now);
   job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
   job->mutable_error()->set_message("cancelled before it started");
 }
 
 void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
-                     bool not_the_jobs_fault) {
+                     bool not_the_jobs_fault, absl::Time now) {
   job->clear_progress();
   if (not_the_jobs_fault) job->set_lost_to_restarts(job->lost_to_restarts() + 1);
   if (cancel_requested) {
     job->set_state(v1::CANCELLED);
     job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
     job->mutable_error()->set_message("cancelled while its worker was lost");
-    *job->mutable_end_time() = NowTimestamp();
+    *job->mutable_end_time() = TimestampOf(now);
   } else if (job->attempts() - job->lost_to_restarts() >= max_attempts) {
     job->set_state(v1::FAILED);
     job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kAborted));
@@ -84,7 +86,7 @@ void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
         absl::StrCat("its worker was lost ", job->attempts(),
                      " times (lease expired or server restarted); giving up after max_attempts = ",
                      max_attempts));
-    *job->mutable_end_time() = NowTimestamp();
+    *job->mutable_end_time() = TimestampOf(now);
   } else {
     job->set_state(v1::QUEUED);
   }

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
 #include "google/protobuf/timestamp.pb.h"
 #include "sheetmesh/v1/jobs.pb.h"
 
@@ -16,6 +18,8 @@ namespace sheetmesh::server {
 
 inline constexpr const char* kDefaultTenant = "default";
 
+// `t` (now, by default) as a protobuf timestamp, to the millisecond.
+google::protobuf::Timestamp TimestampOf(absl::Time t);
 google::protobuf::Timestamp NowTimestamp();
 
 // "jobs/ID" -> "ID" (an id stays as it is).
@@ -40,17 +44,17 @@ absl::StatusOr<v1::Job> ParseStoredJob(const std::string& bytes);
 // A job's end as its worker reports it: the state, the end time, and the artifacts
 // (SUCCEEDED) or the error.
 void ApplyFinish(v1::Job* job, v1::JobState state, const v1::JobError& error,
-                 const std::vector<v1::Artifact>& artifacts);
+                 const std::vector<v1::Artifact>& artifacts, absl::Time now = absl::Now());
 
 // A QUEUED job cancelled: CANCELLED at once.
-void ApplyCancelBeforeStart(v1::Job* job);
+void ApplyCancelBeforeStart(v1::Job* job, absl::Time now = absl::Now());
 
 // A RUNNING job whose worker was lost (lease expired, server restarted): CANCELLED when a
 // cancel was asked, FAILED after max_attempts, QUEUED again otherwise.
 // With `not_the_jobs_fault` the lost run is counted in lost_to_restarts, not against
 // max_attempts.
 void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
-                     bool not_the_jobs_fault = false);
+                     bool not_the_jobs_fault = false, absl::Time now = absl::Now());
 
 }  // namespace sheetmesh::server
 

@@ -14,14 +14,24 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "absl/time/time.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
 #include "server/server.h"
 #include "worker/runtime/job_limit_flags.h"
 #include "worker/runtime/job_process.h"
+#include "worker/runtime/worker_pool.h"
 
-ABSL_FLAG(std::string, address, "127.0.0.1:50051",
+namespace {
+// The flags' defaults are the options' own (server.h): written once.
+const sheetmesh::server::ServerOptions& Defaults() {
+  static const sheetmesh::server::ServerOptions defaults;
+  return defaults;
+}
+}  // namespace
+
+ABSL_FLAG(std::string, address, Defaults().address,
           "host:port to listen on (port 0: any free port)");
 ABSL_FLAG(std::string, data_dir, "", "folder of the job store, blobs and scratch (required)");
 ABSL_FLAG(
@@ -32,9 +42,9 @@ ABSL_FLAG(
 ABSL_FLAG(std::string, scratch_dir, "",
           "the workers' scratch, emptied at start (default DATA_DIR/scratch; each server its own "
           "when several share a data folder)");
-ABSL_FLAG(bool, local_workers, true,
+ABSL_FLAG(bool, local_workers, Defaults().local_workers,
           "run jobs in this process's workers (false: only remote sheetmesh-workers run them)");
-ABSL_FLAG(int, workers, 0, "in-process workers (0: the number of cores)");
+ABSL_FLAG(int, workers, Defaults().workers, "in-process workers (0: the number of cores)");
 ABSL_FLAG(std::string, allowed_root, "",
           "comma-separated folders whose volumes jobs may name by path");
 ABSL_FLAG(std::string, auth_token, "",
@@ -47,34 +57,37 @@ ABSL_FLAG(std::string, worker_token_file, "",
           "with tokens takes no remote workers, an open one any");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
-ABSL_FLAG(int64_t, max_blob_bytes, int64_t{64} << 30, "largest upload accepted, bytes");
-ABSL_FLAG(int64_t, max_queued_jobs, 1000, "jobs the queue may hold");
-ABSL_FLAG(int64_t, max_unfinished_upload_mb, 65536,
+ABSL_FLAG(int64_t, max_blob_bytes, Defaults().limits.max_blob_bytes, "largest upload accepted, bytes");
+ABSL_FLAG(int64_t, max_queued_jobs, Defaults().limits.max_queued_jobs, "jobs the queue may hold");
+ABSL_FLAG(int64_t, max_unfinished_upload_mb,
+          Defaults().limits.max_unfinished_upload_bytes_per_tenant >> 20,
           "bytes one tenant may hold in unfinished uploads, MiB");
-ABSL_FLAG(int, max_upload_streams, 256, "open upload (Write) streams, in all");
-ABSL_FLAG(int, max_upload_streams_per_client, 64,
+ABSL_FLAG(int, max_upload_streams, Defaults().limits.max_upload_streams, "open upload (Write) streams, in all");
+ABSL_FLAG(int, max_upload_streams_per_client, Defaults().limits.max_upload_streams_per_client,
           "open upload streams of one client (its tenant; on an open server, its address)");
-ABSL_FLAG(int, max_watch_streams, 2048, "open WatchJob streams, in all");
-ABSL_FLAG(int, max_watch_streams_per_client, 256, "open WatchJob streams of one client");
-ABSL_FLAG(int, upload_idle_seconds, 120,
+ABSL_FLAG(int, max_watch_streams, Defaults().limits.max_watch_streams, "open WatchJob streams, in all");
+ABSL_FLAG(int, max_watch_streams_per_client, Defaults().limits.max_watch_streams_per_client,
+          "open WatchJob streams of one client");
+ABSL_FLAG(int, upload_idle_seconds,
+          absl::ToInt64Seconds(Defaults().limits.upload_idle_timeout),
           "an upload stream that brings no byte for this long is closed (it can resume)");
-ABSL_FLAG(int, upload_expiry_hours, 24,
+ABSL_FLAG(int, upload_expiry_hours, absl::ToInt64Hours(Defaults().limits.upload_expiry),
           "an unfinished upload nobody has written for this long is removed");
-ABSL_FLAG(double, blob_retention_hours, 24 * 7,
+ABSL_FLAG(double, blob_retention_hours, absl::ToDoubleHours(Defaults().blob_retention),
           "blobs no job names and nobody used for this long are removed (0: keep all)");
-ABSL_FLAG(double, gc_interval_hours, 1, "how often retention runs (also once at start)");
-ABSL_FLAG(bool, gc_dry_run, false, "retention lists what it would remove and removes nothing");
+ABSL_FLAG(double, gc_interval_hours, absl::ToDoubleHours(Defaults().gc_interval), "how often retention runs (also once at start)");
+ABSL_FLAG(bool, gc_dry_run, Defaults().gc_dry_run, "retention lists what it would remove and removes nothing");
 ABSL_FLAG(bool, gc_once, false,
           "run one retention pass over --data_dir, print what it removed (or, with "
           "--gc_dry_run, would remove) and exit, without serving");
-ABSL_FLAG(int64_t, min_free_disk_mb, 256,
+ABSL_FLAG(int64_t, min_free_disk_mb, Defaults().min_free_disk_bytes >> 20,
           "uploads are refused, and health says NOT_SERVING, while the data folder has less "
           "free space than this");
-ABSL_FLAG(int, lease_seconds, 30, "worker lease length");
-ABSL_FLAG(int, max_attempts, 3, "runs before a job whose worker keeps vanishing fails");
-ABSL_FLAG(int, heartbeat_seconds, 5, "WatchJob heartbeat");
-ABSL_FLAG(bool, cache, true, "reuse results of identical work");
-ABSL_FLAG(int, drain_seconds, 30, "on SIGTERM, how long running jobs may finish");
+ABSL_FLAG(int, lease_seconds, absl::ToInt64Seconds(Defaults().lease), "worker lease length");
+ABSL_FLAG(int, max_attempts, Defaults().max_attempts, "runs before a job whose worker keeps vanishing fails");
+ABSL_FLAG(int, heartbeat_seconds, absl::ToInt64Seconds(Defaults().heartbeat), "WatchJob heartbeat");
+ABSL_FLAG(bool, cache, Defaults().cache, "reuse results of identical work");
+ABSL_FLAG(int, drain_seconds, absl::ToInt64Seconds(sheetmesh::runtime::kDefaultDrain), "on SIGTERM, how long running jobs may finish");
 ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
 // --isolate_jobs and the job limits: worker/runtime/job_limit_flags.cc.
 

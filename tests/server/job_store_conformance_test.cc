@@ -1,6 +1,7 @@
-// One conformance suite for every JobStore: SQLite in a temporary folder, and PostgreSQL
-// in a fresh database of the test cluster (tools/pg_cluster.sh, started by ctest; the
-// PostgreSQL cases skip with a message where no cluster is given).
+// One conformance suite for every JobStore: SQLite in a temporary folder, PostgreSQL in a
+// fresh database of the test cluster (tools/pg_cluster.sh, started by ctest; the
+// PostgreSQL cases skip with a message where no cluster is given), and the in-memory store
+// on a manual clock (leases end when the test moves the clock, not when time passes).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <libpq-fe.h>
@@ -13,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "server/job_store.h"
+#include "server/memory_job_store.h"
 #include "tests/testing/temp_dir.h"
 
 namespace sheetmesh::server {
@@ -74,18 +76,25 @@ class JobStoreConformanceTest : public ::testing::TestWithParam<std::string> {
   // (Re)opens the store on the same data: a restart.
   void Open() {
     store_.reset();
-    absl::StatusOr<std::unique_ptr<JobStore>> s = GetParam() == "postgres"
-                                                      ? OpenPostgresJobStore(Conninfo())
-                                                      : OpenSqliteJobStore(dir_.File("jobs.db"));
-    ASSERT_TRUE(s.ok()) << s.status();
-    store_ = std::move(*s);
+    store_ = Another();
+    ASSERT_NE(store_, nullptr);
   }
   // Another store on the same data, as another replica (or another thread's) sees it.
   std::unique_ptr<JobStore> Another() {
+    if (GetParam() == "memory") return OpenMemoryJobStore(tables_, clock_.AsStoreClock());
     auto s = GetParam() == "postgres" ? OpenPostgresJobStore(Conninfo())
                                       : OpenSqliteJobStore(dir_.File("jobs.db"));
     EXPECT_TRUE(s.ok()) << s.status();
     return s.ok() ? std::move(*s) : nullptr;
+  }
+  // Lets `d` pass for the leases: the manual clock moves; the databases' clock is the
+  // system's, so the test waits.
+  void PassTime(absl::Duration d) {
+    if (GetParam() == "memory") {
+      clock_.Advance(d);
+    } else {
+      absl::SleepFor(d);
+    }
   }
   std::string Conninfo() const { return absl::StrCat(cluster_, " dbname=", db_); }
 
@@ -105,6 +114,8 @@ class JobStoreConformanceTest : public ::testing::TestWithParam<std::string> {
 
   TempDir dir_;
   std::string cluster_, db_;
+  std::shared_ptr<MemoryJobTables> tables_ = NewMemoryJobTables();
+  ManualClock clock_;
   std::unique_ptr<JobStore> store_;
 };
 
@@ -224,7 +235,7 @@ TEST_P(JobStoreConformanceTest, ExpiredLeasesRequeueThenFailAfterMaxAttemptsWith
     auto l = store_->LeaseNext("w", absl::Milliseconds(1));
     ASSERT_TRUE(l.ok() && l->has_value());
     EXPECT_EQ((*l)->attempts(), attempt);
-    absl::SleepFor(absl::Milliseconds(30));
+    PassTime(absl::Milliseconds(30));
     EXPECT_EQ(*store_->RequeueExpired(2, false), 1);
   }
   auto end = store_->Get(job);
@@ -272,7 +283,7 @@ TEST_P(JobStoreConformanceTest, CancelQueuedAtOnceRunningByRequestAndDeleteOnlyF
   const std::string third = Add("t");
   ASSERT_TRUE(store_->LeaseNext("w", absl::Milliseconds(1))->has_value());
   ASSERT_TRUE(store_->RequestCancel(third).ok());
-  absl::SleepFor(absl::Milliseconds(30));
+  PassTime(absl::Milliseconds(30));
   EXPECT_EQ(*store_->RequeueExpired(3, false), 1);
   EXPECT_EQ(store_->Get(third)->state(), v1::CANCELLED);
 }
@@ -312,7 +323,7 @@ TEST_P(JobStoreConformanceTest, BlobOwnersByUploadAndByJob) {
   EXPECT_FALSE(*store_->OwnsBlob("bob", std::string(64, 'b')));
 }
 
-INSTANTIATE_TEST_SUITE_P(Stores, JobStoreConformanceTest, ::testing::Values("sqlite", "postgres"),
+INSTANTIATE_TEST_SUITE_P(Stores, JobStoreConformanceTest, ::testing::Values("sqlite", "postgres", "memory"),
                          [](const auto& info) { return info.param; });
 
 TEST(PostgresJobStoreTest, AnUnreachableServerIsUnavailableNamingTheAddress) {
@@ -323,6 +334,34 @@ TEST(PostgresJobStoreTest, AnUnreachableServerIsUnavailableNamingTheAddress) {
   auto bad = OpenPostgresJobStore("host=127.0.0.1 port= = =");
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace sheetmesh::server
+
+namespace sheetmesh::server {
+namespace {
+
+// The manual clock decides: a lease of 30 s holds at 29 s and ends after 30 s, and the
+// job's times are the clock's.
+TEST(MemoryJobStoreTest, LeasesEndAndTimesAreStampedByTheGivenClock) {
+  ManualClock clock;
+  std::unique_ptr<JobStore> store = OpenMemoryJobStore(NewMemoryJobTables(), clock.AsStoreClock());
+  v1::Job j;
+  j.set_request_id("r");
+  bool created = false;
+  ASSERT_TRUE(store->Create(j, "", &created).ok());
+  auto leased = store->LeaseNext("w", absl::Seconds(30));
+  ASSERT_TRUE(leased.ok() && leased->has_value());
+  EXPECT_EQ((*leased)->start_time().seconds(), absl::ToUnixSeconds(clock.Now()));
+  clock.Advance(absl::Seconds(29));
+  EXPECT_EQ(*store->RequeueExpired(3, false), 0);
+  ASSERT_TRUE(store->Renew((*leased)->name(), "w", absl::Seconds(30)).ok());
+  clock.Advance(absl::Seconds(29));
+  EXPECT_EQ(*store->RequeueExpired(3, false), 0) << "renewed at 29 s, so until 59 s";
+  clock.Advance(absl::Seconds(2));
+  EXPECT_EQ(*store->RequeueExpired(3, false), 1);
+  EXPECT_EQ(store->Get((*leased)->name())->state(), v1::QUEUED);
 }
 
 }  // namespace

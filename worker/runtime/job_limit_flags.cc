@@ -4,14 +4,17 @@
 #include <cstdint>
 
 #include "absl/flags/flag.h"
+#include "absl/time/time.h"
+#include "worker/runtime/job_process.h"
 
 ABSL_FLAG(bool, isolate_jobs, true,
           "run each job's pipeline in a child process with the limits below (false: in a "
           "worker thread)");
 ABSL_FLAG(double, job_memory_gb, 0,
           "each job's memory limit, GiB (0: three quarters of the machine's memory)");
-ABSL_FLAG(int64_t, job_cpu_seconds, 0, "each job's CPU time limit, seconds (0: none)");
-ABSL_FLAG(int64_t, job_time_limit_seconds, 86400, "each job's wall-clock limit, seconds");
+ABSL_FLAG(int64_t, job_cpu_seconds, sheetmesh::runtime::JobLimits().cpu_seconds, "each job's CPU time limit, seconds (0: none)");
+ABSL_FLAG(int64_t, job_time_limit_seconds,
+          absl::ToInt64Seconds(sheetmesh::runtime::JobLimits().wall), "each job's wall-clock limit, seconds");
 
 namespace sheetmesh::runtime {
 

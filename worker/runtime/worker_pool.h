@@ -17,6 +17,10 @@
 
 namespace sheetmesh::runtime {
 
+// How long running jobs may finish on SIGTERM, by default, before they go back to the queue
+// (sheetmesh-server's and sheetmesh-worker's --drain_seconds).
+inline constexpr absl::Duration kDefaultDrain = absl::Seconds(30);
+
 struct WorkerPoolOptions {
   int workers = 0;                                      // threads (0: the number of cores)
   std::string name = "worker";                          // prefix of the workers' lease names

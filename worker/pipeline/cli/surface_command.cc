@@ -212,7 +212,7 @@ absl::Status RunScore(const ScoreCommandOptions& options, std::ostream& out) {
   VoxelSet model;
   if (options.closed) {
     SM_ASSIGN_OR_RETURN(model, VoxelizeClosedSurface(mesh, phase.info.dims));
-  } else if (mesh.face_thickness.size() == mesh.faces.size()) {
+  } else if (mesh.face_thickness_voxels.size() == mesh.faces.size()) {
     // A sheetmesh surface: its sheets' prisms and its bodies' insides (the PLY's `body`).
     SM_ASSIGN_OR_RETURN(model, VoxelizeMesh(mesh, phase.info.dims));
   } else {

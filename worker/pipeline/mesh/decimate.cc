@@ -148,7 +148,7 @@ class Decimator {
     DecimateStats s;
     s.faces_before = mesh_.faces.size();
     uint64_t faces = s.faces_before;
-    while (faces > o_.target_faces && !heap_.empty()) {
+    while (faces > o_.triangles && !heap_.empty()) {
       const Candidate c = heap_.top();
       heap_.pop();
       if (gone_[c.u] || gone_[c.v] || stamp_[c.u] != c.stamp_u || stamp_[c.v] != c.stamp_v) {
@@ -418,13 +418,13 @@ class Decimator {
       }
       faces.push_back(g);
       if (!mesh_.face_piece.empty()) piece.push_back(mesh_.face_piece[f]);
-      if (!mesh_.face_thickness.empty()) thickness.push_back(mesh_.face_thickness[f]);
+      if (!mesh_.face_thickness_voxels.empty()) thickness.push_back(mesh_.face_thickness_voxels[f]);
     }
     mesh_.vertices = std::move(vertices);
     mesh_.faces = std::move(faces);
     mesh_.face_piece = std::move(piece);
-    mesh_.face_thickness = std::move(thickness);
-    mesh_.vertex_thickness.clear();
+    mesh_.face_thickness_voxels = std::move(thickness);
+    mesh_.vertex_thickness_voxels.clear();
   }
 
   TriangleMesh& mesh_;
@@ -443,7 +443,7 @@ class Decimator {
 }  // namespace
 
 DecimateStats Decimate(TriangleMesh* mesh, const DecimateOptions& options) {
-  if (mesh->faces.size() <= options.target_faces) {
+  if (mesh->faces.size() <= options.triangles) {
     return {mesh->faces.size(), mesh->faces.size(), 0, 0.0};
   }
   return Decimator(mesh, options).Run();

@@ -13,7 +13,7 @@
 namespace sheetmesh {
 
 struct DecimateOptions {
-  uint64_t target_faces = 0;      // collapse until at most this many faces remain
+  uint64_t triangles = 0;      // collapse until at most this many faces remain
   double boundary_weight = 4.0;   // weight of the planes across boundary edges
   double max_normal_turn = 45.0;  // degrees a face's normal may turn in one collapse
   double max_error = 1e300;       // stop once the cheapest collapse costs more (voxels²)
@@ -36,7 +36,7 @@ struct DecimateStats {
   double largest_error = 0;  // the cost of the dearest collapse made
 };
 
-// Decimates `mesh` in place. Per-face arrays (face_piece, face_thickness) follow their
+// Decimates `mesh` in place. Per-face arrays (face_piece, face_thickness_voxels) follow their
 // faces; per-vertex thickness is dropped (the caller recomputes what it needs). A collapse
 // that would change the mesh's topology (or take a piece's last faces), flip or fold a
 // face, or move a vertex of an edge of three or more faces off its junction curve (or

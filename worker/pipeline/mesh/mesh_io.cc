@@ -16,6 +16,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "common/version.h"
+#include "worker/pipeline/mesh/vtk_xml.h"
 
 namespace sheetmesh {
 namespace {}  // namespace
@@ -40,10 +41,10 @@ std::array<int, 3> ThicknessColour(float t, float lo, float hi) {
 
 absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                       const Placement& placement) {
-  const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
-  const bool fthick = mesh.face_thickness.size() == mesh.faces.size();
+  const bool vthick = mesh.vertex_thickness_voxels.size() == mesh.vertices.size();
+  const bool fthick = mesh.face_thickness_voxels.size() == mesh.faces.size();
   const bool fpiece = mesh.face_piece.size() == mesh.faces.size();
-  const bool faperture = fthick && mesh.face_aperture.size() == mesh.faces.size();
+  const bool faperture = fthick && mesh.face_aperture_voxels.size() == mesh.faces.size();
   std::string out =
       absl::StrCat("ply\nformat ascii 1.0\ncomment sheetmesh ", SHEETMESH_VERSION, "\n");
   if (!placement.unit.empty()) absl::StrAppend(&out, "comment unit ", placement.unit, "\n");
@@ -78,7 +79,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                           static_cast<float>(p.z));
     if (vthick) {
       absl::StrAppendFormat(
-          &out, " %.7g", static_cast<float>(PhysicalLength(mesh.vertex_thickness[v], placement)));
+          &out, " %.7g", static_cast<float>(PhysicalLength(mesh.vertex_thickness_voxels[v], placement)));
     }
     if (!body_vertex.empty()) out += body_vertex[v] ? " 1" : " 0";
     out += '\n';
@@ -86,7 +87,7 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
   float lo = 0, hi = 0;
   if (fthick && !mesh.faces.empty()) {
     const auto [mn, mx] =
-        std::minmax_element(mesh.face_thickness.begin(), mesh.face_thickness.end());
+        std::minmax_element(mesh.face_thickness_voxels.begin(), mesh.face_thickness_voxels.end());
     lo = *mn;
     hi = *mx;
   }
@@ -95,18 +96,18 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
     absl::StrAppend(&out, "3 ", t[0], " ", t[1], " ", t[2]);
     if (fthick) {
       absl::StrAppendFormat(&out, " %.7g %.7g",
-                            static_cast<float>(PhysicalLength(mesh.face_thickness[f], placement)),
-                            mesh.face_thickness[f]);
+                            static_cast<float>(PhysicalLength(mesh.face_thickness_voxels[f], placement)),
+                            mesh.face_thickness_voxels[f]);
     }
     if (faperture) {
       absl::StrAppendFormat(&out, " %.7g %.7g",
-                            static_cast<float>(PhysicalLength(mesh.face_aperture[f], placement)),
-                            mesh.face_aperture[f]);
+                            static_cast<float>(PhysicalLength(mesh.face_aperture_voxels[f], placement)),
+                            mesh.face_aperture_voxels[f]);
     }
     if (fpiece) absl::StrAppend(&out, " ", mesh.face_piece[f]);
     if (fbody) absl::StrAppend(&out, mesh.IsBodyFace(f) ? " 1" : " 0");
     if (fthick) {
-      const std::array<int, 3> c = ThicknessColour(mesh.face_thickness[f], lo, hi);
+      const std::array<int, 3> c = ThicknessColour(mesh.face_thickness_voxels[f], lo, hi);
       absl::StrAppend(&out, " ", c[0], " ", c[1], " ", c[2]);
     }
     out += '\n';
@@ -119,66 +120,44 @@ namespace {
 // The surface as VTK XML: PolyData (.vtp) or UnstructuredGrid (.vtu, for readers such as
 // meshio that take no PolyData), the same arrays in both.
 std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, bool unstructured) {
-  const char* kind = unstructured ? "UnstructuredGrid" : "PolyData";
-  std::string out;
-  absl::StrAppend(&out, "<?xml version=\"1.0\"?>\n<VTKFile type=\"", kind,
-                  "\" version=\"1.0\" byte_order=\"LittleEndian\">\n<", kind,
-                  ">\n<Piece NumberOfPoints=\"", mesh.vertices.size(),
-                  unstructured ? "\" NumberOfCells=\"" : "\" NumberOfPolys=\"", mesh.faces.size(),
-                  "\">\n");
-  out += "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const Vec3& v : mesh.vertices) {
-    const Vec3 p = placement.ToPhysical(v);
-    absl::StrAppendFormat(&out, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+  const size_t nf = mesh.faces.size();
+  VtkXml vtk(unstructured ? VtkKind::kUnstructuredGrid : VtkKind::kPolyData,
+             mesh.vertices.size(), nf);
+  vtk.Points(
+      mesh.vertices.size(), [&](size_t v) { return placement.ToPhysical(mesh.vertices[v]); }, 9);
+  const auto physical = [&](const std::vector<float>& t) {
+    return [&](size_t i) { return absl::StrFormat("%.7g", PhysicalLength(t[i], placement)); };
+  };
+  if (mesh.vertex_thickness_voxels.size() == mesh.vertices.size()) {
+    vtk.BeginData("PointData", "thickness");
+    vtk.Array("Float32", "thickness", mesh.vertices.size(),
+              physical(mesh.vertex_thickness_voxels));
+    vtk.EndData();
   }
-  out += "</DataArray>\n</Points>\n";
-  if (mesh.vertex_thickness.size() == mesh.vertices.size()) {
-    out +=
-        "<PointData Scalars=\"thickness\">\n<DataArray type=\"Float32\" Name=\"thickness\" "
-        "format=\"ascii\">\n";
-    for (float t : mesh.vertex_thickness)
-      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
-    out += "</DataArray>\n</PointData>\n";
+  vtk.BeginData("CellData", "thickness");
+  if (mesh.face_thickness_voxels.size() == nf) {
+    vtk.Array("Float32", "thickness", nf, physical(mesh.face_thickness_voxels));
+    vtk.Array("Float32", "thickness_voxels", nf, [&](size_t f) {
+      return absl::StrFormat("%.7g", mesh.face_thickness_voxels[f]);
+    });
   }
-  out += "<CellData Scalars=\"thickness\">\n";
-  if (mesh.face_thickness.size() == mesh.faces.size()) {
-    out += "<DataArray type=\"Float32\" Name=\"thickness\" format=\"ascii\">\n";
-    for (float t : mesh.face_thickness)
-      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
-    out +=
-        "</DataArray>\n<DataArray type=\"Float32\" Name=\"thickness_voxels\" format=\"ascii\">\n";
-    for (float t : mesh.face_thickness) absl::StrAppendFormat(&out, "%.7g\n", t);
-    out += "</DataArray>\n";
+  if (mesh.face_aperture_voxels.size() == nf) {
+    vtk.Array("Float32", "aperture", nf, physical(mesh.face_aperture_voxels));
   }
-  if (mesh.face_aperture.size() == mesh.faces.size()) {
-    out += "<DataArray type=\"Float32\" Name=\"aperture\" format=\"ascii\">\n";
-    for (float t : mesh.face_aperture)
-      absl::StrAppendFormat(&out, "%.7g\n", PhysicalLength(t, placement));
-    out += "</DataArray>\n";
-  }
-  if (mesh.face_piece.size() == mesh.faces.size()) {
-    out += "<DataArray type=\"Int32\" Name=\"piece\" format=\"ascii\">\n";
-    for (int32_t p : mesh.face_piece) absl::StrAppend(&out, p, "\n");
-    out += "</DataArray>\n";
+  if (mesh.face_piece.size() == nf) {
+    vtk.Array("Int32", "piece", nf, [&](size_t f) { return mesh.face_piece[f]; });
     // 1 on a body's faces (the closed surface around a piece), 0 on a sheet's.
-    out += "<DataArray type=\"UInt8\" Name=\"body\" format=\"ascii\">\n";
-    for (size_t f = 0; f < mesh.faces.size(); ++f) out += mesh.IsBodyFace(f) ? "1\n" : "0\n";
-    out += "</DataArray>\n";
+    vtk.Array("UInt8", "body", nf, [&](size_t f) { return mesh.IsBodyFace(f) ? 1 : 0; });
   }
-  absl::StrAppend(&out, "</CellData>\n", unstructured ? "<Cells>\n" : "<Polys>\n",
-                  "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-  for (const Face& f : mesh.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
-  out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (size_t f = 0; f < mesh.faces.size(); ++f) absl::StrAppend(&out, 3 * (f + 1), "\n");
-  out += "</DataArray>\n";
-  if (unstructured) {
-    out += "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (size_t f = 0; f < mesh.faces.size(); ++f) out += "5\n";  // VTK_TRIANGLE
-    out += "</DataArray>\n";
-  }
-  absl::StrAppend(&out, unstructured ? "</Cells>\n" : "</Polys>\n", "</Piece>\n</", kind,
-                  ">\n</VTKFile>\n");
-  return out;
+  vtk.EndData();
+  vtk.BeginCells();
+  vtk.Array("Int64", "connectivity", nf, [&](size_t f) {
+    return absl::StrCat(mesh.faces[f][0], " ", mesh.faces[f][1], " ", mesh.faces[f][2]);
+  });
+  vtk.Array("Int64", "offsets", nf, [](size_t f) { return 3 * (f + 1); });
+  if (unstructured) vtk.Array("UInt8", "types", nf, [](size_t) { return 5; });  // VTK_TRIANGLE
+  vtk.EndCells();
+  return std::move(vtk).Finish();
 }
 
 }  // namespace
@@ -204,10 +183,10 @@ absl::Status WriteObj(const std::string& path, const TriangleMesh& mesh,
   }
   // OBJ has no per-face values: the thickness at each vertex travels as its texture
   // coordinate (u physical, v in voxels), which meshio reads as point data "obj:vt".
-  const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
+  const bool vthick = mesh.vertex_thickness_voxels.size() == mesh.vertices.size();
   if (vthick) {
     out += "# vt u v: the thickness at the vertex (u physical, v in voxels)\n";
-    for (float t : mesh.vertex_thickness)
+    for (float t : mesh.vertex_thickness_voxels)
       absl::StrAppendFormat(&out, "vt %.7g %.7g\n", PhysicalLength(t, placement), t);
   }
   const bool pieces = mesh.face_piece.size() == mesh.faces.size();
@@ -491,12 +470,12 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
   }
   // Attributes only count when every element has them.
   if (face_aperture_vox.size() == mesh.faces.size()) {
-    mesh.face_aperture = std::move(face_aperture_vox);
+    mesh.face_aperture_voxels = std::move(face_aperture_vox);
   }
   if (face_thick_vox.size() == mesh.faces.size()) {
-    mesh.face_thickness = std::move(face_thick_vox);
+    mesh.face_thickness_voxels = std::move(face_thick_vox);
   } else if (face_thick.size() == mesh.faces.size()) {
-    mesh.face_thickness = std::move(face_thick);
+    mesh.face_thickness_voxels = std::move(face_thick);
   }
   if (mesh.face_piece.size() != mesh.faces.size()) mesh.face_piece.clear();
   if (!mesh.face_piece.empty() && face_body.size() == mesh.faces.size()) {
@@ -507,7 +486,7 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
     mesh.body_pieces.erase(std::unique(mesh.body_pieces.begin(), mesh.body_pieces.end()),
                            mesh.body_pieces.end());
   }
-  if (vert_thick.size() == mesh.vertices.size()) mesh.vertex_thickness = std::move(vert_thick);
+  if (vert_thick.size() == mesh.vertices.size()) mesh.vertex_thickness_voxels = std::move(vert_thick);
   return mesh;
 }
 

@@ -24,7 +24,7 @@ struct SmoothOptions {
 // The weight of each vertex: 0 where its thickness is at most its mean edge length, rising
 // to 1 where it is twice that.
 std::vector<double> ThicknessSmoothingWeights(const TriangleMesh& mesh,
-                                              std::span<const float> vertex_thickness);
+                                              std::span<const float> vertex_thickness_voxels);
 
 // Moves the vertices of `mesh` by `weight`-scaled λ|μ steps towards the mean of their
 // neighbours. Vertices on a boundary or a non-manifold edge (rims, crossings) stay where they

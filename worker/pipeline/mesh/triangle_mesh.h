@@ -19,13 +19,13 @@ using Face = std::array<uint32_t, 3>;
 struct TriangleMesh {
   std::vector<Vec3> vertices;  // voxel index coordinates (not physical)
   std::vector<Face> faces;
-  std::vector<float> face_thickness;  // per face, voxels; empty when not computed
+  std::vector<float> face_thickness_voxels;  // per face, voxels; empty when not computed
   // Per face, voxels: the opening of the sheet the face belongs to, for a flow model
-  // (surface/face_apertures.h); empty when not computed. face_thickness is the prism height
+  // (surface/face_apertures.h); empty when not computed. face_thickness_voxels is the prism height
   // that scores best with its neighbours'.
-  std::vector<float> face_aperture;
+  std::vector<float> face_aperture_voxels;
   std::vector<int32_t> face_piece;      // per face, object id; empty when not labelled
-  std::vector<float> vertex_thickness;  // per vertex, voxels; empty unless computed
+  std::vector<float> vertex_thickness_voxels;  // per vertex, voxels; empty unless computed
   std::vector<int32_t> body_pieces;     // pieces meshed as bodies, sorted; the rest are sheets
 
   size_t num_vertices() const { return vertices.size(); }

@@ -226,7 +226,7 @@ Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
     }
   }
   // The prisms' walls, then the mid-surface over them.
-  const bool thick = mesh.face_thickness.size() == mesh.num_faces();
+  const bool thick = mesh.face_thickness_voxels.size() == mesh.num_faces();
   size_t cut = 0;
   for (int pass = 0; pass < 2; ++pass) {
     for (size_t t = 0; t < mesh.num_faces(); ++t) {
@@ -234,7 +234,7 @@ Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
       Vec3 a, b;
       if (pass == 0) {
         if (!thick) continue;
-        const Vec3 n = UnitNormal(tri) * (0.5 * mesh.face_thickness[t]);
+        const Vec3 n = UnitNormal(tri) * (0.5 * mesh.face_thickness_voxels[t]);
         for (double side : {-1.0, 1.0}) {
           const Triangle moved = {tri[0] + n * side, tri[1] + n * side, tri[2] + n * side};
           if (CutTriangle(moved, axis, static_cast<double>(f.index), &a, &b)) {
@@ -285,8 +285,8 @@ Preview ThicknessPreview(const TriangleMesh& mesh, const Placement& placement) {
   const int32_t piece =
       faces.empty() || mesh.face_piece.size() != mesh.num_faces() ? -1 : mesh.face_piece[faces[0]];
   // The aperture a flow model takes, where the mesh has one; else the thickness.
-  const bool aperture = mesh.face_aperture.size() == mesh.num_faces();
-  const std::vector<float>& values = aperture ? mesh.face_aperture : mesh.face_thickness;
+  const bool aperture = mesh.face_aperture_voxels.size() == mesh.num_faces();
+  const std::vector<float>& values = aperture ? mesh.face_aperture_voxels : mesh.face_thickness_voxels;
   const bool thick = values.size() == mesh.num_faces();
   RgbImage& im = p.image;
   if (faces.empty()) {

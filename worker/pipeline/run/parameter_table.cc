@@ -229,12 +229,12 @@ std::vector<ParamRow> SurfaceRows() {
     r.spec.exclusive = "radius search";
     r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
       if (!o.search_radius || o.radius_search.goal != RadiusGoal::kTriangles) return std::nullopt;
-      return ParamValue(int64_t(o.radius_search.target_triangles));
+      return ParamValue(int64_t(o.radius_search.triangles));
     };
     r.set = [](const ParamValue& v, PipelineOptions& o) {
       o.search_radius = true;
       o.radius_search.goal = RadiusGoal::kTriangles;
-      o.radius_search.target_triangles = uint64_t(std::get<int64_t>(v));
+      o.radius_search.triangles = uint64_t(std::get<int64_t>(v));
     };
     rows.push_back(std::move(r));
   }
@@ -275,8 +275,8 @@ std::vector<ParamRow> SurfaceRows() {
           std::get<std::string>(v) == "paper" ? SurfaceOptions::Paper() : SurfaceOptions();
       o.surface.placement = p.placement;
       o.surface.thickness = p.thickness;
-      o.surface.triangles.rim = p.triangles.rim;
-      o.surface.triangles.close_cracks = p.triangles.close_cracks;
+      o.surface.dual.rim = p.dual.rim;
+      o.surface.dual.close_cracks = p.dual.close_cracks;
       o.surface.scvd.domain = p.scvd.domain;
     };
     rows.push_back(std::move(r));
@@ -324,13 +324,13 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Integer("surface.smooth", SM_MEMBER(surface.smooth_iterations), "[0, 1000]", "",
                          "λ|μ smoothing steps of the mid-surface where the sheet is thicker than "
                          "its triangles are wide (0: none)"));
-  rows.push_back(Number("surface.rim_push", SM_MEMBER(surface.triangles.rim_push_voxels), "[0, 1]",
+  rows.push_back(Number("surface.rim_push", SM_MEMBER(surface.dual.rim_push_voxels), "[0, 1]",
                         "voxels",
                         "rim vertices this far past the outermost voxels' centres (0.5: at the "
                         "voxels' edge, a closer rim; 0: the volume mesh keeps larger angles)"));
-  rows.push_back(Bool("surface.rim", SM_MEMBER(surface.triangles.rim),
+  rows.push_back(Bool("surface.rim", SM_MEMBER(surface.dual.rim),
                       "close the band along the rims with a strip of triangles"));
-  rows.push_back(Bool("surface.close_cracks", SM_MEMBER(surface.triangles.close_cracks),
+  rows.push_back(Bool("surface.close_cracks", SM_MEMBER(surface.dual.close_cracks),
                       "close narrow notches the triangle selection leaves in the boundary"));
   rows.push_back(Choice("surface.representation", SM_MEMBER(representation.mode),
                         {{"auto", RepresentationMode::kAuto},
@@ -348,7 +348,7 @@ std::vector<ParamRow> SurfaceRows() {
                         "in auto, a piece (or a lens of one) is tried as a body only where its "
                         "median thickness is at least this fraction of its width"));
   rows.push_back(Number(
-      "surface.fold_angle", SM_MEMBER(surface.triangles.fold_angle_degrees), "[0, 180)", "degrees",
+      "surface.fold_angle", SM_MEMBER(surface.dual.fold_angle_degrees), "[0, 180)", "degrees",
       "a candidate meeting a kept triangle below this dihedral angle is refused"));
   return rows;
 }

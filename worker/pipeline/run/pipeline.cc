@@ -130,8 +130,8 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
     if (e.recover) stages.push_back("recover");
   }
   stages.push_back("analyze");
-  if (options.search_radius) stages.push_back("search-r");
-  stages.push_back("surface");
+  // The search builds the surface it chooses.
+  stages.push_back(options.search_radius ? "search-r" : "surface");
   if (options.representation.mode != RepresentationMode::kSheet) stages.push_back("representation");
   stages.push_back("similarity");
   if (options.volume_mesh) stages.push_back("volume");
@@ -251,16 +251,19 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     // (bench/RESULTS.md, issue 42); where a volume mesh follows, its angles come first.
     surface.fit_vertices = options.volume_mesh ? VertexFit::kNone : VertexFit::kRim;
   }
-  if (options.search_radius) {
-    StageTimer t(&report, "search-r");
-    SM_ASSIGN_OR_RETURN(report.radius_choice, SearchRadius(sheet, surface, options.radius_search,
-                                                           progress.Stage("search-r")));
-    surface.scvd.radius_voxels = report.radius_choice->radius;
-    report.options.surface.scvd.radius_voxels = report.radius_choice->radius;
-    surface.target_faces = report.radius_choice->decimate_to;
-  }
   SurfaceResult result;
-  {
+  if (options.search_radius) {
+    // The search hands back the surface it chose.
+    StageTimer t(&report, "search-r");
+    SM_ASSIGN_OR_RETURN(RadiusSearchResult found,
+                        SearchRadius(sheet, surface, options.radius_search, piece_of_voxel,
+                                     progress.Stage("search-r")));
+    surface.scvd.radius_voxels = found.choice.radius;
+    surface.triangles = found.choice.decimated_to;
+    report.options.surface.scvd.radius_voxels = found.choice.radius;
+    report.radius_choice = std::move(found.choice);
+    result = std::move(found.surface);
+  } else {
     StageTimer t(&report, "surface");
     SM_ASSIGN_OR_RETURN(
         result, BuildRequestedSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
@@ -280,9 +283,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                                              &result.mesh, progress.Stage("representation")));
   }
   const TriangleMesh& mesh = result.mesh;
-  if (surface.target_faces > 0 &&
-      mesh.num_faces() > (1 + kTriangleTolerance) * surface.target_faces) {
-    return absl::InvalidArgumentError(absl::StrCat("triangles = ", surface.target_faces,
+  if (surface.triangles > 0 && mesh.num_faces() > (1 + kTriangleTolerance) * surface.triangles) {
+    return absl::InvalidArgumentError(absl::StrCat("triangles = ", surface.triangles,
                                                    " is below the fewest this sheet can be meshed "
                                                    "with: ",
                                                    mesh.num_faces(),

@@ -48,14 +48,14 @@ absl::StatusOr<VoxelSet> Collect(tbb::combinable<std::vector<uint64_t>>& parts, 
 
 absl::StatusOr<VoxelSet> VoxelizePrisms(const TriangleMesh& mesh, const Dims& dims,
                                         PrismHeight height, const Progress& progress) {
-  if (height == PrismHeight::kFace && mesh.face_thickness.size() != mesh.faces.size()) {
+  if (height == PrismHeight::kFace && mesh.face_thickness_voxels.size() != mesh.faces.size()) {
     return absl::InvalidArgumentError(
-        absl::StrCat("prism model needs a thickness per face: ", mesh.face_thickness.size(),
+        absl::StrCat("prism model needs a thickness per face: ", mesh.face_thickness_voxels.size(),
                      " for ", mesh.faces.size(), " faces"));
   }
-  if (height == PrismHeight::kVertex && mesh.vertex_thickness.size() != mesh.vertices.size()) {
+  if (height == PrismHeight::kVertex && mesh.vertex_thickness_voxels.size() != mesh.vertices.size()) {
     return absl::InvalidArgumentError(
-        absl::StrCat("shell model needs a thickness per vertex: ", mesh.vertex_thickness.size(),
+        absl::StrCat("shell model needs a thickness per vertex: ", mesh.vertex_thickness_voxels.size(),
                      " for ", mesh.vertices.size(), " vertices"));
   }
   tbb::combinable<std::vector<uint64_t>> parts;
@@ -67,8 +67,8 @@ absl::StatusOr<VoxelSet> VoxelizePrisms(const TriangleMesh& mesh, const Dims& di
                         const Triangle t = Corners(mesh, f);
                         double h[3];
                         for (int k = 0; k < 3; ++k) {
-                          h[k] = height == PrismHeight::kFace ? mesh.face_thickness[f]
-                                                              : mesh.vertex_thickness[face[k]];
+                          h[k] = height == PrismHeight::kFace ? mesh.face_thickness_voxels[f]
+                                                              : mesh.vertex_thickness_voxels[face[k]];
                         }
                         const double hmax = std::max({h[0], h[1], h[2]});
                         if (!(hmax > 0)) continue;

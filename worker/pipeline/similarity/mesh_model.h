@@ -15,8 +15,8 @@
 namespace sheetmesh {
 
 enum class PrismHeight {
-  kFace,    // one thickness per triangle (mesh.face_thickness): the paper's prisms
-  kVertex,  // thickness interpolated from mesh.vertex_thickness: a linearly varying shell
+  kFace,    // one thickness per triangle (mesh.face_thickness_voxels): the paper's prisms
+  kVertex,  // thickness interpolated from mesh.vertex_thickness_voxels: a linearly varying shell
 };
 
 // Voxels of `dims` whose centre projects into some triangle and lies within half its

@@ -165,7 +165,7 @@ class SurfaceNets {
 
 }  // namespace
 
-absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t target_faces) {
+absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t triangles) {
   if (voxels.empty()) {
     return absl::InvalidArgumentError(absl::StrCat("piece ", piece, " has no voxels to mesh"));
   }
@@ -177,10 +177,10 @@ absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint
   TriangleMesh& mesh = out.mesh;
   out.faces_before = mesh.faces.size();
   mesh.face_piece.assign(mesh.faces.size(), piece);
-  mesh.face_thickness.assign(mesh.faces.size(), 0.0f);
-  if (target_faces > 0 && mesh.faces.size() > target_faces) {
+  mesh.face_thickness_voxels.assign(mesh.faces.size(), 0.0f);
+  if (triangles > 0 && mesh.faces.size() > triangles) {
     DecimateOptions d;
-    d.target_faces = target_faces;
+    d.triangles = triangles;
     d.optimal_placement = true;
     d.keep_box = true;
     d.box_lo = Vec3(-0.5, -0.5, -0.5);
@@ -188,7 +188,7 @@ absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint
     d.box_hi = Vec3(n.nx - 0.5, n.ny - 0.5, n.nz - 0.5);
     out.decimation = Decimate(&mesh, d);
   }
-  mesh.vertex_thickness.assign(mesh.vertices.size(), 0.0f);
+  mesh.vertex_thickness_voxels.assign(mesh.vertices.size(), 0.0f);
   return out;
 }
 

@@ -16,17 +16,17 @@
 namespace sheetmesh {
 
 struct BodySurface {
-  TriangleMesh mesh;                        // face_piece = the piece, face_thickness 0
+  TriangleMesh mesh;                        // face_piece = the piece, face_thickness_voxels 0
   uint64_t faces_before = 0;                // at voxel resolution, before decimation
-  std::optional<DecimateStats> decimation;  // when target_faces asked for fewer
+  std::optional<DecimateStats> decimation;  // when triangles asked for fewer
 };
 
 // The boundary of `voxels` at voxel resolution (a dual surface between the voxels' centres
 // and their outside neighbours'), oriented outward, within the box of the set's dims
 // ([-0.5, n - 0.5] on each axis: a piece reaching the box is closed by faces lying in the
-// box's face), then decimated to `target_faces` when that is > 0 and fewer
+// box's face), then decimated to `triangles` when that is > 0 and fewer
 // than it has. Faces carry `piece` and thickness 0. kInvalidArgument for an empty set.
-absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t target_faces);
+absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t triangles);
 
 }  // namespace sheetmesh
 

@@ -30,7 +30,7 @@ double WeightedMedian(std::vector<std::pair<double, double>> values) {
 FaceApertureStats SetFaceApertures(TriangleMesh* mesh, std::span<const float> measured, int rings) {
   TriangleMesh& m = *mesh;
   const size_t nf = m.faces.size();
-  SM_ASSERT(m.face_thickness.size() == nf);
+  SM_ASSERT(m.face_thickness_voxels.size() == nf);
   SM_ASSERT(measured.size() == nf);
   FaceApertureStats stats;
   if (nf == 0) return stats;
@@ -61,7 +61,7 @@ FaceApertureStats SetFaceApertures(TriangleMesh* mesh, std::span<const float> me
     if (junction_vertex[t[0]] || junction_vertex[t[1]] || junction_vertex[t[2]]) {
       kind[f] = kJunction;
       ++stats.junction;
-    } else if (m.face_thickness[f] <= 0) {
+    } else if (m.face_thickness_voxels[f] <= 0) {
       kind[f] = measured[f] > 0 ? kCovered : kHole;
       ++(measured[f] > 0 ? stats.covered : stats.holes);
     }
@@ -69,15 +69,15 @@ FaceApertureStats SetFaceApertures(TriangleMesh* mesh, std::span<const float> me
   // Per piece, the area-weighted median of the faces read from.
   absl::flat_hash_map<int32_t, std::vector<std::pair<double, double>>> by_piece;
   for (size_t f = 0; f < nf; ++f) {
-    if (kind[f] == kKeep && m.face_thickness[f] > 0) {
-      by_piece[piece(f)].push_back({m.face_thickness[f], area[f]});
+    if (kind[f] == kKeep && m.face_thickness_voxels[f] > 0) {
+      by_piece[piece(f)].push_back({m.face_thickness_voxels[f], area[f]});
     }
   }
   absl::flat_hash_map<int32_t, double> piece_median;
   for (auto& [p, values] : by_piece) piece_median[p] = WeightedMedian(std::move(values));
 
   // Each face to set: a breadth-first walk over the faces of its piece, `rings` rings out.
-  std::vector<float> out = m.face_thickness;
+  std::vector<float> out = m.face_thickness_voxels;
   std::vector<uint32_t> seen_at(nf, UINT32_MAX), front, next;
   for (uint32_t f = 0; f < nf; ++f) {
     if (kind[f] != kCovered && kind[f] != kJunction) continue;
@@ -94,8 +94,8 @@ FaceApertureStats SetFaceApertures(TriangleMesh* mesh, std::span<const float> me
             if (seen_at[h] == f || piece(h) != piece(f)) continue;
             seen_at[h] = f;
             next.push_back(h);
-            if (kind[h] == kKeep && m.face_thickness[h] > 0) {
-              sum += area[h] * m.face_thickness[h];
+            if (kind[h] == kKeep && m.face_thickness_voxels[h] > 0) {
+              sum += area[h] * m.face_thickness_voxels[h];
               weight += area[h];
             }
           }
@@ -110,11 +110,11 @@ FaceApertureStats SetFaceApertures(TriangleMesh* mesh, std::span<const float> me
     }
     if (sheet <= 0) sheet = measured[f];
     if (sheet <= 0) continue;
-    if (kind[f] == kJunction && m.face_thickness[f] > sheet) ++stats.junction_lowered;
-    if (kind[f] == kJunction && m.face_thickness[f] < sheet) ++stats.junction_raised;
+    if (kind[f] == kJunction && m.face_thickness_voxels[f] > sheet) ++stats.junction_lowered;
+    if (kind[f] == kJunction && m.face_thickness_voxels[f] < sheet) ++stats.junction_raised;
     out[f] = static_cast<float>(sheet);
   }
-  m.face_aperture = std::move(out);
+  m.face_aperture_voxels = std::move(out);
   return stats;
 }
 

@@ -20,7 +20,7 @@ struct FaceApertureStats {
   uint64_t junction_raised = 0;   // of those, faces thinner than their sheet, raised to it
 };
 
-// Sets mesh->face_aperture: each face's thickness, except two kinds of faces, which take
+// Sets mesh->face_aperture_voxels: each face's thickness, except two kinds of faces, which take
 // their sheet's local opening (the area-weighted mean thickness of the faces of the same
 // piece, neither of these kinds, within `rings` rings of faces; else the piece's
 // area-weighted median; else `measured`): faces at 0 whose `measured` thickness (the mean τ

@@ -1,8 +1,10 @@
 #include "worker/pipeline/surface/radius_search.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
@@ -24,11 +26,22 @@ std::vector<double> Ladder(double lo, double hi) {
   return out;
 }
 
+// Builds and scores the surface at each r tried. The surfaces the search may choose are
+// held (at most two, besides the last one built), so the chosen one is handed back, not
+// built again.
 class Evaluator {
  public:
-  Evaluator(const SheetAnalysis& sheet, const SurfaceOptions& surface, PrismHeight height,
+  // Which candidate a held surface is.
+  enum Slot { kBest, kOther, kSlots };
+
+  Evaluator(const SheetAnalysis& sheet, const SurfaceOptions& surface,
+            std::span<const int32_t> piece_of_voxel, PrismHeight height,
             const Progress& progress)
-      : sheet_(sheet), surface_(surface), height_(height), progress_(progress) {}
+      : sheet_(sheet),
+        surface_(surface),
+        piece_of_voxel_(piece_of_voxel),
+        height_(height),
+        progress_(progress) {}
 
   // Counts only, without the similarity, when `score` is false.
   // With `decimate_to`, the mesh is decimated to that many faces.
@@ -37,18 +50,21 @@ class Evaluator {
     auto it = done_.find({r, decimate_to});
     if (it != done_.end() && (it->second.scored || !score)) return it->second;
     SM_RETURN_IF_ERROR(progress_.Update(0.0, absl::StrCat("trying r = ", r)));
-    SurfaceOptions o = surface_;
-    o.scvd.radius_voxels = r;
-    o.target_faces = decimate_to;
+    SurfaceOptions o = Options(r, decimate_to);
     // Counting needs no heights: the fits change no face.
     if (!score) o.fit_walls = false;
-    SM_ASSIGN_OR_RETURN(SurfaceResult s, BuildRequestedSurface(sheet_, o));
+    auto built = std::make_shared<Built>();
+    built->radius = r;
+    built->decimate_to = decimate_to;
+    built->whole = o.fit_walls == surface_.fit_walls;
+    SM_ASSIGN_OR_RETURN(built->surface, BuildRequestedSurface(sheet_, o, piece_of_voxel_));
+    const TriangleMesh& mesh = built->surface.mesh;
     RadiusTrial t;
     t.radius = r;
-    t.triangles = s.mesh.num_faces();
+    t.triangles = mesh.num_faces();
     t.scored = score;
     if (t.triangles > 0 && score) {
-      SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(s.mesh, sheet_.set.dims(), height_));
+      SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizePrisms(mesh, sheet_.set.dims(), height_));
       t.similarity = ScoreModel(model, sheet_.set).similarity;
     } else {
       t.similarity = 0.0;
@@ -56,17 +72,60 @@ class Evaluator {
     t.decimated_to = decimate_to;
     done_[{r, decimate_to}] = t;
     trials_.push_back(t);
+    last_ = std::move(built);
     return t;
   }
+
+  // Keeps the surface of trial `t`, if it was the last built, as the candidate `slot`
+  // (dropping the one held there).
+  void Hold(Slot slot, const RadiusTrial& t) {
+    if (last_ && last_->radius == t.radius && last_->decimate_to == t.decimated_to) {
+      held_[slot] = last_;
+    }
+  }
+
+  // The surface at (r, decimate_to) with the caller's settings: held or last built, else
+  // built now (a trial that was only counted was built without its heights).
+  absl::StatusOr<SurfaceResult> Take(double r, uint64_t decimate_to) {
+    for (const std::shared_ptr<Built>& b : {held_[kBest], held_[kOther], last_}) {
+      if (b && b->whole && b->radius == r && b->decimate_to == decimate_to) {
+        SurfaceResult out = std::move(b->surface);
+        held_ = {};
+        last_.reset();
+        return out;
+      }
+    }
+    held_ = {};
+    last_.reset();
+    return BuildRequestedSurface(sheet_, Options(r, decimate_to), piece_of_voxel_);
+  }
+
   std::vector<RadiusTrial> trials() const { return trials_; }
 
  private:
+  struct Built {
+    double radius = 0;
+    uint64_t decimate_to = 0;
+    bool whole = false;  // built with the caller's settings (heights fitted if they fit them)
+    SurfaceResult surface;
+  };
+
+  SurfaceOptions Options(double r, uint64_t decimate_to) const {
+    SurfaceOptions o = surface_;
+    o.scvd.radius_voxels = r;
+    o.triangles = decimate_to;
+    return o;
+  }
+
   const SheetAnalysis& sheet_;
   SurfaceOptions surface_;
+  std::span<const int32_t> piece_of_voxel_;
   PrismHeight height_;
   Progress progress_;
   std::map<std::pair<double, uint64_t>, RadiusTrial> done_;
   std::vector<RadiusTrial> trials_;
+  std::shared_ptr<Built> last_;
+  std::array<std::shared_ptr<Built>, kSlots> held_;
 };
 
 // kTriangles: the count falls about as r^-2; a secant in log r, log count from two trials
@@ -142,9 +201,11 @@ absl::StatusOr<RadiusChoice> SearchTriangles(Evaluator& eval, double start, doub
 
 }  // namespace
 
-absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const SurfaceOptions& surface,
-                                          const RadiusSearchOptions& options,
-                                          const Progress& progress) {
+namespace {
+
+absl::StatusOr<RadiusChoice> Search(Evaluator& eval, const SheetAnalysis& sheet,
+                                    const SurfaceOptions& surface,
+                                    const RadiusSearchOptions& options) {
   const Dims& d = sheet.set.dims();
   const double hi = options.max_radius_voxels > 0
                         ? options.max_radius_voxels
@@ -160,16 +221,14 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
         absl::StrCat("target_similarity = ", options.target_similarity,
                      " must be in (0, 1): 1 is a perfect model"));
   }
-  if (options.goal == RadiusGoal::kTriangles && options.target_triangles == 0) {
+  if (options.goal == RadiusGoal::kTriangles && options.triangles == 0) {
     return absl::InvalidArgumentError("triangles = 0: a mesh needs at least one triangle");
   }
-  Evaluator eval(sheet, surface, options.height, progress);
   if (options.goal == RadiusGoal::kTriangles) {
-    const uint64_t n = options.target_triangles;
+    const uint64_t n = options.triangles;
     absl::StatusOr<RadiusChoice> plain =
         SearchTriangles(eval, surface.scvd.radius_voxels, lo, hi, n, false);
     if (!options.decimate) {
-      if (plain.ok()) plain->trials = eval.trials();
       return plain;
     }
     if (!plain.ok() && plain.status().code() != absl::StatusCode::kInvalidArgument) {
@@ -182,8 +241,9 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
                         SearchTriangles(eval, plain.ok() ? plain->radius : hi, lo, hi,
                                         static_cast<uint64_t>(std::ceil(kOversample * n)), true));
     SM_ASSIGN_OR_RETURN(RadiusTrial decimated, eval.Eval(fine.radius, true, n));
+    eval.Hold(Evaluator::kOther, decimated);
     RadiusChoice c = fine;
-    c.decimate_to = n;
+    c.decimated_to = n;
     c.target_reached = std::abs(double(decimated.triangles) - n) <= kTriangleTolerance * n;
     if (!c.target_reached) {
       c.message =
@@ -196,8 +256,6 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
       SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(plain->radius, true));
       if (t.similarity >= decimated.similarity || !c.target_reached) c = *plain;
     }
-    c.trials = eval.trials();
-    SM_RETURN_IF_ERROR(progress.Update(1.0));
     return c;
   }
   const std::vector<double> ladder = Ladder(lo, hi);
@@ -212,6 +270,7 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(ladder[i]));
     if (t.similarity > best.similarity) {
       best = t;
+      eval.Hold(Evaluator::kBest, t);
       since_best = 0;
     } else {
       ++since_best;
@@ -221,6 +280,7 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     } else {
       if (t.similarity >= options.target_similarity) {
         good = t.radius;
+        eval.Hold(Evaluator::kOther, t);
         bad = -1;
         misses = 0;
       } else if (good > 0) {
@@ -239,7 +299,10 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     for (double r = below + 1; r < above; r += 1) {
       if (r == best.radius) continue;
       SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(r));
-      if (t.similarity > best.similarity) best = t;
+      if (t.similarity > best.similarity) {
+        best = t;
+        eval.Hold(Evaluator::kBest, t);
+      }
     }
     choice.radius = best.radius;
   } else if (good < 0) {
@@ -257,6 +320,7 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
         SM_ASSIGN_OR_RETURN(RadiusTrial t, eval.Eval(m));
         if (t.similarity >= options.target_similarity) {
           a = m;
+          eval.Hold(Evaluator::kOther, t);
         } else {
           b = m;
         }
@@ -265,9 +329,23 @@ absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const Surf
     }
     choice.radius = good;
   }
-  choice.trials = eval.trials();
-  SM_RETURN_IF_ERROR(progress.Update(1.0));
   return choice;
+}
+
+}  // namespace
+
+absl::StatusOr<RadiusSearchResult> SearchRadius(const SheetAnalysis& sheet,
+                                                const SurfaceOptions& surface,
+                                                const RadiusSearchOptions& options,
+                                                std::span<const int32_t> piece_of_voxel,
+                                                const Progress& progress) {
+  Evaluator eval(sheet, surface, piece_of_voxel, options.height, progress);
+  RadiusSearchResult out;
+  SM_ASSIGN_OR_RETURN(out.choice, Search(eval, sheet, surface, options));
+  out.choice.trials = eval.trials();
+  SM_ASSIGN_OR_RETURN(out.surface, eval.Take(out.choice.radius, out.choice.decimated_to));
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
 }
 
 }  // namespace sheetmesh

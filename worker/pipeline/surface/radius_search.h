@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,13 +21,13 @@ namespace sheetmesh {
 enum class RadiusGoal {
   kBestSimilarity,    // the r with the highest similarity
   kTargetSimilarity,  // the largest r whose similarity reaches the target
-  kTriangles,         // the r whose mesh has target_triangles triangles, within 5%
+  kTriangles,         // the r whose mesh has `triangles` triangles, within 5%
 };
 
 struct RadiusSearchOptions {
   RadiusGoal goal = RadiusGoal::kBestSimilarity;
   double target_similarity = 0.60;  // kTargetSimilarity: the similarity to reach
-  uint64_t target_triangles = 0;    // kTriangles: the triangle count wanted
+  uint64_t triangles = 0;    // kTriangles: the triangle count wanted
   bool decimate = true;             // kTriangles: search r for kOversample times the count
                                     // (the caller decimates to it); below the coarsest r's
                                     // count, the coarsest r
@@ -50,7 +51,7 @@ struct RadiusTrial {
 
 struct RadiusChoice {
   double radius = 0;                // the chosen r
-  uint64_t decimate_to = 0;         // kTriangles: > 0 when the dual mesh at r is decimated to
+  uint64_t decimated_to = 0;        // kTriangles: > 0 when the dual mesh at r is decimated to
                                     // this many faces
   bool target_reached = true;       // kTargetSimilarity: false when no r reached the target (the
                                     // best r is chosen then); kTriangles: false when no r gave
@@ -62,13 +63,23 @@ struct RadiusChoice {
   nlohmann::json Fields() const;
 };
 
-// Searches r on `sheet` with the other settings of `surface`. kInvalidArgument for a
-// non-positive or inverted radius range, a similarity target outside (0, 1), a triangle
-// target of 0 or below the fewest triangles the sheet's outline needs (the count at the
-// largest r, which the message names); errors of meshing pass through; kCancelled if asked.
-absl::StatusOr<RadiusChoice> SearchRadius(const SheetAnalysis& sheet, const SurfaceOptions& surface,
-                                          const RadiusSearchOptions& options,
-                                          const Progress& progress = {});
+// What the search chose, and the surface it chose, as BuildRequestedSurface would give it
+// with `surface` at the chosen r (decimated to `choice.decimated_to` when that is > 0).
+struct RadiusSearchResult {
+  RadiusChoice choice;
+  SurfaceResult surface;
+};
+
+// Searches r on `sheet` with the other settings of `surface`, labelling faces with
+// `piece_of_voxel` as BuildSurface does. kInvalidArgument for a non-positive or inverted
+// radius range, a similarity target outside (0, 1), a triangle target of 0 or below the
+// fewest triangles the sheet's outline needs (the count at the largest r, which the message
+// names); errors of meshing pass through; kCancelled if asked.
+absl::StatusOr<RadiusSearchResult> SearchRadius(const SheetAnalysis& sheet,
+                                                const SurfaceOptions& surface,
+                                                const RadiusSearchOptions& options,
+                                                std::span<const int32_t> piece_of_voxel = {},
+                                                const Progress& progress = {});
 
 }  // namespace sheetmesh
 

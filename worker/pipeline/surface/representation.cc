@@ -25,7 +25,7 @@ TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& face
   std::vector<uint32_t> local;
   std::vector<uint32_t>& index = renumbered != nullptr ? *renumbered : local;
   index.assign(mesh.vertices.size(), UINT32_MAX);
-  const bool vthick = mesh.vertex_thickness.size() == mesh.vertices.size();
+  const bool vthick = mesh.vertex_thickness_voxels.size() == mesh.vertices.size();
   for (const uint32_t f : faces) {
     Face face;
     for (int k = 0; k < 3; ++k) {
@@ -33,13 +33,13 @@ TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& face
       if (v == UINT32_MAX) {
         v = static_cast<uint32_t>(out.vertices.size());
         out.vertices.push_back(mesh.vertices[mesh.faces[f][k]]);
-        if (vthick) out.vertex_thickness.push_back(mesh.vertex_thickness[mesh.faces[f][k]]);
+        if (vthick) out.vertex_thickness_voxels.push_back(mesh.vertex_thickness_voxels[mesh.faces[f][k]]);
       }
       face[k] = v;
     }
     out.faces.push_back(face);
-    out.face_thickness.push_back(mesh.face_thickness[f]);
-    if (!mesh.face_aperture.empty()) out.face_aperture.push_back(mesh.face_aperture[f]);
+    out.face_thickness_voxels.push_back(mesh.face_thickness_voxels[f]);
+    if (!mesh.face_aperture_voxels.empty()) out.face_aperture_voxels.push_back(mesh.face_aperture_voxels[f]);
     out.face_piece.push_back(mesh.face_piece[f]);
   }
   return out;
@@ -50,24 +50,24 @@ TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& face
 void Append(const TriangleMesh& part, TriangleMesh* mesh) {
   const uint32_t base = static_cast<uint32_t>(mesh->vertices.size());
   mesh->vertices.insert(mesh->vertices.end(), part.vertices.begin(), part.vertices.end());
-  if (part.vertex_thickness.size() == part.vertices.size()) {
-    mesh->vertex_thickness.insert(mesh->vertex_thickness.end(), part.vertex_thickness.begin(),
-                                  part.vertex_thickness.end());
+  if (part.vertex_thickness_voxels.size() == part.vertices.size()) {
+    mesh->vertex_thickness_voxels.insert(mesh->vertex_thickness_voxels.end(), part.vertex_thickness_voxels.begin(),
+                                  part.vertex_thickness_voxels.end());
   } else {
-    mesh->vertex_thickness.resize(mesh->vertices.size(), 0.0f);
+    mesh->vertex_thickness_voxels.resize(mesh->vertices.size(), 0.0f);
   }
-  if (!part.face_aperture.empty() || !mesh->face_aperture.empty()) {
-    mesh->face_aperture.resize(mesh->faces.size(), 0.0f);
-    if (part.face_aperture.empty()) {
-      mesh->face_aperture.resize(mesh->faces.size() + part.faces.size(), 0.0f);
+  if (!part.face_aperture_voxels.empty() || !mesh->face_aperture_voxels.empty()) {
+    mesh->face_aperture_voxels.resize(mesh->faces.size(), 0.0f);
+    if (part.face_aperture_voxels.empty()) {
+      mesh->face_aperture_voxels.resize(mesh->faces.size() + part.faces.size(), 0.0f);
     } else {
-      mesh->face_aperture.insert(mesh->face_aperture.end(), part.face_aperture.begin(),
-                                 part.face_aperture.end());
+      mesh->face_aperture_voxels.insert(mesh->face_aperture_voxels.end(), part.face_aperture_voxels.begin(),
+                                 part.face_aperture_voxels.end());
     }
   }
   for (const Face& f : part.faces) mesh->faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  mesh->face_thickness.insert(mesh->face_thickness.end(), part.face_thickness.begin(),
-                              part.face_thickness.end());
+  mesh->face_thickness_voxels.insert(mesh->face_thickness_voxels.end(), part.face_thickness_voxels.begin(),
+                              part.face_thickness_voxels.end());
   mesh->face_piece.insert(mesh->face_piece.end(), part.face_piece.begin(), part.face_piece.end());
 }
 
@@ -77,20 +77,20 @@ void WeldExact(TriangleMesh* mesh) {
   std::map<std::array<double, 3>, uint32_t> first;
   std::vector<uint32_t> to(mesh->vertices.size());
   TriangleMesh out;
-  const bool vthick = mesh->vertex_thickness.size() == mesh->vertices.size();
+  const bool vthick = mesh->vertex_thickness_voxels.size() == mesh->vertices.size();
   for (uint32_t v = 0; v < mesh->vertices.size(); ++v) {
     const Vec3& p = mesh->vertices[v];
     auto [it, fresh] = first.try_emplace({p.x, p.y, p.z}, out.vertices.size());
     if (fresh) {
       out.vertices.push_back(p);
-      if (vthick) out.vertex_thickness.push_back(mesh->vertex_thickness[v]);
+      if (vthick) out.vertex_thickness_voxels.push_back(mesh->vertex_thickness_voxels[v]);
     }
     to[v] = it->second;
   }
   for (Face& f : mesh->faces)
     for (uint32_t& v : f) v = to[v];
   mesh->vertices = std::move(out.vertices);
-  if (vthick) mesh->vertex_thickness = std::move(out.vertex_thickness);
+  if (vthick) mesh->vertex_thickness_voxels = std::move(out.vertex_thickness_voxels);
 }
 
 // Each piece's voxels (linear indices, ascending) and their τ.
@@ -454,10 +454,10 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
                                                           TriangleMesh* mesh,
                                                           const Progress& progress) {
   if (mesh->face_piece.size() != mesh->faces.size() ||
-      mesh->face_thickness.size() != mesh->faces.size()) {
+      mesh->face_thickness_voxels.size() != mesh->faces.size()) {
     return absl::InvalidArgumentError(
         absl::StrCat("choosing representations needs a piece and a thickness per face: ",
-                     mesh->face_piece.size(), " and ", mesh->face_thickness.size(), " for ",
+                     mesh->face_piece.size(), " and ", mesh->face_thickness_voxels.size(), " for ",
                      mesh->faces.size(), " faces"));
   }
   Chosen chosen;

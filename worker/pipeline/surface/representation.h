@@ -84,7 +84,7 @@ const char* RepresentationName(RepresentationMode mode);
 // lens whose sheet would cut through it after the join. `piece_of_voxel`, when not
 // empty, labels each voxel of sheet.set with its piece (as given to BuildSurface); else
 // pieces are the components. Pieces with no sheet face (too small for the SCVD at this r)
-// stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness;
+// stay without. kInvalidArgument when the mesh carries no face_piece or face_thickness_voxels;
 // kCancelled if asked.
 absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& sheet,
                                                           std::span<const int32_t> piece_of_voxel,

@@ -19,8 +19,8 @@ SurfaceOptions SurfaceOptions::Paper() {
   SurfaceOptions o;
   o.placement = VertexPlacement::kGenerator;
   o.thickness = ThicknessMeasure::kAxisRuns;
-  o.triangles.rim = false;
-  o.triangles.close_cracks = false;
+  o.dual.rim = false;
+  o.dual.close_cracks = false;
   o.scvd.domain = ScvdDomain::kVoxels;
   o.fit_walls = false;
   o.smooth_iterations = 0;
@@ -47,7 +47,7 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
   }
   SM_ASSIGN_OR_RETURN(DualTriangulation tri,
                       TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, positions,
-                                      options.triangles, progress.Sub(0.7, 0.9)));
+                                      options.dual, progress.Sub(0.7, 0.9)));
   // Rim vertices follow the generators in the vertex numbering of `tri`.
   const uint32_t num_gen = scvd.num_generators();
   for (size_t k = 0; k < tri.rim_positions.size(); ++k) positions.push_back(tri.rim_positions[k]);
@@ -85,7 +85,7 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
   for (size_t v = 0; v < scvd.cell.size(); ++v) {
     if (scvd.cell[v] != kNoCell) cell_tau[scvd.cell[v]] += sheet.thickness[v];
   }
-  mesh.vertex_thickness.resize(mesh.vertices.size());
+  mesh.vertex_thickness_voxels.resize(mesh.vertices.size());
   std::vector<int32_t> vertex_piece(mesh.vertices.size());
   for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
     const uint32_t g = out.vertex_generator[v];
@@ -95,7 +95,7 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     if (options.thickness == ThicknessMeasure::kNormal) {
       tau *= AxisRunToNormalFactor(Normalized(vnormal[v]));
     }
-    mesh.vertex_thickness[v] = static_cast<float>(tau);
+    mesh.vertex_thickness_voxels[v] = static_cast<float>(tau);
     vertex_piece[v] = piece_of_voxel.empty() ? static_cast<int32_t>(scvd.generator_component[g])
                                              : piece_of_voxel[scvd.generator_voxel[g]];
   }
@@ -104,27 +104,27 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     SmoothOptions so;
     so.iterations = options.smooth_iterations;
     out.smoothed_vertices =
-        SmoothVertices(&mesh, ThicknessSmoothingWeights(mesh, mesh.vertex_thickness), so);
+        SmoothVertices(&mesh, ThicknessSmoothingWeights(mesh, mesh.vertex_thickness_voxels), so);
   }
-  if (options.target_faces > 0 && mesh.faces.size() > options.target_faces) {
+  if (options.triangles > 0 && mesh.faces.size() > options.triangles) {
     DecimateOptions d;
-    d.target_faces = options.target_faces;
+    d.triangles = options.triangles;
     out.decimation = Decimate(&mesh, d);
   }
-  mesh.face_thickness = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+  mesh.face_thickness_voxels = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
   if (options.fit_walls) {
     // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
-    std::vector<float> measured = mesh.face_thickness;
-    std::vector<float> search(mesh.face_thickness.size());
-    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness[f] + 4;
-    mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
+    std::vector<float> measured = mesh.face_thickness_voxels;
+    std::vector<float> search(mesh.face_thickness_voxels.size());
+    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness_voxels[f] + 4;
+    mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
     if (options.fit_vertices != VertexFit::kNone) {
       VertexFitOptions fit;
       fit.along_normal = options.fit_vertices == VertexFit::kAll;
       out.vertex_fit = FitVertexPositions(&mesh, sheet.set, fit);
       // The heights again, for the faces as they lie now.
       if (out.vertex_fit->moves > 0) {
-        mesh.face_thickness = FitFaceThickness(mesh, sheet.set, search);
+        mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
         measured = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
       }
     }
@@ -138,13 +138,13 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
       const double a = Area(Corners(mesh, f));
       for (uint32_t v : mesh.faces[f]) {
-        sum[v] += a * mesh.face_thickness[f];
+        sum[v] += a * mesh.face_thickness_voxels[f];
         area[v] += a;
       }
     }
-    mesh.vertex_thickness.resize(mesh.vertices.size());
+    mesh.vertex_thickness_voxels.resize(mesh.vertices.size());
     for (size_t v = 0; v < sum.size(); ++v) {
-      mesh.vertex_thickness[v] = static_cast<float>(area[v] > 0 ? sum[v] / area[v] : 0.0);
+      mesh.vertex_thickness_voxels[v] = static_cast<float>(area[v] > 0 ? sum[v] / area[v] : 0.0);
     }
   }
 

@@ -30,7 +30,7 @@ enum class VertexPlacement {
 };
 
 // How far a surface's triangle count may land from a count asked for (`--triangles`,
-// SurfaceOptions::target_faces), as a fraction of it: the radius search's aim and the
+// SurfaceOptions::triangles), as a fraction of it: the radius search's aim and the
 // pipeline's check of the count it got.
 inline constexpr double kTriangleTolerance = 0.05;
 
@@ -45,11 +45,11 @@ enum class VertexFit {
 
 struct SurfaceOptions {
   ScvdOptions scvd;               // r, seed, Lloyd settings
-  DualTriangleOptions triangles;  // candidate selection
+  DualTriangleOptions dual;  // which dual triangles are kept (rim strip, cracks, folds)
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
   bool orient = true;         // orient faces consistently per manifold piece
-  uint64_t target_faces = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
+  uint64_t triangles = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
   bool fit_walls = true;      // each face's thickness fitted to the prisms' best formula-5 score
                               // (wall_fit.h; beyond the paper; false: the mean τ)
   VertexFit fit_vertices = VertexFit::kAuto;  // with fit_walls: vertices moved where
@@ -77,10 +77,10 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                           // face_thickness, face_piece, vertex_thickness set
+  TriangleMesh mesh;                           // face_thickness_voxels, face_piece, vertex_thickness_voxels set
   std::vector<uint32_t> vertex_generator;      // SCVD generator of each vertex of the dual mesh
                                                // (before any decimation)
-  std::optional<DecimateStats> decimation;     // when target_faces decimated the mesh
+  std::optional<DecimateStats> decimation;     // when triangles decimated the mesh
   std::optional<VertexFitStats> vertex_fit;    // when fit_vertices moved the vertices
   std::optional<FaceApertureStats> apertures;  // when fit_walls fitted the heights
   size_t smoothed_vertices = 0;                // vertices the thick-sheet smoothing moved

@@ -56,7 +56,7 @@ nlohmann::json RadiusChoice::Fields() const {
     t.push_back(std::move(trial));
   }
   nlohmann::json j = {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
-  if (decimate_to > 0) j["decimated_to"] = decimate_to;
+  if (decimated_to > 0) j["decimated_to"] = decimated_to;
   if (!message.empty()) j["message"] = message;
   return j;
 }

@@ -15,7 +15,7 @@
 namespace sheetmesh {
 namespace {
 
-// The voxels of the columns of `faces` (heights mesh.face_thickness) that no other prism
+// The voxels of the columns of `faces` (heights mesh.face_thickness_voxels) that no other prism
 // holds, each once: +1 for a voxel of the set, −1 for any other — what these faces add to
 // formula 5's numerator on top of the others.
 int64_t OwnGain(const TriangleMesh& mesh, std::span<const uint32_t> faces, const VoxelSet& set,
@@ -23,7 +23,7 @@ int64_t OwnGain(const TriangleMesh& mesh, std::span<const uint32_t> faces, const
                 std::vector<uint64_t>* keys) {
   keys->clear();
   for (uint32_t f : faces) {
-    ColumnOf(mesh, f, set, mesh.face_thickness[f] / 2, column);
+    ColumnOf(mesh, f, set, mesh.face_thickness_voxels[f] / 2, column);
     for (const ColumnVoxel& c : *column) {
       if (cover.Count(c) == 0) keys->push_back(c.id << 1 | uint64_t(c.in_set));
     }
@@ -38,7 +38,7 @@ int64_t OwnGain(const TriangleMesh& mesh, std::span<const uint32_t> faces, const
 void AddColumns(const TriangleMesh& mesh, std::span<const uint32_t> faces, const VoxelSet& set,
                 int delta, Coverage* cover, std::vector<ColumnVoxel>* column) {
   for (uint32_t f : faces) {
-    ColumnOf(mesh, f, set, mesh.face_thickness[f] / 2, column);
+    ColumnOf(mesh, f, set, mesh.face_thickness_voxels[f] / 2, column);
     for (const ColumnVoxel& c : *column) cover->Add(c, delta);
   }
 }
@@ -50,7 +50,7 @@ VertexFitStats FitVertexPositions(TriangleMesh* mesh_ptr, const VoxelSet& set,
   TriangleMesh& mesh = *mesh_ptr;
   VertexFitStats stats;
   const size_t nv = mesh.vertices.size();
-  if (mesh.face_thickness.size() != mesh.faces.size() || nv == 0) return stats;
+  if (mesh.face_thickness_voxels.size() != mesh.faces.size() || nv == 0) return stats;
   std::vector<std::vector<uint32_t>> faces_of(nv);
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
     for (uint32_t v : mesh.faces[f]) faces_of[v].push_back(f);

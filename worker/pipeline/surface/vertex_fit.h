@@ -34,13 +34,13 @@ struct VertexFitStats {
 };
 
 // Moves vertices of a sheet mesh where formula 5 of all the prisms together (face heights
-// `mesh.face_thickness`) rises: each rim vertex in turn tries one or two steps across the rim
+// `mesh.face_thickness_voxels`) rises: each rim vertex in turn tries one or two steps across the rim
 // (the outline of the outermost voxels; each rim edge's two ends together too) and, with
 // `along_normal`, every vertex along its normal, and takes the move that gains
 // most, as long as no face turns, folds or sharpens past the options' bounds. A rim within
 // `box_reach` of a face of the box goes onto it unless that loses. Vertices on and beside
 // junctions of sheets stay, a coordinate in a face of the box stays, and no vertex comes
-// nearer than a voxel to a face of the box otherwise. `mesh.face_thickness` must be set.
+// nearer than a voxel to a face of the box otherwise. `mesh.face_thickness_voxels` must be set.
 VertexFitStats FitVertexPositions(TriangleMesh* mesh, const VoxelSet& set,
                                   const VertexFitOptions& options = {});
 

@@ -209,7 +209,7 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
       for (int v = 0; v < 3; ++v) {
         std::vector<double> values;
         for (size_t f : faces) {
-          const double a = m.face_thickness[f];
+          const double a = m.FaceThickness(f);
           values.push_back(v == 0 ? a : v == 1 ? a * a / 12 : a * a * a / 12);
         }
         SM_RETURN_IF_ERROR(

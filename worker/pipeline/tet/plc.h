@@ -174,7 +174,7 @@ struct Clash {
   std::array<Vec3, 3> ta, tb;  // their corners, physical units
 };
 
-// Builds the PLC of `sheets` (voxel index coordinates; face_piece and face_thickness used
+// Builds the PLC of `sheets` (voxel index coordinates; face_piece and face_thickness_voxels used
 // when present) in the box of `dims` placed by `placement`. kFailedPrecondition listing
 // the first clashing triangles (ids and coordinates) when sheet facets intersect and
 // options.repair is off; kInvalidArgument for empty dims.

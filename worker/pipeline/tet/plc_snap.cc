@@ -76,7 +76,7 @@ SheetTriangles KeepTriangles(const TriangleMesh& sheets, const std::vector<Vec3>
     st.source.push_back(static_cast<uint32_t>(f));
     st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
     st.thickness.push_back(
-        sheets.face_thickness.size() == sheets.faces.size() ? sheets.face_thickness[f] : 0.f);
+        sheets.face_thickness_voxels.size() == sheets.faces.size() ? sheets.face_thickness_voxels[f] : 0.f);
   }
   return st;
 }

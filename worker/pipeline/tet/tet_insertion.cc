@@ -307,11 +307,11 @@ void VertexInserter::Apply(const Candidate& c) {
         TetMesh& m = ed_.mesh();
         index = static_cast<uint32_t>(m.faces.size());
         const int32_t marker = m.face_marker[f], piece = m.face_piece[f];
-        const float thickness = m.face_thickness[f];
+        const float thickness = m.face_thickness_voxels[f];
         m.faces.push_back(pieces[k]);
         m.face_marker.push_back(marker);
         m.face_piece.push_back(piece);
-        m.face_thickness.push_back(thickness);
+        m.face_thickness_voxels.push_back(thickness);
       }
       ed_.SetFacetFace(SortedFace(pieces[k][0], pieces[k][1], pieces[k][2]), index);
       for (uint32_t w : pieces[k]) ed_.sheet_faces_of(w).push_back(index);

@@ -41,7 +41,7 @@ TriangleMesh TetMesh::SheetSurface(const Placement& placement) const {
     }
     out.faces.push_back(g);
     out.face_piece.push_back(face_piece[f]);
-    out.face_thickness.push_back(static_cast<float>(face_thickness[f] / voxel_length));
+    out.face_thickness_voxels.push_back(face_thickness_voxels[f]);
   }
   return out;
 }

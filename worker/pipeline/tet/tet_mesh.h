@@ -26,7 +26,8 @@ struct TetMesh {
   std::vector<std::array<uint32_t, 3>> faces;  // faces on the PLC's facets
   std::vector<int32_t> face_marker;            // per face: 1 = box, >= 10 sheet triangle
   std::vector<int32_t> face_piece;             // per face: sheet piece, -1 on the box
-  std::vector<float> face_thickness;           // per face: sheet thickness (physical), 0 on the box
+  std::vector<float> face_thickness_voxels;    // per face: sheet thickness (its aperture where
+                                               // fitted) in voxels, 0 on the box
   std::vector<int32_t> body_pieces;  // pieces that are bodies, sorted (their faces bound them)
   std::vector<int32_t> tet_region;   // per tetrahedron: the body piece it fills, -1 in the
                                      // rock; empty when there are no bodies
@@ -41,6 +42,11 @@ struct TetMesh {
   // the inverse of `placement`, thickness in voxels), with the body pieces: what the volume
   // mesh carries of the surface, for scoring it as the surface is scored.
   TriangleMesh SheetSurface(const Placement& placement) const;
+
+  // Face f's thickness in physical units (the unit of the nodes).
+  float FaceThickness(size_t f) const {
+    return static_cast<float>(face_thickness_voxels[f] * voxel_length);
+  }
 
   size_t num_sheet_faces() const;
   bool IsBody(int32_t piece) const {

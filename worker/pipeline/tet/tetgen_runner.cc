@@ -126,10 +126,10 @@ absl::StatusOr<TetMesh> ReadOutput(const std::string& stem, const Plc& plc) {
     const int64_t s = marker - kFirstSheetMarker;
     if (s >= 0 && s < static_cast<int64_t>(plc.sheet_triangles.size())) {
       m.face_piece.push_back(plc.sheet_piece[s]);
-      m.face_thickness.push_back(plc.sheet_thickness[s]);
+      m.face_thickness_voxels.push_back(plc.sheet_thickness[s]);
     } else {
       m.face_piece.push_back(-1);
-      m.face_thickness.push_back(0.0f);
+      m.face_thickness_voxels.push_back(0.0f);
     }
   }
   return m;

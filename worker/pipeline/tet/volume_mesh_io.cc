@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "common/file_util.h"
 #include "common/version.h"
+#include "worker/pipeline/mesh/vtk_xml.h"
 
 namespace sheetmesh {
 namespace {
@@ -18,16 +19,6 @@ std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& m) {
   std::map<int32_t, std::vector<size_t>> groups;
   for (size_t f = 0; f < m.faces.size(); ++f) groups[m.face_piece[f]].push_back(f);
   return groups;
-}
-
-// Appends one VTU cell array: tet(t) per tetrahedron, then value(f) per face.
-template <class T, class F>
-void AppendCellArray(std::string* out, const char* type, const char* name, const TetMesh& m, T tet,
-                     F value) {
-  absl::StrAppend(out, "<DataArray type=\"", type, "\" Name=\"", name, "\" format=\"ascii\">\n");
-  for (size_t i = 0; i < m.tets.size(); ++i) absl::StrAppend(out, tet(i), "\n");
-  for (size_t f = 0; f < m.faces.size(); ++f) absl::StrAppend(out, value(f), "\n");
-  *out += "</DataArray>\n";
 }
 
 std::string G7(double v) { return absl::StrFormat("%.7g", v); }
@@ -66,57 +57,58 @@ std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
 }
 
 absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
-  const size_t cells = m.tets.size() + m.faces.size();
-  std::string out = absl::StrCat(
-      "<?xml version=\"1.0\"?>\n<!-- sheetmesh ", SHEETMESH_VERSION, ": ", m.UnitsText(),
-      " -->\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
-      "byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"",
-      m.nodes.size(), "\" NumberOfCells=\"", cells,
-      "\">\n<Points>\n"
-      "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-  for (const Vec3& p : m.nodes) absl::StrAppendFormat(&out, "%.12g %.12g %.12g\n", p.x, p.y, p.z);
-  out +=
-      "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" "
-      "format=\"ascii\">\n";
-  for (const Tet& t : m.tets) absl::StrAppend(&out, t[0], " ", t[1], " ", t[2], " ", t[3], "\n");
-  for (const auto& f : m.faces) absl::StrAppend(&out, f[0], " ", f[1], " ", f[2], "\n");
-  out += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  uint64_t off = 0;
-  for (size_t i = 0; i < m.tets.size(); ++i) absl::StrAppend(&out, off += 4, "\n");
-  for (size_t i = 0; i < m.faces.size(); ++i) absl::StrAppend(&out, off += 3, "\n");
-  out += "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (size_t i = 0; i < m.tets.size(); ++i) out += "10\n";
-  for (size_t i = 0; i < m.faces.size(); ++i) out += "5\n";
-  out += "</DataArray>\n</Cells>\n<CellData Scalars=\"MaterialIDs\">\n";
+  const size_t nt = m.tets.size(), cells = nt + m.faces.size();
+  VtkXml vtk(VtkKind::kUnstructuredGrid, m.nodes.size(), cells,
+             absl::StrCat("sheetmesh ", SHEETMESH_VERSION, ": ", m.UnitsText()));
+  vtk.Points(m.nodes.size(), [&](size_t i) { return m.nodes[i]; }, 12);
+  vtk.BeginCells();
+  vtk.Array("Int64", "connectivity", cells, [&](size_t i) {
+    if (i < nt) {
+      const Tet& t = m.tets[i];
+      return absl::StrCat(t[0], " ", t[1], " ", t[2], " ", t[3]);
+    }
+    const auto& f = m.faces[i - nt];
+    return absl::StrCat(f[0], " ", f[1], " ", f[2]);
+  });
+  vtk.Array("Int64", "offsets", cells,
+            [&](size_t i) { return i < nt ? 4 * (i + 1) : 4 * nt + 3 * (i - nt + 1); });
+  // VTK_TETRA, VTK_TRIANGLE
+  vtk.Array("UInt8", "types", cells, [&](size_t i) { return i < nt ? 10 : 5; });
+  vtk.EndCells();
+  vtk.BeginData("CellData", "MaterialIDs");
   int32_t top_piece = -1;
   for (int32_t p : m.face_piece) top_piece = std::max(top_piece, p);
   const int32_t box_id = top_piece + 2;
-  const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
-  const auto zero = [](size_t) { return "0"; };
-  AppendCellArray(&out, "Int32", "kind", m, zero, [&](size_t f) {
+  // One value per cell: tet(t) on the tetrahedra, then face(f) on the faces.
+  const auto cell_array = [&](const char* type, const char* name, auto tet, auto face) {
+    vtk.Array(type, name, cells, [&](size_t i) {
+      return i < nt ? absl::StrCat(tet(i)) : absl::StrCat(face(i - nt));
+    });
+  };
+  const auto zero = [](size_t) { return 0; };
+  cell_array("Int32", "kind", zero, [&](size_t f) {
     return m.face_piece[f] < 0 ? 2 : (m.IsBody(m.face_piece[f]) ? 3 : 1);
   });
-  AppendCellArray(
-      &out, "Int32", "piece", m, [&](size_t t) { return m.Region(t); },
+  cell_array(
+      "Int32", "piece", [&](size_t t) { return m.Region(t); },
       [&](size_t f) { return m.face_piece[f]; });
-  AppendCellArray(
-      &out, "Int32", "MaterialIDs", m, [&](size_t t) { return m.Region(t) + 1; },
+  cell_array(
+      "Int32", "MaterialIDs", [&](size_t t) { return m.Region(t) + 1; },
       [&](size_t f) { return m.face_piece[f] >= 0 ? m.face_piece[f] + 1 : box_id; });
-  AppendCellArray(&out, "Float32", "thickness", m, zero,
-                  [&](size_t f) { return G7(m.face_thickness[f]); });
-  AppendCellArray(&out, "Float32", "thickness_voxels", m, zero,
-                  [&](size_t f) { return G7(m.face_thickness[f] / vox); });
-  AppendCellArray(&out, "Float32", "aperture", m, zero,
-                  [&](size_t f) { return G7(m.face_thickness[f]); });
-  AppendCellArray(&out, "Float64", "permeability", m, zero, [&](size_t f) {
-    const double a = m.face_thickness[f];
+  cell_array("Float32", "thickness", zero, [&](size_t f) { return G7(m.FaceThickness(f)); });
+  cell_array("Float32", "thickness_voxels", zero,
+             [&](size_t f) { return G7(m.face_thickness_voxels[f]); });
+  cell_array("Float32", "aperture", zero, [&](size_t f) { return G7(m.FaceThickness(f)); });
+  cell_array("Float64", "permeability", zero, [&](size_t f) {
+    const double a = m.FaceThickness(f);
     return absl::StrFormat("%.9g", a * a / 12);
   });
-  AppendCellArray(&out, "Float64", "transmissivity", m, zero, [&](size_t f) {
-    const double a = m.face_thickness[f];
+  cell_array("Float64", "transmissivity", zero, [&](size_t f) {
+    const double a = m.FaceThickness(f);
     return absl::StrFormat("%.9g", a * a * a / 12);
   });
-  out += "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  vtk.EndData();
+  const std::string out = std::move(vtk).Finish();
   return WriteFileAtomically(path, out);
 }
 
@@ -190,16 +182,19 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
   // The thickness of every element (meshio takes element data only when every element has
   // it): 0 on the tetrahedra and the box, the sheet's on its triangles. Tags follow the
   // order written above.
-  std::vector<double> thickness(total, 0.0);
+  std::vector<double> thickness(total, 0.0), thickness_voxels(total, 0.0);
   tag = m.tets.size();
-  for (const auto& [piece, faces] : groups)
-    for (size_t f : faces) thickness[tag++] = m.face_thickness[f];
-  const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
+  for (const auto& [piece, faces] : groups) {
+    for (size_t f : faces) {
+      thickness[tag] = m.FaceThickness(f);
+      thickness_voxels[tag++] = m.face_thickness_voxels[f];
+    }
+  }
   for (const bool voxels : {false, true}) {
     absl::StrAppend(&out, "$ElementData\n1\n\"", voxels ? "thickness_voxels" : "thickness",
                     "\"\n1\n0\n3\n0\n1\n", total, "\n");
     for (size_t e = 0; e < total; ++e)
-      absl::StrAppendFormat(&out, "%d %.7g\n", e + 1, voxels ? thickness[e] / vox : thickness[e]);
+      absl::StrAppendFormat(&out, "%d %.7g\n", e + 1, voxels ? thickness_voxels[e] : thickness[e]);
     out += "$EndElementData\n";
   }
   return WriteFileAtomically(path, out);
@@ -298,7 +293,7 @@ absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
   }
   for (const auto& [piece, faces] : sheets) {
     double sum = 0;
-    for (size_t f : faces) sum += m.face_thickness[f];
+    for (size_t f : faces) sum += m.FaceThickness(f);
     const double mean = faces.empty() ? 0 : sum / faces.size();
     const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
     absl::StrAppendFormat(&out,

@@ -95,7 +95,7 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
   kept.faces.clear();
   kept.face_marker.clear();
   kept.face_piece.clear();
-  kept.face_thickness.clear();
+  kept.face_thickness_voxels.clear();
   for (size_t f = 0; f < mesh->faces.size(); ++f) {
     const int32_t marker = mesh->face_marker[f];
     if (marker >= kFirstSheetMarker) {
@@ -105,7 +105,7 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
     kept.faces.push_back(mesh->faces[f]);
     kept.face_marker.push_back(marker);
     kept.face_piece.push_back(mesh->face_piece[f]);
-    kept.face_thickness.push_back(mesh->face_thickness[f]);
+    kept.face_thickness_voxels.push_back(mesh->face_thickness_voxels[f]);
   }
   auto AssignToSheet = [&](const FaceKey& k) {
     if (!markers.contains(k[0]) || !markers.contains(k[1]) || !markers.contains(k[2])) return;
@@ -127,7 +127,7 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh) {
       kept.faces.push_back(k);
       kept.face_marker.push_back(marker);
       kept.face_piece.push_back(plc.sheet_piece[t]);
-      kept.face_thickness.push_back(plc.sheet_thickness[t]);
+      kept.face_thickness_voxels.push_back(plc.sheet_thickness[t]);
       break;
     }
   };
@@ -404,9 +404,9 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
                                                  const Progress& progress) {
   // The sheet faces carry their aperture into the volume mesh, where a flow model takes it.
   TriangleMesh with_apertures;
-  if (surface.face_aperture.size() == surface.faces.size() && !surface.faces.empty()) {
+  if (surface.face_aperture_voxels.size() == surface.faces.size() && !surface.faces.empty()) {
     with_apertures = surface;
-    with_apertures.face_thickness = surface.face_aperture;
+    with_apertures.face_thickness_voxels = surface.face_aperture_voxels;
   }
   const TriangleMesh& sheets = with_apertures.faces.empty() ? surface : with_apertures;
   VolumeMeshResult r;
@@ -455,10 +455,9 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
     it->volume += std::abs(
         TetVolume(r.mesh.nodes[q[0]], r.mesh.nodes[q[1]], r.mesh.nodes[q[2]], r.mesh.nodes[q[3]]));
   }
-  // The sheets' thickness came in voxels: the mesh is physical.
+  // The nodes are physical; a voxel's length makes the thickness so where it is written.
   r.mesh.voxel_length = PhysicalLength(1.0, placement);
   r.mesh.unit = placement.unit;
-  for (float& t : r.mesh.face_thickness) t = static_cast<float>(t * r.mesh.voxel_length);
   r.quality = MeasureQuality(r.mesh);
   r.nodes = r.mesh.nodes.size();
   r.tetrahedra = r.mesh.tets.size();

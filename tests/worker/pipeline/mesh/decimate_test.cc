@@ -23,7 +23,7 @@ double TotalArea(const TriangleMesh& m) {
 TEST(DecimateTest, APlaneRectangleNeedsOnlyItsOutline) {
   TriangleMesh m = Grid(12, 8, [](int x, int y) { return Vec3{double(x), double(y), 3.0}; });
   m.face_piece.assign(m.num_faces(), 7);
-  const DecimateStats s = Decimate(&m, {.target_faces = 2});
+  const DecimateStats s = Decimate(&m, {.triangles = 2});
   EXPECT_EQ(s.faces_before, 192u);
   EXPECT_LE(m.num_faces(), 8u);
   EXPECT_NEAR(TotalArea(m), 96.0, 1e-6);  // the rectangle whole
@@ -42,7 +42,7 @@ TEST(DecimateTest, AFoldIsKeptWhereTheFlatIsMerged) {
   TriangleMesh m = Grid(12, 8, [](int x, int y) {
     return x <= 6 ? Vec3{double(x), double(y), 0} : Vec3{6, double(y), double(x - 6)};
   });
-  Decimate(&m, {.target_faces = 4});
+  Decimate(&m, {.triangles = 4});
   ASSERT_GT(m.num_faces(), 0u);
   for (size_t f = 0; f < m.num_faces(); ++f) {
     const Vec3 n = UnitNormal(Corners(m, f));
@@ -66,7 +66,7 @@ TEST(DecimateTest, AJunctionKeepsItsLineAndItsEnds) {
   // Only the collapses that cost nothing: the inner vertices of the junction slide along it,
   // its ends (on the rim) stay, and the base becomes two rectangles of two triangles each
   // beside the standing sheet's two (a locked junction kept 44 faces).
-  Decimate(&m, {.target_faces = 1, .max_error = 1e-9});
+  Decimate(&m, {.triangles = 1, .max_error = 1e-9});
   EXPECT_LE(m.num_faces(), 10u);
   EXPECT_NEAR(TotalArea(m), 36.0 + 12.0, 1e-6);
   for (const Vec3 end : {Vec3{3, 0, 0}, Vec3{3, 6, 0}}) {
@@ -109,7 +109,7 @@ TEST(DecimateTest, ThreeSheetsMeetingAtAPointKeepThePoint) {
   m.vertices = unique;
   const double area = TotalArea(m);
   ASSERT_EQ(m.num_faces(), 384u);
-  Decimate(&m, {.target_faces = 1, .max_error = 1e-9});
+  Decimate(&m, {.triangles = 1, .max_error = 1e-9});
   EXPECT_LE(m.num_faces(), 50u);  // 66 with the junction held fixed
   EXPECT_NEAR(TotalArea(m), area, 1e-6);
   EXPECT_TRUE(std::find(m.vertices.begin(), m.vertices.end(), Vec3{0, 0, 0}) != m.vertices.end())

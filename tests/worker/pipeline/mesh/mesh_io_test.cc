@@ -19,9 +19,9 @@ TriangleMesh Sample() {
   TriangleMesh m;
   m.vertices = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 1}};
   m.faces = {{0, 1, 2}, {1, 3, 2}};
-  m.face_thickness = {3.5f, 0.0f};
+  m.face_thickness_voxels = {3.5f, 0.0f};
   m.face_piece = {4, 7};
-  m.vertex_thickness = {1, 2, 3, 4};
+  m.vertex_thickness_voxels = {1, 2, 3, 4};
   return m;
 }
 
@@ -38,10 +38,10 @@ TEST(MeshIoTest, PlyRoundTripKeepsGeometryAndAttributesInPhysicalUnits) {
   for (size_t v = 0; v < 4; ++v) {
     EXPECT_NEAR(back.vertices[v].x, m.vertices[v].x, 1e-5);
     EXPECT_NEAR(back.vertices[v].z, m.vertices[v].z, 1e-5);
-    EXPECT_NEAR(back.vertex_thickness[v], m.vertex_thickness[v], 1e-5);
+    EXPECT_NEAR(back.vertex_thickness_voxels[v], m.vertex_thickness_voxels[v], 1e-5);
   }
   EXPECT_EQ(back.faces, m.faces);
-  EXPECT_EQ(back.face_thickness, m.face_thickness);
+  EXPECT_EQ(back.face_thickness_voxels, m.face_thickness_voxels);
   EXPECT_EQ(back.face_piece, m.face_piece);
   // Physical coordinates in the file: vertex 1 is at 10 + 2 * 0.5 = 11.
   SM_ASSERT_OK_AND_ASSIGN(TriangleMesh phys, ReadMesh(path));

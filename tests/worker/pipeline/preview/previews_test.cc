@@ -24,7 +24,7 @@ struct Slab {
       for (int64_t y = 2; y < 18; ++y) b.AddRun(y, z, 2, 18);
     phase = std::move(b).Build();
     mesh = Grid(15, 15, [](int x, int y) { return Vec3{2.0 + x, 2.0 + y, 5.0}; });
-    mesh.face_thickness.assign(mesh.num_faces(), 3.0f);
+    mesh.face_thickness_voxels.assign(mesh.num_faces(), 3.0f);
   }
 };
 
@@ -86,15 +86,15 @@ TEST(PreviewsTest, SliceAlongTheSlabIsAllPhaseInsideItsOutline) {
 
 TEST(PreviewsTest, ThicknessMapColoursByThicknessAndEncodesAsPng) {
   Slab s;
-  for (size_t f = 0; f < s.mesh.num_faces(); ++f) s.mesh.face_thickness[f] = 1.0f + f % 7;
+  for (size_t f = 0; f < s.mesh.num_faces(); ++f) s.mesh.face_thickness_voxels[f] = 1.0f + f % 7;
   const Preview p = ThicknessPreview(s.mesh);
   EXPECT_EQ(p.fields["faces"], s.mesh.num_faces());
   EXPECT_THAT(p.fields["thickness_range_voxels"].get<std::vector<double>>(),
               ::testing::ElementsAre(1.0, 7.0));
   EXPECT_EQ(p.fields["field"], "thickness");
   // With apertures, the map is of them.
-  s.mesh.face_aperture.assign(s.mesh.num_faces(), 2.0f);
-  s.mesh.face_aperture[0] = 4.0f;
+  s.mesh.face_aperture_voxels.assign(s.mesh.num_faces(), 2.0f);
+  s.mesh.face_aperture_voxels[0] = 4.0f;
   const Preview a = ThicknessPreview(s.mesh);
   EXPECT_EQ(a.fields["field"], "aperture");
   EXPECT_THAT(a.fields["thickness_range_voxels"].get<std::vector<double>>(),

@@ -225,7 +225,7 @@ TEST(ParametersTest, ConfigSetsEveryGroup) {
   EXPECT_EQ(o->extraction.recover_extend.max_rounds, 3);
   EXPECT_EQ(o->surface.scvd.radius_voxels, 9);
   EXPECT_EQ(o->surface.scvd.seed, 5u);
-  EXPECT_FALSE(o->surface.triangles.rim) << "method paper";
+  EXPECT_FALSE(o->surface.dual.rim) << "method paper";
   EXPECT_TRUE(o->search_radius);
   EXPECT_EQ(o->radius_search.goal, RadiusGoal::kTargetSimilarity);
   EXPECT_EQ(o->score.height, PrismHeight::kVertex);
@@ -288,7 +288,7 @@ TEST(ParametersTest, APresetNeverUndoesASettingGivenBesideIt) {
   ASSERT_THAT(o, IsOk());
   EXPECT_EQ(o->surface.scvd.radius_voxels, 5);
   EXPECT_EQ(o->surface.placement, VertexPlacement::kCentroid) << "set explicitly";
-  EXPECT_FALSE(o->surface.triangles.rim) << "from the preset";
+  EXPECT_FALSE(o->surface.dual.rim) << "from the preset";
   EXPECT_EQ(o->surface.thickness, ThicknessMeasure::kAxisRuns) << "from the preset";
 }
 

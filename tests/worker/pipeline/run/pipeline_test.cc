@@ -224,12 +224,12 @@ TEST(PipelineTest, SheetFacesCarryAnApertureThatIsZeroOnlyOverAHole) {
   PipelineOptions o = VolumeRun(tmp, 3);
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
   SM_ASSERT_OK_AND_ASSIGN(TriangleMesh surface, ReadMesh(tmp.File("out/surface.ply")));
-  ASSERT_EQ(surface.face_aperture.size(), surface.faces.size());
+  ASSERT_EQ(surface.face_aperture_voxels.size(), surface.faces.size());
   size_t zero_thickness = 0, zero_aperture = 0;
   for (size_t f = 0; f < surface.faces.size(); ++f) {
     if (surface.IsBodyFace(f)) continue;
-    zero_thickness += surface.face_thickness[f] == 0;
-    zero_aperture += surface.face_aperture[f] == 0;
+    zero_thickness += surface.face_thickness_voxels[f] == 0;
+    zero_aperture += surface.face_aperture_voxels[f] == 0;
   }
   const nlohmann::json j = nlohmann::json::parse(r.ToJson())["surface"]["apertures"];
   EXPECT_GT(zero_thickness, 0u) << "r = 3 leaves covered faces at 0 on this phantom";

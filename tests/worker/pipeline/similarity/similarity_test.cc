@@ -20,7 +20,7 @@ TriangleMesh RightTriangle(float thickness) {
   TriangleMesh m;
   m.vertices = {{0, 0, 5}, {10, 0, 5}, {0, 10, 5}};
   m.faces = {{0, 1, 2}};
-  m.face_thickness = {thickness};
+  m.face_thickness_voxels = {thickness};
   return m;
 }
 
@@ -40,7 +40,7 @@ TEST(MeshModelTest, ZeroThicknessAddsNothingAndTheShellFollowsVertexThickness) {
   SM_ASSERT_OK_AND_ASSIGN(VoxelSet none, VoxelizePrisms(RightTriangle(0), d));
   EXPECT_TRUE(none.empty());
   TriangleMesh m = RightTriangle(0);
-  m.vertex_thickness = {5, 1, 1};  // thick at the origin, thin at the far corners
+  m.vertex_thickness_voxels = {5, 1, 1};  // thick at the origin, thin at the far corners
   SM_ASSERT_OK_AND_ASSIGN(VoxelSet shell, VoxelizePrisms(m, d, PrismHeight::kVertex));
   EXPECT_TRUE(shell.Contains(0, 0, 7));    // half thickness 2.5 at the origin
   EXPECT_FALSE(shell.Contains(10, 0, 6));  // half thickness 0.5 at (10, 0)
@@ -48,7 +48,7 @@ TEST(MeshModelTest, ZeroThicknessAddsNothingAndTheShellFollowsVertexThickness) {
   TriangleMesh bad = RightTriangle(1);
   EXPECT_THAT(VoxelizePrisms(bad, d, PrismHeight::kVertex),
               StatusIs(absl::StatusCode::kInvalidArgument));
-  bad.face_thickness.clear();
+  bad.face_thickness_voxels.clear();
   EXPECT_THAT(VoxelizePrisms(bad, d), StatusIs(absl::StatusCode::kInvalidArgument));
 }
 

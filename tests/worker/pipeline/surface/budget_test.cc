@@ -25,15 +25,13 @@ struct AtBudget {
 AtBudget Mesh(const SheetAnalysis& sheet, uint64_t n) {
   RadiusSearchOptions o;
   o.goal = RadiusGoal::kTriangles;
-  o.target_triangles = n;
+  o.triangles = n;
   SurfaceOptions s;
-  s.triangles.rim_push_voxels = 0.5;
-  absl::StatusOr<RadiusChoice> c = SearchRadius(sheet, s, o);
+  s.dual.rim_push_voxels = 0.5;
+  absl::StatusOr<RadiusSearchResult> c = SearchRadius(sheet, s, o);
   EXPECT_TRUE(c.ok()) << c.status();
-  s.scvd.radius_voxels = c->radius;
-  s.target_faces = c->decimate_to;
   AtBudget out;
-  out.surface = *BuildSurface(sheet, s);
+  out.surface = std::move(c->surface);
   out.similarity =
       ScoreModel(*VoxelizePrisms(out.surface.mesh, sheet.set.dims()), sheet.set).similarity;
   return out;
@@ -116,14 +114,14 @@ TEST(BudgetTest, TheSameBudgetGivesTheSameMeshEveryTime) {
       }));
   SurfaceOptions s;
   s.scvd.radius_voxels = 3;
-  s.target_faces = 100;
+  s.triangles = 100;
   const SurfaceResult first = *BuildSurface(sheet, s);
   ASSERT_TRUE(first.decimation.has_value());
   for (int i = 0; i < 5; ++i) {
     const SurfaceResult again = *BuildSurface(sheet, s);
     EXPECT_EQ(again.mesh.faces, first.mesh.faces) << "call " << i;
     EXPECT_EQ(again.mesh.vertices, first.mesh.vertices) << "call " << i;
-    EXPECT_EQ(again.mesh.face_thickness, first.mesh.face_thickness) << "call " << i;
+    EXPECT_EQ(again.mesh.face_thickness_voxels, first.mesh.face_thickness_voxels) << "call " << i;
   }
 }
 

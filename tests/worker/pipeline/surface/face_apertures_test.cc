@@ -52,14 +52,14 @@ TEST(FaceAperturesTest, AJunctionsFacesCarryTheirOwnSheetsApertureNotTheCrossing
   TriangleMesh& m = c.mesh;
   // Sheet 0 is 2 voxels thick, sheet 1 is 3; the fit gave the junction's faces the sum.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    m.face_thickness.push_back(c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2.0f : 3.0f));
+    m.face_thickness_voxels.push_back(c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2.0f : 3.0f));
   }
-  const std::vector<float> measured = m.face_thickness;
+  const std::vector<float> measured = m.face_thickness_voxels;
   const FaceApertureStats s = SetFaceApertures(&m, measured);
-  ASSERT_EQ(m.face_aperture.size(), m.faces.size());
+  ASSERT_EQ(m.face_aperture_voxels.size(), m.faces.size());
   size_t junction = 0;
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    EXPECT_FLOAT_EQ(m.face_aperture[f], m.face_piece[f] == 0 ? 2.0f : 3.0f) << f;
+    EXPECT_FLOAT_EQ(m.face_aperture_voxels[f], m.face_piece[f] == 0 ? 2.0f : 3.0f) << f;
     junction += c.at_junction[f];
   }
   EXPECT_EQ(s.junction, junction);
@@ -67,28 +67,28 @@ TEST(FaceAperturesTest, AJunctionsFacesCarryTheirOwnSheetsApertureNotTheCrossing
   EXPECT_EQ(s.junction_raised, 0u);
   // The thickness the score uses stays as fitted.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    EXPECT_FLOAT_EQ(m.face_thickness[f], c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2 : 3));
+    EXPECT_FLOAT_EQ(m.face_thickness_voxels[f], c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2 : 3));
   }
 }
 
 TEST(FaceAperturesTest, ACoveredFaceGetsItsSheetsApertureAndAHoleStaysOpen) {
   Crossing c = MakeCrossing();
   TriangleMesh& m = c.mesh;
-  m.face_thickness.assign(m.faces.size(), 2.0f);
+  m.face_thickness_voxels.assign(m.faces.size(), 2.0f);
   std::vector<float> measured(m.faces.size(), 2.0f);
   // Two faces of sheet 0 far from the crossing fitted at 0: one over sheet voxels (its
   // neighbours' prisms cover them), one over none (a hole in the sheet).
   const size_t covered = 2, hole = 20;
   ASSERT_FALSE(c.at_junction[covered] || c.at_junction[hole]);
-  m.face_thickness[covered] = m.face_thickness[hole] = 0;
+  m.face_thickness_voxels[covered] = m.face_thickness_voxels[hole] = 0;
   measured[hole] = 0;
   // Neighbours of different thickness: the covered face takes the mean of its rings.
   const FaceApertureStats s = SetFaceApertures(&m, measured);
   EXPECT_EQ(s.covered, 1u);
   EXPECT_EQ(s.holes, 1u);
-  EXPECT_FLOAT_EQ(m.face_aperture[covered], 2.0f);
-  EXPECT_FLOAT_EQ(m.face_aperture[hole], 0.0f);
-  EXPECT_FLOAT_EQ(m.face_thickness[covered], 0.0f);
+  EXPECT_FLOAT_EQ(m.face_aperture_voxels[covered], 2.0f);
+  EXPECT_FLOAT_EQ(m.face_aperture_voxels[hole], 0.0f);
+  EXPECT_FLOAT_EQ(m.face_thickness_voxels[covered], 0.0f);
 }
 
 TEST(FaceAperturesTest, TheLocalApertureFollowsASheetWhoseThicknessVaries) {
@@ -96,16 +96,16 @@ TEST(FaceAperturesTest, TheLocalApertureFollowsASheetWhoseThicknessVaries) {
   TriangleMesh& m = c.mesh;
   // Sheet 0 thickens along x: 1 + x / 2 at the face's first vertex.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    m.face_thickness.push_back(m.face_piece[f] == 0 ? 1 + m.vertices[m.faces[f][0]].x / 2 : 3);
+    m.face_thickness_voxels.push_back(m.face_piece[f] == 0 ? 1 + m.vertices[m.faces[f][0]].x / 2 : 3);
   }
-  const std::vector<float> measured = m.face_thickness;
+  const std::vector<float> measured = m.face_thickness_voxels;
   const size_t far = 2 * (8 * 7 + 3);  // x = 7: 4.5 voxels
   ASSERT_EQ(m.face_piece[far], 0);
   ASSERT_DOUBLE_EQ(m.vertices[m.faces[far][0]].x, 7);
-  m.face_thickness[far] = 0;
+  m.face_thickness_voxels[far] = 0;
   SetFaceApertures(&m, measured);
-  EXPECT_GT(m.face_aperture[far], 3.5f) << "the piece's median (3) would ignore where it lies";
-  EXPECT_LE(m.face_aperture[far], 4.5f);
+  EXPECT_GT(m.face_aperture_voxels[far], 3.5f) << "the piece's median (3) would ignore where it lies";
+  EXPECT_LE(m.face_aperture_voxels[far], 4.5f);
 }
 
 }  // namespace

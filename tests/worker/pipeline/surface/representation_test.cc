@@ -56,7 +56,7 @@ TEST(BodySurfaceTest, ABallAtVoxelResolutionIsExactClosedAndOutward) {
   EXPECT_NEAR(SignedVolume(b.mesh), double(ball.size()), 0.05 * ball.size());
   EXPECT_DOUBLE_EQ(BodyScore(b.mesh, ball), 1.0);
   EXPECT_THAT(b.mesh.face_piece, ::testing::Each(7));
-  EXPECT_THAT(b.mesh.face_thickness, ::testing::Each(0.0f));
+  EXPECT_THAT(b.mesh.face_thickness_voxels, ::testing::Each(0.0f));
   EXPECT_EQ(b.faces_before, b.mesh.num_faces());
   // Decimated to 300 faces: still closed, still the ball.
   SM_ASSERT_OK_AND_ASSIGN(BodySurface d, MeshBody(ball, 7, 300));

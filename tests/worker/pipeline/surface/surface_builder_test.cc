@@ -53,9 +53,9 @@ void ExpectCleanMesh(const Built& b) {
   EXPECT_EQ(b.topo.unused_vertices, 0u);
   EXPECT_EQ(b.topo.inconsistent_edges, 0u) << "orientation must agree within manifold pieces";
   EXPECT_THAT(FindSelfIntersections(m, 10), ::testing::IsEmpty());
-  ASSERT_EQ(m.face_thickness.size(), m.num_faces());
+  ASSERT_EQ(m.face_thickness_voxels.size(), m.num_faces());
   ASSERT_EQ(m.face_piece.size(), m.num_faces());
-  for (float t : m.face_thickness) EXPECT_GE(t, 0.0f);
+  for (float t : m.face_thickness_voxels) EXPECT_GE(t, 0.0f);
 }
 
 TEST(SurfaceBuilderTest, FlatSlabGivesOneLayerWithZNormals) {
@@ -68,7 +68,7 @@ TEST(SurfaceBuilderTest, FlatSlabGivesOneLayerWithZNormals) {
   for (size_t f = 0; f < b.surface.mesh.num_faces(); ++f) {
     const Vec3 n = UnitNormal(Corners(b.surface.mesh, f));
     EXPECT_NEAR(std::abs(n.z), 1.0, 1e-9) << "face " << f;
-    EXPECT_NEAR(b.surface.mesh.face_thickness[f], 5.0, 1e-6);
+    EXPECT_NEAR(b.surface.mesh.face_thickness_voxels[f], 5.0, 1e-6);
   }
   // One layer: every vertex at the slab's mid-plane.
   for (const Vec3& v : b.surface.mesh.vertices) EXPECT_NEAR(v.z, 8.0, 1e-9);

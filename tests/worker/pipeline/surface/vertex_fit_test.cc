@@ -32,7 +32,7 @@ TriangleMesh FlatGrid(double x0, double x1, double y0, double y1, double z, int 
       m.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
     }
   }
-  m.face_thickness.assign(m.faces.size(), thickness);
+  m.face_thickness_voxels.assign(m.faces.size(), thickness);
   m.face_piece.assign(m.faces.size(), 0);
   return m;
 }
@@ -92,8 +92,8 @@ TEST(FitVertexPositionsTest, VerticesOnAndBesideAJunctionAndCoordinatesInTheBoxF
     const uint32_t a = static_cast<uint32_t>(2 * 5 + i), b = a + 1;  // row j = 2
     mesh.faces.push_back({a, b, base + i + 1});
     mesh.faces.push_back({a, base + i + 1, base + i});
-    mesh.face_thickness.push_back(4.0f);
-    mesh.face_thickness.push_back(4.0f);
+    mesh.face_thickness_voxels.push_back(4.0f);
+    mesh.face_thickness_voxels.push_back(4.0f);
     mesh.face_piece.push_back(0);
     mesh.face_piece.push_back(0);
   }

@@ -30,7 +30,7 @@ TriangleMesh Diamond() {
   b.vertices = {{37, 33, 20.5}, {37, 38, 25.5}, {37, 33, 30.5}, {37, 28, 25.5}};
   b.faces = {{0, 1, 2}, {0, 2, 3}};
   b.face_piece = {1, 1};
-  b.face_thickness = {3, 3};
+  b.face_thickness_voxels = {3, 3};
   return Append(Square(10, 50, 20, 4, 0), b);
 }
 

@@ -26,7 +26,7 @@ TriangleMesh ThinPair(double lift, int32_t piece_f, int32_t piece_g, double bulg
   m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10 + bulge, 20}, {20, 8.5, 20 + lift}};  // a b c d
   m.faces = {{0, 1, 2}, {1, 0, 3}};
   m.face_piece = {piece_f, piece_g};
-  m.face_thickness = {2, 4};
+  m.face_thickness_voxels = {2, 4};
   return m;
 }
 
@@ -53,7 +53,7 @@ TriangleMesh NarrowWedge() {
                 {8, 8, 4}};  // H: O, W, and a corner far below
   m.faces = {{0, 1, 2}, {0, 3, 4}};
   m.face_piece = {0, 0};
-  m.face_thickness = {1, 1};
+  m.face_thickness_voxels = {1, 1};
   return m;
 }
 
@@ -85,7 +85,7 @@ TriangleMesh Slit() {
                 {9, 9.9, 10.05}, {7, 4, 10},   {13, 4, 10}};  // c, y, z
   m.faces = {{0, 1, 2}, {0, 4, 3}, {3, 5, 1}, {3, 4, 5}};
   m.face_piece.assign(4, 0);
-  m.face_thickness.assign(4, 1);
+  m.face_thickness_voxels.assign(4, 1);
   return m;
 }
 
@@ -166,7 +166,7 @@ TEST(PlcTest, AFlatTriangleOnTheRimIsDropped) {
   m.vertices = {{10, 10, 20}, {30, 10, 20}, {20, 10.9, 20}, {12, 20, 20}};  // a b c e
   m.faces = {{0, 2, 3}, {0, 1, 2}};
   m.face_piece = {0, 0};
-  m.face_thickness = {3, 3};
+  m.face_thickness_voxels = {3, 3};
   PlcOptions o;
   o.flip_fold_degrees = 15;
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {40, 30, 40}, {}, o));
@@ -185,7 +185,7 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   fragment.vertices = {{6, 6, 10.2}, {11, 6, 10.2}, {6, 11, 10.37}};
   fragment.faces = {{0, 1, 2}};
   fragment.face_piece = {1};
-  fragment.face_thickness = {2};
+  fragment.face_thickness_voxels = {2};
   const TriangleMesh m = Append(Square(4, 16, 10, 4), fragment);
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
   EXPECT_EQ(plc.dropped_overlaps, 1u);
@@ -262,7 +262,7 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   blocked.vertices.insert(blocked.vertices.end(), {{11.6, 9.6, 10}, {9.6, 11.6, 10}, {13, 13, 10}});
   blocked.faces.push_back({5, 6, 7});
   blocked.face_piece.push_back(1);
-  blocked.face_thickness.push_back(1);
+  blocked.face_thickness_voxels.push_back(1);
   for (const PlcOptions& o : {base, far}) {
     SM_ASSERT_OK_AND_ASSIGN(const Plc d, BuildPlc(blocked, dims, {}, o));
     EXPECT_EQ(d.opened_wedges, 0u);
@@ -404,7 +404,7 @@ TEST(PlcTest, AnEdgeAcrossACornerOfABoxFaceIsASegmentOfItsFacet) {
   m.vertices = {{19.5, 19.5, 5}, {19.5, 12, -0.5}, {10, 15, 5}};
   m.faces = {{0, 1, 2}};
   m.face_piece = {0};
-  m.face_thickness = {1};
+  m.face_thickness_voxels = {1};
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(m, {20, 20, 20}, {}));
   const Face& t = plc.sheet_triangles.at(0);
   uint32_t a = 0, b = 0;
@@ -480,7 +480,7 @@ TEST(PlcTest, RepairSparesABodysWalls) {
   m.vertices.insert(m.vertices.end(), {{0, 0, 10.3}, {20, 0, 10.3}, {0, 20, 10.3}});
   m.faces.push_back({8, 9, 10});
   m.face_piece.push_back(0);
-  m.face_thickness.push_back(2.f);
+  m.face_thickness_voxels.push_back(2.f);
   PlcOptions o;
   o.untangle_voxels = 0;
   o.contact_voxels = 0;

@@ -58,7 +58,7 @@ TetMesh Bipyramid() {
   for (size_t f = 0; f < m.faces.size(); ++f) {
     m.face_marker.push_back(kFirstSheetMarker + static_cast<int32_t>(f));
     m.face_piece.push_back(0);
-    m.face_thickness.push_back(1);
+    m.face_thickness_voxels.push_back(1);
   }
   return m;
 }
@@ -93,7 +93,7 @@ TEST(TetImproveTest, AnEdgeOnAFacetFaceIsNeverRemoved) {
   m.faces.push_back({3, 4, 0});
   m.face_marker.push_back(kFirstSheetMarker + 6);
   m.face_piece.push_back(1);
-  m.face_thickness.push_back(1);
+  m.face_thickness_voxels.push_back(1);
   TetImproveReport report;
   ASSERT_TRUE(ImproveTetMesh(&m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5, {}, &report).ok());
   EXPECT_EQ(m.tets.size(), 3u);
@@ -167,7 +167,7 @@ TriangleMesh WavySquare(double a, double b, double z, int n, double wave) {
       m.faces.push_back({v, v + n + 2, v + n + 1});
     }
   m.face_piece.assign(m.faces.size(), 0);
-  m.face_thickness.assign(m.faces.size(), 2);
+  m.face_thickness_voxels.assign(m.faces.size(), 2);
   return m;
 }
 

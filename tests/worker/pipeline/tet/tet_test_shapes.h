@@ -32,7 +32,7 @@ inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 
       m.faces.push_back({v, v + n + 2, v + n + 1});
     }
   m.face_piece.assign(m.faces.size(), piece);
-  m.face_thickness.assign(m.faces.size(), thick);
+  m.face_thickness_voxels.assign(m.faces.size(), thick);
   return m;
 }
 
@@ -50,7 +50,7 @@ inline TriangleMesh Cube(double lo, double hi, int32_t piece) {
     m.faces.push_back({q[0], q[2], q[3]});
   }
   m.face_piece.assign(12, piece);
-  m.face_thickness.assign(12, 0.f);
+  m.face_thickness_voxels.assign(12, 0.f);
   m.body_pieces = {piece};
   return m;
 }
@@ -60,7 +60,7 @@ inline TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
   a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
   for (Face f : b.faces) a.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
   a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
-  a.face_thickness.insert(a.face_thickness.end(), b.face_thickness.begin(), b.face_thickness.end());
+  a.face_thickness_voxels.insert(a.face_thickness_voxels.end(), b.face_thickness_voxels.begin(), b.face_thickness_voxels.end());
   return a;
 }
 

@@ -47,7 +47,7 @@ TetMesh SampleMesh(const Placement& placement = {}) {
     sheets.faces.push_back({b, b + 1, b + 2});
     sheets.faces.push_back({b, b + 2, b + 3});
     sheets.face_piece.insert(sheets.face_piece.end(), {s == 0 ? 0 : 3, s == 0 ? 0 : 3});
-    sheets.face_thickness.insert(sheets.face_thickness.end(), {2.5f, 2.5f});
+    sheets.face_thickness_voxels.insert(sheets.face_thickness_voxels.end(), {2.5f, 2.5f});
   }
   auto r = BuildVolumeMesh(sheets, {20, 20, 20}, placement, {});
   EXPECT_TRUE(r.ok()) << r.status();
@@ -146,7 +146,7 @@ TEST(VolumeMeshIoTest, ThicknessIsPhysicalWithAnisotropicSpacing) {
   const TetMesh m = SampleMesh(pl);
   const double t = 2.5 * std::cbrt(0.5);
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    EXPECT_NEAR(m.face_thickness[f], m.face_piece[f] >= 0 ? t : 0.0, 1e-5);
+    EXPECT_NEAR(m.FaceThickness(f), m.face_piece[f] >= 0 ? t : 0.0, 1e-5);
   }
   ASSERT_THAT(WriteVtu(tmp.File("m.vtu"), m), IsOk());
   ASSERT_THAT(WriteGmsh(tmp.File("m.msh"), m), IsOk());
@@ -185,7 +185,7 @@ TetMesh MeshWithBody() {
   m.vertices = {{3, 3, 5}, {16, 3, 5}, {16, 16, 5}, {3, 16, 5}};
   m.faces = {{0, 1, 2}, {0, 2, 3}};
   m.face_piece = {0, 0};
-  m.face_thickness = {2.f, 2.f};
+  m.face_thickness_voxels = {2.f, 2.f};
   m = testing::Append(m, testing::Cube(8, 13, 5));
   m.body_pieces = {5};
   auto r = BuildVolumeMesh(m, {20, 20, 20}, {}, {});

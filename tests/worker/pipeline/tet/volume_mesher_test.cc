@@ -50,7 +50,7 @@ TriangleMesh PhantomJunction() {
              {14, 19, 2}, {12, 17, 9},  {12, 9, 8},   {13, 5, 18}, {7, 13, 18}, {14, 1, 10},
              {10, 8, 21}, {16, 12, 22}, {13, 22, 12}, {11, 2, 23}, {20, 2, 11}, {2, 20, 23}};
   m.face_piece.assign(m.faces.size(), 0);
-  m.face_thickness.assign(m.faces.size(), 2.f);
+  m.face_thickness_voxels.assign(m.faces.size(), 2.f);
   return m;
 }
 
@@ -73,7 +73,8 @@ TEST(VolumeMesherTest, BoxWithAnInternalSquareSheet) {
   for (size_t f = 0; f < r.mesh.faces.size(); ++f) {
     if (r.mesh.face_marker[f] < kFirstSheetMarker) continue;
     EXPECT_EQ(r.mesh.face_piece[f], 0);
-    EXPECT_FLOAT_EQ(r.mesh.face_thickness[f], 1.5f);  // 3 voxels of 0.5: physical
+    EXPECT_FLOAT_EQ(r.mesh.face_thickness_voxels[f], 3.f);
+    EXPECT_FLOAT_EQ(r.mesh.FaceThickness(f), 1.5f);  // 3 voxels of 0.5: physical
     EXPECT_NEAR(r.mesh.nodes[r.mesh.faces[f][0]].z, 3 + 10 * 0.5, 1e-12);
   }
   // The angle asked for holds.
@@ -145,7 +146,7 @@ TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsSt
     for (size_t f = 0; f < mesh.faces.size(); ++f) {
       if (mesh.face_piece[f] < 0) continue;
       EXPECT_EQ(mesh.face_piece[f], 0);
-      EXPECT_EQ(mesh.face_thickness[f], 2.f);
+      EXPECT_EQ(mesh.face_thickness_voxels[f], 2.f);
       const auto& x = mesh.faces[f];
       area += Area({mesh.nodes[x[0]], mesh.nodes[x[1]], mesh.nodes[x[2]]});
     }
@@ -233,7 +234,7 @@ TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakes
                     {0.1, 9, 9.8}, {0.1, 11, 9.8}, {2, 10, 11.4}};  // B
   clash.faces = {{0, 1, 2}, {3, 4, 5}};
   clash.face_piece = {0, 1};
-  clash.face_thickness = {1, 1};
+  clash.face_thickness_voxels = {1, 1};
   const Dims dims{16, 20, 20};
   // (P, held 1 voxel off the box, is also within 0.75 of B: not mended here.)
   PlcOptions wide_apart = wide;
@@ -266,7 +267,7 @@ TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakes
   TriangleMesh alone = clash;
   alone.faces.pop_back();
   alone.face_piece.pop_back();
-  alone.face_thickness.pop_back();
+  alone.face_thickness_voxels.pop_back();
   SM_ASSERT_OK_AND_ASSIGN(const Plc free, BuildPlc(alone, dims, {}, wide));
   EXPECT_EQ(free.snap_held_vertices, 0u);
   EXPECT_TRUE(has(free, {-0.5, 10, 10}));
@@ -411,7 +412,7 @@ TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
   m.vertices.push_back({8.5, 9, 11});
   m.faces.push_back({base, base + 1, base + 2});
   m.face_piece.push_back(1);
-  m.face_thickness.push_back(1);
+  m.face_thickness_voxels.push_back(1);
   // By default it is untangled (moved off the sheet), nothing removed: the short-edge
   // collapse is off here, since it would fold the small triangle away.
   VolumeMeshOptions untangle;
@@ -444,7 +445,7 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
                 {5 + 10 * std::cos(5 * deg), 10, 10 + 10 * std::sin(5 * deg)}};
   m.faces = {{0, 1, 2}, {0, 1, 3}};
   m.face_piece = {0, 1};
-  m.face_thickness = {1, 1};
+  m.face_thickness_voxels = {1, 1};
   VolumeMeshOptions o;
   // The mends that would open it (a vertex moved off the other sheet's plane, or onto it
   // where it lies within a voxel) are off: this is about what cannot be mended.

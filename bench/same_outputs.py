@@ -166,9 +166,10 @@ def compare(a, b):
                 bad += 1
             elif f.endswith(".json"):
                 # Paths name the output folders, which differ.
-                la = {moved(k, f): v for k, v in
-                      leaves(json.loads(open(fa).read().replace(a.rstrip("/"), "OUT")))}
                 lb = dict(leaves(json.loads(open(fb).read().replace(b.rstrip("/"), "OUT"))))
+                # Old paths are mapped only where the new report has no such path.
+                la = {(k if k in lb else moved(k, f)): v for k, v in
+                      leaves(json.loads(open(fa).read().replace(a.rstrip("/"), "OUT")))}
                 for k in sorted(set(la) & set(lb)):
                     if any(k == i or k.endswith("." + i) or k.startswith(i + ".") for i in IGNORED):
                         continue

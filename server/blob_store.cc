@@ -7,6 +7,8 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <future>
 #include <random>
@@ -116,9 +118,14 @@ class PartFile {
     if (dfd >= 0) direct_ = ScopedFd(dfd);
     SM_ASSIGN_OR_RETURN(*size, FileSizeOf(fd_.get(), path));
     end_ = *size;
+    on_disk_ = *size;
     return absl::OkStatus();
   }
   int fd() const { return fd_.get(); }
+
+  // The bytes written out to the file so far: what a restart after a kill of this
+  // process finds, while the stream still fills the buffers.
+  int64_t on_disk() const { return on_disk_.load(); }
 
   // Appends at the end of what was written.
   absl::Status Append(absl::string_view data) {
@@ -138,8 +145,11 @@ class PartFile {
         std::swap(stage_, spare_);
         const char* full = spare_.get();
         const int64_t at = stage_start_;
-        writing_ = std::async(std::launch::async,
-                              [this, full, at] { return WriteAt(full, kStage, at, true); });
+        writing_ = std::async(std::launch::async, [this, full, at] {
+          absl::Status st = WriteAt(full, kStage, at, true);
+          if (st.ok()) on_disk_ = at + kStage;
+          return st;
+        });
         stage_start_ += kStage;
         stage_len_ = 0;
       }
@@ -162,6 +172,7 @@ class PartFile {
     spare_.reset();
     stage_len_ = 0;
     if (::fdatasync(fd_.get()) != 0) return ErrnoStatus(errno, path_);
+    on_disk_ = end_;
     return absl::OkStatus();
   }
 
@@ -232,6 +243,7 @@ class PartFile {
   int64_t stage_start_ = 0;  // file offset of stage_[0], block-aligned
   int64_t stage_len_ = 0;
   int64_t end_ = 0;  // bytes in the file and the buffers together
+  std::atomic<int64_t> on_disk_{0};
 };
 
 // An upload: its file (open only while a stream writes it), the hash of the bytes written,
@@ -523,7 +535,11 @@ absl::StatusOr<BlobStore::UploadState> BlobStore::Status(const std::string& tena
       up->file.reset();
     }
   }
-  return UploadState{up->complete ? up->expected.size_bytes() : up->committed, up->complete};
+  // While a stream writes it, the blocks already written out count: a kill of this process
+  // would leave them, and a restart would report them.
+  const int64_t durable =
+      up->file != nullptr ? std::max(up->committed, up->file->on_disk()) : up->committed;
+  return UploadState{up->complete ? up->expected.size_bytes() : durable, up->complete};
 }
 
 int BlobStore::ExpireUploads(absl::Duration max_age) {

@@ -24,6 +24,14 @@ namespace {
 
 using ::testing::HasSubstr;
 
+// The bytes of upload `resource` the server holds durably (-1 when it cannot say).
+int64_t Committed(client::SheetmeshClient& c, const std::string& resource) {
+  v1::QueryWriteStatusRequest q;
+  q.set_resource_name(resource);
+  v1::QueryWriteStatusResponse qs;
+  return c.blobs()->QueryWriteStatus(c.Context().get(), q, &qs).ok() ? qs.committed_size() : -1;
+}
+
 // ---------------------------------------------------------------------------------------
 // Uploads
 
@@ -63,26 +71,30 @@ TEST_F(ServiceTest, UploadWholeThenFindMissingAndRangedRead) {
 TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
   StartServer();
   const std::string path = dir_.File("big.bin");
-  const std::string bytes = WriteRandomFile(path, 6 * (1 << 20) + 77, 8);
+  const std::string bytes = WriteRandomFile(path, 11 * (1 << 20) + 77, 8);
   auto digest = server::DigestOfFile(path);
   ASSERT_TRUE(digest.ok());
   // The client library names the upload by the content: break a stream of that name
-  // after three pieces.
+  // after nine pieces, once the server reports eight durable: it writes its 8 MiB buffer
+  // out when the ninth arrives, and what the buffer holds when the stream breaks.
   const std::string resource = absl::StrCat("uploads/u", digest->hash().substr(0, 32), "/blobs/",
                                             digest->hash(), "/", digest->size_bytes());
   {
     auto ctx = client_->Context();
     v1::WriteResponse resp;
     auto writer = client_->blobs()->Write(ctx.get(), &resp);
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 9; ++i) {
       v1::WriteRequest req;
       if (i == 0) req.set_resource_name(resource);
       req.set_write_offset(int64_t{i} << 20);
       req.set_data(bytes.substr(static_cast<size_t>(i) << 20, size_t{1} << 20));
       ASSERT_TRUE(writer->Write(req));
     }
-    // Let the pieces arrive, then break the stream.
-    absl::SleepFor(absl::Milliseconds(300));
+    const absl::Time deadline = absl::Now() + absl::Seconds(30);
+    while (Committed(*client_, resource) < 8 << 20 && absl::Now() < deadline) {
+      absl::SleepFor(absl::Milliseconds(20));
+    }
+    ASSERT_GE(Committed(*client_, resource), 8 << 20);
     ctx->TryCancel();
     EXPECT_FALSE(writer->Finish().ok());
   }
@@ -90,13 +102,8 @@ TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
   v1::QueryWriteStatusRequest q;
   q.set_resource_name(resource);
   v1::QueryWriteStatusResponse qs;
-  const absl::Time deadline = absl::Now() + absl::Seconds(10);
-  do {
-    ASSERT_TRUE(client_->blobs()->QueryWriteStatus(client_->Context().get(), q, &qs).ok());
-    if (qs.committed_size() == 3 << 20) break;
-    absl::SleepFor(absl::Milliseconds(50));
-  } while (absl::Now() < deadline);
-  EXPECT_EQ(qs.committed_size(), 3 << 20);
+  ASSERT_TRUE(client_->blobs()->QueryWriteStatus(client_->Context().get(), q, &qs).ok());
+  EXPECT_EQ(qs.committed_size(), 9 << 20);
   EXPECT_FALSE(qs.complete());
   EXPECT_EQ(Missing(*client_, *digest).size(), 1u);
   // The client resumes where the server stopped: its first report is past that point.
@@ -105,7 +112,7 @@ TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
     if (first_report < 0) first_report = sent;
   });
   ASSERT_TRUE(up.ok()) << up.status();
-  EXPECT_EQ(first_report, 4 << 20);
+  EXPECT_EQ(first_report, 10 << 20);
   ASSERT_TRUE(client_->Download(*digest, dir_.File("back.bin")).ok());
   EXPECT_EQ(Slurp(dir_.File("back.bin")), bytes);
 }

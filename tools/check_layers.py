@@ -9,12 +9,47 @@ LAYERS_TXT (written by CMake from its sheetmesh_layer_rule calls) has one rule p
 under their own folder, common/, and the ALLOWED folders. A file belongs to the longest
 FOLDER its path starts with; so does an included path. Includes under no FOLDER (the
 standard library, third-party headers) are not checked.
+
+It also fails on a cycle of modules (a module is a header with its source: x.h and x.cc):
+two modules that need each other are one module, or want a small shared header.
 """
 import os
 import re
 import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
+
+
+def cycles(needs):
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(needs.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    sys.setrecursionlimit(100000)
+    for v in sorted(needs):
+        if v not in index:
+            visit(v)
+    return out
 
 
 def main():
@@ -38,6 +73,7 @@ def main():
 
     wrong = []
     checked = 0
+    needs = {}  # module -> the modules it includes
     for top in ("common", "worker", "server", "client"):
         for dirpath, _, names in os.walk(os.path.join(root, top)):
             for name in names:
@@ -48,23 +84,31 @@ def main():
                 if own is None:
                     continue
                 checked += 1
+                module = path.rsplit(".", 1)[0]
                 for n, text in enumerate(open(os.path.join(root, path), encoding="utf-8"), 1):
                     m = INCLUDE.match(text)
                     if not m:
                         continue
+                    other = m.group(1).rsplit(".", 1)[0]
+                    if other != module and os.path.exists(os.path.join(root, m.group(1))):
+                        needs.setdefault(module, set()).add(other)
                     target = layer_of(m.group(1))
                     if target is not None and target not in rules[own]:
                         wrong.append("%s:%d: %s (layer %s) includes %s (layer %s), which it may not; "
                                      "its layer may include %s" % (
                                          path, n, path, own, m.group(1), target,
                                          ", ".join(sorted(rules[own] - {own}))))
+    for cycle in cycles(needs):
+        wrong.append("modules that include each other: %s (break the cycle: one module, or a "
+                     "small header both include)" % " <-> ".join(cycle))
     for w in wrong:
         print(w, file=sys.stderr)
     if wrong:
-        print("%d includes point where their layer may not (rules: the sheetmesh_layer_rule calls "
-              "of the CMakeLists.txt files)" % len(wrong), file=sys.stderr)
+        print("%d includes point where their layer may not, or close a cycle (rules: the "
+              "sheetmesh_layer_rule calls of the CMakeLists.txt files)" % len(wrong),
+              file=sys.stderr)
         return 1
-    print("layers: %d files, every include within its rules" % checked)
+    print("layers: %d files, every include within its rules, no module cycle" % checked)
     return 0
 
 

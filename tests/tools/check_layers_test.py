@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """tools/check_layers.py on a small tree: an include within the rules passes, one that
-points up a layer fails naming the file, the line and what its layer may include.
+points up a layer fails naming the file, the line and what its layer may include, and
+two modules that include each other fail naming both.
 
     /usr/bin/python3 tests/tools/check_layers_test.py
 """
@@ -51,6 +52,18 @@ class CheckLayersTest(unittest.TestCase):
         self.assertIn("(layer worker/pipeline/voxel), which it may not", r.stderr)
         self.assertIn("worker/pipeline/run/parameter_table.cc:1", r.stderr)
         self.assertIn("2 includes point where their layer may not", r.stderr)
+
+    def test_modules_that_include_each_other_fail(self):
+        # builder.cc needs parts.h, and parts.h needs builder.h: one cycle, named.
+        r = self.tree({
+            "worker/pipeline/voxel/builder.h": "",
+            "worker/pipeline/voxel/builder.cc": '#include "worker/pipeline/voxel/builder.h"\n'
+                                                '#include "worker/pipeline/voxel/parts.h"\n',
+            "worker/pipeline/voxel/parts.h": '#include "worker/pipeline/voxel/builder.h"\n',
+        })
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("modules that include each other: worker/pipeline/voxel/builder <-> "
+                      "worker/pipeline/voxel/parts", r.stderr)
 
 
 if __name__ == "__main__":

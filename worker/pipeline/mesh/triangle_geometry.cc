@@ -160,4 +160,20 @@ Triangle Shrink(const Triangle& t, double fraction) {
   return {t[0] + (c - t[0]) * fraction, t[1] + (c - t[1]) * fraction, t[2] + (c - t[2]) * fraction};
 }
 
+double MeanEdgeLength(const TriangleMesh& mesh) {
+  if (mesh.faces.empty()) return 0.0;
+  double sum = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto c = Corners(mesh, f);
+    sum += Norm(c[1] - c[0]) + Norm(c[2] - c[1]) + Norm(c[0] - c[2]);
+  }
+  return sum / (3.0 * mesh.faces.size());
+}
+
+double SurfaceArea(const TriangleMesh& mesh) {
+  double a = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) a += Area(Corners(mesh, f));
+  return a;
+}
+
 }  // namespace sheetmesh

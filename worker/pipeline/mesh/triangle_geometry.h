@@ -63,6 +63,11 @@ bool TrianglesIntersect(const Triangle& a, const Triangle& b, double tolerance =
 // share a vertex or an edge for overlap beyond it.
 Triangle Shrink(const Triangle& t, double fraction);
 
+// Mean edge length over all edges of all faces (the paper's "element size"), 0 if empty.
+double MeanEdgeLength(const TriangleMesh& mesh);
+// Total area.
+double SurfaceArea(const TriangleMesh& mesh);
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_GEOMETRY_H_

@@ -45,11 +45,6 @@ inline std::array<Vec3, 3> Corners(const TriangleMesh& m, size_t f) {
   return {m.vertices[m.faces[f][0]], m.vertices[m.faces[f][1]], m.vertices[m.faces[f][2]]};
 }
 
-// Mean edge length over all edges of all faces (the paper's "element size"), 0 if empty.
-double MeanEdgeLength(const TriangleMesh& mesh);
-// Total area.
-double SurfaceArea(const TriangleMesh& mesh);
-
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_MESH_TRIANGLE_MESH_H_

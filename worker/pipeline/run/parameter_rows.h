@@ -8,7 +8,8 @@
 #include <optional>
 #include <vector>
 
-#include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/run/parameter_types.h"
+#include "worker/pipeline/run/pipeline_options.h"
 
 namespace sheetmesh {
 

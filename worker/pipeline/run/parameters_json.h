@@ -5,7 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/run/parameter_types.h"
+#include "worker/pipeline/run/pipeline_options.h"
 
 namespace sheetmesh {
 

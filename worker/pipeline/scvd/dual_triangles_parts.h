@@ -15,7 +15,8 @@
 #include "absl/container/inlined_vector.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
-#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/scvd/dual_triangle_types.h"
+#include "worker/pipeline/scvd/scvd.h"
 
 namespace sheetmesh {
 

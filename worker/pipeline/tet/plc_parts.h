@@ -10,7 +10,7 @@
 
 #include "absl/status/status.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
-#include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/plc_types.h"
 
 namespace sheetmesh {
 

@@ -14,6 +14,7 @@
 #include "common/file_util.h"
 #include "common/sha256.h"
 #include "common/status_macros.h"
+#include "server/status_util.h"
 
 namespace sheetmesh::server {
 namespace {
@@ -104,8 +105,8 @@ grpc::Status Tenants::Authenticate(const grpc::ServerContextBase& context,
       }
     }
   }
-  return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
-                      "missing or wrong bearer token (metadata 'authorization: Bearer <token>')");
+  return ToGrpcStatus(absl::UnauthenticatedError(
+      "missing or wrong bearer token (metadata 'authorization: Bearer <token>')"));
 }
 
 absl::Status Tenants::AddWorkerToken(const std::string& token, const std::string& where) {

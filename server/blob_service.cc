@@ -164,8 +164,8 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
     active.Progress();
     if (resource.empty()) {
       if (req.resource_name().empty()) {
-        return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                            "the first WriteRequest must name the resource");
+        return ToGrpcStatus(
+            absl::InvalidArgumentError("the first WriteRequest must name the resource"));
       }
       resource = req.resource_name();
       absl::StatusOr<v1::Digest> digest = DigestOfResource(resource);
@@ -174,9 +174,9 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
       if (!owned.ok()) return ToGrpcStatus(owned.status());
       stored_counts = *owned;
     } else if (!req.resource_name().empty() && req.resource_name() != resource) {
-      result = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                            absl::StrCat("resource_name changed within a stream: '",
-                                         req.resource_name(), "' after '", resource, "'"));
+      result = ToGrpcStatus(absl::InvalidArgumentError(
+          absl::StrCat("resource_name changed within a stream: '", req.resource_name(), "' after '",
+                       resource, "'")));
       break;
     }
     if (static_cast<int64_t>(req.data().size()) > kMaxPiece) {
@@ -199,7 +199,7 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
     }
   }
   if (resource.empty()) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "the write stream carried no request");
+    return ToGrpcStatus(absl::InvalidArgumentError("the write stream carried no request"));
   }
   if (finished) {
     // The blob is stored; it is the tenant's now.
@@ -260,9 +260,10 @@ grpc::Status BlobServiceImpl::Read(grpc::ServerContext* context, const v1::ReadR
                      request->read_limit(), " do not fit a blob of ", size, " bytes"));
   }
   // A limit past the blob's end reads to its end (offset + limit may not fit 64 bits).
-  const int64_t end = request->read_limit() == 0 || request->read_limit() > size - request->read_offset()
-                          ? size
-                          : request->read_offset() + request->read_limit();
+  const int64_t end =
+      request->read_limit() == 0 || request->read_limit() > size - request->read_offset()
+          ? size
+          : request->read_offset() + request->read_limit();
   absl::StatusOr<ScopedFd> fd = OpenForRead(*path);
   if (!fd.ok()) return ToGrpcStatus(fd.status());
   std::vector<std::byte> buf(kMaxPiece);

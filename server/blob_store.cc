@@ -606,10 +606,10 @@ absl::Status BlobStore::CheckRoom(const std::string& tenant, int64_t bytes) {
     if (::statvfs(root_.c_str(), &fs) == 0) {
       const int64_t free_bytes = static_cast<int64_t>(fs.f_bavail) * fs.f_frsize;
       if (free_bytes - bytes < min_free) {
-        return absl::ResourceExhaustedError(absl::StrCat(
-            "the server's data folder has ", free_bytes, " bytes free; ", bytes,
-            " more would leave less than its floor of ", min_free,
-            " bytes (--min_free_disk_mb): uploads wait until space is freed"));
+        return absl::ResourceExhaustedError(
+            absl::StrCat("the server's data folder has ", free_bytes, " bytes free; ", bytes,
+                         " more would leave less than its floor of ", min_free,
+                         " bytes (--min_free_disk_mb): uploads wait until space is freed"));
       }
     }
   }

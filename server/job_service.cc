@@ -219,8 +219,8 @@ grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context, const v1::Li
   std::string tenant;
   if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
   if (r->page_size() < 0) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        absl::StrCat("page_size ", r->page_size(), " is negative"));
+    return ToGrpcStatus(
+        absl::InvalidArgumentError(absl::StrCat("page_size ", r->page_size(), " is negative")));
   }
   const int size = r->page_size() == 0 ? 50 : std::min(r->page_size(), 1000);
   std::string next;

@@ -70,8 +70,8 @@ void ApplyCancelBeforeStart(v1::Job* job, absl::Time now) {
   job->mutable_error()->set_message("cancelled before it started");
 }
 
-void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
-                     bool not_the_jobs_fault, absl::Time now) {
+void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts, bool not_the_jobs_fault,
+                     absl::Time now) {
   job->clear_progress();
   if (not_the_jobs_fault) job->set_lost_to_restarts(job->lost_to_restarts() + 1);
   if (cancel_requested) {

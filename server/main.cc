@@ -57,26 +57,30 @@ ABSL_FLAG(std::string, worker_token_file, "",
           "with tokens takes no remote workers, an open one any");
 ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
-ABSL_FLAG(int64_t, max_blob_bytes, Defaults().limits.max_blob_bytes, "largest upload accepted, bytes");
+ABSL_FLAG(int64_t, max_blob_bytes, Defaults().limits.max_blob_bytes,
+          "largest upload accepted, bytes");
 ABSL_FLAG(int64_t, max_queued_jobs, Defaults().limits.max_queued_jobs, "jobs the queue may hold");
 ABSL_FLAG(int64_t, max_unfinished_upload_mb,
           Defaults().limits.max_unfinished_upload_bytes_per_tenant >> 20,
           "bytes one tenant may hold in unfinished uploads, MiB");
-ABSL_FLAG(int, max_upload_streams, Defaults().limits.max_upload_streams, "open upload (Write) streams, in all");
+ABSL_FLAG(int, max_upload_streams, Defaults().limits.max_upload_streams,
+          "open upload (Write) streams, in all");
 ABSL_FLAG(int, max_upload_streams_per_client, Defaults().limits.max_upload_streams_per_client,
           "open upload streams of one client (its tenant; on an open server, its address)");
-ABSL_FLAG(int, max_watch_streams, Defaults().limits.max_watch_streams, "open WatchJob streams, in all");
+ABSL_FLAG(int, max_watch_streams, Defaults().limits.max_watch_streams,
+          "open WatchJob streams, in all");
 ABSL_FLAG(int, max_watch_streams_per_client, Defaults().limits.max_watch_streams_per_client,
           "open WatchJob streams of one client");
-ABSL_FLAG(int, upload_idle_seconds,
-          absl::ToInt64Seconds(Defaults().limits.upload_idle_timeout),
+ABSL_FLAG(int, upload_idle_seconds, absl::ToInt64Seconds(Defaults().limits.upload_idle_timeout),
           "an upload stream that brings no byte for this long is closed (it can resume)");
 ABSL_FLAG(int, upload_expiry_hours, absl::ToInt64Hours(Defaults().limits.upload_expiry),
           "an unfinished upload nobody has written for this long is removed");
 ABSL_FLAG(double, blob_retention_hours, absl::ToDoubleHours(Defaults().blob_retention),
           "blobs no job names and nobody used for this long are removed (0: keep all)");
-ABSL_FLAG(double, gc_interval_hours, absl::ToDoubleHours(Defaults().gc_interval), "how often retention runs (also once at start)");
-ABSL_FLAG(bool, gc_dry_run, Defaults().gc_dry_run, "retention lists what it would remove and removes nothing");
+ABSL_FLAG(double, gc_interval_hours, absl::ToDoubleHours(Defaults().gc_interval),
+          "how often retention runs (also once at start)");
+ABSL_FLAG(bool, gc_dry_run, Defaults().gc_dry_run,
+          "retention lists what it would remove and removes nothing");
 ABSL_FLAG(bool, gc_once, false,
           "run one retention pass over --data_dir, print what it removed (or, with "
           "--gc_dry_run, would remove) and exit, without serving");
@@ -84,10 +88,12 @@ ABSL_FLAG(int64_t, min_free_disk_mb, Defaults().min_free_disk_bytes >> 20,
           "uploads are refused, and health says NOT_SERVING, while the data folder has less "
           "free space than this");
 ABSL_FLAG(int, lease_seconds, absl::ToInt64Seconds(Defaults().lease), "worker lease length");
-ABSL_FLAG(int, max_attempts, Defaults().max_attempts, "runs before a job whose worker keeps vanishing fails");
+ABSL_FLAG(int, max_attempts, Defaults().max_attempts,
+          "runs before a job whose worker keeps vanishing fails");
 ABSL_FLAG(int, heartbeat_seconds, absl::ToInt64Seconds(Defaults().heartbeat), "WatchJob heartbeat");
 ABSL_FLAG(bool, cache, Defaults().cache, "reuse results of identical work");
-ABSL_FLAG(int, drain_seconds, absl::ToInt64Seconds(sheetmesh::runtime::kDefaultDrain), "on SIGTERM, how long running jobs may finish");
+ABSL_FLAG(int, drain_seconds, absl::ToInt64Seconds(sheetmesh::runtime::kDefaultDrain),
+          "on SIGTERM, how long running jobs may finish");
 ABSL_FLAG(std::string, port_file, "", "write the bound port here once serving (for scripts)");
 // --isolate_jobs and the job limits: worker/runtime/job_limit_flags.cc.
 

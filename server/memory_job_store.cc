@@ -53,7 +53,9 @@ using Row = MemoryJobTables::Row;
 class MemoryJobStore : public JobStore {
  public:
   MemoryJobStore(std::shared_ptr<MemoryJobTables> tables, StoreClock clock)
-      : t_(std::move(tables)), clock_(std::move(clock)), rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
+      : t_(std::move(tables)),
+        clock_(std::move(clock)),
+        rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
 
   absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
                                  bool* created) override {

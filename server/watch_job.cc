@@ -54,8 +54,8 @@ class WatchHub::Reactor final : public grpc::ServerWriteReactor<v1::WatchJobResp
   void Poll(bool stopping) {
     if (cancelled_) return Finish(grpc::Status::OK);  // the watcher left; the job goes on
     if (stopping) {
-      return Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                                 "the server is shutting down; watch again after it restarts"));
+      return Finish(ToGrpcStatus(
+          absl::UnavailableError("the server is shutting down; watch again after it restarts")));
     }
     const uint64_t now = ctx_.events->Version(request_.name());
     const bool changed = now != seen_;
@@ -96,8 +96,8 @@ class WatchHub::Reactor final : public grpc::ServerWriteReactor<v1::WatchJobResp
   }
 
   void FinishStopping() {
-    Finish(grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                        "the server is shutting down; watch again after it restarts"));
+    Finish(ToGrpcStatus(
+        absl::UnavailableError("the server is shutting down; watch again after it restarts")));
   }
 
   void OnWriteDone(bool ok) override {

@@ -25,12 +25,11 @@ bool IsArtifactName(const std::string& name) {
 
 grpc::Status NeedNames(const std::string& name, const std::string& worker) {
   if (worker.empty()) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        "worker is required (the worker's name)");
+    return ToGrpcStatus(absl::InvalidArgumentError("worker is required (the worker's name)"));
   }
   if (name.rfind("jobs/", 0) != 0) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        absl::StrCat("name '", name, "' is not a job name (jobs/ID)"));
+    return ToGrpcStatus(
+        absl::InvalidArgumentError(absl::StrCat("name '", name, "' is not a job name (jobs/ID)")));
   }
   return grpc::Status::OK;
 }
@@ -42,12 +41,12 @@ grpc::Status WorkerServiceImpl::Authorize(const grpc::ServerContext& context) co
   grpc::Status st = ctx_->tenants->Authenticate(context, &tenant);
   if (ctx_->tenants->has_worker_tokens()) {
     if (st.ok() && tenant == Tenants::kWorkerTenant) return grpc::Status::OK;
-    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
-                        "a worker needs the server's worker token (--worker_token_file)");
+    return ToGrpcStatus(absl::UnauthenticatedError(
+        "a worker needs the server's worker token (--worker_token_file)"));
   }
   if (ctx_->tenants->open()) return grpc::Status::OK;
-  return grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
-                      "this server takes no remote workers: start it with --worker_token_file");
+  return ToGrpcStatus(absl::PermissionDeniedError(
+      "this server takes no remote workers: start it with --worker_token_file"));
 }
 
 bool WorkerServiceImpl::MustStop(const std::string& job) const {
@@ -60,8 +59,7 @@ grpc::Status WorkerServiceImpl::LeaseJob(grpc::ServerContext* context,
                                          v1::LeaseJobResponse* response) {
   if (grpc::Status a = Authorize(*context); !a.ok()) return a;
   if (request->worker().empty()) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        "worker is required (the worker's name)");
+    return ToGrpcStatus(absl::InvalidArgumentError("worker is required (the worker's name)"));
   }
   absl::StatusOr<std::optional<v1::Job>> job =
       ctx_->jobs->LeaseNext(request->worker(), ctx_->worker_lease);
@@ -125,18 +123,18 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
   if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
   const v1::JobState state = request->state();
   if (!v1::IsTerminal(state)) {
-    return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                        absl::StrCat("state ", v1::JobState_Name(state),
-                                     " does not end a job (SUCCEEDED, FAILED or CANCELLED)"));
+    return ToGrpcStatus(absl::InvalidArgumentError(
+        absl::StrCat("state ", v1::JobState_Name(state),
+                     " does not end a job (SUCCEEDED, FAILED or CANCELLED)")));
   }
   // Every artifact has a plain file name, and is a blob this job's worker uploaded for this
   // job (with worker tokens: an open server has one tenant), stored already.
   for (const v1::Artifact& a : request->artifacts()) {
     if (!IsArtifactName(a.name())) {
-      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                          absl::StrCat("artifact name '", Excerpt(a.name(), 80),
-                                       "' is not a plain file name ([A-Za-z0-9._-], not starting "
-                                       "with '.', at most 255 characters)"));
+      return ToGrpcStatus(absl::InvalidArgumentError(
+          absl::StrCat("artifact name '", Excerpt(a.name(), 80),
+                       "' is not a plain file name ([A-Za-z0-9._-], not starting "
+                       "with '.', at most 255 characters)")));
     }
     if (absl::Status d = CheckDigest(a.digest()); !d.ok()) return ToGrpcStatus(d);
     if (ctx_->tenants->has_worker_tokens()) {

@@ -323,7 +323,8 @@ TEST_P(JobStoreConformanceTest, BlobOwnersByUploadAndByJob) {
   EXPECT_FALSE(*store_->OwnsBlob("bob", std::string(64, 'b')));
 }
 
-INSTANTIATE_TEST_SUITE_P(Stores, JobStoreConformanceTest, ::testing::Values("sqlite", "postgres", "memory"),
+INSTANTIATE_TEST_SUITE_P(Stores, JobStoreConformanceTest,
+                         ::testing::Values("sqlite", "postgres", "memory"),
                          [](const auto& info) { return info.param; });
 
 TEST(PostgresJobStoreTest, AnUnreachableServerIsUnavailableNamingTheAddress) {

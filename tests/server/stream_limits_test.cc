@@ -16,13 +16,15 @@ TEST(StreamLimitsTest, EachClientAndTheServerHaveTheirLimitAndClosingFreesAPlace
   auto a3 = limits.Acquire("tenant:a");
   ASSERT_FALSE(a3.ok());
   EXPECT_EQ(a3.status().code(), absl::StatusCode::kResourceExhausted);
-  EXPECT_THAT(a3.status().message(),
-              HasSubstr("tenant:a has 2 open, the limit per client (--max_watch_streams_per_client)"));
+  EXPECT_THAT(
+      a3.status().message(),
+      HasSubstr("tenant:a has 2 open, the limit per client (--max_watch_streams_per_client)"));
   auto b1 = limits.Acquire("tenant:b");
   ASSERT_TRUE(b1.ok());
   auto b2 = limits.Acquire("tenant:b");
   ASSERT_FALSE(b2.ok());
-  EXPECT_THAT(b2.status().message(), HasSubstr("the server has 3 open, its limit (--max_watch_streams)"));
+  EXPECT_THAT(b2.status().message(),
+              HasSubstr("the server has 3 open, its limit (--max_watch_streams)"));
   EXPECT_EQ(limits.open(), 3);
   // A refused client holds no place; a released slot frees one, once.
   EXPECT_EQ(limits.open_of("tenant:c"), 0);

@@ -33,10 +33,12 @@ ABSL_FLAG(std::string, allowed_root, "",
           "shared storage jobs may name by path, comma-separated (none: only uploaded volumes)");
 ABSL_FLAG(int, workers, 1, "jobs run at once");
 ABSL_FLAG(std::string, name, "", "this worker's name in leases (default: host and pid)");
-ABSL_FLAG(int, drain_seconds, absl::ToInt64Seconds(sheetmesh::runtime::kDefaultDrain), "on SIGTERM, how long running jobs may finish");
+ABSL_FLAG(int, drain_seconds, absl::ToInt64Seconds(sheetmesh::runtime::kDefaultDrain),
+          "on SIGTERM, how long running jobs may finish");
 // --isolate_jobs and the job limits: worker/runtime/job_limit_flags.cc.
 ABSL_FLAG(int, renew_seconds,
-          absl::ToInt64Seconds(sheetmesh::runtime::WorkerPoolOptions().renew_interval), "lease renewal period (below a third of the server's lease)");
+          absl::ToInt64Seconds(sheetmesh::runtime::WorkerPoolOptions().renew_interval),
+          "lease renewal period (below a third of the server's lease)");
 
 int main(int argc, char** argv) {
   if (const int code = sheetmesh::runtime::RunJobChildIfAsked(argc, argv); code >= 0) return code;

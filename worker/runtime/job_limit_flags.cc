@@ -12,9 +12,11 @@ ABSL_FLAG(bool, isolate_jobs, true,
           "worker thread)");
 ABSL_FLAG(double, job_memory_gb, 0,
           "each job's memory limit, GiB (0: three quarters of the machine's memory)");
-ABSL_FLAG(int64_t, job_cpu_seconds, sheetmesh::runtime::JobLimits().cpu_seconds, "each job's CPU time limit, seconds (0: none)");
+ABSL_FLAG(int64_t, job_cpu_seconds, sheetmesh::runtime::JobLimits().cpu_seconds,
+          "each job's CPU time limit, seconds (0: none)");
 ABSL_FLAG(int64_t, job_time_limit_seconds,
-          absl::ToInt64Seconds(sheetmesh::runtime::JobLimits().wall), "each job's wall-clock limit, seconds");
+          absl::ToInt64Seconds(sheetmesh::runtime::JobLimits().wall),
+          "each job's wall-clock limit, seconds");
 
 namespace sheetmesh::runtime {
 

@@ -13,7 +13,7 @@
 namespace sheetmesh {
 
 struct DecimateOptions {
-  uint64_t triangles = 0;      // collapse until at most this many faces remain
+  uint64_t triangles = 0;         // collapse until at most this many faces remain
   double boundary_weight = 4.0;   // weight of the planes across boundary edges
   double max_normal_turn = 45.0;  // degrees a face's normal may turn in one collapse
   double max_error = 1e300;       // stop once the cheapest collapse costs more (voxels²)

@@ -79,7 +79,8 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
                           static_cast<float>(p.z));
     if (vthick) {
       absl::StrAppendFormat(
-          &out, " %.7g", static_cast<float>(PhysicalLength(mesh.vertex_thickness_voxels[v], placement)));
+          &out, " %.7g",
+          static_cast<float>(PhysicalLength(mesh.vertex_thickness_voxels[v], placement)));
     }
     if (!body_vertex.empty()) out += body_vertex[v] ? " 1" : " 0";
     out += '\n';
@@ -95,14 +96,16 @@ absl::Status WritePly(const std::string& path, const TriangleMesh& mesh,
     const Face& t = mesh.faces[f];
     absl::StrAppend(&out, "3 ", t[0], " ", t[1], " ", t[2]);
     if (fthick) {
-      absl::StrAppendFormat(&out, " %.7g %.7g",
-                            static_cast<float>(PhysicalLength(mesh.face_thickness_voxels[f], placement)),
-                            mesh.face_thickness_voxels[f]);
+      absl::StrAppendFormat(
+          &out, " %.7g %.7g",
+          static_cast<float>(PhysicalLength(mesh.face_thickness_voxels[f], placement)),
+          mesh.face_thickness_voxels[f]);
     }
     if (faperture) {
-      absl::StrAppendFormat(&out, " %.7g %.7g",
-                            static_cast<float>(PhysicalLength(mesh.face_aperture_voxels[f], placement)),
-                            mesh.face_aperture_voxels[f]);
+      absl::StrAppendFormat(
+          &out, " %.7g %.7g",
+          static_cast<float>(PhysicalLength(mesh.face_aperture_voxels[f], placement)),
+          mesh.face_aperture_voxels[f]);
     }
     if (fpiece) absl::StrAppend(&out, " ", mesh.face_piece[f]);
     if (fbody) absl::StrAppend(&out, mesh.IsBodyFace(f) ? " 1" : " 0");
@@ -121,8 +124,8 @@ namespace {
 // meshio that take no PolyData), the same arrays in both.
 std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, bool unstructured) {
   const size_t nf = mesh.faces.size();
-  VtkXml vtk(unstructured ? VtkKind::kUnstructuredGrid : VtkKind::kPolyData,
-             mesh.vertices.size(), nf);
+  VtkXml vtk(unstructured ? VtkKind::kUnstructuredGrid : VtkKind::kPolyData, mesh.vertices.size(),
+             nf);
   vtk.Points(
       mesh.vertices.size(), [&](size_t v) { return placement.ToPhysical(mesh.vertices[v]); }, 9);
   const auto physical = [&](const std::vector<float>& t) {
@@ -130,16 +133,14 @@ std::string SurfaceVtkXml(const TriangleMesh& mesh, const Placement& placement, 
   };
   if (mesh.vertex_thickness_voxels.size() == mesh.vertices.size()) {
     vtk.BeginData("PointData", "thickness");
-    vtk.Array("Float32", "thickness", mesh.vertices.size(),
-              physical(mesh.vertex_thickness_voxels));
+    vtk.Array("Float32", "thickness", mesh.vertices.size(), physical(mesh.vertex_thickness_voxels));
     vtk.EndData();
   }
   vtk.BeginData("CellData", "thickness");
   if (mesh.face_thickness_voxels.size() == nf) {
     vtk.Array("Float32", "thickness", nf, physical(mesh.face_thickness_voxels));
-    vtk.Array("Float32", "thickness_voxels", nf, [&](size_t f) {
-      return absl::StrFormat("%.7g", mesh.face_thickness_voxels[f]);
-    });
+    vtk.Array("Float32", "thickness_voxels", nf,
+              [&](size_t f) { return absl::StrFormat("%.7g", mesh.face_thickness_voxels[f]); });
   }
   if (mesh.face_aperture_voxels.size() == nf) {
     vtk.Array("Float32", "aperture", nf, physical(mesh.face_aperture_voxels));
@@ -486,7 +487,8 @@ absl::StatusOr<TriangleMesh> ReadPly(const std::string& path, const std::string&
     mesh.body_pieces.erase(std::unique(mesh.body_pieces.begin(), mesh.body_pieces.end()),
                            mesh.body_pieces.end());
   }
-  if (vert_thick.size() == mesh.vertices.size()) mesh.vertex_thickness_voxels = std::move(vert_thick);
+  if (vert_thick.size() == mesh.vertices.size())
+    mesh.vertex_thickness_voxels = std::move(vert_thick);
   return mesh;
 }
 

@@ -24,9 +24,9 @@ struct TriangleMesh {
   // (surface/face_apertures.h); empty when not computed. face_thickness_voxels is the prism height
   // that scores best with its neighbours'.
   std::vector<float> face_aperture_voxels;
-  std::vector<int32_t> face_piece;      // per face, object id; empty when not labelled
+  std::vector<int32_t> face_piece;             // per face, object id; empty when not labelled
   std::vector<float> vertex_thickness_voxels;  // per vertex, voxels; empty unless computed
-  std::vector<int32_t> body_pieces;     // pieces meshed as bodies, sorted; the rest are sheets
+  std::vector<int32_t> body_pieces;  // pieces meshed as bodies, sorted; the rest are sheets
 
   size_t num_vertices() const { return vertices.size(); }
   size_t num_faces() const { return faces.size(); }

@@ -11,15 +11,13 @@ const char* Name(VtkKind kind) {
 
 }  // namespace
 
-VtkXml::VtkXml(VtkKind kind, size_t points, size_t cells, absl::string_view comment)
-    : kind_(kind) {
+VtkXml::VtkXml(VtkKind kind, size_t points, size_t cells, absl::string_view comment) : kind_(kind) {
   out_ = "<?xml version=\"1.0\"?>\n";
   if (!comment.empty()) absl::StrAppend(&out_, "<!-- ", comment, " -->\n");
-  absl::StrAppend(&out_, "<VTKFile type=\"", Name(kind),
-                  "\" version=\"1.0\" byte_order=\"LittleEndian\">\n<", Name(kind),
-                  ">\n<Piece NumberOfPoints=\"", points,
-                  kind == VtkKind::kPolyData ? "\" NumberOfPolys=\"" : "\" NumberOfCells=\"",
-                  cells, "\">\n");
+  absl::StrAppend(
+      &out_, "<VTKFile type=\"", Name(kind), "\" version=\"1.0\" byte_order=\"LittleEndian\">\n<",
+      Name(kind), ">\n<Piece NumberOfPoints=\"", points,
+      kind == VtkKind::kPolyData ? "\" NumberOfPolys=\"" : "\" NumberOfCells=\"", cells, "\">\n");
 }
 
 void VtkXml::BeginData(absl::string_view section, absl::string_view scalars) {

@@ -286,7 +286,8 @@ Preview ThicknessPreview(const TriangleMesh& mesh, const Placement& placement) {
       faces.empty() || mesh.face_piece.size() != mesh.num_faces() ? -1 : mesh.face_piece[faces[0]];
   // The aperture a flow model takes, where the mesh has one; else the thickness.
   const bool aperture = mesh.face_aperture_voxels.size() == mesh.num_faces();
-  const std::vector<float>& values = aperture ? mesh.face_aperture_voxels : mesh.face_thickness_voxels;
+  const std::vector<float>& values =
+      aperture ? mesh.face_aperture_voxels : mesh.face_thickness_voxels;
   const bool thick = values.size() == mesh.num_faces();
   RgbImage& im = p.image;
   if (faces.empty()) {

@@ -53,55 +53,56 @@ absl::StatusOr<VoxelSet> VoxelizePrisms(const TriangleMesh& mesh, const Dims& di
         absl::StrCat("prism model needs a thickness per face: ", mesh.face_thickness_voxels.size(),
                      " for ", mesh.faces.size(), " faces"));
   }
-  if (height == PrismHeight::kVertex && mesh.vertex_thickness_voxels.size() != mesh.vertices.size()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("shell model needs a thickness per vertex: ", mesh.vertex_thickness_voxels.size(),
-                     " for ", mesh.vertices.size(), " vertices"));
+  if (height == PrismHeight::kVertex &&
+      mesh.vertex_thickness_voxels.size() != mesh.vertices.size()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "shell model needs a thickness per vertex: ", mesh.vertex_thickness_voxels.size(), " for ",
+        mesh.vertices.size(), " vertices"));
   }
   tbb::combinable<std::vector<uint64_t>> parts;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.faces.size(), 256),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                      std::vector<uint64_t>& out = parts.local();
-                      for (size_t f = r.begin(); f < r.end(); ++f) {
-                        const Face& face = mesh.faces[f];
-                        const Triangle t = Corners(mesh, f);
-                        double h[3];
-                        for (int k = 0; k < 3; ++k) {
-                          h[k] = height == PrismHeight::kFace ? mesh.face_thickness_voxels[f]
-                                                              : mesh.vertex_thickness_voxels[face[k]];
-                        }
-                        const double hmax = std::max({h[0], h[1], h[2]});
-                        if (!(hmax > 0)) continue;
-                        const Vec3 n = UnitNormal(t);
-                        if (Norm2(n) == 0) continue;
-                        // The prism lies within hmax / 2 of the triangle.
-                        const double pad = hmax / 2;
-                        int64_t lo[3], hi[3];
-                        for (int k = 0; k < 3; ++k) {
-                          const double mn = std::min({t[0][k], t[1][k], t[2][k]}) - pad;
-                          const double mx = std::max({t[0][k], t[1][k], t[2][k]}) + pad;
-                          const int64_t extent = k == 0 ? dims.nx : (k == 1 ? dims.ny : dims.nz);
-                          lo[k] = std::max<int64_t>(0, static_cast<int64_t>(std::ceil(mn - 1e-9)));
-                          hi[k] = std::min<int64_t>(extent - 1,
-                                                    static_cast<int64_t>(std::floor(mx + 1e-9)));
-                        }
-                        for (int64_t z = lo[2]; z <= hi[2]; ++z) {
-                          for (int64_t y = lo[1]; y <= hi[1]; ++y) {
-                            for (int64_t x = lo[0]; x <= hi[0]; ++x) {
-                              const Vec3 p(x, y, z);
-                              const double dist = Dot(p - t[0], n);
-                              if (std::abs(dist) > pad + 1e-9) continue;
-                              double u, v, w;
-                              if (!ProjectBarycentric(p, t, &u, &v, &w)) continue;
-                              if (u < -1e-9 || v < -1e-9 || w < -1e-9) continue;
-                              const double hh = u * h[0] + v * h[1] + w * h[2];
-                              if (std::abs(dist) > hh / 2 + 1e-9) continue;
-                              out.push_back(static_cast<uint64_t>((z * dims.ny + y) * dims.nx + x));
-                            }
-                          }
-                        }
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, mesh.faces.size(), 256),
+      [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<uint64_t>& out = parts.local();
+        for (size_t f = r.begin(); f < r.end(); ++f) {
+          const Face& face = mesh.faces[f];
+          const Triangle t = Corners(mesh, f);
+          double h[3];
+          for (int k = 0; k < 3; ++k) {
+            h[k] = height == PrismHeight::kFace ? mesh.face_thickness_voxels[f]
+                                                : mesh.vertex_thickness_voxels[face[k]];
+          }
+          const double hmax = std::max({h[0], h[1], h[2]});
+          if (!(hmax > 0)) continue;
+          const Vec3 n = UnitNormal(t);
+          if (Norm2(n) == 0) continue;
+          // The prism lies within hmax / 2 of the triangle.
+          const double pad = hmax / 2;
+          int64_t lo[3], hi[3];
+          for (int k = 0; k < 3; ++k) {
+            const double mn = std::min({t[0][k], t[1][k], t[2][k]}) - pad;
+            const double mx = std::max({t[0][k], t[1][k], t[2][k]}) + pad;
+            const int64_t extent = k == 0 ? dims.nx : (k == 1 ? dims.ny : dims.nz);
+            lo[k] = std::max<int64_t>(0, static_cast<int64_t>(std::ceil(mn - 1e-9)));
+            hi[k] = std::min<int64_t>(extent - 1, static_cast<int64_t>(std::floor(mx + 1e-9)));
+          }
+          for (int64_t z = lo[2]; z <= hi[2]; ++z) {
+            for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+              for (int64_t x = lo[0]; x <= hi[0]; ++x) {
+                const Vec3 p(x, y, z);
+                const double dist = Dot(p - t[0], n);
+                if (std::abs(dist) > pad + 1e-9) continue;
+                double u, v, w;
+                if (!ProjectBarycentric(p, t, &u, &v, &w)) continue;
+                if (u < -1e-9 || v < -1e-9 || w < -1e-9) continue;
+                const double hh = u * h[0] + v * h[1] + w * h[2];
+                if (std::abs(dist) > hh / 2 + 1e-9) continue;
+                out.push_back(static_cast<uint64_t>((z * dims.ny + y) * dims.nx + x));
+              }
+            }
+          }
+        }
+      });
   SM_RETURN_IF_ERROR(progress.Update(0.7));
   return Collect(parts, dims);
 }

@@ -35,8 +35,7 @@ class Evaluator {
   enum Slot { kBest, kOther, kSlots };
 
   Evaluator(const SheetAnalysis& sheet, const SurfaceOptions& surface,
-            std::span<const int32_t> piece_of_voxel, PrismHeight height,
-            const Progress& progress)
+            std::span<const int32_t> piece_of_voxel, PrismHeight height, const Progress& progress)
       : sheet_(sheet),
         surface_(surface),
         piece_of_voxel_(piece_of_voxel),

@@ -27,7 +27,7 @@ enum class RadiusGoal {
 struct RadiusSearchOptions {
   RadiusGoal goal = RadiusGoal::kBestSimilarity;
   double target_similarity = 0.60;  // kTargetSimilarity: the similarity to reach
-  uint64_t triangles = 0;    // kTriangles: the triangle count wanted
+  uint64_t triangles = 0;           // kTriangles: the triangle count wanted
   bool decimate = true;             // kTriangles: search r for kOversample times the count
                                     // (the caller decimates to it); below the coarsest r's
                                     // count, the coarsest r

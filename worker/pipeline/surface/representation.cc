@@ -33,13 +33,15 @@ TriangleMesh SubMesh(const TriangleMesh& mesh, const std::vector<uint32_t>& face
       if (v == UINT32_MAX) {
         v = static_cast<uint32_t>(out.vertices.size());
         out.vertices.push_back(mesh.vertices[mesh.faces[f][k]]);
-        if (vthick) out.vertex_thickness_voxels.push_back(mesh.vertex_thickness_voxels[mesh.faces[f][k]]);
+        if (vthick)
+          out.vertex_thickness_voxels.push_back(mesh.vertex_thickness_voxels[mesh.faces[f][k]]);
       }
       face[k] = v;
     }
     out.faces.push_back(face);
     out.face_thickness_voxels.push_back(mesh.face_thickness_voxels[f]);
-    if (!mesh.face_aperture_voxels.empty()) out.face_aperture_voxels.push_back(mesh.face_aperture_voxels[f]);
+    if (!mesh.face_aperture_voxels.empty())
+      out.face_aperture_voxels.push_back(mesh.face_aperture_voxels[f]);
     out.face_piece.push_back(mesh.face_piece[f]);
   }
   return out;
@@ -51,8 +53,9 @@ void Append(const TriangleMesh& part, TriangleMesh* mesh) {
   const uint32_t base = static_cast<uint32_t>(mesh->vertices.size());
   mesh->vertices.insert(mesh->vertices.end(), part.vertices.begin(), part.vertices.end());
   if (part.vertex_thickness_voxels.size() == part.vertices.size()) {
-    mesh->vertex_thickness_voxels.insert(mesh->vertex_thickness_voxels.end(), part.vertex_thickness_voxels.begin(),
-                                  part.vertex_thickness_voxels.end());
+    mesh->vertex_thickness_voxels.insert(mesh->vertex_thickness_voxels.end(),
+                                         part.vertex_thickness_voxels.begin(),
+                                         part.vertex_thickness_voxels.end());
   } else {
     mesh->vertex_thickness_voxels.resize(mesh->vertices.size(), 0.0f);
   }
@@ -61,13 +64,15 @@ void Append(const TriangleMesh& part, TriangleMesh* mesh) {
     if (part.face_aperture_voxels.empty()) {
       mesh->face_aperture_voxels.resize(mesh->faces.size() + part.faces.size(), 0.0f);
     } else {
-      mesh->face_aperture_voxels.insert(mesh->face_aperture_voxels.end(), part.face_aperture_voxels.begin(),
-                                 part.face_aperture_voxels.end());
+      mesh->face_aperture_voxels.insert(mesh->face_aperture_voxels.end(),
+                                        part.face_aperture_voxels.begin(),
+                                        part.face_aperture_voxels.end());
     }
   }
   for (const Face& f : part.faces) mesh->faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  mesh->face_thickness_voxels.insert(mesh->face_thickness_voxels.end(), part.face_thickness_voxels.begin(),
-                              part.face_thickness_voxels.end());
+  mesh->face_thickness_voxels.insert(mesh->face_thickness_voxels.end(),
+                                     part.face_thickness_voxels.begin(),
+                                     part.face_thickness_voxels.end());
   mesh->face_piece.insert(mesh->face_piece.end(), part.face_piece.begin(), part.face_piece.end());
 }
 

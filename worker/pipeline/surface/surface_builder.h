@@ -44,14 +44,14 @@ enum class VertexFit {
 };
 
 struct SurfaceOptions {
-  ScvdOptions scvd;               // r, seed, Lloyd settings
+  ScvdOptions scvd;          // r, seed, Lloyd settings
   DualTriangleOptions dual;  // which dual triangles are kept (rim strip, cracks, folds)
   VertexPlacement placement = VertexPlacement::kCentroid;
   ThicknessMeasure thickness = ThicknessMeasure::kNormal;
-  bool orient = true;         // orient faces consistently per manifold piece
+  bool orient = true;      // orient faces consistently per manifold piece
   uint64_t triangles = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
-  bool fit_walls = true;      // each face's thickness fitted to the prisms' best formula-5 score
-                              // (wall_fit.h; beyond the paper; false: the mean τ)
+  bool fit_walls = true;   // each face's thickness fitted to the prisms' best formula-5 score
+                           // (wall_fit.h; beyond the paper; false: the mean τ)
   VertexFit fit_vertices = VertexFit::kAuto;  // with fit_walls: vertices moved where
                                               // formula 5 rises (vertex_fit.h; beyond the paper)
   double error_density = 0;    // > 0: a second SCVD with ρ from the first surface's local fit
@@ -77,13 +77,13 @@ struct SkippedComponent {
 };
 
 struct SurfaceResult {
-  TriangleMesh mesh;                           // face_thickness_voxels, face_piece, vertex_thickness_voxels set
-  std::vector<uint32_t> vertex_generator;      // SCVD generator of each vertex of the dual mesh
-                                               // (before any decimation)
-  std::optional<DecimateStats> decimation;     // when triangles decimated the mesh
-  std::optional<VertexFitStats> vertex_fit;    // when fit_vertices moved the vertices
-  std::optional<FaceApertureStats> apertures;  // when fit_walls fitted the heights
-  size_t smoothed_vertices = 0;                // vertices the thick-sheet smoothing moved
+  TriangleMesh mesh;  // face_thickness_voxels, face_piece, vertex_thickness_voxels set
+  std::vector<uint32_t> vertex_generator;          // SCVD generator of each vertex of the dual mesh
+                                                   // (before any decimation)
+  std::optional<DecimateStats> decimation;         // when triangles decimated the mesh
+  std::optional<VertexFitStats> vertex_fit;        // when fit_vertices moved the vertices
+  std::optional<FaceApertureStats> apertures;      // when fit_walls fitted the heights
+  size_t smoothed_vertices = 0;                    // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
   Scvd scvd;
   DualTriangleStats triangle_stats;

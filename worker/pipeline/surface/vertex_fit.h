@@ -34,8 +34,8 @@ struct VertexFitStats {
 };
 
 // Moves vertices of a sheet mesh where formula 5 of all the prisms together (face heights
-// `mesh.face_thickness_voxels`) rises: each rim vertex in turn tries one or two steps across the rim
-// (the outline of the outermost voxels; each rim edge's two ends together too) and, with
+// `mesh.face_thickness_voxels`) rises: each rim vertex in turn tries one or two steps across the
+// rim (the outline of the outermost voxels; each rim edge's two ends together too) and, with
 // `along_normal`, every vertex along its normal, and takes the move that gains
 // most, as long as no face turns, folds or sharpens past the options' bounds. A rim within
 // `box_reach` of a face of the box goes onto it unless that loses. Vertices on and beside

@@ -75,8 +75,9 @@ SheetTriangles KeepTriangles(const TriangleMesh& sheets, const std::vector<Vec3>
     st.faces.push_back(t);
     st.source.push_back(static_cast<uint32_t>(f));
     st.piece.push_back(sheets.face_piece.size() == sheets.faces.size() ? sheets.face_piece[f] : 0);
-    st.thickness.push_back(
-        sheets.face_thickness_voxels.size() == sheets.faces.size() ? sheets.face_thickness_voxels[f] : 0.f);
+    st.thickness.push_back(sheets.face_thickness_voxels.size() == sheets.faces.size()
+                               ? sheets.face_thickness_voxels[f]
+                               : 0.f);
   }
   return st;
 }

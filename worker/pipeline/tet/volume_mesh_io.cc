@@ -60,7 +60,8 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   const size_t nt = m.tets.size(), cells = nt + m.faces.size();
   VtkXml vtk(VtkKind::kUnstructuredGrid, m.nodes.size(), cells,
              absl::StrCat("sheetmesh ", SHEETMESH_VERSION, ": ", m.UnitsText()));
-  vtk.Points(m.nodes.size(), [&](size_t i) { return m.nodes[i]; }, 12);
+  vtk.Points(
+      m.nodes.size(), [&](size_t i) { return m.nodes[i]; }, 12);
   vtk.BeginCells();
   vtk.Array("Int64", "connectivity", cells, [&](size_t i) {
     if (i < nt) {
@@ -81,9 +82,8 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
   const int32_t box_id = top_piece + 2;
   // One value per cell: tet(t) on the tetrahedra, then face(f) on the faces.
   const auto cell_array = [&](const char* type, const char* name, auto tet, auto face) {
-    vtk.Array(type, name, cells, [&](size_t i) {
-      return i < nt ? absl::StrCat(tet(i)) : absl::StrCat(face(i - nt));
-    });
+    vtk.Array(type, name, cells,
+              [&](size_t i) { return i < nt ? absl::StrCat(tet(i)) : absl::StrCat(face(i - nt)); });
   };
   const auto zero = [](size_t) { return 0; };
   cell_array("Int32", "kind", zero, [&](size_t f) {

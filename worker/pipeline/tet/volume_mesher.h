@@ -112,9 +112,9 @@ struct VolumeMeshResult : VolumeMeshStats {
 // Meshes the box of `dims` (placed by `placement`) with `sheets` (voxel index coordinates)
 // as internal faces; the pieces that are bodies (sheets.body_pieces) bound regions of
 // their own (TetMesh::tet_region). Each sheet face carries its aperture (face_aperture_voxels, else
-// face_thickness_voxels) as the volume mesh's face_thickness_voxels. kFailedPrecondition when sheet triangles
-// intersect (naming them); kInternal when the output does not conform (naming the first sheet
-// triangle not covered) or the tetrahedra do not fill the box; TetGen's errors pass through.
+// face_thickness_voxels) as the volume mesh's face_thickness_voxels. kFailedPrecondition when sheet
+// triangles intersect (naming them); kInternal when the output does not conform (naming the first
+// sheet triangle not covered) or the tetrahedra do not fill the box; TetGen's errors pass through.
 absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& sheets, const Dims& dims,
                                                  const Placement& placement,
                                                  const VolumeMeshOptions& options,

@@ -10,7 +10,8 @@ using ::testing::HasSubstr;
 
 TEST(VtkXmlTest, PolyDataHasPolysAndNoTypes) {
   VtkXml vtk(VtkKind::kPolyData, 3, 1);
-  vtk.Points(3, [](size_t i) { return Vec3(double(i), 0.5, 1.0 / 3); }, 4);
+  vtk.Points(
+      3, [](size_t i) { return Vec3(double(i), 0.5, 1.0 / 3); }, 4);
   vtk.BeginData("CellData", "thickness");
   vtk.Array("Float32", "thickness", 1, [](size_t) { return 2.5; });
   vtk.EndData();
@@ -32,7 +33,8 @@ TEST(VtkXmlTest, PolyDataHasPolysAndNoTypes) {
 
 TEST(VtkXmlTest, UnstructuredGridKeepsTheOrderOfItsSectionsAndItsComment) {
   VtkXml vtk(VtkKind::kUnstructuredGrid, 4, 2, "lengths in mm");
-  vtk.Points(4, [](size_t i) { return Vec3(0.1 * i, 0, 0); }, 12);
+  vtk.Points(
+      4, [](size_t i) { return Vec3(0.1 * i, 0, 0); }, 12);
   vtk.BeginCells();
   vtk.Array("UInt8", "types", 2, [](size_t i) { return i == 0 ? 10 : 5; });
   vtk.EndCells();

@@ -52,7 +52,8 @@ TEST(FaceAperturesTest, AJunctionsFacesCarryTheirOwnSheetsApertureNotTheCrossing
   TriangleMesh& m = c.mesh;
   // Sheet 0 is 2 voxels thick, sheet 1 is 3; the fit gave the junction's faces the sum.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    m.face_thickness_voxels.push_back(c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2.0f : 3.0f));
+    m.face_thickness_voxels.push_back(c.at_junction[f] ? 5.0f
+                                                       : (m.face_piece[f] == 0 ? 2.0f : 3.0f));
   }
   const std::vector<float> measured = m.face_thickness_voxels;
   const FaceApertureStats s = SetFaceApertures(&m, measured);
@@ -67,7 +68,8 @@ TEST(FaceAperturesTest, AJunctionsFacesCarryTheirOwnSheetsApertureNotTheCrossing
   EXPECT_EQ(s.junction_raised, 0u);
   // The thickness the score uses stays as fitted.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    EXPECT_FLOAT_EQ(m.face_thickness_voxels[f], c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2 : 3));
+    EXPECT_FLOAT_EQ(m.face_thickness_voxels[f],
+                    c.at_junction[f] ? 5.0f : (m.face_piece[f] == 0 ? 2 : 3));
   }
 }
 
@@ -96,7 +98,8 @@ TEST(FaceAperturesTest, TheLocalApertureFollowsASheetWhoseThicknessVaries) {
   TriangleMesh& m = c.mesh;
   // Sheet 0 thickens along x: 1 + x / 2 at the face's first vertex.
   for (size_t f = 0; f < m.faces.size(); ++f) {
-    m.face_thickness_voxels.push_back(m.face_piece[f] == 0 ? 1 + m.vertices[m.faces[f][0]].x / 2 : 3);
+    m.face_thickness_voxels.push_back(m.face_piece[f] == 0 ? 1 + m.vertices[m.faces[f][0]].x / 2
+                                                           : 3);
   }
   const std::vector<float> measured = m.face_thickness_voxels;
   const size_t far = 2 * (8 * 7 + 3);  // x = 7: 4.5 voxels
@@ -104,7 +107,8 @@ TEST(FaceAperturesTest, TheLocalApertureFollowsASheetWhoseThicknessVaries) {
   ASSERT_DOUBLE_EQ(m.vertices[m.faces[far][0]].x, 7);
   m.face_thickness_voxels[far] = 0;
   SetFaceApertures(&m, measured);
-  EXPECT_GT(m.face_aperture_voxels[far], 3.5f) << "the piece's median (3) would ignore where it lies";
+  EXPECT_GT(m.face_aperture_voxels[far], 3.5f)
+      << "the piece's median (3) would ignore where it lies";
   EXPECT_LE(m.face_aperture_voxels[far], 4.5f);
 }
 

@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "tests/testing/shapes.h"
+#include "tests/testing/status_matchers.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
-#include "tests/testing/status_matchers.h"
 
 namespace sheetmesh {
 namespace {
@@ -101,8 +101,7 @@ TEST(RadiusSearchTest, TriangleGoalMeetsTheBudgetWithinFivePercent) {
       o.goal = RadiusGoal::kTriangles;
       o.triangles = n;
       o.decimate = decimate;
-      SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult c_found,
-                              SearchRadius(sheet, SurfaceOptions(), o));
+      SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult c_found, SearchRadius(sheet, SurfaceOptions(), o));
       const RadiusChoice& c = c_found.choice;
       EXPECT_TRUE(c.target_reached) << n << ": " << c.message;
       if (!decimate) EXPECT_EQ(c.decimated_to, 0u);
@@ -151,14 +150,16 @@ TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
   EXPECT_DOUBLE_EQ(fine.radius, 3);
   EXPECT_THAT(fine.message, ::testing::HasSubstr("1000000 triangles"));
   o.decimate = true;
-  SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult finest_found, SearchRadius(sheet, SurfaceOptions(), o));
+  SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult finest_found,
+                          SearchRadius(sheet, SurfaceOptions(), o));
   const RadiusChoice& finest = finest_found.choice;
   EXPECT_FALSE(finest.target_reached);
   EXPECT_THAT(finest.message, ::testing::HasSubstr("1000000 triangles"));
   o.triangles = 2;
   o.max_radius_voxels = 12;
   o.min_radius_voxels = 2;
-  SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult stopped_found, SearchRadius(sheet, SurfaceOptions(), o));
+  SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult stopped_found,
+                          SearchRadius(sheet, SurfaceOptions(), o));
   const RadiusChoice& stopped = stopped_found.choice;
   EXPECT_FALSE(stopped.target_reached);
   EXPECT_THAT(stopped.message, ::testing::HasSubstr("decimation stopped at"));

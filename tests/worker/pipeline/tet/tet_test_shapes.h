@@ -60,7 +60,8 @@ inline TriangleMesh Append(TriangleMesh a, const TriangleMesh& b) {
   a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
   for (Face f : b.faces) a.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
   a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
-  a.face_thickness_voxels.insert(a.face_thickness_voxels.end(), b.face_thickness_voxels.begin(), b.face_thickness_voxels.end());
+  a.face_thickness_voxels.insert(a.face_thickness_voxels.end(), b.face_thickness_voxels.begin(),
+                                 b.face_thickness_voxels.end());
   return a;
 }
 

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <map>
-#include <nlohmann/json.hpp>
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
@@ -427,30 +426,6 @@ const char* RepresentationName(RepresentationMode mode) {
       break;
   }
   return "auto";
-}
-
-nlohmann::json PieceRepresentation::Fields() const {
-  nlohmann::json j = {{"piece", piece},
-                      {"part_of", part_of},
-                      {"representation", body ? "body" : "sheet"},
-                      {"voxels", voxels},
-                      {"thickness_voxels", thickness},
-                      {"median_thickness_voxels", median_thickness},
-                      {"sheet_triangles", sheet_triangles}};
-  if (sheet_similarity) j["sheet_similarity"] = *sheet_similarity;
-  if (body_similarity) {
-    j["body_similarity"] = *body_similarity;
-    j["body_triangles"] = body_triangles;
-    j["body_triangles_before_decimation"] = body_triangles_before;
-  }
-  return j;
-}
-
-nlohmann::json RepresentationReport::Fields() const {
-  nlohmann::json j = {{"mode", RepresentationName(mode)}, {"bodies", bodies}};
-  j["pieces"] = nlohmann::json::array();
-  for (const PieceRepresentation& p : pieces) j["pieces"].push_back(p.Fields());
-  return j;
 }
 
 absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& sheet,

@@ -1,8 +1,10 @@
-// The report's part of the surface and the radius search: the `Fields()` its results declare, with
-// the report's JSON names (run/pipeline_report.cc nests them).
+// The report's part of the surface, the radius search and the representations: the
+// `Fields()` their results declare, with the report's JSON names (run/pipeline_report.cc
+// nests them).
 #include <nlohmann/json.hpp>
 
 #include "worker/pipeline/surface/radius_search.h"
+#include "worker/pipeline/surface/representation.h"
 #include "worker/pipeline/surface/surface_builder.h"
 
 namespace sheetmesh {
@@ -58,6 +60,30 @@ nlohmann::json RadiusChoice::Fields() const {
   nlohmann::json j = {{"chosen_r", radius}, {"target_reached", target_reached}, {"trials", t}};
   if (decimated_to > 0) j["decimated_to"] = decimated_to;
   if (!message.empty()) j["message"] = message;
+  return j;
+}
+
+nlohmann::json PieceRepresentation::Fields() const {
+  nlohmann::json j = {{"piece", piece},
+                      {"part_of", part_of},
+                      {"representation", body ? "body" : "sheet"},
+                      {"voxels", voxels},
+                      {"thickness_voxels", thickness},
+                      {"median_thickness_voxels", median_thickness},
+                      {"sheet_triangles", sheet_triangles}};
+  if (sheet_similarity) j["sheet_similarity"] = *sheet_similarity;
+  if (body_similarity) {
+    j["body_similarity"] = *body_similarity;
+    j["body_triangles"] = body_triangles;
+    j["body_triangles_before_decimation"] = body_triangles_before;
+  }
+  return j;
+}
+
+nlohmann::json RepresentationReport::Fields() const {
+  nlohmann::json j = {{"mode", RepresentationName(mode)}, {"bodies", bodies}};
+  j["pieces"] = nlohmann::json::array();
+  for (const PieceRepresentation& p : pieces) j["pieces"].push_back(p.Fields());
   return j;
 }
 

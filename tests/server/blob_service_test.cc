@@ -75,15 +75,15 @@ TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
   auto digest = server::DigestOfFile(path);
   ASSERT_TRUE(digest.ok());
   // The client library names the upload by the content: break a stream of that name
-  // after nine pieces, once the server reports eight durable: it writes its 8 MiB buffer
-  // out when the ninth arrives, and what the buffer holds when the stream breaks.
+  // after eight pieces, once the server reports them durable: it writes its 8 MiB buffer
+  // out as the eighth fills it, so all eight have arrived then and nothing is left over.
   const std::string resource = absl::StrCat("uploads/u", digest->hash().substr(0, 32), "/blobs/",
                                             digest->hash(), "/", digest->size_bytes());
   {
     auto ctx = client_->Context();
     v1::WriteResponse resp;
     auto writer = client_->blobs()->Write(ctx.get(), &resp);
-    for (int i = 0; i < 9; ++i) {
+    for (int i = 0; i < 8; ++i) {
       v1::WriteRequest req;
       if (i == 0) req.set_resource_name(resource);
       req.set_write_offset(int64_t{i} << 20);
@@ -103,7 +103,7 @@ TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
   q.set_resource_name(resource);
   v1::QueryWriteStatusResponse qs;
   ASSERT_TRUE(client_->blobs()->QueryWriteStatus(client_->Context().get(), q, &qs).ok());
-  EXPECT_EQ(qs.committed_size(), 9 << 20);
+  EXPECT_EQ(qs.committed_size(), 8 << 20);
   EXPECT_FALSE(qs.complete());
   EXPECT_EQ(Missing(*client_, *digest).size(), 1u);
   // The client resumes where the server stopped: its first report is past that point.
@@ -112,7 +112,7 @@ TEST_F(ServiceTest, UploadResumesAfterBrokenStream) {
     if (first_report < 0) first_report = sent;
   });
   ASSERT_TRUE(up.ok()) << up.status();
-  EXPECT_EQ(first_report, 10 << 20);
+  EXPECT_EQ(first_report, 9 << 20);
   ASSERT_TRUE(client_->Download(*digest, dir_.File("back.bin")).ok());
   EXPECT_EQ(Slurp(dir_.File("back.bin")), bytes);
 }

@@ -115,10 +115,69 @@ std::vector<ParamRow> InputRows() {
     };
     rows.push_back(std::move(r));
   }
+  {
+    ParamRow r = Row("input.grey", ParamType::kBool, nullptr, "",
+                     "sheet phase of a grey scan as it came: sheets found by their sheetness, "
+                     "apertures from the attenuation they miss (grey.*)");
+    r.spec.exclusive = "selection";
+    // Unset when off: only a grey run excludes the labels, the window and the threshold.
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      if (!o.grey.enabled) return std::nullopt;
+      return ParamValue(true);
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) { o.grey.enabled = std::get<bool>(v); };
+    rows.push_back(std::move(r));
+  }
   rows.push_back(Local(Text("input.mask", SM_MEMBER(input.mask_path),
                             "rock mask volume, same dims (non-zero = rock; empty: none)")));
   rows.push_back(Labels("input.mask_labels", &SheetInput::mask_selection,
                         "rock mask: the values that are rock (default: non-zero)"));
+  return rows;
+}
+
+// input.grey's settings.
+std::vector<ParamRow> GreyRows() {
+  std::vector<ParamRow> rows;
+  {
+    ParamRow r = Row("grey.levels", ParamType::kNumbers, "[-1e300, 1e300]", "",
+                     "grey levels of the void and the rock, [VOID, ROCK] (unset: measured from "
+                     "the histogram's peaks)");
+    r.spec.count = 2;
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      if (o.grey.levels.empty()) return std::nullopt;
+      return ParamValue(o.grey.levels);
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      o.grey.levels = std::get<std::vector<double>>(v);
+    };
+    r.check = [](const ParamValue& v) -> std::string {
+      const auto& w = std::get<std::vector<double>>(v);
+      return w[0] < w[1] ? "" : "must be [VOID, ROCK] with the void darker";
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Number("grey.psf_sigma", SM_MEMBER(grey.psf_sigma_voxels), "(0, 8]", "voxels",
+                        "the scanner's point spread (Gaussian sigma): the apertures' window "
+                        "reaches three of it past the sheet"));
+  {
+    ParamRow r = Row("grey.scales", ParamType::kNumbers, "(0, 16]", "voxels",
+                     "Gaussian scales of the sheetness filter");
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      return ParamValue(o.grey.sheetness.scales);
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      o.grey.sheetness.scales = std::get<std::vector<double>>(v);
+    };
+    r.check = [](const ParamValue& v) -> std::string {
+      return std::get<std::vector<double>>(v).empty() ? "must hold at least one scale" : "";
+    };
+    rows.push_back(std::move(r));
+  }
+  rows.push_back(Number("grey.high", SM_MEMBER(grey.sheetness.high), "(0, 1000]", "",
+                        "sheetness that seeds a sheet, in units of its noise (the median "
+                        "response)"));
+  rows.push_back(Number("grey.low", SM_MEMBER(grey.sheetness.low), "(0, 1000]", "",
+                        "sheetness a sheet grows through from its seeds, in the same units"));
   return rows;
 }
 
@@ -521,7 +580,7 @@ std::vector<ParamRow> OutputRows() {
 const std::vector<ParamRow>& ParamRows() {
   static const std::vector<ParamRow>* rows = [] {
     auto* all = new std::vector<ParamRow>;
-    for (auto part : {InputRows(), ExtractionRows(), SurfaceRows(), SimilarityRows(),
+    for (auto part : {InputRows(), GreyRows(), ExtractionRows(), SurfaceRows(), SimilarityRows(),
                       VolumeMeshRows(), OutputRows()}) {
       for (ParamRow& r : part) all->push_back(std::move(r));
     }

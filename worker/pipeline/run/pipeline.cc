@@ -210,9 +210,17 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   PipelineReport report;
   report.options = options;
   SheetPhase phase;
+  std::optional<GreySheetPhase> grey;
   {
     StageTimer t(&report, "read");
-    SM_ASSIGN_OR_RETURN(phase, LoadSheetPhase(options.input, progress.Stage("read")));
+    if (options.grey.enabled) {
+      SM_ASSIGN_OR_RETURN(grey, LoadGreySheetPhase(options.input, options.grey.levels,
+                                                   options.grey.sheetness, progress.Stage("read")));
+      phase = grey->phase;
+      report.sheetness = grey->sheetness;
+    } else {
+      SM_ASSIGN_OR_RETURN(phase, LoadSheetPhase(options.input, progress.Stage("read")));
+    }
   }
   report.volume = phase.info;
   report.selection = phase.selection;
@@ -281,6 +289,14 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_ASSIGN_OR_RETURN(report.representation,
                         ChooseRepresentation(sheet, piece_of_voxel, options.representation,
                                              &result.mesh, progress.Stage("representation")));
+  }
+  if (grey) {
+    // The apertures from the attenuation the sheets miss; the prisms' heights, which the
+    // similarity scores against the sheets found, stay.
+    GreyApertureOptions ao;
+    ao.psf_sigma_voxels = options.grey.psf_sigma_voxels;
+    SM_ASSIGN_OR_RETURN(report.grey_apertures,
+                        SetGreyApertures(&result.mesh, grey->grey, grey->levels, ao));
   }
   const TriangleMesh& mesh = result.mesh;
   if (surface.triangles > 0 && mesh.num_faces() > (1 + kTriangleTolerance) * surface.triangles) {

@@ -18,6 +18,7 @@
 #include "worker/pipeline/run/pipeline_options.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
+#include "worker/pipeline/surface/grey_apertures.h"
 #include "worker/pipeline/surface/radius_search.h"
 #include "worker/pipeline/surface/representation.h"
 #include "worker/pipeline/surface/surface_builder.h"
@@ -71,6 +72,9 @@ struct PipelineReport {
   std::optional<RepresentationReport> representation;  // unless every piece is a sheet
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
+  // With input.grey: what the sheets were found on, and the apertures from the grey levels.
+  std::optional<SheetnessStats> sheetness;
+  std::optional<GreyApertureStats> grey_apertures;
   std::vector<StageTime> timings;
   std::vector<std::string> files;     // written, relative to output.dir
   std::vector<std::string> previews;  // each preview's description, as JSON text

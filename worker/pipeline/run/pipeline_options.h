@@ -13,6 +13,7 @@
 #include "worker/pipeline/surface/surface_builder.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 #include "worker/pipeline/voxel/sheet_input.h"
+#include "worker/pipeline/voxel/sheetness.h"
 
 namespace sheetmesh {
 
@@ -39,8 +40,18 @@ struct OutputOptions {
   bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
 };
 
+// Grey levels as the scanner gave them (input.grey): sheets found by their sheetness and
+// apertures from the attenuation they miss, instead of a segmented phase.
+struct GreyOptions {
+  bool enabled = false;
+  std::vector<double> levels;     // [void, rock]; empty: measured from the histogram
+  double psf_sigma_voxels = 1.0;  // the point spread (Gaussian σ) the apertures' window allows
+  SheetnessOptions sheetness;
+};
+
 struct PipelineOptions {
   SheetInput input;
+  GreyOptions grey;
   bool extract = true;  // run the feature extraction (Fig. 3) first; the surface command: false
   ExtractionOptions extraction;
   SurfaceOptions surface;      // r = surface.scvd.radius_voxels unless searched

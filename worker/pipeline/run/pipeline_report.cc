@@ -77,6 +77,13 @@ std::string PipelineReport::ToJson() const {
     j["radius_search"]["target_similarity"] = options.radius_search.target_similarity;
   }
   if (volume_mesh) j["volume_mesh"] = volume_mesh->Fields();
+  if (sheetness) {
+    j["grey"] = {{"sheetness", sheetness->Fields()}};
+    if (grey_apertures) {
+      const nlohmann::json a = grey_apertures->Fields();
+      for (auto it = a.begin(); it != a.end(); ++it) j["grey"][it.key()] = it.value();
+    }
+  }
   if (!failed_stage.empty()) j["failed"] = {{"stage", failed_stage}, {"error", error}};
   nlohmann::json times = nlohmann::json::object();
   for (const StageTime& t : timings) times[t.stage] = t.seconds;

@@ -3,6 +3,7 @@
 // nests them).
 #include <nlohmann/json.hpp>
 
+#include "worker/pipeline/surface/grey_apertures.h"
 #include "worker/pipeline/surface/radius_search.h"
 #include "worker/pipeline/surface/representation.h"
 #include "worker/pipeline/surface/surface_builder.h"
@@ -84,6 +85,20 @@ nlohmann::json RepresentationReport::Fields() const {
   nlohmann::json j = {{"mode", RepresentationName(mode)}, {"bodies", bodies}};
   j["pieces"] = nlohmann::json::array();
   for (const PieceRepresentation& p : pieces) j["pieces"].push_back(p.Fields());
+  return j;
+}
+
+nlohmann::json GreyApertureStats::Fields() const {
+  nlohmann::json j = {{"levels", levels.Fields()}, {"measured", measured}};
+  if (measured) {
+    j["faces"] = faces;
+    j["mean_aperture_voxels"] = mean_voxels;
+    j["counted_mean_aperture_voxels"] = counted_mean_voxels;
+    j["uncertainty_voxels"] = uncertainty_voxels;
+    j["window_voxels"] = window_voxels;
+  } else {
+    j["fallback"] = "apertures counted from voxels: " + levels.problem;
+  }
   return j;
 }
 

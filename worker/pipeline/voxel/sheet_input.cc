@@ -84,4 +84,41 @@ absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progres
   return out;
 }
 
+absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
+                                                  const std::vector<double>& given,
+                                                  const SheetnessOptions& sheetness,
+                                                  const Progress& progress) {
+  const absl::Time start = absl::Now();
+  if (!input.mask_path.empty() || input.mask_from_volume) {
+    return absl::InvalidArgumentError(
+        "input.grey finds the sheets in the whole volume: input.mask is not taken with it");
+  }
+  if (!given.empty() && given.size() != 2) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "grey.levels holds ", given.size(), " numbers: give two, [VOID, ROCK], or none"));
+  }
+  GreySheetPhase out;
+  SM_ASSIGN_OR_RETURN(auto source, OpenVolume(input.path, input.open));
+  out.phase.info = source->info();
+  SM_ASSIGN_OR_RETURN(out.grey,
+                      ReadGreyVolume(*source, input.open.limits, progress.Sub(0, 0.3)));
+  std::optional<double> void_level, rock;
+  if (given.size() == 2) {
+    void_level = given[0];
+    rock = given[1];
+  }
+  SM_ASSIGN_OR_RETURN(out.levels, MeasureGreyLevels(out.grey, void_level, rock, input.path));
+  SM_ASSIGN_OR_RETURN(out.phase.sheet, DetectSheets(out.grey, sheetness, &out.sheetness,
+                                                    progress.Sub(0.3, 1)));
+  if (out.phase.sheet.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        input.path, ": input.grey found no sheet (no voxel's sheetness reached grey.high = ",
+        sheetness.high, " times its noise; the rock at ", out.levels.rock, ", noise ",
+        out.levels.noise, "): lower grey.high, or the sheets are brighter than the rock"));
+  }
+  out.phase.stats.selected = out.phase.sheet.size();
+  out.phase.read_seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  return out;
+}
+
 }  // namespace sheetmesh

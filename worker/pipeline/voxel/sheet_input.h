@@ -9,7 +9,9 @@
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/volume/volume_open.h"
+#include "worker/pipeline/voxel/grey_volume.h"
 #include "worker/pipeline/voxel/phase_selection.h"
+#include "worker/pipeline/voxel/sheetness.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {
@@ -35,6 +37,24 @@ struct SheetPhase {
   std::optional<double> threshold;  // the threshold used (Otsu's value when "otsu")
   double read_seconds = 0;          // wall time of reading and selecting
 };
+
+// The sheet phase found on grey levels (input.grey), with what it was found on.
+struct GreySheetPhase {
+  SheetPhase phase;  // the sheets found, the volume's info
+  GreyVolume grey;   // kept for the apertures
+  GreyLevels levels;
+  SheetnessStats sheetness;
+};
+
+// Reads the volume's grey levels, measures the levels `given` ([void, rock], or empty) does
+// not give, and finds the sheets (sheetness.h). kInvalidArgument for a mask or a selection
+// beside it (input.grey is the selection), for levels that are not two numbers, for a
+// volume without contrast or with only a few values (MeasureGreyLevels), and when no sheet
+// is found; reader errors pass through; kCancelled if asked.
+absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
+                                                  const std::vector<double>& given,
+                                                  const SheetnessOptions& sheetness,
+                                                  const Progress& progress = {});
 
 // Opens the volume (and mask), selects S slab by slab (after a pass for Otsu's threshold
 // when asked). kInvalidArgument when S is empty (the message names the file, the selection

@@ -1,0 +1,139 @@
+#!/usr/bin/python3
+"""Apertures from grey levels against the truth (issue 45).
+
+Grey phantoms are made here with numpy: one tilted planar sheet (or a rough one) of a known
+aperture across a 64³ rock with a band of void along x = 0 (the air around a core), drawn by
+the share of each voxel it covers (8 sub-samples per axis), blurred by a Gaussian point
+spread and given Gaussian noise at a contrast-to-noise ratio. Each volume is meshed three
+ways by `sheetmesh-pipeline run --extract=false`:
+
+- `--grey`: sheets found by their sheetness, apertures from missing attenuation;
+- `--threshold=otsu`: one global threshold, the apertures counted from voxels;
+- the same Otsu run's voxel-count aperture is also what the grey run reports beside its own.
+
+For each: the share of the sheet found (the mesh's area over the sheet's area in the box)
+and the mean aperture against the truth (error in voxels and per cent), and the time.
+
+Usage: /usr/bin/python3 bench/grey_apertures.py BUILD_DIR [--quick]
+Writes bench/out/grey_apertures.md and prints it.
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+from scipy import ndimage
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def phantom(path, aperture, sigma, cnr, rough=0.0, n=64, rock=200.0, void=40.0, seed=1):
+    """Writes a float32 volume; returns the sheet's area (voxels²) inside the rock."""
+    normal = np.array([0.25, 0.35, 1.0])
+    normal /= np.linalg.norm(normal)
+    along = np.cross(normal, [0, 1, 0])
+    along /= np.linalg.norm(along)
+    across = np.cross(normal, along)
+    centre = np.array([n / 2 + 3, n / 2, n / 2])
+    k = 8
+    sub = (np.arange(k) + 0.5) / k - 0.5
+    z, y, x = np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")
+    vol = np.full((n, n, n), rock, dtype=np.float64)
+
+    def offset(px, py, pz):
+        q = np.stack([px - centre[0], py - centre[1], pz - centre[2]], -1)
+        d = q @ normal
+        if rough > 0:
+            d = d - rough * np.sin(0.21 * (q @ along)) * np.cos(0.17 * (q @ across))
+        return d
+
+    centre_offset = offset(x, y, z)
+    near = np.abs(centre_offset) <= aperture / 2 + 1.5
+    idx = np.nonzero(near)
+    share = np.zeros(len(idx[0]))
+    for dz in sub:
+        for dy in sub:
+            for dx in sub:
+                d = offset(idx[2] + dx, idx[1] + dy, idx[0] + dz)
+                share += np.abs(d) <= aperture / 2
+    share /= k ** 3
+    vol[idx] = rock - (rock - void) * share
+    vol[:, :, :6] = void
+    vol = ndimage.gaussian_filter(vol, sigma, mode="nearest")
+    rng = np.random.default_rng(seed)
+    vol += rng.normal(0, (rock - void) / cnr, vol.shape)
+    vol.astype("<f4").tofile(path)
+    # The sheet's area in the rock: voxels whose centre lies within half a voxel of it.
+    inside = (np.abs(centre_offset) <= 0.5) & (x >= 6)
+    return float(inside.sum())
+
+
+def run(cli, vol, out, extra):
+    t0 = time.time()
+    p = subprocess.run([cli, "run", vol, "--extract=false", "-o", out, "--output_previews=false"]
+                       + extra, capture_output=True, text=True)
+    dt = time.time() - t0
+    if p.returncode != 0:
+        return None, dt, p.stderr.strip().splitlines()[-1]
+    return json.load(open(os.path.join(out, "report.json"))), dt, ""
+
+
+def main():
+    build = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build-tests")
+    cli = os.path.join(build, "worker", "pipeline", "sheetmesh-pipeline")
+    quick = "--quick" in sys.argv
+    apertures = [0.2, 0.5, 1, 2, 4]
+    cases = [(a, s, c, 0.0) for a in apertures for s in ([1.0] if quick else [0.5, 1.5])
+             for c in ([10] if quick else [5, 20])]
+    cases += [(a, 1.0, 10, 1.5) for a in ([1] if quick else [0.5, 1, 2])]
+    rows = []
+    tmp = tempfile.mkdtemp(prefix="sheetmesh_grey_")
+    for a, s, c, rough in cases:
+        vol = os.path.join(tmp, "grey_64x64x64_f32.raw")
+        area = phantom(vol, a, s, c, rough)
+        row = {"aperture": a, "sigma": s, "cnr": c, "rough": rough}
+        for name, extra in [("grey", ["--grey", "--r=5"]), ("otsu", ["--threshold=otsu", "--r=5"])]:
+            rep, dt, err = run(cli, vol, os.path.join(tmp, name), extra)
+            if rep is None:
+                row[name] = {"error": err, "seconds": dt}
+                continue
+            found = rep["surface"]["area_voxels"] / area
+            if name == "grey" and rep.get("grey", {}).get("measured"):
+                mean = rep["grey"]["mean_aperture_voxels"]
+                counted = rep["grey"]["counted_mean_aperture_voxels"]
+            else:
+                mean = rep.get("surface", {}).get("apertures", {}).get("mean_voxels")
+                if mean is None:
+                    mean = rep["thickness"]["mean"]
+                counted = mean
+            row[name] = {"found": found, "mean": mean, "counted": counted, "seconds": dt}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    lines = ["| aperture | σ | CNR | rough | grey: found | grey: mean (error) | grey: voxel count "
+             "| Otsu: found | Otsu: mean (error) |", "|---|---|---|---|---|---|---|---|---|"]
+
+    def cell(r, key, a):
+        if "error" in r:
+            return "fails", "—"
+        err = r[key] - a
+        return ("%.2f" % r["found"],
+                "%.2f (%+.2f, %+.0f%%)" % (r[key], err, 100 * err / a))
+    for r in rows:
+        g = r["grey"]
+        o = r["otsu"]
+        gf, gm = cell(g, "mean", r["aperture"])
+        of, om = cell(o, "mean", r["aperture"])
+        gc = "%.2f" % g["counted"] if "counted" in g else "—"
+        lines.append("| %g | %g | %g | %g | %s | %s | %s | %s | %s |" % (
+            r["aperture"], r["sigma"], r["cnr"], r["rough"], gf, gm, gc, of, om))
+    text = "\n".join(lines)
+    os.makedirs(os.path.join(ROOT, "bench", "out"), exist_ok=True)
+    open(os.path.join(ROOT, "bench", "out", "grey_apertures.md"), "w").write(text + "\n")
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -18,10 +18,10 @@ namespace sheetmesh::testing {
 struct GreySheet {
   Vec3 center;
   Vec3 normal{0, 0, 1};
-  Vec3 along{1, 0, 0};         // the aperture varies linearly along this in-plane axis
-  double aperture = 1;         // at the centre
-  double aperture_slope = 0;   // change per voxel along `along`
-  double roughness = 0;        // amplitude of the mid-plane's waviness, voxels
+  Vec3 along{1, 0, 0};        // the aperture varies linearly along this in-plane axis
+  double aperture = 1;        // at the centre
+  double aperture_slope = 0;  // change per voxel along `along`
+  double roughness = 0;       // amplitude of the mid-plane's waviness, voxels
   double Aperture(const Vec3& p) const {
     return std::max(0.0, aperture + aperture_slope * Dot(p - center, along));
   }
@@ -81,7 +81,8 @@ inline void BlurAxis(std::vector<float>& v, const Dims& d, int axis, double sigm
       for (int64_t t = 0; t < n[axis]; ++t) line[t] = v[base + t * st[axis]];
       for (int64_t t = 0; t < n[axis]; ++t) {
         double s = 0;
-        for (int q = -r; q <= r; ++q) s += k[q + r] * line[std::clamp<int64_t>(t + q, 0, n[axis] - 1)];
+        for (int q = -r; q <= r; ++q)
+          s += k[q + r] * line[std::clamp<int64_t>(t + q, 0, n[axis] - 1)];
         v[base + t * st[axis]] = float(s);
       }
     }

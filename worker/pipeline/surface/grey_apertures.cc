@@ -16,13 +16,13 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
                                                    const GreyApertureOptions& options) {
   const size_t nf = mesh->faces.size();
   if (mesh->face_thickness_voxels.size() != nf) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "apertures from grey levels need a thickness per face: ",
-        mesh->face_thickness_voxels.size(), " for ", nf, " faces"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("apertures from grey levels need a thickness per face: ",
+                     mesh->face_thickness_voxels.size(), " for ", nf, " faces"));
   }
   if (!(options.psf_sigma_voxels > 0 && options.psf_sigma_voxels <= 8)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "grey.psf_sigma = ", options.psf_sigma_voxels, " must be in (0, 8] voxels"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("grey.psf_sigma = ", options.psf_sigma_voxels, " must be in (0, 8] voxels"));
   }
   GreyApertureStats stats;
   stats.levels = levels;
@@ -46,7 +46,7 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
     double area = 0;
     Vec3 centre;
     double w = 0;
-    double sum = 0;  // of the samples
+    double sum = 0;   // of the samples
     double ends = 0;  // mean of the samples within kEnd of the window's ends
     int samples = 0;
   };
@@ -150,7 +150,8 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
   // which weighs on the whole window.
   const double window = 2 * margin + 1;
   const double integral = std::sqrt(window) / 2;
-  const double background = window / std::sqrt(4 * 2 * kEnd * std::max<size_t>(1, faces.size() > 0 ? 4 : 1));
+  const double background =
+      window / std::sqrt(4 * 2 * kEnd * std::max<size_t>(1, faces.size() > 0 ? 4 : 1));
   stats.uncertainty_voxels =
       levels.noise / contrast * std::sqrt(integral * integral + background * background);
   return stats;

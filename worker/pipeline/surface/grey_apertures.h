@@ -23,9 +23,9 @@ struct GreyApertureOptions {
 
 struct GreyApertureStats {
   GreyLevels levels;
-  bool measured = false;         // false: the levels allow no aperture (levels.problem)
-  uint64_t faces = 0;            // sheet faces given an aperture from the grey levels
-  double mean_voxels = 0;        // area-weighted mean aperture
+  bool measured = false;           // false: the levels allow no aperture (levels.problem)
+  uint64_t faces = 0;              // sheet faces given an aperture from the grey levels
+  double mean_voxels = 0;          // area-weighted mean aperture
   double counted_mean_voxels = 0;  // the same faces' aperture from the voxel count before
   double uncertainty_voxels = 0;   // one face's aperture's standard error from the noise
   double window_voxels = 0;        // the half width of the integration window, beyond the

@@ -40,8 +40,9 @@ absl::StatusOr<GreyVolume> ReadGreyVolume(VolumeSource& source, const VolumeLimi
   g.values.resize(static_cast<size_t>(n));
   const int64_t slice = g.dims.nx * g.dims.ny;
   const int bytes = BytesPerVoxel(info.dtype);
-  const int64_t slab = std::clamp<int64_t>((int64_t{32} << 20) / std::max<int64_t>(1, slice * bytes),
-                                           1, std::max<int64_t>(1, g.dims.nz));
+  const int64_t slab =
+      std::clamp<int64_t>((int64_t{32} << 20) / std::max<int64_t>(1, slice * bytes), 1,
+                          std::max<int64_t>(1, g.dims.nz));
   std::vector<std::byte> buffer(static_cast<size_t>(slab * slice * bytes));
   for (int64_t z0 = 0; z0 < g.dims.nz; z0 += slab) {
     const int64_t count = std::min(slab, g.dims.nz - z0);
@@ -112,7 +113,8 @@ Histogram MakeHistogram(const std::vector<float>& values, double lo, double hi) 
 
 }  // namespace
 
-absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey, std::optional<double> given_void,
+absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
+                                             std::optional<double> given_void,
                                              std::optional<double> given_rock,
                                              const std::string& path) {
   double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
@@ -126,9 +128,9 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey, std::option
     integral = integral && v == std::floor(v);
   }
   if (!(lo < hi)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        path, ": input.grey needs contrast, and every voxel is ",
-        lo <= hi ? absl::StrCat(lo) : std::string("not a number")));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": input.grey needs contrast, and every voxel is ",
+                     lo <= hi ? absl::StrCat(lo) : std::string("not a number")));
   }
   if (integral && distinct.size() <= 16) {
     std::vector<std::string> v;
@@ -194,8 +196,8 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey, std::option
     // the sheets' partial voxels leaning on it — holding a thousandth of the voxels within
     // two noise widths.
     const std::vector<double> smooth = h.Smoothed(std::max(1.0, 0.5 * out.noise / h.width));
-    const int edge = std::clamp(static_cast<int>((out.rock - 3 * out.noise - h.lo) / h.width),
-                                0, kBins - 1);
+    const int edge =
+        std::clamp(static_cast<int>((out.rock - 3 * out.noise - h.lo) / h.width), 0, kBins - 1);
     // From the rock down: the lowest the histogram has been since the rock, and the
     // highest local maximum standing half as high again above that.
     int best = -1;
@@ -220,16 +222,15 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey, std::option
       out.void_measured = true;
     } else {
       out.void_level = lo;
-      out.problem = absl::StrCat(
-          "no void phase in the histogram (no peak darker than the rock at ", out.rock,
-          " by three times the noise, ", out.noise,
-          "), and none given (grey.levels = [VOID, ROCK])");
+      out.problem = absl::StrCat("no void phase in the histogram (no peak darker than the rock at ",
+                                 out.rock, " by three times the noise, ", out.noise,
+                                 "), and none given (grey.levels = [VOID, ROCK])");
     }
   }
   if (out.problem.empty() && !(out.contrast() > 3 * out.noise)) {
-    out.problem = absl::StrCat("the contrast between the rock (", out.rock, ") and the void (",
-                               out.void_level, ") is under three times the noise (", out.noise,
-                               ")");
+    out.problem =
+        absl::StrCat("the contrast between the rock (", out.rock, ") and the void (",
+                     out.void_level, ") is under three times the noise (", out.noise, ")");
   }
   return out;
 }

@@ -61,7 +61,8 @@ struct GreyLevels {
 // the rock peak's half width. kInvalidArgument naming `path` for a volume of one value (no
 // contrast at all) and for one of a few integer values (a label volume: input.labels reads
 // it), and when given levels put the void above the rock.
-absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey, std::optional<double> given_void,
+absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
+                                             std::optional<double> given_void,
                                              std::optional<double> given_rock,
                                              const std::string& path);
 

@@ -94,22 +94,21 @@ absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
         "input.grey finds the sheets in the whole volume: input.mask is not taken with it");
   }
   if (!given.empty() && given.size() != 2) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "grey.levels holds ", given.size(), " numbers: give two, [VOID, ROCK], or none"));
+    return absl::InvalidArgumentError(absl::StrCat("grey.levels holds ", given.size(),
+                                                   " numbers: give two, [VOID, ROCK], or none"));
   }
   GreySheetPhase out;
   SM_ASSIGN_OR_RETURN(auto source, OpenVolume(input.path, input.open));
   out.phase.info = source->info();
-  SM_ASSIGN_OR_RETURN(out.grey,
-                      ReadGreyVolume(*source, input.open.limits, progress.Sub(0, 0.3)));
+  SM_ASSIGN_OR_RETURN(out.grey, ReadGreyVolume(*source, input.open.limits, progress.Sub(0, 0.3)));
   std::optional<double> void_level, rock;
   if (given.size() == 2) {
     void_level = given[0];
     rock = given[1];
   }
   SM_ASSIGN_OR_RETURN(out.levels, MeasureGreyLevels(out.grey, void_level, rock, input.path));
-  SM_ASSIGN_OR_RETURN(out.phase.sheet, DetectSheets(out.grey, sheetness, &out.sheetness,
-                                                    progress.Sub(0.3, 1)));
+  SM_ASSIGN_OR_RETURN(out.phase.sheet,
+                      DetectSheets(out.grey, sheetness, &out.sheetness, progress.Sub(0.3, 1)));
   if (out.phase.sheet.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
         input.path, ": input.grey found no sheet (no voxel's sheetness reached grey.high = ",

@@ -1,5 +1,7 @@
 #include "worker/pipeline/voxel/sheetness.h"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -28,9 +30,9 @@ void Convolve(std::vector<float>& v, const Dims& d, int axis, const std::vector<
   const int64_t n[3] = {d.nx, d.ny, d.nz};
   const int64_t stride[3] = {1, d.nx, d.nx * d.ny};
   const int64_t len = n[axis], st = stride[axis];
-  std::vector<float> line(static_cast<size_t>(len)), out(static_cast<size_t>(len));
   const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-  for (int64_t j = 0; j < n[a2]; ++j) {
+  tbb::parallel_for(int64_t{0}, n[a2], [&](int64_t j) {
+    std::vector<float> line(static_cast<size_t>(len)), out(static_cast<size_t>(len));
     for (int64_t i = 0; i < n[a1]; ++i) {
       const int64_t base = i * stride[a1] + j * stride[a2];
       for (int64_t t = 0; t < len; ++t) line[t] = v[base + t * st];
@@ -41,7 +43,7 @@ void Convolve(std::vector<float>& v, const Dims& d, int axis, const std::vector<
       }
       for (int64_t t = 0; t < len; ++t) v[base + t * st] = out[t];
     }
-  }
+  });
 }
 
 }  // namespace
@@ -81,7 +83,7 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
           }
       return r;
     };
-    for (int64_t z = 0; z < d.nz; ++z) {
+    tbb::parallel_for(int64_t{0}, d.nz, [&](int64_t z) {
       for (int64_t y = 0; y < d.ny; ++y) {
         for (int64_t x = 0; x < d.nx; ++x) {
           const double c = at(x, y, z);
@@ -95,6 +97,12 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
                                       at(x - 1, y, z + 1) + at(x - 1, y, z - 1));
           h(1, 2) = h(2, 1) = 0.25 * (at(x, y + 1, z + 1) - at(x, y + 1, z - 1) -
                                       at(x, y - 1, z + 1) + at(x, y - 1, z - 1));
+          // A valley's largest curvature is positive and outweighs the others: the trace is
+          // positive (about half the voxels of noise are skipped here).
+          if (!(h.trace() > 0)) {
+            response[static_cast<size_t>((z * d.ny + y) * d.nx + x)] = 0.0f;
+            continue;
+          }
           Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
           es.computeDirect(h, Eigen::ComputeEigenvectors);
           const Eigen::Vector3d e = es.eigenvalues();  // ascending
@@ -119,7 +127,7 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
           response[static_cast<size_t>((z * d.ny + y) * d.nx + x)] = static_cast<float>(v);
         }
       }
-    }
+    });
     // In units of this scale's noise: the median response over the voxels that respond
     // at all, most of which are the rock's noise (a sheet's voxels are few). Noise answers
     // the fine scales more, sheets the coarse ones: each scale in its own units.
@@ -153,8 +161,8 @@ absl::StatusOr<VoxelSet> DetectSheets(const GreyVolume& grey, const SheetnessOpt
     }
   }
   if (!(options.low > 0) || !(options.low <= options.high)) {
-    return absl::InvalidArgumentError(absl::StrCat("grey.low = ", options.low, " and grey.high = ",
-                                                   options.high,
+    return absl::InvalidArgumentError(absl::StrCat("grey.low = ", options.low,
+                                                   " and grey.high = ", options.high,
                                                    ": need 0 < low <= high (noise units)"));
   }
   const Dims& d = grey.dims;
@@ -178,8 +186,8 @@ absl::StatusOr<VoxelSet> DetectSheets(const GreyVolume& grey, const SheetnessOpt
     const int64_t i = queue.front();
     queue.pop_front();
     const int64_t x = i % d.nx, y = (i / d.nx) % d.ny, z = i / sz;
-    const int64_t nb[6][2] = {{x > 0, -sx},          {x + 1 < d.nx, sx}, {y > 0, -sy},
-                              {y + 1 < d.ny, sy},    {z > 0, -sz},       {z + 1 < d.nz, sz}};
+    const int64_t nb[6][2] = {{x > 0, -sx},       {x + 1 < d.nx, sx}, {y > 0, -sy},
+                              {y + 1 < d.ny, sy}, {z > 0, -sz},       {z + 1 < d.nz, sz}};
     for (const auto& [ok, step] : nb) {
       if (!ok) continue;
       const int64_t j = i + step;

@@ -30,8 +30,8 @@ struct SheetnessOptions {
 
 struct SheetnessStats {
   std::vector<double> noise;  // each scale's median positive response (its noise unit)
-  uint64_t seeds = 0;      // voxels above `high`
-  uint64_t detected = 0;   // voxels of the sheets after growing
+  uint64_t seeds = 0;         // voxels above `high`
+  uint64_t detected = 0;      // voxels of the sheets after growing
   double seconds = 0;
   nlohmann::json Fields() const;
 };

@@ -2,8 +2,8 @@
 // its results declare, with the report's JSON names (run/pipeline_report.cc nests them).
 #include <nlohmann/json.hpp>
 
-#include "worker/pipeline/voxel/sheetness.h"
 #include "worker/pipeline/voxel/grey_volume.h"
+#include "worker/pipeline/voxel/sheetness.h"
 #include "worker/pipeline/voxel/thickness.h"
 
 namespace sheetmesh {
@@ -24,7 +24,10 @@ nlohmann::json GreyLevels::Fields() const {
 }
 
 nlohmann::json SheetnessStats::Fields() const {
-  return {{"noise_per_scale", noise}, {"seeds", seeds}, {"detected_voxels", detected}, {"seconds", seconds}};
+  return {{"noise_per_scale", noise},
+          {"seeds", seeds},
+          {"detected_voxels", detected},
+          {"seconds", seconds}};
 }
 
 }  // namespace sheetmesh

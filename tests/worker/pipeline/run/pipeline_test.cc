@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/file_util.h"
+#include "tests/testing/grey_phantoms.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
@@ -167,6 +168,63 @@ TEST(PipelineTest, EmptySelectionFailsNamingTheFile) {
   o.input.selection = PhaseSelection::Labels({7});
   EXPECT_THAT(RunPipeline(o), StatusIs(absl::StatusCode::kInvalidArgument,
                                        ::testing::HasSubstr("p_64x56x48_u8.raw")));
+}
+
+// A grey scan of one sheet half a voxel open, blurred and noisy, as float32: --grey finds
+// it, meshes it, and its aperture comes from the grey levels, with the voxel count beside.
+std::string GreyScan(const TempDir& tmp, const std::vector<float>& values, const Dims& d) {
+  const std::string path = tmp.File(absl::StrCat("scan_", d.ToString(), "_f32.raw"));
+  std::string bytes(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+  EXPECT_TRUE(WriteFileAtomically(path, bytes).ok());
+  return path;
+}
+
+TEST(PipelineTest, AGreyScanGivesTheSheetAndItsApertureFromTheGreyLevels) {
+  TempDir tmp;
+  testing::GreyPhantomOptions g;
+  g.dims = {56, 48, 48};
+  testing::GreySheet sheet;
+  sheet.center = {33, 24, 24};
+  sheet.normal = Normalized(Vec3(0.2, 0.3, 1));
+  sheet.along = Normalized(Cross(sheet.normal, Vec3(0, 1, 0)));
+  sheet.aperture = 0.5;
+  g.sheets = {sheet};
+  PipelineOptions o;
+  o.input.path = GreyScan(tmp, testing::MakeGreyPhantom(g).values, g.dims);
+  o.grey.enabled = true;
+  o.surface.scvd.radius_voxels = 5;
+  o.output.dir = tmp.File("out");
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  ASSERT_TRUE(r.grey_apertures.has_value());
+  EXPECT_TRUE(r.grey_apertures->measured) << r.grey_apertures->levels.problem;
+  EXPECT_NEAR(r.grey_apertures->mean_voxels, 0.5, 0.1);
+  EXPECT_GT(r.grey_apertures->counted_mean_voxels, 1.0);  // a detected band is voxels wide
+  EXPECT_GT(r.similarity->score.similarity, 0.6);
+  const nlohmann::json j = nlohmann::json::parse(r.ToJson());
+  EXPECT_TRUE(j["grey"]["levels"]["void_measured"].get<bool>());
+  EXPECT_EQ(j["grey"]["sheetness"]["noise_per_scale"].size(), 3u);
+  // The writers carry it: the surface's aperture is the grey levels'.
+  SM_ASSERT_OK_AND_ASSIGN(std::string vtp, ReadFileToString(tmp.File("out/surface.vtp")));
+  EXPECT_THAT(vtp, ::testing::HasSubstr("Name=\"aperture\""));
+}
+
+TEST(PipelineTest, AGreyRunOnAVolumeWithoutGreyLevelsFailsNamingIt) {
+  TempDir tmp;
+  const Dims d{16, 16, 16};
+  std::vector<float> labels(d.num_voxels());
+  for (size_t i = 0; i < labels.size(); ++i) labels[i] = float(i % 4 == 0);
+  PipelineOptions o;
+  o.input.path = GreyScan(tmp, labels, d);
+  o.grey.enabled = true;
+  EXPECT_THAT(RunPipeline(o),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       ::testing::AllOf(::testing::HasSubstr("scan_16x16x16_f32.raw"),
+                                        ::testing::HasSubstr("input.labels"))));
+  std::vector<float> flat(d.num_voxels(), 3.5f);
+  o.input.path = GreyScan(tmp, flat, d);
+  EXPECT_THAT(RunPipeline(o),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       ::testing::HasSubstr("needs contrast, and every voxel is 3.5")));
 }
 
 TEST(PipelineTest, AnRThatGivesNoTriangleFailsNamingR) {

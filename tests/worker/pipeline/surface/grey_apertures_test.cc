@@ -21,7 +21,8 @@ TriangleMesh PlaneMesh(const GreySheet& s, double half, double cell) {
   const Vec3 u = Normalized(s.along), v = Normalized(Cross(s.normal, u));
   const int n = static_cast<int>(2 * half / cell);
   for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.vertices.push_back(s.center + u * (-half + i * cell) + v * (-half + j * cell));
+    for (int i = 0; i <= n; ++i)
+      m.vertices.push_back(s.center + u * (-half + i * cell) + v * (-half + j * cell));
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;

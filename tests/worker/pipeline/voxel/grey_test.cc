@@ -58,18 +58,20 @@ TEST(GreyLevelsTest, VolumesWithoutGreyLevelsAreRefusedNamingWhy) {
   GreyVolume g;
   g.dims = {8, 8, 8};
   g.values.assign(512, 7.f);
-  EXPECT_THAT(MeasureGreyLevels(g, {}, {}, "flat.raw"),
-              testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("flat.raw: input.grey needs contrast, and every voxel is 7")));
+  EXPECT_THAT(
+      MeasureGreyLevels(g, {}, {}, "flat.raw"),
+      testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                        HasSubstr("flat.raw: input.grey needs contrast, and every voxel is 7")));
   for (size_t i = 0; i < g.values.size(); ++i) g.values[i] = float(i % 3);
   EXPECT_THAT(MeasureGreyLevels(g, {}, {}, "labels.raw"),
               testing::StatusIs(absl::StatusCode::kInvalidArgument,
                                 HasSubstr("only 3 values (0, 1, 2): a segmented or label volume; "
                                           "select its sheet phase with input.labels")));
   for (size_t i = 0; i < g.values.size(); ++i) g.values[i] = float(i % 97) * 1.5f;
-  EXPECT_THAT(MeasureGreyLevels(g, 100.0, 50.0, "g.raw"),
-              testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("grey.levels = [100, 50]: the void's level must be below")));
+  EXPECT_THAT(
+      MeasureGreyLevels(g, 100.0, 50.0, "g.raw"),
+      testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                        HasSubstr("grey.levels = [100, 50]: the void's level must be below")));
 }
 
 // Every aperture from 0.2 to 4 voxels, blurred and noisy, tilted: one sheet, across the

@@ -76,8 +76,13 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   absl::StatusOr<PipelineReport> run = RunPipeline(options, Progress(&progress, ""));
   progress.Finish();
   SM_ASSIGN_OR_RETURN(PipelineReport r, std::move(run));
-  out << absl::StrFormat("sheet       %d voxels of %s\n", r.sheet_voxels,
-                         r.options.input.selection.ToString());
+  if (r.sheetness) {
+    out << absl::StrFormat("sheet       %d voxels found by their sheetness (%d seeds)\n",
+                           r.sheet_voxels, r.sheetness->seeds);
+  } else {
+    out << absl::StrFormat("sheet       %d voxels of %s\n", r.sheet_voxels,
+                           r.options.input.selection.ToString());
+  }
   if (r.extraction) {
     for (const ExtractionStep& s : r.extraction->steps) {
       if (!s.ran) {
@@ -126,6 +131,21 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
         "apertures   per face, beside the fitted thickness: %d junction faces at their own "
         "sheet's (%d lowered, %d raised), %d covered faces given their sheet's, %d over holes\n",
         a.junction, a.junction_lowered, a.junction_raised, a.covered, a.holes);
+  }
+  if (r.grey_apertures) {
+    const GreyApertureStats& g = *r.grey_apertures;
+    out << absl::StrFormat(
+        "grey levels rock %.6g%s, void %.6g%s, noise %.3g (contrast to noise %.1f)\n",
+        g.levels.rock, g.levels.rock_measured ? "" : " (given)", g.levels.void_level,
+        g.levels.void_measured ? "" : " (given)", g.levels.noise, g.levels.cnr());
+    if (g.measured) {
+      out << absl::StrFormat(
+          "            aperture from the grey levels: mean %.3g voxels over %d faces (counted "
+          "from voxels: %.3g), ± %.2g a face\n",
+          g.mean_voxels, g.faces, g.counted_mean_voxels, g.uncertainty_voxels);
+    } else {
+      out << "            apertures counted from voxels: " << g.levels.problem << "\n";
+    }
   }
   if (r.representation && r.representation->bodies > 0) {
     out << absl::StrFormat(

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <map>
 
 #include "absl/strings/str_format.h"
@@ -124,6 +125,26 @@ std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces) {
         g.centroid.z, g.sheet);
   }
   return out;
+}
+
+void UseFaceApertures(const TriangleMesh& mesh, const Placement& placement,
+                      std::vector<PieceGeology>* pieces) {
+  const size_t nf = mesh.faces.size();
+  if (mesh.face_aperture_voxels.size() != nf || mesh.face_piece.size() != nf) return;
+  std::map<int32_t, std::array<double, 3>> by_piece;  // area, area × aperture, largest
+  for (size_t f = 0; f < nf; ++f) {
+    const double area = Area(Corners(mesh, f));
+    auto& s = by_piece[mesh.face_piece[f]];
+    s[0] += area;
+    s[1] += area * mesh.face_aperture_voxels[f];
+    s[2] = std::max<double>(s[2], mesh.face_aperture_voxels[f]);
+  }
+  for (PieceGeology& g : *pieces) {
+    auto it = by_piece.find(g.piece);
+    if (it == by_piece.end() || !(it->second[0] > 0)) continue;
+    g.mean_aperture = PhysicalLength(it->second[1] / it->second[0], placement);
+    g.max_aperture = PhysicalLength(it->second[2], placement);
+  }
 }
 
 }  // namespace sheetmesh

@@ -49,6 +49,12 @@ inline constexpr double kSheetMinPlanarity = 0.8;
 // Sets every piece's sheet id (0, 1, ... in the order of each sheet's first piece).
 void AssignSheets(std::vector<PieceGeology>* pieces);
 
+// Each piece's mean (area-weighted) and largest aperture from its faces' aperture
+// (mesh.face_aperture_voxels, made physical by `placement`), where it has faces: the
+// apertures measured on the mesh, from the grey levels, rather than counted from voxels.
+void UseFaceApertures(const TriangleMesh& mesh, const Placement& placement,
+                      std::vector<PieceGeology>* pieces);
+
 // CSV with a header line: piece, voxels, triangles, area, mean_aperture, max_aperture,
 // normal_x/y/z, dip, dip_direction, planarity, centroid_x/y/z, sheet.
 std::string PieceGeologyCsv(const std::vector<PieceGeology>& pieces);

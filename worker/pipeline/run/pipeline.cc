@@ -315,6 +315,10 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     if (options.extract) {
       report.geology = ComputePieceGeology(LabelledVoxels{sheet.set, piece_of_voxel},
                                            sheet.thickness, mesh, phase.info.placement);
+      if (report.grey_apertures && report.grey_apertures->measured) {
+        // Each piece's aperture is its faces' from the grey levels, not its voxels' count.
+        UseFaceApertures(mesh, phase.info.placement, &report.geology);
+      }
     }
   }
 

@@ -200,6 +200,9 @@ TEST(PipelineTest, AGreyScanGivesTheSheetAndItsApertureFromTheGreyLevels) {
   EXPECT_NEAR(r.grey_apertures->mean_voxels, 0.5, 0.1);
   EXPECT_GT(r.grey_apertures->counted_mean_voxels, 1.0);  // a detected band is voxels wide
   EXPECT_GT(r.similarity->score.similarity, 0.6);
+  // The piece's aperture (pieces.csv, the report's pieces) is the grey levels' too.
+  ASSERT_EQ(r.geology.size(), 1u);
+  EXPECT_NEAR(r.geology[0].mean_aperture, r.grey_apertures->mean_voxels, 0.05);
   const nlohmann::json j = nlohmann::json::parse(r.ToJson());
   EXPECT_TRUE(j["grey"]["levels"]["void_measured"].get<bool>());
   EXPECT_EQ(j["grey"]["sheetness"]["noise_per_scale"].size(), 3u);

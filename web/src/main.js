@@ -23,6 +23,8 @@ function parametersForm() {
     el("input", { id: "budget_value", type: "number", step: "any", min: "0", value: String(defaults.r) }),
     el("label", {}, "Sheet labels ",
       el("input", { id: "labels", value: "", size: 12, placeholder: "every non-zero voxel" })),
+    el("label", { title: "a scan as it came: sheets found by their sheetness, apertures from the grey levels" },
+      el("input", { id: "grey", type: "checkbox" }), " grey scan"),
     el("label", {}, el("input", { id: "extract", type: "checkbox", checked: defaults.extract }), " extraction"),
     el("label", {}, el("input", { id: "volume_mesh", type: "checkbox", checked: defaults.volume_mesh }),
       " volume mesh"),
@@ -35,7 +37,9 @@ function readParameters() {
   const v = document.getElementById("budget_value").value.trim();
   if (v !== "") p[kind] = kind === "triangles" ? String(Math.round(Number(v))) : Number(v);
   const labels = document.getElementById("labels").value.split(/[ ,]+/).filter((s) => s !== "");
-  if (labels.length) p.labels = labels.map(Number);
+  // A grey scan is its own sheet phase: labels go with segmented volumes only.
+  if (document.getElementById("grey").checked) p.grey = true;
+  else if (labels.length) p.labels = labels.map(Number);
   p.extract = document.getElementById("extract").checked;
   p.volume_mesh = document.getElementById("volume_mesh").checked;
   return p;

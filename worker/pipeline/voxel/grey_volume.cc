@@ -192,20 +192,20 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
   } else {
     // The void: the highest peak of the histogram (smoothed at half the noise) darker than
     // the rock by three times the noise that is a peak of its own — the histogram falls
-    // below two thirds of its height between it and the rock, so it is neither the rock's tail nor
+    // below half its height between it and the rock, so it is neither the rock's tail nor
     // the sheets' partial voxels leaning on it — holding a thousandth of the voxels within
     // two noise widths.
     const std::vector<double> smooth = h.Smoothed(std::max(1.0, 0.5 * out.noise / h.width));
     const int edge =
         std::clamp(static_cast<int>((out.rock - 3 * out.noise - h.lo) / h.width), 0, kBins - 1);
     // From the rock down: the lowest the histogram has been since the rock, and the
-    // highest local maximum standing half as high again above that.
+    // highest local maximum standing twice as high as that.
     int best = -1;
     double lowest = smooth[edge];
     for (int b = edge - 1; b >= 1; --b) {
       lowest = std::min(lowest, smooth[b]);
       const bool local_max = smooth[b] >= smooth[b - 1] && smooth[b] >= smooth[b + 1];
-      if (local_max && smooth[b] > 1.5 * lowest && (best < 0 || smooth[b] > smooth[best])) {
+      if (local_max && smooth[b] > 2 * lowest && (best < 0 || smooth[b] > smooth[best])) {
         best = b;
       }
     }

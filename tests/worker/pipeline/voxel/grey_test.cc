@@ -35,11 +35,31 @@ TEST(GreyLevelsTest, RockVoidAndNoiseFromTheHistogram) {
     SM_ASSERT_OK_AND_ASSIGN(GreyLevels l, MeasureGreyLevels(g, {}, {}, "g.raw"));
     const double noise = 160 / cnr;
     EXPECT_NEAR(l.rock, 200, 0.25 * noise) << cnr;
-    EXPECT_NEAR(l.void_level, 40, 0.5 * noise) << cnr;
     EXPECT_NEAR(l.noise, noise, 0.3 * noise) << cnr;
-    EXPECT_TRUE(l.rock_measured && l.void_measured);
-    EXPECT_EQ(l.problem, "");
+    EXPECT_TRUE(l.rock_measured);
+    if (cnr >= 10) {
+      EXPECT_NEAR(l.void_level, 40, 0.5 * noise) << cnr;
+      EXPECT_TRUE(l.void_measured);
+      EXPECT_EQ(l.problem, "");
+    } else if (l.void_measured) {
+      // At CNR 5 the void's peak may drown in the partial voxels between it and the rock;
+      // then it is said, never taken from elsewhere.
+      EXPECT_NEAR(l.void_level, 40, 0.5 * noise);
+    } else {
+      EXPECT_THAT(l.problem, HasSubstr("no void phase"));
+    }
   }
+}
+
+// A sheet's partial voxels, even a 2-voxel sheet's dark core, are not a void phase: no
+// void is taken from them (a wrong void would bias every aperture).
+TEST(GreyLevelsTest, ASheetsCoreIsNotTakenForTheVoid) {
+  GreyPhantomOptions o = OneSheet(2, 0.5, 10);
+  o.void_band = 0;
+  const GreyVolume g = testing::MakeGreyPhantom(o);
+  SM_ASSERT_OK_AND_ASSIGN(GreyLevels l, MeasureGreyLevels(g, {}, {}, "g.raw"));
+  EXPECT_FALSE(l.void_measured) << "void at " << l.void_level;
+  EXPECT_THAT(l.problem, HasSubstr("no void phase"));
 }
 
 TEST(GreyLevelsTest, GivenLevelsAreKeptAndAMissingVoidIsSaid) {

@@ -180,9 +180,8 @@ grpc::Status BlobServiceImpl::Write(grpc::ServerContext* context,
       break;
     }
     if (static_cast<int64_t>(req.data().size()) > kMaxPiece) {
-      result = grpc::Status(
-          grpc::StatusCode::INVALID_ARGUMENT,
-          absl::StrCat("a piece of ", req.data().size(), " bytes exceeds the 1 MiB limit"));
+      result = ToGrpcStatus(absl::InvalidArgumentError(
+          absl::StrCat("a piece of ", req.data().size(), " bytes exceeds the 1 MiB limit")));
       break;
     }
     absl::StatusOr<BlobStore::UploadState> st =
@@ -254,10 +253,9 @@ grpc::Status BlobServiceImpl::Read(grpc::ServerContext* context, const v1::ReadR
   if (!path.ok()) return ToGrpcStatus(path.status());
   const int64_t size = request->digest().size_bytes();
   if (request->read_offset() < 0 || request->read_offset() > size || request->read_limit() < 0) {
-    return grpc::Status(
-        grpc::StatusCode::OUT_OF_RANGE,
+    return ToGrpcStatus(absl::OutOfRangeError(
         absl::StrCat("read_offset ", request->read_offset(), " and read_limit ",
-                     request->read_limit(), " do not fit a blob of ", size, " bytes"));
+                     request->read_limit(), " do not fit a blob of ", size, " bytes")));
   }
   // A limit past the blob's end reads to its end (offset + limit may not fit 64 bits).
   const int64_t end =

@@ -190,10 +190,9 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     absl::StatusOr<int64_t> queued = ctx_->jobs->CountInState(v1::QUEUED);
     if (!queued.ok()) return ToGrpcStatus(queued.status());
     if (*queued >= ctx_->limits.max_queued_jobs) {
-      return grpc::Status(
-          grpc::StatusCode::RESOURCE_EXHAUSTED,
+      return ToGrpcStatus(absl::ResourceExhaustedError(
           absl::StrCat("the queue holds ", *queued, " jobs, the server's limit (max_queued_jobs = ",
-                       ctx_->limits.max_queued_jobs, "); retry later"));
+                       ctx_->limits.max_queued_jobs, "); retry later")));
     }
   }
   bool created = false;

@@ -142,17 +142,15 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
           ctx_->jobs->OwnsBlob(ArtifactOwner(request->name()), a.digest().hash());
       if (!owned.ok()) return ToGrpcStatus(owned.status());
       if (!*owned) {
-        return grpc::Status(
-            grpc::StatusCode::PERMISSION_DENIED,
+        return ToGrpcStatus(absl::PermissionDeniedError(
             absl::StrCat("artifact ", a.name(), " (", DigestString(a.digest()),
-                         ") was not uploaded for ", request->name(), " by its worker"));
+                         ") was not uploaded for ", request->name(), " by its worker")));
       }
     }
     if (!ctx_->blobs->Contains(a.digest())) {
-      return grpc::Status(
-          grpc::StatusCode::FAILED_PRECONDITION,
+      return ToGrpcStatus(absl::FailedPreconditionError(
           absl::StrCat("artifact ", a.name(), " (", a.digest().hash(), "/", a.digest().size_bytes(),
-                       ") is not stored: upload it first"));
+                       ") is not stored: upload it first")));
     }
   }
   absl::StatusOr<v1::Job> done =

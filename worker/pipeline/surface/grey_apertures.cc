@@ -104,10 +104,11 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
                                   int64_t(std::floor(p.z / reach))};
   };
   for (size_t i = 0; i < profiles.size(); ++i) grid[cell(profiles[i].centre)].push_back(i);
-  double sum = 0, sum_counted = 0, area_sum = 0;
+  double sum = 0, sum_counted = 0, area_sum = 0, neighbours = 0, windows = 0;
   for (const Profile& p : profiles) {
     const auto c = cell(p.centre);
     double rock = 0, weight = 0;
+    windows += 2 * p.w;
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
@@ -117,6 +118,7 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
             if (Norm2(profiles[j].centre - p.centre) > reach * reach) continue;
             rock += profiles[j].area * profiles[j].ends;
             weight += profiles[j].area;
+            neighbours += 1;
           }
         }
     // The mean takes the value as measured (noise makes some negative; clipping them would
@@ -145,15 +147,18 @@ absl::StatusOr<GreyApertureStats> SetGreyApertures(TriangleMesh* mesh, const Gre
     stats.mean_voxels = sum / area_sum;
     stats.counted_mean_voxels = sum_counted / area_sum;
   }
-  // Noise integrated over the window (about one independent value per voxel of it, four
-  // lines per face), and the local rock level's (its ends, over the faces around),
-  // which weighs on the whole window.
-  const double window = 2 * margin + 1;
-  const double integral = std::sqrt(window) / 2;
-  const double background =
-      window / std::sqrt(4 * 2 * kEnd * std::max<size_t>(1, faces.size() > 0 ? 4 : 1));
-  stats.uncertainty_voxels =
-      levels.noise / contrast * std::sqrt(integral * integral + background * background);
+  // One face's standard error from the noise: the noise integrated over its window (about
+  // one independent value per voxel of it, four lines), and the error of the rock's level
+  // (the ends of the faces around: four lines, two ends, kEnd voxels each), which weighs
+  // on the whole window.
+  if (!profiles.empty()) {
+    const double window = windows / profiles.size();
+    const double around = std::max(1.0, neighbours / profiles.size());
+    const double integral = std::sqrt(window) / 2;
+    const double background = window / std::sqrt(4 * 2 * kEnd * around);
+    stats.uncertainty_voxels =
+        levels.noise / contrast * std::sqrt(integral * integral + background * background);
+  }
   return stats;
 }
 

@@ -55,7 +55,8 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
   if (noise_per_scale) noise_per_scale->clear();
   std::vector<float> response(grey.values.size());
   for (double s : scales) {
-    std::vector<float> g = grey.values;
+    GreyVolume smoothed{d, grey.values};
+    std::vector<float>& g = smoothed.values;
     const std::vector<double> k = Kernel(s);
     for (int axis = 0; axis < 3; ++axis) Convolve(g, d, axis, k);
     auto at = [&](int64_t x, int64_t y, int64_t z) {
@@ -65,24 +66,6 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
       return double(g[static_cast<size_t>((z * d.ny + y) * d.nx + x)]);
     };
     const double norm = s * s;
-    // Trilinear in the smoothed levels, clamped to the box.
-    auto sample = [&](double px, double py, double pz) {
-      px = std::clamp(px, 0.0, double(d.nx - 1));
-      py = std::clamp(py, 0.0, double(d.ny - 1));
-      pz = std::clamp(pz, 0.0, double(d.nz - 1));
-      const int64_t x0 = std::min<int64_t>(int64_t(px), d.nx - 2 < 0 ? 0 : d.nx - 2),
-                    y0 = std::min<int64_t>(int64_t(py), d.ny - 2 < 0 ? 0 : d.ny - 2),
-                    z0 = std::min<int64_t>(int64_t(pz), d.nz - 2 < 0 ? 0 : d.nz - 2);
-      const double fx = px - x0, fy = py - y0, fz = pz - z0;
-      double r = 0;
-      for (int dz = 0; dz < 2; ++dz)
-        for (int dy = 0; dy < 2; ++dy)
-          for (int dx = 0; dx < 2; ++dx) {
-            const double w = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy) * (dz ? fz : 1 - fz);
-            if (w > 0) r += w * at(x0 + dx, y0 + dy, z0 + dz);
-          }
-      return r;
-    };
     tbb::parallel_for(int64_t{0}, d.nz, [&](int64_t z) {
       for (int64_t y = 0; y < d.ny; ++y) {
         for (int64_t x = 0; x < d.nx; ++x) {
@@ -118,8 +101,8 @@ std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& 
             // one side stays as dark or goes on darker: left out.
             const double reach = std::max(1.0, 1.5 * s);
             const Eigen::Vector3d dir = es.eigenvectors().col(k3) * reach;
-            const double plus = sample(x + dir[0], y + dir[1], z + dir[2]);
-            const double minus = sample(x - dir[0], y - dir[1], z - dir[2]);
+            const Vec3 p(x, y, z), step(dir[0], dir[1], dir[2]);
+            const double plus = smoothed.Sample(p + step), minus = smoothed.Sample(p - step);
             if (std::min(plus, minus) - c >= 0.15 * e[k3] * reach * reach) {
               v = norm * (e[k3] - std::abs(e[k2]));
             }

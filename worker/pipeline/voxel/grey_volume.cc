@@ -29,42 +29,53 @@ double GreyVolume::Sample(const Vec3& p) const {
   return lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
 }
 
+void GreyVolume::CopySlices(int64_t z0, int64_t count, float* out) const {
+  const size_t begin = static_cast<size_t>(z0 * dims.nx * dims.ny);
+  const size_t n = static_cast<size_t>(count * dims.nx * dims.ny);
+  if (!values8.empty()) {
+    std::copy(values8.begin() + begin, values8.begin() + begin + n, out);
+  } else if (!values16.empty()) {
+    std::copy(values16.begin() + begin, values16.begin() + begin + n, out);
+  } else {
+    std::copy(values.begin() + begin, values.begin() + begin + n, out);
+  }
+}
+
 absl::StatusOr<GreyVolume> ReadGreyVolume(VolumeSource& source, const VolumeLimits& limits,
                                           const Progress& progress) {
   const VolumeInfo& info = source.info();
   GreyVolume g;
   g.dims = info.dims;
   const int64_t n = g.dims.num_voxels();
-  SM_RETURN_IF_ERROR(
-      CheckAllocation(n * int64_t{sizeof(float)}, limits, "the grey levels as floats"));
-  g.values.resize(static_cast<size_t>(n));
-  const int64_t slice = g.dims.nx * g.dims.ny;
   const int bytes = BytesPerVoxel(info.dtype);
+  SM_RETURN_IF_ERROR(CheckAllocation(
+      n * bytes, limits, absl::StrCat("the grey levels (", DTypeName(info.dtype), ")")));
+  std::byte* dst = nullptr;
+  switch (info.dtype) {
+    case DType::kUInt8:
+      g.values8.resize(static_cast<size_t>(n));
+      dst = reinterpret_cast<std::byte*>(g.values8.data());
+      break;
+    case DType::kUInt16:
+      g.values16.resize(static_cast<size_t>(n));
+      dst = reinterpret_cast<std::byte*>(g.values16.data());
+      break;
+    case DType::kFloat32:
+      g.values.resize(static_cast<size_t>(n));
+      dst = reinterpret_cast<std::byte*>(g.values.data());
+      break;
+  }
+  // Readers give native byte order, the layout of the vectors: each slab straight in.
+  const int64_t slice = g.dims.nx * g.dims.ny;
   const int64_t slab =
       std::clamp<int64_t>((int64_t{32} << 20) / std::max<int64_t>(1, slice * bytes), 1,
                           std::max<int64_t>(1, g.dims.nz));
-  std::vector<std::byte> buffer(static_cast<size_t>(slab * slice * bytes));
   for (int64_t z0 = 0; z0 < g.dims.nz; z0 += slab) {
     const int64_t count = std::min(slab, g.dims.nz - z0);
-    std::span<std::byte> out(buffer.data(), static_cast<size_t>(count * slice * bytes));
-    SM_RETURN_IF_ERROR(source.ReadSlices(z0, count, out));
-    float* dst = g.values.data() + z0 * slice;
-    const int64_t m = count * slice;
-    switch (info.dtype) {
-      case DType::kUInt8:
-        for (int64_t i = 0; i < m; ++i) dst[i] = static_cast<float>(uint8_t(buffer[i]));
-        break;
-      case DType::kUInt16:
-        for (int64_t i = 0; i < m; ++i) {
-          uint16_t v;
-          std::memcpy(&v, buffer.data() + 2 * i, 2);
-          dst[i] = static_cast<float>(v);
-        }
-        break;
-      case DType::kFloat32:
-        std::memcpy(dst, buffer.data(), static_cast<size_t>(m) * sizeof(float));
-        break;
-    }
+    SM_RETURN_IF_ERROR(
+        source.ReadSlices(z0, count,
+                          std::span<std::byte>(dst + z0 * slice * bytes,
+                                               static_cast<size_t>(count * slice * bytes))));
     SM_RETURN_IF_ERROR(progress.Update(double(z0 + count) / g.dims.nz));
   }
   return g;
@@ -99,15 +110,44 @@ struct Histogram {
   }
 };
 
-Histogram MakeHistogram(const std::vector<float>& values, double lo, double hi) {
+// The volume's levels with how many voxels hold each: for 8- and 16-bit scans a count per
+// integer level (so that the passes below cost nothing at any size), for floats each voxel.
+struct LevelCounts {
+  std::vector<std::pair<float, double>> counted;  // (level, voxels), levels with voxels
+  const std::vector<float>* each = nullptr;       // float volumes: every voxel once
+
+  explicit LevelCounts(const GreyVolume& grey) {
+    if (grey.values8.empty() && grey.values16.empty()) {
+      each = &grey.values;
+      return;
+    }
+    std::vector<double> n(grey.values8.empty() ? 65536 : 256, 0.0);
+    for (uint8_t v : grey.values8) ++n[v];
+    for (uint16_t v : grey.values16) ++n[v];
+    for (size_t v = 0; v < n.size(); ++v) {
+      if (n[v] > 0) counted.emplace_back(static_cast<float>(v), n[v]);
+    }
+  }
+  // Calls f(level, voxels) for every level.
+  template <class F>
+  void ForEach(F&& f) const {
+    if (each) {
+      for (float v : *each) f(v, 1.0);
+    } else {
+      for (const auto& [v, n] : counted) f(v, n);
+    }
+  }
+};
+
+Histogram MakeHistogram(const LevelCounts& levels, double lo, double hi) {
   Histogram h;
   h.lo = lo;
   h.width = (hi - lo) / kBins;
   h.raw.assign(kBins, 0.0);
-  for (float v : values) {
-    if (!std::isfinite(v)) continue;
-    ++h.raw[std::clamp(static_cast<int>((v - lo) / h.width), 0, kBins - 1)];
-  }
+  levels.ForEach([&](float v, double n) {
+    if (!std::isfinite(v)) return;
+    h.raw[std::clamp(static_cast<int>((v - lo) / h.width), 0, kBins - 1)] += n;
+  });
   return h;
 }
 
@@ -120,13 +160,14 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
   double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
   std::set<float> distinct;
   bool integral = true;
-  for (float v : grey.values) {
-    if (!std::isfinite(v)) continue;
+  const LevelCounts levels(grey);
+  levels.ForEach([&](float v, double) {
+    if (!std::isfinite(v)) return;
     lo = std::min(lo, double(v));
     hi = std::max(hi, double(v));
     if (distinct.size() <= 16) distinct.insert(v);
     integral = integral && v == std::floor(v);
-  }
+  });
   if (!(lo < hi)) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": input.grey needs contrast, and every voxel is ",
@@ -145,7 +186,7 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
         "grey.levels = [", *given_void, ", ", *given_rock,
         "]: the void's level must be below the rock's (sheets are darker than the rock)"));
   }
-  const Histogram h = MakeHistogram(grey.values, lo, hi);
+  const Histogram h = MakeHistogram(levels, lo, hi);
   GreyLevels out;
   // The rock: the highest peak, found on a coarse smoothing, then placed on one at a
   // quarter of the noise it shows.
@@ -173,12 +214,12 @@ absl::StatusOr<GreyLevels> MeasureGreyLevels(const GreyVolume& grey,
   double rock = h.Value(peak);
   for (int pass = 0; pass < 8; ++pass) {
     double sum = 0, n = 0;
-    for (float v : grey.values) {
+    levels.ForEach([&](float v, double count) {
       if (std::isfinite(v) && std::abs(v - rock) <= out.noise) {
-        sum += v;
-        n += 1;
+        sum += count * v;
+        n += count;
       }
-    }
+    });
     if (n == 0) break;
     const double next = sum / n;
     const bool settled = std::abs(next - rock) < 1e-3 * out.noise;

@@ -1,5 +1,5 @@
-// Grey levels as the scanner gave them (beyond the paper): the volume read densely as
-// floats, and the grey levels of the rock and of the void (empty space) measured from its
+// Grey levels as the scanner gave them (beyond the paper): the volume read densely in its
+// own voxel type, and the grey levels of the rock and of the void (empty space) measured from its
 // histogram or given, with the noise about the rock's level. What sheet detection on grey
 // levels (sheetness.h) and the aperture from missing attenuation (surface/grey_apertures.h)
 // start from.
@@ -21,19 +21,34 @@ namespace sheetmesh {
 
 struct GreyVolume {
   Dims dims;
-  std::vector<float> values;  // x fastest, then y, then z
+  // One of these holds the levels, x fastest, then y, then z: an 8- or 16-bit scan as it
+  // came (a byte or two a voxel, what a volume at the paper's scale can afford), a float
+  // scan or a volume made in memory as floats.
+  std::vector<uint8_t> values8;
+  std::vector<uint16_t> values16;
+  std::vector<float> values;
 
+  size_t size() const {
+    return !values8.empty() ? values8.size() : !values16.empty() ? values16.size() : values.size();
+  }
+  float Value(size_t i) const {
+    if (!values8.empty()) return values8[i];
+    if (!values16.empty()) return values16[i];
+    return values[i];
+  }
   float At(int64_t x, int64_t y, int64_t z) const {
-    return values[static_cast<size_t>((z * dims.ny + y) * dims.nx + x)];
+    return Value(static_cast<size_t>((z * dims.ny + y) * dims.nx + x));
   }
   // Trilinear between voxel centres (voxel (x, y, z) is at (x, y, z)); points outside take
   // the nearest voxel's value.
   double Sample(const Vec3& p) const;
+  // Slices [z0, z0 + count) as floats into `out` (count * nx * ny of them).
+  void CopySlices(int64_t z0, int64_t count, float* out) const;
 };
 
-// Reads every slice of `source` into floats. kResourceExhausted (naming the size) when the
-// volume does not fit `limits`' memory budget; reader errors pass through; kCancelled if
-// asked.
+// Reads every slice of `source`: 8- and 16-bit voxels as they are, float ones as floats.
+// kResourceExhausted (naming the size) when the volume does not fit `limits`' memory budget; reader
+// errors pass through; kCancelled if asked.
 absl::StatusOr<GreyVolume> ReadGreyVolume(VolumeSource& source, const VolumeLimits& limits,
                                           const Progress& progress = {});
 

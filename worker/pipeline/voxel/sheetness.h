@@ -26,28 +26,34 @@ struct SheetnessOptions {
   double high = 6.0;  // seeds: sheetness above this many noise units (each scale's median
                       // response)
   double low = 3.0;   // grown through voxels above this many
+  // Work by slabs of about this many float voxels (the halo of the largest scale included;
+  // a slab's core at least twice the halo thick), and measure the noise units on slabs
+  // spread through the volume holding about this many voxels (all of a smaller volume).
+  int64_t slab_voxels = int64_t{32} << 20;
+  int64_t noise_sample_voxels = int64_t{16} << 20;
 };
 
 struct SheetnessStats {
-  std::vector<double> noise;  // each scale's median positive response (its noise unit)
-  uint64_t seeds = 0;         // voxels above `high`
-  uint64_t detected = 0;      // voxels of the sheets after growing
+  std::vector<double> noise;   // each scale's median positive response (its noise unit),
+                               // over slabs spread through the volume
+  uint64_t slabs = 0;          // slabs worked
+  uint64_t sampled_slabs = 0;  // of those, the noise units measured on
+  uint64_t seeds = 0;          // voxels above `high`
+  uint64_t detected = 0;       // voxels of the sheets after growing
   double seconds = 0;
   nlohmann::json Fields() const;
 };
 
-// The sheet voxels of `grey` (dark sheets in bright rock). kInvalidArgument for no scale, a
+// The sheet voxels of `grey` (dark sheets in bright rock). The sheetness of a voxel is the
+// largest over the scales of s² (λ3 − |λ2|) / (that scale's noise unit), where λ3 > 0 is
+// the Hessian's eigenvalue of largest magnitude (else 0) of the grey levels smoothed at s,
+// and only where they rise on both sides along its eigenvector as that curvature says (a
+// valley's floor, not the dark side of a step). Worked slab by slab (floats for one slab
+// and its halo at a time; the voxels found kept as runs), so that memory beyond the volume
+// itself stays small at any size. kInvalidArgument for no scale, a
 // scale outside (0, 16], or low above high; kCancelled if asked.
 absl::StatusOr<VoxelSet> DetectSheets(const GreyVolume& grey, const SheetnessOptions& options,
                                       SheetnessStats* stats, const Progress& progress = {});
-
-// The sheetness of every voxel, in noise units: the largest over the scales of
-// s² (λ3 − |λ2|) / (that scale's median positive response), where λ3 > 0 is the Hessian's
-// eigenvalue of largest magnitude (else 0) of the grey levels smoothed at s, and only
-// where they rise on both sides along its eigenvector as that curvature says (a valley's
-// floor, not the dark side of a step). The medians go to `noise_per_scale` when given.
-std::vector<float> Sheetness(const GreyVolume& grey, const std::vector<double>& scales,
-                             std::vector<double>* noise_per_scale = nullptr);
 
 }  // namespace sheetmesh
 

@@ -4,10 +4,9 @@
 #define SHEETMESH_WORKER_PIPELINE_VOXEL_THICKNESS_H_
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <span>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
@@ -22,7 +21,7 @@ absl::StatusOr<std::vector<uint16_t>> ComputeThickness(const VoxelSet& set,
                                                        const Progress& progress = {});
 
 struct ThicknessStats {
-  double mean = 0;     // t̄ of formula 3
+  double mean = 0;  // t̄ of formula 3
   uint32_t min = 0;
   uint32_t max = 0;
   double median = 0;

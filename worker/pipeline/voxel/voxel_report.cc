@@ -27,6 +27,8 @@ nlohmann::json SheetnessStats::Fields() const {
   return {{"noise_per_scale", noise},
           {"seeds", seeds},
           {"detected_voxels", detected},
+          {"slabs", slabs},
+          {"noise_measured_on_slabs", sampled_slabs},
           {"seconds", seconds}};
 }
 

@@ -127,6 +127,42 @@ TEST(SheetnessTest, ThinSheetsAreFoundWholeAndNothingElse) {
   }
 }
 
+// Slab by slab, the answer of the whole volume at once: cut into slabs of a few slices
+// (each with its halo), the same voxels, to the bit; the noise units measured on a third
+// of the slabs, nearly the same.
+TEST(SheetnessTest, SlabsGiveTheWholeVolumesAnswer) {
+  GreyPhantomOptions o = OneSheet(0.5, 1.0, 8, {0.3, 0.2, 1});
+  o.sheets.push_back(o.sheets[0]);
+  o.sheets[1].normal = Normalized(Vec3(1, 0.1, 0.2));
+  o.sheets[1].aperture = 1.5;
+  const GreyVolume g = testing::MakeGreyPhantom(o);
+  SheetnessStats whole_stats, slab_stats, sampled_stats;
+  SheetnessOptions whole_volume;
+  whole_volume.scales = {0.75, 1.5};  // a halo of 10 slices
+  SM_ASSERT_OK_AND_ASSIGN(const VoxelSet whole, DetectSheets(g, whole_volume, &whole_stats));
+  EXPECT_EQ(whole_stats.slabs, 1u);
+  SheetnessOptions slabs = whole_volume;
+  slabs.slab_voxels = 48 * 48 * 40;  // cores of 20 slices: 3 slabs
+  SM_ASSERT_OK_AND_ASSIGN(const VoxelSet sliced, DetectSheets(g, slabs, &slab_stats));
+  EXPECT_EQ(slab_stats.slabs, 3u);
+  EXPECT_EQ(slab_stats.sampled_slabs, 3u);
+  EXPECT_EQ(slab_stats.noise, whole_stats.noise);
+  EXPECT_EQ(sliced.size(), whole.size());
+  EXPECT_TRUE(sliced == whole);
+  slabs.noise_sample_voxels = 1;  // the middle slab only
+  SM_ASSERT_OK_AND_ASSIGN(const VoxelSet sampled, DetectSheets(g, slabs, &sampled_stats));
+  EXPECT_EQ(sampled_stats.sampled_slabs, 1u);
+  for (size_t k = 0; k < whole_stats.noise.size(); ++k) {
+    EXPECT_NEAR(sampled_stats.noise[k], whole_stats.noise[k], 0.25 * whole_stats.noise[k]) << k;
+  }
+  uint64_t common = 0;
+  sampled.ForEachRun([&](int32_t y, int32_t z, const sheetmesh::Run& run, uint64_t) {
+    for (int32_t x = run.x0; x < run.x1; ++x) common += whole.Contains(x, y, z);
+  });
+  EXPECT_GE(common, 0.9 * whole.size()) << sampled.size() << " of " << whole.size();
+  EXPECT_LE(sampled.size(), 1.1 * whole.size());
+}
+
 TEST(SheetnessTest, BadOptionsAreRefusedNamingThem) {
   const GreyVolume g = testing::MakeGreyPhantom(OneSheet(1, 1, 10));
   SheetnessOptions o;

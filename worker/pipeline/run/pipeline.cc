@@ -286,9 +286,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   }
   if (options.representation.mode != RepresentationMode::kSheet) {
     StageTimer t(&report, "representation");
+    RepresentationOptions representation = options.representation;
+    representation.for_volume_mesh = options.volume_mesh;
     SM_ASSIGN_OR_RETURN(report.representation,
-                        ChooseRepresentation(sheet, piece_of_voxel, options.representation,
-                                             &result.mesh, progress.Stage("representation")));
+                        ChooseRepresentation(sheet, piece_of_voxel, representation, &result.mesh,
+                                             progress.Stage("representation")));
   }
   if (grey) {
     // The apertures from the attenuation the sheets miss; the prisms' heights, which the

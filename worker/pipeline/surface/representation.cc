@@ -290,11 +290,12 @@ bool MayBeThickEnough(uint64_t voxels, double median, uint64_t faces) {
 }
 
 // Whether a body scored in `choice` beats its sheet, keeps to the sheet's share of the
-// triangles (its decimation may stop short of it where the outline needs more) and is
-// thick enough for its triangles.
-bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body) {
+// triangles (its decimation may stop short of it where the outline needs more) and, for a
+// volume mesh, is thick enough for its triangles.
+bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool for_volume_mesh) {
   return choice.body_triangles <= (1 + kTriangleTolerance) * choice.sheet_triangles &&
-         choice.median_thickness >= kBodyThicknessPerEdge * MeanEdgeLength(body) &&
+         (!for_volume_mesh ||
+          choice.median_thickness >= kBodyThicknessPerEdge * MeanEdgeLength(body)) &&
          *choice.body_similarity > *choice.sheet_similarity;
 }
 
@@ -403,7 +404,7 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
     SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
     lens.sheet_similarity = score;
     lens.body_similarity = ScoreModel(Union(with_body, inside), *own).similarity;
-    if (!BodyWins(lens, body.mesh) || CutsThrough(kept, body.mesh)) continue;
+    if (!BodyWins(lens, body.mesh, true) || CutsThrough(kept, body.mesh)) continue;
     lens.body = true;
     score = *lens.body_similarity;
     *sheet_part = std::move(kept);
@@ -481,15 +482,16 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       for (uint16_t t : pv.tau) sum += t;
       choice.thickness = sum / pv.keys.size();
       choice.median_thickness = Median(pv.tau);
-      if (body_mode ||
+      const bool volume = options.for_volume_mesh;
+      if (body_mode || !volume ||
           (choice.median_thickness >= options.body_min_thickness &&
            Stout(choice.median_thickness, Width(pv.keys, dims), options.body_min_aspect) &&
            MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
-        choice.body = body_mode ||
-                      (BodyWins(choice, body.mesh) && !NearOthers(*mesh, piece, own, kNearVoxels));
+        choice.body = body_mode || (BodyWins(choice, body.mesh, volume) &&
+                                    !NearOthers(*mesh, piece, own, kNearVoxels));
         if (choice.body) {
           chosen.Add(body.mesh, piece, -1);
           sheet_part = TriangleMesh();

@@ -42,6 +42,12 @@ struct RepresentationOptions {
   // a vug about 0.5.
   double body_min_aspect = 0.25;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
+  // In auto, whether bodies are held to what a volume mesh can fill (body_min_thickness,
+  // body_min_aspect, thick enough for their triangles, clear of other pieces). Without a
+  // volume mesh the surface is the result, and every piece is tried both ways and keeps the
+  // better: a thin planar fracture's closed surface may follow its voxels better than its
+  // sheet at a fine budget (the pipeline sets this from whether a volume mesh follows).
+  bool for_volume_mesh = true;
 };
 
 // One piece's choice, for the report.

@@ -43,10 +43,11 @@ struct RepresentationOptions {
   double body_min_aspect = 0.25;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
   // In auto, whether bodies are held to what a volume mesh can fill (body_min_thickness,
-  // body_min_aspect, thick enough for their triangles, clear of other pieces). Without a
-  // volume mesh the surface is the result, and every piece is tried both ways and keeps the
-  // better: a thin planar fracture's closed surface may follow its voxels better than its
-  // sheet at a fine budget (the pipeline sets this from whether a volume mesh follows).
+  // body_min_aspect, thick enough for their triangles). Without a volume mesh the surface
+  // is the result, and every piece (a thin one up to about a million voxels: beyond, its
+  // trial would cost more than the run) is tried both ways and keeps the better: a planar
+  // fracture's closed surface may follow its voxels better than its sheet, at a coarse
+  // budget as at a fine one (the pipeline sets this from whether a volume mesh follows).
   bool for_volume_mesh = true;
 };
 

@@ -166,6 +166,49 @@ TEST(RepresentationTest, ForcedEitherWay) {
   }
 }
 
+// Three planar slabs of constant aperture 4, two crossing and one ending against both (a
+// T), at 100 triangles asked: where the surface is the result, the closed surface of the junction
+// is nearly exact (its walls are a dozen rectangles) and beats the sheet, whose junction
+// curves hold the decimation back; where a volume mesh follows, 4 voxels thick against a
+// width of 50 stays a sheet.
+TEST(RepresentationTest, WhereTheSurfaceIsTheResultAPlanarJunctionIsABody) {
+  auto mesh = [](bool for_volume_mesh, double* score) {
+    const SheetAnalysis sheet =
+        *AnalyzeSheet(testing::ShapeSet({60, 60, 60}, [](double x, double y, double z) {
+          const bool inside = x >= 5 && x < 55 && y >= 5 && y < 55;
+          return (z >= 29 && z < 33 && inside) ||
+                 (x >= 29 && x < 33 && y >= 5 && y < 55 && z >= 5 && z < 55) ||
+                 (y >= 14 && y < 18 && z >= 33 && z < 55 && x >= 31 && x < 55);
+        }));
+    SurfaceOptions s;
+    s.scvd.radius_voxels = 4;
+    s.triangles = 100;
+    SurfaceResult surface = *BuildSurface(sheet, s);
+    // The sheet's decimation stops short of 100 at its junction curves; the body keeps to
+    // the sheet's count.
+    const size_t share = surface.mesh.num_faces();
+    EXPECT_LE(share, 200u);
+    RepresentationOptions o;
+    o.for_volume_mesh = for_volume_mesh;
+    const RepresentationReport report = *ChooseRepresentation(sheet, {}, o, &surface.mesh);
+    *score = ScoreModel(*VoxelizeMesh(surface.mesh, sheet.set.dims()), sheet.set).similarity;
+    EXPECT_LE(surface.mesh.num_faces(), share * (1 + kTriangleTolerance));
+    return report;
+  };
+  double result = 0, for_volume = 0;
+  const RepresentationReport alone = mesh(false, &result);
+  ASSERT_EQ(alone.pieces.size(), 1u);
+  EXPECT_TRUE(alone.pieces[0].body);
+  ASSERT_TRUE(alone.pieces[0].body_similarity.has_value());
+  EXPECT_GT(*alone.pieces[0].body_similarity, *alone.pieces[0].sheet_similarity);
+  EXPECT_GE(result, 0.99);
+  const RepresentationReport volume = mesh(true, &for_volume);
+  ASSERT_EQ(volume.pieces.size(), 1u);
+  EXPECT_FALSE(volume.pieces[0].body);
+  EXPECT_FALSE(volume.pieces[0].body_similarity.has_value());  // not tried
+  EXPECT_LT(for_volume, result);
+}
+
 // A 2-voxel sheet opening into a lens 40 voxels across and 20 thick: the lens becomes a
 // body of its own, the sheet stays a sheet around it and reaches it; the volume mesh
 // conforms to both and the lens is a region of about its voxels' volume.

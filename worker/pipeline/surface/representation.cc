@@ -257,11 +257,12 @@ absl::StatusOr<BodySurface> Trial(const TriangleMesh& sheet_faces, const VoxelSe
 // (a 2-voxel sheet with a lens meshed whole as a body kept 1.7°).
 constexpr double kBodyThicknessPerEdge = 0.5;
 
-// Where the surface is the result, a thin piece is tried as a body up to this many voxels:
-// a larger one's closed surface at voxel resolution (millions of faces) costs more to
-// decimate than the whole run (a 3.07 M-voxel sheet of a grey scan: 89 s for the trial,
-// 16 s for the rest). Stout pieces are always tried.
-constexpr uint64_t kThinBodyTrialVoxels = uint64_t{1} << 20;
+// Where the surface is the result, thin pieces are tried as bodies up to this many voxels
+// in all (in the order of their ids): their closed surfaces at voxel resolution cost about
+// 10-30 µs a voxel to build, decimate and score (a 3.07 M-voxel sheet of a grey scan: 89 s
+// for its trial, 16 s for the rest of the run), so a volume at scale keeps its sheets
+// rather than spend minutes on trials. Stout pieces are always tried.
+constexpr uint64_t kThinBodyTrialVoxels = uint64_t{1} << 19;
 
 // The longest side of the bounding box of voxels given by linear index.
 double Width(std::span<const uint64_t> keys, const Dims& d) {
@@ -296,12 +297,11 @@ bool MayBeThickEnough(uint64_t voxels, double median, uint64_t faces) {
 }
 
 // Whether a body scored in `choice` beats its sheet, keeps to the sheet's share of the
-// triangles (its decimation may stop short of it where the outline needs more) and, for a
-// volume mesh, is thick enough for its triangles.
-bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool for_volume_mesh) {
+// triangles (its decimation may stop short of it where the outline needs more) and, unless
+// thin bodies are allowed, is thick enough for its triangles.
+bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool thin) {
   return choice.body_triangles <= (1 + kTriangleTolerance) * choice.sheet_triangles &&
-         (!for_volume_mesh ||
-          choice.median_thickness >= kBodyThicknessPerEdge * MeanEdgeLength(body)) &&
+         (thin || choice.median_thickness >= kBodyThicknessPerEdge * MeanEdgeLength(body)) &&
          *choice.body_similarity > *choice.sheet_similarity;
 }
 
@@ -410,7 +410,7 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
     SM_ASSIGN_OR_RETURN(VoxelSet inside, VoxelizeClosedSurface(body.mesh, dims));
     lens.sheet_similarity = score;
     lens.body_similarity = ScoreModel(Union(with_body, inside), *own).similarity;
-    if (!BodyWins(lens, body.mesh, true) || CutsThrough(kept, body.mesh)) continue;
+    if (!BodyWins(lens, body.mesh, false) || CutsThrough(kept, body.mesh)) continue;
     lens.body = true;
     score = *lens.body_similarity;
     *sheet_part = std::move(kept);
@@ -473,6 +473,7 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
   }
 
   const bool body_mode = options.mode == RepresentationMode::kBody;
+  uint64_t thin_tried = 0;  // voxels of thin pieces tried as bodies
   TriangleMesh sheets;
   size_t done = 0;
   for (const auto& [piece, faces] : faces_of) {
@@ -488,15 +489,17 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       for (uint16_t t : pv.tau) sum += t;
       choice.thickness = sum / pv.keys.size();
       choice.median_thickness = Median(pv.tau);
-      const bool volume = options.for_volume_mesh;
-      if (body_mode || (!volume && choice.voxels <= kThinBodyTrialVoxels) ||
+      const bool thin = options.try_thin_bodies;
+      const bool thin_trial = thin && thin_tried + choice.voxels <= kThinBodyTrialVoxels;
+      if (thin_trial) thin_tried += choice.voxels;
+      if (body_mode || thin_trial ||
           (choice.median_thickness >= options.body_min_thickness &&
            Stout(choice.median_thickness, Width(pv.keys, dims), options.body_min_aspect) &&
            MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
-        choice.body = body_mode || (BodyWins(choice, body.mesh, volume) &&
+        choice.body = body_mode || (BodyWins(choice, body.mesh, thin) &&
                                     !NearOthers(*mesh, piece, own, kNearVoxels));
         if (choice.body) {
           chosen.Add(body.mesh, piece, -1);

@@ -42,13 +42,14 @@ struct RepresentationOptions {
   // a vug about 0.5.
   double body_min_aspect = 0.25;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
-  // In auto, whether bodies are held to what a volume mesh can fill (body_min_thickness,
-  // body_min_aspect, thick enough for their triangles). Without a volume mesh the surface
-  // is the result, and every piece (a thin one up to about a million voxels: beyond, its
-  // trial would cost more than the run) is tried both ways and keeps the better: a planar
-  // fracture's closed surface may follow its voxels better than its sheet, at a coarse
-  // budget as at a fine one (the pipeline sets this from whether a volume mesh follows).
-  bool for_volume_mesh = true;
+  // In auto, whether a thin piece is tried as a body too. By default bodies are held to
+  // what a volume mesh can fill (body_min_thickness, body_min_aspect, thick enough for
+  // their triangles). Where the surface is the result (no volume mesh, no grey apertures
+  // wanted of its sheets), the pipeline sets this: every piece is tried both ways (thin ones
+  // up to about half a million voxels in all: beyond, the trials would cost more than the
+  // run) and keeps the better — a planar fracture's closed surface may follow its voxels
+  // better than its sheet, at a coarse budget as at a fine one.
+  bool try_thin_bodies = false;
 };
 
 // One piece's choice, for the report.

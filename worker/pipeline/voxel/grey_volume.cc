@@ -29,9 +29,7 @@ double GreyVolume::Sample(const Vec3& p) const {
   return lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
 }
 
-void GreyVolume::CopySlices(int64_t z0, int64_t count, float* out) const {
-  const size_t begin = static_cast<size_t>(z0 * dims.nx * dims.ny);
-  const size_t n = static_cast<size_t>(count * dims.nx * dims.ny);
+void GreyVolume::CopyValues(size_t begin, size_t n, float* out) const {
   if (!values8.empty()) {
     std::copy(values8.begin() + begin, values8.begin() + begin + n, out);
   } else if (!values16.empty()) {

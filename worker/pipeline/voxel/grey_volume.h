@@ -42,8 +42,8 @@ struct GreyVolume {
   // Trilinear between voxel centres (voxel (x, y, z) is at (x, y, z)); points outside take
   // the nearest voxel's value.
   double Sample(const Vec3& p) const;
-  // Slices [z0, z0 + count) as floats into `out` (count * nx * ny of them).
-  void CopySlices(int64_t z0, int64_t count, float* out) const;
+  // Voxels [begin, begin + count) (by linear index) as floats into `out`.
+  void CopyValues(size_t begin, size_t count, float* out) const;
 };
 
 // Reads every slice of `source`: 8- and 16-bit voxels as they are, float ones as floats.

@@ -27,19 +27,18 @@ struct SheetnessOptions {
                       // response)
   double low = 3.0;   // grown through voxels above this many
   // Work by slabs of about this many float voxels (the halo of the largest scale included;
-  // a slab's core at least twice the halo thick), and measure the noise units on slabs
+  // a slab's core at least twice the halo thick), and measure the noise units on slices
   // spread through the volume holding about this many voxels (all of a smaller volume).
-  int64_t slab_voxels = int64_t{32} << 20;
-  int64_t noise_sample_voxels = int64_t{16} << 20;
+  int64_t slab_voxels = int64_t{96} << 20;
+  int64_t noise_sample_voxels = int64_t{4} << 20;
 };
 
 struct SheetnessStats {
-  std::vector<double> noise;   // each scale's median positive response (its noise unit),
-                               // over slabs spread through the volume
-  uint64_t slabs = 0;          // slabs worked
-  uint64_t sampled_slabs = 0;  // of those, the noise units measured on
-  uint64_t seeds = 0;          // voxels above `high`
-  uint64_t detected = 0;       // voxels of the sheets after growing
+  std::vector<double> noise;  // each scale's median positive response (its noise unit)
+  int64_t noise_slices = 0;   // measured on this many slices spread through the volume
+  uint64_t slabs = 0;         // slabs worked
+  uint64_t seeds = 0;         // voxels above `high`
+  uint64_t detected = 0;      // voxels of the sheets after growing
   double seconds = 0;
   nlohmann::json Fields() const;
 };

@@ -24,12 +24,9 @@ nlohmann::json GreyLevels::Fields() const {
 }
 
 nlohmann::json SheetnessStats::Fields() const {
-  return {{"noise_per_scale", noise},
-          {"seeds", seeds},
-          {"detected_voxels", detected},
-          {"slabs", slabs},
-          {"noise_measured_on_slabs", sampled_slabs},
-          {"seconds", seconds}};
+  return {{"noise_per_scale", noise},     {"seeds", seeds},
+          {"detected_voxels", detected},  {"slabs", slabs},
+          {"noise_slices", noise_slices}, {"seconds", seconds}};
 }
 
 }  // namespace sheetmesh

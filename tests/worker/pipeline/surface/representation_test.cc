@@ -172,7 +172,7 @@ TEST(RepresentationTest, ForcedEitherWay) {
 // curves hold the decimation back; where a volume mesh follows, 4 voxels thick against a
 // width of 50 stays a sheet.
 TEST(RepresentationTest, WhereTheSurfaceIsTheResultAPlanarJunctionIsABody) {
-  auto mesh = [](bool for_volume_mesh, double* score) {
+  auto mesh = [](bool try_thin_bodies, double* score) {
     const SheetAnalysis sheet =
         *AnalyzeSheet(testing::ShapeSet({60, 60, 60}, [](double x, double y, double z) {
           const bool inside = x >= 5 && x < 55 && y >= 5 && y < 55;
@@ -189,20 +189,20 @@ TEST(RepresentationTest, WhereTheSurfaceIsTheResultAPlanarJunctionIsABody) {
     const size_t share = surface.mesh.num_faces();
     EXPECT_LE(share, 200u);
     RepresentationOptions o;
-    o.for_volume_mesh = for_volume_mesh;
+    o.try_thin_bodies = try_thin_bodies;
     const RepresentationReport report = *ChooseRepresentation(sheet, {}, o, &surface.mesh);
     *score = ScoreModel(*VoxelizeMesh(surface.mesh, sheet.set.dims()), sheet.set).similarity;
     EXPECT_LE(surface.mesh.num_faces(), share * (1 + kTriangleTolerance));
     return report;
   };
   double result = 0, for_volume = 0;
-  const RepresentationReport alone = mesh(false, &result);
+  const RepresentationReport alone = mesh(true, &result);
   ASSERT_EQ(alone.pieces.size(), 1u);
   EXPECT_TRUE(alone.pieces[0].body);
   ASSERT_TRUE(alone.pieces[0].body_similarity.has_value());
   EXPECT_GT(*alone.pieces[0].body_similarity, *alone.pieces[0].sheet_similarity);
   EXPECT_GE(result, 0.99);
-  const RepresentationReport volume = mesh(true, &for_volume);
+  const RepresentationReport volume = mesh(false, &for_volume);
   ASSERT_EQ(volume.pieces.size(), 1u);
   EXPECT_FALSE(volume.pieces[0].body);
   EXPECT_FALSE(volume.pieces[0].body_similarity.has_value());  // not tried

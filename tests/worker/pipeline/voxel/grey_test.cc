@@ -138,20 +138,20 @@ TEST(SheetnessTest, SlabsGiveTheWholeVolumesAnswer) {
   const GreyVolume g = testing::MakeGreyPhantom(o);
   SheetnessStats whole_stats, slab_stats, sampled_stats;
   SheetnessOptions whole_volume;
-  whole_volume.scales = {0.75, 1.5};  // a halo of 10 slices
+  whole_volume.scales = {0.75, 1.5};
   SM_ASSERT_OK_AND_ASSIGN(const VoxelSet whole, DetectSheets(g, whole_volume, &whole_stats));
   EXPECT_EQ(whole_stats.slabs, 1u);
   SheetnessOptions slabs = whole_volume;
-  slabs.slab_voxels = 48 * 48 * 40;  // cores of 20 slices: 3 slabs
+  slabs.slab_voxels = 48 * 48 * 26;  // cores of 16 slices (a halo of 5): 3 slabs
   SM_ASSERT_OK_AND_ASSIGN(const VoxelSet sliced, DetectSheets(g, slabs, &slab_stats));
   EXPECT_EQ(slab_stats.slabs, 3u);
-  EXPECT_EQ(slab_stats.sampled_slabs, 3u);
+  EXPECT_EQ(slab_stats.noise_slices, 48);
   EXPECT_EQ(slab_stats.noise, whole_stats.noise);
   EXPECT_EQ(sliced.size(), whole.size());
   EXPECT_TRUE(sliced == whole);
-  slabs.noise_sample_voxels = 1;  // the middle slab only
+  slabs.noise_sample_voxels = 48 * 48 * 8;  // 2 blocks of 4 slices of the 48
   SM_ASSERT_OK_AND_ASSIGN(const VoxelSet sampled, DetectSheets(g, slabs, &sampled_stats));
-  EXPECT_EQ(sampled_stats.sampled_slabs, 1u);
+  EXPECT_EQ(sampled_stats.noise_slices, 8);
   for (size_t k = 0; k < whole_stats.noise.size(); ++k) {
     EXPECT_NEAR(sampled_stats.noise[k], whole_stats.noise[k], 0.25 * whole_stats.noise[k]) << k;
   }

@@ -185,13 +185,17 @@ def plot(rows, path):
             for key, field, colour, label in [("grey", "mean", "C0", "grey, levels measured"),
                                               ("given", "mean", "C1", "grey, levels given"),
                                               ("given", "counted", "C3", "voxel count")]:
+                # A run whose levels were not found fell back to the voxel count: not drawn
+                # as the grey levels' answer.
                 pts = [(r["aperture"], 100 * (r[key][field] - r["aperture"]) / r["aperture"])
-                       for r in sel if field in r[key]]
+                       for r in sel if field in r[key]
+                       and (field == "counted" or r[key].get("measured"))]
                 if pts:
                     ax.plot(*zip(*pts), style, color=colour, marker="o",
                             label="%s, σ %g" % (label, sigma))
         ax.axhspan(-10, 10, color="0.9")
         ax.set_xscale("log")
+        ax.set_xticks([0.2, 0.5, 1, 2, 4], ["0.2", "0.5", "1", "2", "4"])
         ax.set_yscale("symlog", linthresh=10)
         ax.set_xlabel("true aperture (voxels)")
         ax.set_ylabel("error of the mean aperture (%)")
@@ -244,7 +248,8 @@ def main():
             t_err = mesh_aperture(vtu, "aperture", 3) / a ** 3 - 1
             t_count = mesh_aperture(vtu, "thickness_voxels", 3) / a ** 3 - 1
             row[name] = {"found": found, "mean": mean, "counted": counted, "seconds": dt,
-                         "transmissivity_error": t_err, "counted_transmissivity_error": t_count}
+                         "transmissivity_error": t_err, "counted_transmissivity_error": t_count,
+                         "measured": bool(rep.get("grey", {}).get("measured"))}
         rows.append(row)
         print(json.dumps(row), flush=True)
     lines = ["| aperture | σ | CNR | rough | grey: found | grey: mean (error) | grey: voxel count "
@@ -262,6 +267,8 @@ def main():
         g = r["grey"]
         o = r["otsu"]
         gf, gm = cell(g, "mean", r["aperture"])
+        if "error" not in g and not g["measured"]:
+            gm = "*voxel count, %.2f: %s*" % (g["mean"], "no void found")
         of, om = cell(o, "mean", r["aperture"])
         _, vm = cell(r["given"], "mean", r["aperture"])
         gc = "%.2f" % g["counted"] if "counted" in g else "—"

@@ -1,0 +1,172 @@
+// The permeability tensor against known answers: planar fractures of aperture a through a
+// cube of side L add a³/(12 L) (I − n nᵀ) (times the fracture's area over L²) to the rock's
+// k_m, on real volume meshes (TetGen through BuildVolumeMesh).
+#include "worker/pipeline/flow/permeability.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "tests/testing/status_matchers.h"
+#include "worker/pipeline/tet/volume_mesher.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr int kSide = 20;              // voxels
+constexpr double kVoxelMm = 0.01;      // 10 µm voxels
+constexpr double kApertureVoxels = 2;  // 20 µm
+constexpr double kMatrix = 1e-18;      // m²
+
+// A sheet over the box's face-to-face square (u, v) ∈ [−0.5, 19.5]² of the plane `at`
+// (voxel coordinates), in n × n squares of two triangles.
+TriangleMesh Sheet(const std::function<Vec3(double, double)>& at, int n, int32_t piece) {
+  TriangleMesh m;
+  const double lo = -0.5, hi = kSide - 0.5;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i)
+      m.vertices.push_back(at(lo + (hi - lo) * i / n, lo + (hi - lo) * j / n));
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t v = j * (n + 1) + i;
+      m.faces.push_back({v, v + 1, v + n + 2});
+      m.faces.push_back({v, v + n + 2, v + n + 1});
+    }
+  }
+  m.face_piece.assign(m.faces.size(), piece);
+  m.face_thickness_voxels.assign(m.faces.size(), kApertureVoxels);
+  m.face_aperture_voxels.assign(m.faces.size(), kApertureVoxels);
+  return m;
+}
+
+TriangleMesh Join(TriangleMesh a, const TriangleMesh& b) {
+  const uint32_t offset = static_cast<uint32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (Face f : b.faces) a.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
+  a.face_thickness_voxels.insert(a.face_thickness_voxels.end(), b.face_thickness_voxels.begin(),
+                                 b.face_thickness_voxels.end());
+  a.face_aperture_voxels.insert(a.face_aperture_voxels.end(), b.face_aperture_voxels.begin(),
+                                b.face_aperture_voxels.end());
+  return a;
+}
+
+TetMesh Mesh(const TriangleMesh& sheets) {
+  Placement p;
+  p.spacing = {kVoxelMm, kVoxelMm, kVoxelMm};
+  p.unit = "mm";
+  auto r = BuildVolumeMesh(sheets, {kSide, kSide, kSide}, p, {});
+  EXPECT_TRUE(r.ok()) << r.status();
+  return r->mesh;
+}
+
+// a³ / (12 L) in m² for the test's fracture through the whole cube (area L²).
+double FractureTerm() {
+  const double a = kApertureVoxels * kVoxelMm * 1e-3, l = kSide * kVoxelMm * 1e-3;
+  return a * a * a / (12 * l);
+}
+
+FlowOptions Options() {
+  FlowOptions o;
+  o.enabled = true;
+  o.matrix_permeability = kMatrix;
+  return o;
+}
+
+TEST(PermeabilityTest, APlanarFractureAddsTheCubicLawAlongItAndNothingAcross) {
+  const TetMesh mesh = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 4, 0));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult k, SolvePermeability(mesh, Options()));
+  const double along = kMatrix + FractureTerm();
+  EXPECT_NEAR(k.tensor[0][0], along, 0.01 * along);
+  EXPECT_NEAR(k.tensor[1][1], along, 0.01 * along);
+  EXPECT_NEAR(k.tensor[2][2], kMatrix, 0.01 * kMatrix);
+  EXPECT_NEAR(k.tensor[0][1], 0, 1e-3 * along);
+  EXPECT_NEAR(k.tensor[0][2], 0, 1e-3 * along);
+  EXPECT_GT(k.sheet_faces, 0u);
+  EXPECT_NEAR(k.fracture_share[0], FractureTerm() / along, 1e-3);
+  EXPECT_LE(k.residual, 1e-8);
+  // Principal values largest first, the smallest across the fracture.
+  EXPECT_NEAR(k.principal[0], along, 0.01 * along);
+  EXPECT_NEAR(std::abs(k.principal_directions[2].z), 1, 1e-6);
+}
+
+// Tilted 30° about y: the tensor turns with the fracture, which is 1/cos 30° longer in the
+// cube.
+TEST(PermeabilityTest, ATiltedFractureTurnsTheTensorWithIt) {
+  const double t = std::tan(30 * M_PI / 180);
+  const double c = (kSide - 1) / 2.0;
+  const TetMesh mesh =
+      Mesh(Sheet([&](double u, double v) { return Vec3(u, v, c - t * (u - c)); }, 4, 0));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult k, SolvePermeability(mesh, Options()));
+  const double along = kMatrix + FractureTerm() / std::cos(30 * M_PI / 180);
+  EXPECT_NEAR(k.principal[0], along, 0.01 * along);
+  EXPECT_NEAR(k.principal[1], along, 0.01 * along);
+  EXPECT_NEAR(k.principal[2], kMatrix, 0.05 * kMatrix);
+  const Vec3 normal = Normalized(Vec3(std::sin(30 * M_PI / 180), 0, std::cos(30 * M_PI / 180)));
+  const double angle =
+      std::acos(std::min(1.0, std::abs(Dot(k.principal_directions[2], normal)))) * 180 / M_PI;
+  EXPECT_LE(angle, 1.0);
+}
+
+// Two orthogonal fractures crossing along y: K = k_m I + Σ a³/(12 L) (I − n nᵀ).
+TEST(PermeabilityTest, TwoOrthogonalFracturesAddTheirTerms) {
+  const TriangleMesh horizontal = Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 4, 0);
+  const TriangleMesh vertical = Sheet([](double u, double v) { return Vec3(9.5, u, v); }, 4, 1);
+  const TetMesh mesh = Mesh(Join(horizontal, vertical));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult k, SolvePermeability(mesh, Options()));
+  const double f = FractureTerm();
+  EXPECT_NEAR(k.tensor[0][0], kMatrix + f, 0.02 * (kMatrix + f));
+  EXPECT_NEAR(k.tensor[1][1], kMatrix + 2 * f, 0.02 * (kMatrix + 2 * f));
+  EXPECT_NEAR(k.tensor[2][2], kMatrix + f, 0.02 * (kMatrix + f));
+}
+
+// A finer sheet mesh (the triangles' size halved) gives the same tensor.
+TEST(PermeabilityTest, RefiningTheMeshChangesLittle) {
+  auto plane = [](double u, double v) { return Vec3(u, v, 9.5); };
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult coarse,
+                          SolvePermeability(Mesh(Sheet(plane, 4, 0)), Options()));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult fine,
+                          SolvePermeability(Mesh(Sheet(plane, 8, 0)), Options()));
+  EXPECT_NEAR(fine.tensor[0][0], coarse.tensor[0][0], 0.02 * coarse.tensor[0][0]);
+}
+
+TEST(PermeabilityTest, WithoutSheetsTheRockAloneAndANote) {
+  const TetMesh mesh = Mesh(TriangleMesh{});
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult k, SolvePermeability(mesh, Options()));
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(k.tensor[i][i], kMatrix, 1e-6 * kMatrix);
+  EXPECT_THAT(k.note, HasSubstr("no sheet face"));
+}
+
+TEST(PermeabilityTest, BadInputIsRefusedNamingFieldAndValue) {
+  const TetMesh mesh = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 2, 0));
+  FlowOptions o = Options();
+  o.matrix_permeability = -1;
+  EXPECT_THAT(SolvePermeability(mesh, o),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                                HasSubstr("flow.matrix_permeability = -1")));
+  o = Options();
+  o.body_permeability = 5;
+  EXPECT_THAT(SolvePermeability(mesh, o),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                                HasSubstr("flow.body_permeability = 5")));
+  TetMesh negative = mesh;
+  for (size_t f = 0; f < negative.faces.size(); ++f) {
+    if (negative.face_piece[f] >= 0) negative.face_thickness_voxels[f] = -1;
+  }
+  EXPECT_THAT(SolvePermeability(negative, Options()),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("aperture -1")));
+  TetMesh unitless = mesh;
+  unitless.unit.clear();
+  EXPECT_THAT(SolvePermeability(unitless, Options()),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("input.unit")));
+  EXPECT_THAT(SolvePermeability(TetMesh{}, Options()),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("no tetrahedra")));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,45 @@
+// The report's part of the flow layer: the `Fields()` of its results.
+#include <nlohmann/json.hpp>
+
+#include "worker/pipeline/flow/permeability.h"
+
+namespace sheetmesh {
+
+nlohmann::json PermeabilityResult::Fields() const {
+  auto darcy = [](const Tensor3& t) {
+    Tensor3 d = t;
+    for (auto& row : d) {
+      for (double& v : row) v /= kSquareMetresPerDarcy;
+    }
+    return d;
+  };
+  nlohmann::json directions = nlohmann::json::array();
+  for (const Vec3& v : principal_directions) directions.push_back({v.x, v.y, v.z});
+  std::array<double, 3> principal_darcy{};
+  for (int k = 0; k < 3; ++k) principal_darcy[k] = principal[k] / kSquareMetresPerDarcy;
+  nlohmann::json j = {
+      {"permeability_m2", tensor},
+      {"permeability_darcy", darcy(tensor)},
+      {"principal_m2", principal},
+      {"principal_darcy", principal_darcy},
+      {"principal_directions", directions},
+      {"fracture_share_of_flux", fracture_share},
+      {"body_share_of_flux", body_share},
+      {"boundary_conditions",
+       "for each axis d, the pressure -x_d (a unit gradient along d) on every node of the "
+       "box's faces; column d is the mean flux over the box"},
+      {"solver", "conjugate gradients, incomplete Cholesky preconditioner (Eigen)"},
+      {"iterations", iterations},
+      {"relative_residual", residual},
+      {"unknowns", unknowns},
+      {"fixed_nodes", fixed_nodes},
+      {"sheet_faces", sheet_faces},
+      {"body_tets", body_tets},
+      {"box_volume_m3", volume},
+      {"metres_per_unit", metres_per_unit},
+      {"seconds", seconds}};
+  if (!note.empty()) j["note"] = note;
+  return j;
+}
+
+}  // namespace sheetmesh

@@ -13,6 +13,7 @@
 #include "common/json_text.h"
 #include "common/progress_line.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/similarity/mesh_model.h"
@@ -187,6 +188,21 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
     out << "\n";
   }
   if (r.volume_mesh) PrintVolumeMesh(*r.volume_mesh, out);
+  if (r.flow) {
+    const PermeabilityResult& k = *r.flow;
+    out << absl::StrFormat(
+        "permeability  k_xx %.4g  k_yy %.4g  k_zz %.4g m² (%.4g / %.4g / %.4g darcy); principal "
+        "%.4g, %.4g, %.4g m²\n",
+        k.tensor[0][0], k.tensor[1][1], k.tensor[2][2], k.tensor[0][0] / kSquareMetresPerDarcy,
+        k.tensor[1][1] / kSquareMetresPerDarcy, k.tensor[2][2] / kSquareMetresPerDarcy,
+        k.principal[0], k.principal[1], k.principal[2]);
+    out << absl::StrFormat(
+        "              the sheets carry %.0f%% / %.0f%% / %.0f%% of the flux; %d sheet faces, "
+        "%d unknowns, CG %d/%d/%d iterations (residual %.1e)%s\n",
+        100 * k.fracture_share[0], 100 * k.fracture_share[1], 100 * k.fracture_share[2],
+        k.sheet_faces, k.unknowns, k.iterations[0], k.iterations[1], k.iterations[2], k.residual,
+        k.note.empty() ? "" : "; " + k.note);
+  }
   out << "time       ";
   for (const StageTime& t : r.timings) out << absl::StrFormat(" %s %.2fs", t.stage, t.seconds);
   out << "\n";

@@ -86,8 +86,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
                                                      const FlowOptions& options,
                                                      const Progress& progress) {
   const absl::Time start = absl::Now();
-  SM_RETURN_IF_ERROR(CheckPermeability(options.matrix_permeability, "flow.matrix_permeability"));
-  SM_RETURN_IF_ERROR(CheckPermeability(options.body_permeability, "flow.body_permeability"));
+  SM_RETURN_IF_ERROR(CheckPermeability(options.matrix_permeability, "permeability.matrix"));
+  SM_RETURN_IF_ERROR(CheckPermeability(options.body_permeability, "permeability.body"));
   if (!(options.tolerance > 0 && options.tolerance <= 1e-2)) {
     return absl::InvalidArgumentError(
         absl::StrCat("flow tolerance ", options.tolerance, ": must be in (0, 0.01]"));
@@ -101,8 +101,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     return absl::InvalidArgumentError(absl::StrCat(
         "flow needs the volume's length unit to give a permeability in m², and this volume's is ",
         mesh.unit.empty() ? std::string("not known") : absl::StrCat("\"", mesh.unit, "\""),
-        ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --input_unit=um "
-        "--input_spacing=5,5,5"));
+        ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --unit=um "
+        "--spacing=5,5,5"));
   }
   const double m = out.metres_per_unit;
   const size_t n = mesh.nodes.size();

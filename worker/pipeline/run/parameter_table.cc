@@ -545,6 +545,20 @@ std::vector<ParamRow> VolumeMeshRows() {
   return rows;
 }
 
+std::vector<ParamRow> FlowRows() {
+  std::vector<ParamRow> rows;
+  rows.push_back(Bool("flow", SM_MEMBER(flow.enabled),
+                      "with the volume mesh: the sample's permeability tensor (Darcy flow in the "
+                      "rock, the cubic law a³/12 on each sheet face, three unit gradients)"));
+  rows.push_back(Number("permeability.matrix", SM_MEMBER(flow.matrix_permeability),
+                        "(0, 0.001]", "m²",
+                        "permeability of the rock between the sheets (1e-18 m²: about a "
+                        "microdarcy, a tight rock)"));
+  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "(0, 0.001]",
+                        "m²", "permeability inside the pieces meshed as bodies (open vugs)"));
+  return rows;
+}
+
 std::vector<ParamRow> OutputRows() {
   std::vector<ParamRow> rows;
   rows.push_back(Formats("output.formats",
@@ -583,7 +597,7 @@ const std::vector<ParamRow>& ParamRows() {
   static const std::vector<ParamRow>* rows = [] {
     auto* all = new std::vector<ParamRow>;
     for (auto part : {InputRows(), GreyRows(), ExtractionRows(), SurfaceRows(), SimilarityRows(),
-                      VolumeMeshRows(), OutputRows()}) {
+                      VolumeMeshRows(), FlowRows(), OutputRows()}) {
       for (ParamRow& r : part) all->push_back(std::move(r));
     }
     return all;

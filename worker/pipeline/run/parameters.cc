@@ -56,6 +56,10 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
         "radius_search.r_max", absl::StrCat(rs.max_radius_voxels),
         absl::StrCat("must be 0 or at least radius_search.r_min = ", rs.min_radius_voxels)};
   }
+  if (o.flow.enabled && !o.volume_mesh) {
+    return Broken{"flow", "true",
+                  "needs the volume mesh it solves on: set volume_mesh too (--volume_mesh)"};
+  }
   return std::nullopt;
 }
 

@@ -135,6 +135,7 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
   if (options.representation.mode != RepresentationMode::kSheet) stages.push_back("representation");
   stages.push_back("similarity");
   if (options.volume_mesh) stages.push_back("volume");
+  if (options.volume_mesh && options.flow.enabled) stages.push_back("flow");
   if (!options.output.dir.empty()) stages.push_back("write");
   return stages;
 }
@@ -221,6 +222,17 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     } else {
       SM_ASSIGN_OR_RETURN(phase, LoadSheetPhase(options.input, progress.Stage("read")));
     }
+  }
+  if (options.flow.enabled && MetresPerUnit(phase.info.placement.unit) == 0) {
+    // Before any work: a permeability needs lengths in metres.
+    return absl::InvalidArgumentError(absl::StrCat(
+        options.input.path,
+        ": flow gives a permeability in m² and needs the volume's length "
+        "unit, which is ",
+        phase.info.placement.unit.empty() ? std::string("not known")
+                                          : "\"" + phase.info.placement.unit + "\"",
+        ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --unit=um "
+        "--spacing=5,5,5"));
   }
   report.volume = phase.info;
   report.selection = phase.selection;
@@ -346,6 +358,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                        PrismHeight::kFace));  // the volume mesh carries a thickness per face
       volume.delivered_similarity = ScoreModel(delivered, sheet.set).similarity;
       report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
+      if (options.flow.enabled) {
+        StageTimer flow_timer(&report, "flow");
+        SM_ASSIGN_OR_RETURN(report.flow,
+                            SolvePermeability(volume.mesh, options.flow, progress.Stage("flow")));
+      }
     } else {
       // Cancelled or out of time: stop. Otherwise the surface and its score stand.
       const absl::StatusCode code = built.status().code();

@@ -14,6 +14,7 @@
 #include "common/progress.h"
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
+#include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/run/pipeline_options.h"
 #include "worker/pipeline/similarity/mesh_model.h"
@@ -72,6 +73,7 @@ struct PipelineReport {
   std::optional<RepresentationReport> representation;  // unless every piece is a sheet
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
+  std::optional<PermeabilityResult> flow;  // with flow: the permeability tensor
   // With input.grey: what the sheets were found on, and the apertures from the grey levels.
   std::optional<SheetnessStats> sheetness;
   std::optional<GreyApertureStats> grey_apertures;

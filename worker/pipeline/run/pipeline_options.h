@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "worker/pipeline/extract/extraction.h"
+#include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/surface/radius_search.h"
 #include "worker/pipeline/surface/representation.h"
@@ -61,6 +62,7 @@ struct PipelineOptions {
   ScoreOptions score;
   bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
   VolumeMeshOptions volume;
+  FlowOptions flow;  // with the volume mesh: the sample's permeability tensor
   OutputOptions output;
   double time_limit_seconds = 0;  // the run ends kDeadlineExceeded past this (0: none)
 };

@@ -77,6 +77,7 @@ std::string PipelineReport::ToJson() const {
     j["radius_search"]["target_similarity"] = options.radius_search.target_similarity;
   }
   if (volume_mesh) j["volume_mesh"] = volume_mesh->Fields();
+  if (flow) j["flow"] = flow->Fields();
   if (sheetness) {
     j["grey"] = {{"sheetness", sheetness->Fields()}};
     if (grey_apertures) {

@@ -148,12 +148,12 @@ TEST(PermeabilityTest, BadInputIsRefusedNamingFieldAndValue) {
   o.matrix_permeability = -1;
   EXPECT_THAT(SolvePermeability(mesh, o),
               testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("flow.matrix_permeability = -1")));
+                                HasSubstr("permeability.matrix = -1")));
   o = Options();
   o.body_permeability = 5;
   EXPECT_THAT(SolvePermeability(mesh, o),
               testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("flow.body_permeability = 5")));
+                                HasSubstr("permeability.body = 5")));
   TetMesh negative = mesh;
   for (size_t f = 0; f < negative.faces.size(); ++f) {
     if (negative.face_piece[f] >= 0) negative.face_thickness_voxels[f] = -1;

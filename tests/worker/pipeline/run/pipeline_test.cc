@@ -149,6 +149,43 @@ TEST(PipelineTest, VolumeStageWritesTheFemFormats) {
   EXPECT_TRUE(j["volume_mesh"]["quality"].contains("radius_aspect"));
 }
 
+// The flow stage on the phantom's volume mesh: a tensor in the report, every stage seen; a
+// volume of unknown unit and a flow without the volume mesh are refused before any work.
+TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = SmallPhantom(tmp);
+  o.output.dir = tmp.File("out");
+  o.volume_mesh = true;
+  o.flow.enabled = true;
+  o.score.hausdorff = false;
+  o.input.open.unit = "um";
+  Stages stages;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
+  EXPECT_EQ(stages.seen, PlannedStages(o));
+  ASSERT_TRUE(r.flow.has_value());
+  for (int i = 0; i < 3; ++i) {
+    // The sheets raise every diagonal term above the rock's.
+    EXPECT_GT(r.flow->tensor[i][i], o.flow.matrix_permeability);
+    EXPECT_GE(r.flow->principal[i], 0.99 * o.flow.matrix_permeability);
+  }
+  EXPECT_GT(r.flow->sheet_faces, 0u);
+  const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
+  EXPECT_EQ(j["flow"]["permeability_m2"].size(), 3u);
+  EXPECT_NEAR(j["flow"]["permeability_darcy"][0][0].get<double>(),
+              r.flow->tensor[0][0] / kSquareMetresPerDarcy,
+              1e-9 * r.flow->tensor[0][0] / kSquareMetresPerDarcy);
+
+  PipelineOptions unitless = o;
+  unitless.input.open.unit.clear();
+  EXPECT_THAT(RunPipeline(unitless, {}),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("input.unit")));
+  PipelineOptions no_volume = o;
+  no_volume.volume_mesh = false;
+  EXPECT_THAT(RunPipeline(no_volume, {}),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("volume_mesh")));
+}
+
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {
   TempDir tmp;
   PipelineOptions o;

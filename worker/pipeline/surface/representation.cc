@@ -499,8 +499,10 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
+        // Another piece's sheet near a body would be joined to it in a volume mesh; where
+        // the surface is the result, the two may simply lie side by side.
         choice.body = body_mode || (BodyWins(choice, body.mesh, thin) &&
-                                    !NearOthers(*mesh, piece, own, kNearVoxels));
+                                    (thin || !NearOthers(*mesh, piece, own, kNearVoxels)));
         if (choice.body) {
           chosen.Add(body.mesh, piece, -1);
           sheet_part = TriangleMesh();

@@ -547,15 +547,16 @@ std::vector<ParamRow> VolumeMeshRows() {
 
 std::vector<ParamRow> FlowRows() {
   std::vector<ParamRow> rows;
-  rows.push_back(Bool("flow", SM_MEMBER(flow.enabled),
-                      "with the volume mesh: the sample's permeability tensor (Darcy flow in the "
-                      "rock, the cubic law a³/12 on each sheet face, three unit gradients)"));
-  rows.push_back(Number("permeability.matrix", SM_MEMBER(flow.matrix_permeability),
-                        "(0, 0.001]", "m²",
+  rows.push_back(Bool(
+      "flow", SM_MEMBER(flow.enabled),
+      "the sample's permeability tensor on the volume mesh, which it turns on (Darcy flow in the "
+      "rock, the cubic law a³/12 on each sheet face, three unit gradients)"));
+  rows.push_back(Number("permeability.matrix", SM_MEMBER(flow.matrix_permeability), "(0, 0.001]",
+                        "m²",
                         "permeability of the rock between the sheets (1e-18 m²: about a "
                         "microdarcy, a tight rock)"));
-  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "(0, 0.001]",
-                        "m²", "permeability inside the pieces meshed as bodies (open vugs)"));
+  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "(0, 0.001]", "m²",
+                        "permeability inside the pieces meshed as bodies (open vugs)"));
   return rows;
 }
 

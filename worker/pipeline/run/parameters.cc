@@ -56,16 +56,13 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
         "radius_search.r_max", absl::StrCat(rs.max_radius_voxels),
         absl::StrCat("must be 0 or at least radius_search.r_min = ", rs.min_radius_voxels)};
   }
-  if (o.flow.enabled && !o.volume_mesh) {
-    return Broken{"flow", "true",
-                  "needs the volume mesh it solves on: set volume_mesh too (--volume_mesh)"};
-  }
   return std::nullopt;
 }
 
 // Settings that follow another unless set: detect.scvd_r and recover.scvd_r of 0 take
-// separate.r.
+// separate.r; flow turns the volume mesh on.
 void ResolveFollowers(PipelineOptions& o) {
+  if (o.flow.enabled) o.volume_mesh = true;  // flow solves on the volume mesh
   ExtractionOptions& x = o.extraction;
   for (ExtendOptions* e : {&x.detect_extend, &x.recover_extend}) {
     *e = Following(*e, x.separation);

@@ -134,8 +134,8 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
   stages.push_back(options.search_radius ? "search-r" : "surface");
   if (options.representation.mode != RepresentationMode::kSheet) stages.push_back("representation");
   stages.push_back("similarity");
-  if (options.volume_mesh) stages.push_back("volume");
-  if (options.volume_mesh && options.flow.enabled) stages.push_back("flow");
+  if (MeshesVolume(options)) stages.push_back("volume");
+  if (options.flow.enabled) stages.push_back("flow");
   if (!options.output.dir.empty()) stages.push_back("write");
   return stages;
 }
@@ -225,14 +225,14 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   }
   if (options.flow.enabled && MetresPerUnit(phase.info.placement.unit) == 0) {
     // Before any work: a permeability needs lengths in metres.
-    return absl::InvalidArgumentError(absl::StrCat(
-        options.input.path,
-        ": flow gives a permeability in m² and needs the volume's length "
-        "unit, which is ",
-        phase.info.placement.unit.empty() ? std::string("not known")
-                                          : "\"" + phase.info.placement.unit + "\"",
-        ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --unit=um "
-        "--spacing=5,5,5"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(options.input.path,
+                     ": flow gives a permeability in m² and needs the volume's length "
+                     "unit, which is ",
+                     phase.info.placement.unit.empty() ? std::string("not known")
+                                                       : "\"" + phase.info.placement.unit + "\"",
+                     ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --unit=um "
+                     "--spacing=5,5,5"));
   }
   report.volume = phase.info;
   report.selection = phase.selection;
@@ -269,7 +269,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   if (surface.fit_vertices == VertexFit::kAuto) {
     // Measured over the volume mesh sweep: moved vertices leave the volume mesh more slivers
     // (bench/RESULTS.md, issue 42); where a volume mesh follows, its angles come first.
-    surface.fit_vertices = options.volume_mesh ? VertexFit::kNone : VertexFit::kRim;
+    surface.fit_vertices = MeshesVolume(options) ? VertexFit::kNone : VertexFit::kRim;
   }
   SurfaceResult result;
   if (options.search_radius) {
@@ -301,7 +301,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     RepresentationOptions representation = options.representation;
     // Thin pieces as bodies only where the surface is the result: a volume mesh would fill
     // them with flat tetrahedra, and grey apertures are measured across sheets.
-    representation.try_thin_bodies = !options.volume_mesh && !grey;
+    representation.try_thin_bodies = !MeshesVolume(options) && !grey;
     SM_ASSIGN_OR_RETURN(report.representation,
                         ChooseRepresentation(sheet, piece_of_voxel, representation, &result.mesh,
                                              progress.Stage("representation")));
@@ -340,7 +340,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
 
   VolumeMeshResult volume;
   absl::Status volume_failed;
-  if (options.volume_mesh) {
+  if (MeshesVolume(options)) {
     StageTimer t(&report, "volume");
     VolumeMeshOptions vo = options.volume;
     // A PLC TetGen fails on is kept beside the outputs: the input of a bug report.

@@ -62,10 +62,13 @@ struct PipelineOptions {
   ScoreOptions score;
   bool volume_mesh = false;  // tetrahedralize the box with the sheets inside
   VolumeMeshOptions volume;
-  FlowOptions flow;  // with the volume mesh: the sample's permeability tensor
+  FlowOptions flow;  // the sample's permeability tensor on the volume mesh (which it turns on)
   OutputOptions output;
   double time_limit_seconds = 0;  // the run ends kDeadlineExceeded past this (0: none)
 };
+
+// Whether the run makes the volume mesh: asked for, or needed by flow.
+inline bool MeshesVolume(const PipelineOptions& o) { return o.volume_mesh || o.flow.enabled; }
 
 }  // namespace sheetmesh
 

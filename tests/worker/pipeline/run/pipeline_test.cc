@@ -149,14 +149,13 @@ TEST(PipelineTest, VolumeStageWritesTheFemFormats) {
   EXPECT_TRUE(j["volume_mesh"]["quality"].contains("radius_aspect"));
 }
 
-// The flow stage on the phantom's volume mesh: a tensor in the report, every stage seen; a
-// volume of unknown unit and a flow without the volume mesh are refused before any work.
+// The flow stage on the phantom's volume mesh (which flow turns on): a tensor in the report,
+// every stage seen; a volume of unknown unit is refused before any work.
 TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
   TempDir tmp;
   PipelineOptions o;
   o.input.path = SmallPhantom(tmp);
   o.output.dir = tmp.File("out");
-  o.volume_mesh = true;
   o.flow.enabled = true;
   o.score.hausdorff = false;
   o.input.open.unit = "um";
@@ -180,10 +179,7 @@ TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
   unitless.input.open.unit.clear();
   EXPECT_THAT(RunPipeline(unitless, {}),
               StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("input.unit")));
-  PipelineOptions no_volume = o;
-  no_volume.volume_mesh = false;
-  EXPECT_THAT(RunPipeline(no_volume, {}),
-              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("volume_mesh")));
+  EXPECT_TRUE(r.volume_mesh.has_value());
 }
 
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {

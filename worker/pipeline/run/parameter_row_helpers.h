@@ -168,4 +168,13 @@ inline ParamRow Exclusive(ParamRow r, std::string group) {
 
 }  // namespace sheetmesh::parameter_rows
 
+namespace sheetmesh::parameter_rows {
+
+// Parts of the table defined in parameter_table_volume.cc.
+std::vector<ParamRow> VolumeMeshRows();
+std::vector<ParamRow> FlowRows();
+std::vector<ParamRow> OutputRows();
+
+}  // namespace sheetmesh::parameter_rows
+
 #endif  // SHEETMESH_WORKER_PIPELINE_RUN_PARAMETER_ROW_HELPERS_H_

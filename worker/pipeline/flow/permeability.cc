@@ -219,7 +219,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
       return absl::InternalError("flow: the preconditioner of the pressure system failed");
     }
     for (int d = 0; d < 3; ++d) {
-      SM_RETURN_IF_ERROR(progress.Update(0.1 + 0.3 * d, absl::StrCat("solve ", std::string(1, "xyz"[d]))));
+      SM_RETURN_IF_ERROR(
+          progress.Update(0.1 + 0.3 * d, absl::StrCat("solve ", std::string(1, "xyz"[d]))));
       const Eigen::VectorXd p = cg.solve(rhs.col(d));
       out.iterations[d] = static_cast<int>(cg.iterations());
       out.residual = std::max(out.residual, cg.error());

@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "tests/testing/status_matchers.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -23,37 +24,9 @@ constexpr double kApertureVoxels = 2;  // 20 µm
 constexpr double kMatrix = 1e-18;      // m²
 
 // A sheet over the box's face-to-face square (u, v) ∈ [−0.5, 19.5]² of the plane `at`
-// (voxel coordinates), in n × n squares of two triangles.
+// (voxel coordinates), in n × n squares of two triangles, of the test's aperture.
 TriangleMesh Sheet(const std::function<Vec3(double, double)>& at, int n, int32_t piece) {
-  TriangleMesh m;
-  const double lo = -0.5, hi = kSide - 0.5;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i)
-      m.vertices.push_back(at(lo + (hi - lo) * i / n, lo + (hi - lo) * j / n));
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const uint32_t v = j * (n + 1) + i;
-      m.faces.push_back({v, v + 1, v + n + 2});
-      m.faces.push_back({v, v + n + 2, v + n + 1});
-    }
-  }
-  m.face_piece.assign(m.faces.size(), piece);
-  m.face_thickness_voxels.assign(m.faces.size(), kApertureVoxels);
-  m.face_aperture_voxels.assign(m.faces.size(), kApertureVoxels);
-  return m;
-}
-
-TriangleMesh Join(TriangleMesh a, const TriangleMesh& b) {
-  const uint32_t offset = static_cast<uint32_t>(a.vertices.size());
-  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
-  for (Face f : b.faces) a.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
-  a.face_piece.insert(a.face_piece.end(), b.face_piece.begin(), b.face_piece.end());
-  a.face_thickness_voxels.insert(a.face_thickness_voxels.end(), b.face_thickness_voxels.begin(),
-                                 b.face_thickness_voxels.end());
-  a.face_aperture_voxels.insert(a.face_aperture_voxels.end(), b.face_aperture_voxels.begin(),
-                                b.face_aperture_voxels.end());
-  return a;
+  return testing::Grid(at, -0.5, kSide - 0.5, n, piece, kApertureVoxels);
 }
 
 TetMesh Mesh(const TriangleMesh& sheets) {
@@ -117,7 +90,7 @@ TEST(PermeabilityTest, ATiltedFractureTurnsTheTensorWithIt) {
 TEST(PermeabilityTest, TwoOrthogonalFracturesAddTheirTerms) {
   const TriangleMesh horizontal = Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 4, 0);
   const TriangleMesh vertical = Sheet([](double u, double v) { return Vec3(9.5, u, v); }, 4, 1);
-  const TetMesh mesh = Mesh(Join(horizontal, vertical));
+  const TetMesh mesh = Mesh(testing::Append(horizontal, vertical));
   SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult k, SolvePermeability(mesh, Options()));
   const double f = FractureTerm();
   EXPECT_NEAR(k.tensor[0][0], kMatrix + f, 0.02 * (kMatrix + f));
@@ -146,14 +119,12 @@ TEST(PermeabilityTest, BadInputIsRefusedNamingFieldAndValue) {
   const TetMesh mesh = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 2, 0));
   FlowOptions o = Options();
   o.matrix_permeability = -1;
-  EXPECT_THAT(SolvePermeability(mesh, o),
-              testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("permeability.matrix = -1")));
+  EXPECT_THAT(SolvePermeability(mesh, o), testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                                                            HasSubstr("permeability.matrix = -1")));
   o = Options();
   o.body_permeability = 5;
-  EXPECT_THAT(SolvePermeability(mesh, o),
-              testing::StatusIs(absl::StatusCode::kInvalidArgument,
-                                HasSubstr("permeability.body = 5")));
+  EXPECT_THAT(SolvePermeability(mesh, o), testing::StatusIs(absl::StatusCode::kInvalidArgument,
+                                                            HasSubstr("permeability.body = 5")));
   TetMesh negative = mesh;
   for (size_t f = 0; f < negative.faces.size(); ++f) {
     if (negative.face_piece[f] >= 0) negative.face_thickness_voxels[f] = -1;

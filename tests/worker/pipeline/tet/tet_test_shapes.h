@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "worker/pipeline/mesh/triangle_geometry.h"
@@ -12,19 +13,13 @@
 
 namespace sheetmesh::testing {
 
-// A square sheet of n x n quads at height z, spanning [a, b] in x and y (voxel coordinates).
-inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 0, float thick = 3,
-                           int axis = 2) {
+// A sheet of n x n quads, each two triangles, over (u, v) in [a, b]² placed by `at` (voxel
+// coordinates).
+inline TriangleMesh Grid(const std::function<Vec3(double, double)>& at, double a, double b, int n,
+                         int32_t piece = 0, float thick = 3) {
   TriangleMesh m;
-  auto put = [&](double u, double v) {
-    Vec3 p;
-    p[axis] = z;
-    p[(axis + 1) % 3] = u;
-    p[(axis + 2) % 3] = v;
-    m.vertices.push_back(p);
-  };
   for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) put(a + (b - a) * i / n, a + (b - a) * j / n);
+    for (int i = 0; i <= n; ++i) m.vertices.push_back(at(a + (b - a) * i / n, a + (b - a) * j / n));
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const uint32_t v = j * (n + 1) + i;
@@ -34,6 +29,20 @@ inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 
   m.face_piece.assign(m.faces.size(), piece);
   m.face_thickness_voxels.assign(m.faces.size(), thick);
   return m;
+}
+
+// A square sheet of n x n quads at height z, spanning [a, b] in x and y (voxel coordinates).
+inline TriangleMesh Square(double a, double b, double z, int n, int32_t piece = 0, float thick = 3,
+                           int axis = 2) {
+  return Grid(
+      [&](double u, double v) {
+        Vec3 p;
+        p[axis] = z;
+        p[(axis + 1) % 3] = u;
+        p[(axis + 2) % 3] = v;
+        return p;
+      },
+      a, b, n, piece, thick);
 }
 
 // The closed surface of the cube [lo, hi]^3 as a body (piece `piece`, thickness 0),

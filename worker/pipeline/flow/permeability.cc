@@ -34,6 +34,8 @@ struct Element {
   std::array<Vec3, N> gradient;
   double measure = 0;
   double conductivity = 0;
+  double velocity = 0;  // what times −∇p is its Darcy velocity × viscosity (k; a²/12 on a sheet)
+  size_t cell = 0;      // its cell in volume.vtu: the tetrahedra, then the faces
   int kind = 0;
 };
 
@@ -84,7 +86,8 @@ double MetresPerUnit(const std::string& unit) {
 
 absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
                                                      const FlowOptions& options,
-                                                     const Progress& progress) {
+                                                     const Progress& progress,
+                                                     VolumeFields* fields) {
   const absl::Time start = absl::Now();
   SM_RETURN_IF_ERROR(CheckPermeability(options.matrix_permeability, "permeability.matrix"));
   SM_RETURN_IF_ERROR(CheckPermeability(options.body_permeability, "permeability.body"));
@@ -130,6 +133,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     if (!TetGradients(p, &e.gradient, &e.measure)) continue;
     e.kind = mesh.Region(t) >= 0 ? 2 : 0;
     e.conductivity = e.kind == 2 ? options.body_permeability : options.matrix_permeability;
+    e.velocity = e.conductivity;
+    e.cell = t;
     out.body_tets += e.kind == 2;
     tets.push_back(e);
   }
@@ -157,6 +162,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     }
     e.kind = 1;
     e.conductivity = a * a * a / 12;  // the local cubic law: transmissivity per unit viscosity
+    e.velocity = a * a / 12;
+    e.cell = mesh.tets.size() + f;
     faces.push_back(e);
   }
   out.sheet_faces = faces.size();
@@ -253,6 +260,23 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
   };
   for (const Element<4>& e : tets) add_flux(e);
   for (const Element<3>& e : faces) add_flux(e);
+  if (fields != nullptr) {
+    const size_t cells = mesh.tets.size() + mesh.faces.size();
+    for (int d = 0; d < 3; ++d) {
+      const std::string axis(1, "xyz"[d]);
+      std::vector<double> p(pressure[d].data(), pressure[d].data() + n);
+      fields->node_scalars.emplace_back("pressure_" + axis, std::move(p));
+      std::vector<Vec3> v(cells);
+      auto velocity = [&](const auto& e) {
+        Vec3 g;
+        for (size_t a = 0; a < e.nodes.size(); ++a) g += e.gradient[a] * pressure[d][e.nodes[a]];
+        v[e.cell] = g * -e.velocity;
+      };
+      for (const Element<4>& e : tets) velocity(e);
+      for (const Element<3>& e : faces) velocity(e);
+      fields->cell_vectors.emplace_back("velocity_" + axis, std::move(v));
+    }
+  }
   for (int d = 0; d < 3; ++d) {
     const Vec3 total = flux[d][0] + flux[d][1] + flux[d][2];
     for (int i = 0; i < 3; ++i) out.tensor[i][d] = (&total.x)[i];

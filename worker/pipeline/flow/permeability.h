@@ -20,6 +20,7 @@
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/tet/tet_mesh.h"
+#include "worker/pipeline/tet/volume_mesh_io.h"
 
 namespace sheetmesh {
 
@@ -61,10 +62,16 @@ double MetresPerUnit(const std::string& unit);
 // permeability that is not positive and finite or beyond 1e-3 m² (field and value named),
 // a sheet face of negative or non-finite aperture (naming it), a mesh without tetrahedra,
 // or one whose length unit is not known (a permeability needs metres); kInternal when the solver
-// does not converge (naming the axis and residual); kCancelled if asked.
+// does not converge (naming the axis and residual); kCancelled if asked. `fields`, when
+// given, receives the three solutions for volume.vtu: per node pressure_x, pressure_y,
+// pressure_z (the pressure under a unit gradient along that axis, −x_d on the box) and per
+// cell velocity_x, velocity_y, velocity_z, the Darcy velocity times the viscosity under that
+// gradient (m²: −k ∇p in the rock and bodies, −(a²/12) ∇p along a sheet face, 0 on the box's
+// faces and bodies' walls).
 absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
                                                      const FlowOptions& options,
-                                                     const Progress& progress = {});
+                                                     const Progress& progress = {},
+                                                     VolumeFields* fields = nullptr);
 
 }  // namespace sheetmesh
 

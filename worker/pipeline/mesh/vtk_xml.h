@@ -53,6 +53,20 @@ class VtkXml {
     out_ += "</DataArray>\n";
   }
 
+  // An array of 3-vectors of `type`: value(i) (a Vec3) for i < count, `digits` significant
+  // digits.
+  template <class V>
+  void VectorArray(absl::string_view type, absl::string_view name, size_t count, V value,
+                   int digits) {
+    absl::StrAppend(&out_, "<DataArray type=\"", type, "\" Name=\"", name,
+                    "\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for (size_t i = 0; i < count; ++i) {
+      const Vec3 v = value(i);
+      absl::StrAppendFormat(&out_, "%.*g %.*g %.*g\n", digits, v.x, digits, v.y, digits, v.z);
+    }
+    out_ += "</DataArray>\n";
+  }
+
   // Closes the piece and the file; the text.
   std::string Finish() &&;
 

@@ -87,7 +87,8 @@ absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const 
 absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
                           const VoxelSet& phase, const TriangleMesh& mesh,
                           const LabelledVoxels& model, const LabelledVoxels& dropped,
-                          const TetMesh* volume, PipelineReport* report) {
+                          const TetMesh* volume, const VolumeFields* fields,
+                          PipelineReport* report) {
   const std::string& dir = options.output.dir;
   SM_RETURN_IF_ERROR(MakeDirs(dir));
   auto path = [&](const std::string& name) { return (std::filesystem::path(dir) / name).string(); };
@@ -110,7 +111,7 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
     report->files.push_back(labels);
   }
   if (volume != nullptr) {
-    SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files));
+    SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files, fields));
   }
   if (options.output.previews) SM_RETURN_IF_ERROR(WritePreviews(dir, phase, mesh, pl, report));
   report->files.push_back("report.json");
@@ -339,6 +340,7 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   }
 
   VolumeMeshResult volume;
+  VolumeFields flow_fields;  // with flow: the pressures and velocities, for volume.vtu
   absl::Status volume_failed;
   if (MeshesVolume(options)) {
     StageTimer t(&report, "volume");
@@ -360,8 +362,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
       report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
       if (options.flow.enabled) {
         StageTimer flow_timer(&report, "flow");
-        SM_ASSIGN_OR_RETURN(report.flow,
-                            SolvePermeability(volume.mesh, options.flow, progress.Stage("flow")));
+        SM_ASSIGN_OR_RETURN(report.flow, SolvePermeability(volume.mesh, options.flow,
+                                                           progress.Stage("flow"), &flow_fields));
       }
     } else {
       // Cancelled or out of time: stop. Otherwise the surface and its score stand.
@@ -379,7 +381,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   if (!options.output.dir.empty()) {
     StageTimer t(&report, "write");
     SM_RETURN_IF_ERROR(WriteOutputs(options, phase.info.placement, phase.sheet, mesh, model,
-                                    dropped, report.volume_mesh ? &volume.mesh : nullptr, &report));
+                                    dropped, report.volume_mesh ? &volume.mesh : nullptr,
+                                    report.flow ? &flow_fields : nullptr, &report));
     SM_RETURN_IF_ERROR(progress.Stage("write").Update(1.0));
   }
   if (!volume_failed.ok()) {

@@ -38,9 +38,10 @@ absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
 }
 
 absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
-                              const OutputOptions& output, std::vector<std::string>* files) {
+                              const OutputOptions& output, std::vector<std::string>* files,
+                              const VolumeFields* fields) {
   if (output.vtu) {
-    SM_RETURN_IF_ERROR(WriteVtu(In(dir, "volume.vtu"), mesh));
+    SM_RETURN_IF_ERROR(WriteVtu(In(dir, "volume.vtu"), mesh, fields));
     files->push_back("volume.vtu");
   }
   if (output.msh) {

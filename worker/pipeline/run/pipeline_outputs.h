@@ -20,9 +20,11 @@ absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
                                const Placement& placement, const OutputOptions& output,
                                std::vector<std::string>* files);
 
-// volume.vtu, volume.msh, volume.inp into `dir` (which must exist); appends their names.
+// volume.vtu (with `fields` when given), volume.msh, volume.inp into `dir` (which must
+// exist); appends their names.
 absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
-                              const OutputOptions& output, std::vector<std::string>* files);
+                              const OutputOptions& output, std::vector<std::string>* files,
+                              const VolumeFields* fields = nullptr);
 
 }  // namespace sheetmesh
 

@@ -56,7 +56,7 @@ std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
   return groups;
 }
 
-absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
+absl::Status WriteVtu(const std::string& path, const TetMesh& m, const VolumeFields* fields) {
   const size_t nt = m.tets.size(), cells = nt + m.faces.size();
   VtkXml vtk(VtkKind::kUnstructuredGrid, m.nodes.size(), cells,
              absl::StrCat("sheetmesh ", SHEETMESH_VERSION, ": ", m.UnitsText()));
@@ -107,7 +107,28 @@ absl::Status WriteVtu(const std::string& path, const TetMesh& m) {
     const double a = m.FaceThickness(f);
     return absl::StrFormat("%.9g", a * a * a / 12);
   });
+  if (fields != nullptr) {
+    for (const auto& [name, v] : fields->cell_vectors) {
+      if (v.size() != cells) {
+        return absl::InternalError(absl::StrCat("volume field ", name, " has ", v.size(),
+                                                " values for ", cells, " cells"));
+      }
+      vtk.VectorArray(
+          "Float64", name, cells, [&](size_t i) { return v[i]; }, 9);
+    }
+  }
   vtk.EndData();
+  if (fields != nullptr && !fields->node_scalars.empty()) {
+    vtk.BeginData("PointData", fields->node_scalars[0].first);
+    for (const auto& [name, v] : fields->node_scalars) {
+      if (v.size() != m.nodes.size()) {
+        return absl::InternalError(absl::StrCat("volume field ", name, " has ", v.size(),
+                                                " values for ", m.nodes.size(), " nodes"));
+      }
+      vtk.Array("Float64", name, v.size(), [&](size_t i) { return absl::StrFormat("%.9g", v[i]); });
+    }
+    vtk.EndData();
+  }
   const std::string out = std::move(vtk).Finish();
   return WriteFileAtomically(path, out);
 }

@@ -22,7 +22,14 @@ namespace sheetmesh {
 // walls, a sheet's faces — and 1 + the largest piece + 1 for the box faces), thickness (physical)
 // and thickness_voxels, aperture (= thickness), permeability a^2/12 and transmissivity a^3/12 (the
 // cubic law, physical units; 0 off the sheets).
-absl::Status WriteVtu(const std::string& path, const TetMesh& mesh);
+// `fields`, when given, adds its node scalars as point data and its cell vectors (one per
+// tetrahedron, then per face) as cell data.
+struct VolumeFields {
+  std::vector<std::pair<std::string, std::vector<double>>> node_scalars;
+  std::vector<std::pair<std::string, std::vector<Vec3>>> cell_vectors;
+};
+absl::Status WriteVtu(const std::string& path, const TetMesh& mesh,
+                      const VolumeFields* fields = nullptr);
 
 // ASCII MSH 4.1. Physical groups: 3D "rock" (tag 1) and "body_<p>" (tag 100 + p) for every
 // body; 2D "boundary" (tag 2), "sheet_<p>" and "body_<p>_wall" (tag 100 + p) for every piece.

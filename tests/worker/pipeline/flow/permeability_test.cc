@@ -68,6 +68,37 @@ TEST(PermeabilityTest, APlanarFractureAddsTheCubicLawAlongItAndNothingAcross) {
   EXPECT_NEAR(std::abs(k.principal_directions[2].z), 1, 1e-6);
 }
 
+// The fields for volume.vtu: the pressure of the x solve is −x everywhere (the linear
+// solution), and the velocity along a sheet face is a²/12 along x, in the rock k_m.
+TEST(PermeabilityTest, TheFieldsAreTheLinearSolution) {
+  const TetMesh mesh = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 4, 0));
+  VolumeFields fields;
+  ASSERT_THAT(SolvePermeability(mesh, Options(), {}, &fields).status(), testing::IsOk());
+  ASSERT_EQ(fields.node_scalars.size(), 3u);
+  ASSERT_EQ(fields.cell_vectors.size(), 3u);
+  EXPECT_EQ(fields.node_scalars[0].first, "pressure_x");
+  EXPECT_EQ(fields.cell_vectors[2].first, "velocity_z");
+  const double m = 1e-3;  // the mesh's millimetres in metres
+  for (size_t i = 0; i < mesh.nodes.size(); ++i) {
+    ASSERT_NEAR(fields.node_scalars[0].second[i], -mesh.nodes[i].x * m,
+                1e-6 * kSide * kVoxelMm * m);
+  }
+  const double a = kApertureVoxels * kVoxelMm * m;
+  size_t sheet_faces = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Vec3 v = fields.cell_vectors[0].second[mesh.tets.size() + f];
+    if (mesh.face_piece[f] < 0) {
+      EXPECT_EQ(Norm(v), 0);
+      continue;
+    }
+    ++sheet_faces;
+    EXPECT_NEAR(v.x, a * a / 12, 1e-4 * a * a / 12);
+    EXPECT_NEAR(v.y, 0, 1e-4 * a * a / 12);
+  }
+  EXPECT_GT(sheet_faces, 0u);
+  EXPECT_NEAR(fields.cell_vectors[0].second[0].x, kMatrix, 1e-4 * kMatrix);
+}
+
 // Tilted 30° about y: the tensor turns with the fracture, which is 1/cos 30° longer in the
 // cube.
 TEST(PermeabilityTest, ATiltedFractureTurnsTheTensorWithIt) {

@@ -180,6 +180,12 @@ TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
   EXPECT_THAT(RunPipeline(unitless, {}),
               StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("input.unit")));
   EXPECT_TRUE(r.volume_mesh.has_value());
+  // The pressures and velocities of the three solves in volume.vtu.
+  const std::string vtu = *ReadFileToString(tmp.File("out/volume.vtu"));
+  for (const char* name : {"pressure_x", "pressure_z", "velocity_x", "velocity_y"}) {
+    EXPECT_THAT(vtu, ::testing::HasSubstr(absl::StrCat("Name=\"", name, "\""))) << name;
+  }
+  EXPECT_THAT(vtu, ::testing::HasSubstr("<PointData"));
 }
 
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {

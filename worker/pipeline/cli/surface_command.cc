@@ -196,6 +196,17 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
         k.tensor[0][0], k.tensor[1][1], k.tensor[2][2], k.tensor[0][0] / kSquareMetresPerDarcy,
         k.tensor[1][1] / kSquareMetresPerDarcy, k.tensor[2][2] / kSquareMetresPerDarcy,
         k.principal[0], k.principal[1], k.principal[2]);
+    out << absl::StrFormat("              permeameters %.4g / %.4g / %.4g m²", k.permeameter[0],
+                           k.permeameter[1], k.permeameter[2]);
+    if (r.flow_image) {
+      out << absl::StrFormat("; the image's %.4g / %.4g / %.4g (mesh / image %.3f / %.3f / %.3f)",
+                             r.flow_image->tensor[0][0], r.flow_image->tensor[1][1],
+                             r.flow_image->tensor[2][2], r.flow_image->mesh_to_image[0],
+                             r.flow_image->mesh_to_image[1], r.flow_image->mesh_to_image[2]);
+    } else if (!r.flow_image_skipped.empty()) {
+      out << "; the image's reference skipped: " << r.flow_image_skipped;
+    }
+    out << "\n";
     out << absl::StrFormat(
         "              the sheets carry %.0f%% / %.0f%% / %.0f%% of the flux; %d sheet faces, "
         "%d unknowns, CG %d/%d/%d iterations (residual %.1e)%s\n",

@@ -16,6 +16,8 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
+}  // namespace
+
 absl::Status CheckPermeability(double k, const char* field) {
   if (!(std::isfinite(k) && k > 0 && k <= 1e-3)) {
     return absl::InvalidArgumentError(
@@ -24,6 +26,8 @@ absl::Status CheckPermeability(double k, const char* field) {
   }
   return absl::OkStatus();
 }
+
+namespace {
 
 // A linear element: its nodes, the gradients of their shape functions (constant over it),
 // its measure (volume or area, metres) and its conductivity (k for a tetrahedron, a³/12 for
@@ -168,50 +172,56 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
   }
   out.sheet_faces = faces.size();
 
-  // Nodes on the box's faces hold the pressure; the others are the unknowns.
+  // Which side of the box a node lies on: bit 2d for the face at the least x_d, 2d + 1 the
+  // greatest.
   const double eps = 1e-9 * std::max({extent.x, extent.y, extent.z});
-  std::vector<int64_t> unknown(n, -1);
+  std::vector<uint8_t> sides(n, 0);
   for (size_t i = 0; i < n; ++i) {
-    const Vec3& p = x[i];
-    const bool on_box = p.x - lo.x <= eps || hi.x - p.x <= eps || p.y - lo.y <= eps ||
-                        hi.y - p.y <= eps || p.z - lo.z <= eps || hi.z - p.z <= eps;
-    if (on_box) {
-      ++out.fixed_nodes;
-    } else {
-      unknown[i] = static_cast<int64_t>(out.unknowns++);
+    for (int d = 0; d < 3; ++d) {
+      if ((&x[i].x)[d] - (&lo.x)[d] <= eps) sides[i] |= uint8_t(1) << (2 * d);
+      if ((&hi.x)[d] - (&x[i].x)[d] <= eps) sides[i] |= uint8_t(1) << (2 * d + 1);
     }
   }
   // The pressure of axis d at a fixed node: −x_d (a unit gradient along −d drives flow
   // along +d).
   auto fixed_pressure = [&](size_t i, int d) { return -(&x[i].x)[d]; };
 
-  std::vector<Eigen::Triplet<double>> entries;
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(out.unknowns), 3);
-  auto assemble = [&](const auto& e) {
-    constexpr int N = std::tuple_size_v<decltype(e.nodes)>;
-    const double w = e.measure * e.conductivity;
-    for (int a = 0; a < N; ++a) {
-      const int64_t ua = unknown[e.nodes[a]];
-      if (ua < 0) continue;
-      for (int b = 0; b < N; ++b) {
-        const double kab = w * Dot(e.gradient[a], e.gradient[b]);
-        const int64_t ub = unknown[e.nodes[b]];
-        if (ub >= 0) {
-          entries.emplace_back(ua, ub, kab);
-        } else {
-          for (int d = 0; d < 3; ++d) rhs(ua, d) -= kab * fixed_pressure(e.nodes[b], d);
+  // One solve along d with the pressure held on the nodes whose sides meet `held`: the
+  // pressure at every node.
+  auto solve = [&](uint8_t held, int d, double* residual, int* iterations,
+                   uint64_t* unknowns) -> absl::StatusOr<Eigen::VectorXd> {
+    std::vector<int64_t> unknown(n, -1);
+    uint64_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (!(sides[i] & held)) unknown[i] = static_cast<int64_t>(count++);
+    }
+    if (unknowns) *unknowns = count;
+    Eigen::VectorXd pressure(static_cast<Eigen::Index>(n));
+    for (size_t i = 0; i < n; ++i) pressure[static_cast<Eigen::Index>(i)] = fixed_pressure(i, d);
+    if (count == 0) return pressure;
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(count));
+    auto assemble = [&](const auto& e) {
+      constexpr int N = std::tuple_size_v<decltype(e.nodes)>;
+      const double w = e.measure * e.conductivity;
+      for (int a = 0; a < N; ++a) {
+        const int64_t ua = unknown[e.nodes[a]];
+        if (ua < 0) continue;
+        for (int b = 0; b < N; ++b) {
+          const double kab = w * Dot(e.gradient[a], e.gradient[b]);
+          const int64_t ub = unknown[e.nodes[b]];
+          if (ub >= 0) {
+            entries.emplace_back(ua, ub, kab);
+          } else {
+            rhs[ua] -= kab * fixed_pressure(e.nodes[b], d);
+          }
         }
       }
-    }
-  };
-  for (const Element<4>& e : tets) assemble(e);
-  for (const Element<3>& e : faces) assemble(e);
-
-  // Three solves on the same matrix, scaled so that its largest diagonal is 1.
-  std::vector<Eigen::VectorXd> pressure(3, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n)));
-  if (out.unknowns > 0) {
-    SparseMatrix k(static_cast<Eigen::Index>(out.unknowns),
-                   static_cast<Eigen::Index>(out.unknowns));
+    };
+    for (const Element<4>& e : tets) assemble(e);
+    for (const Element<3>& e : faces) assemble(e);
+    // Scaled so that the largest diagonal is 1.
+    SparseMatrix k(static_cast<Eigen::Index>(count), static_cast<Eigen::Index>(count));
     k.setFromTriplets(entries.begin(), entries.end());
     entries = {};
     const double scale = 1.0 / k.diagonal().cwiseAbs().maxCoeff();
@@ -225,41 +235,54 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     if (cg.info() != Eigen::Success) {
       return absl::InternalError("flow: the preconditioner of the pressure system failed");
     }
-    for (int d = 0; d < 3; ++d) {
-      SM_RETURN_IF_ERROR(
-          progress.Update(0.1 + 0.3 * d, absl::StrCat("solve ", std::string(1, "xyz"[d]))));
-      const Eigen::VectorXd p = cg.solve(rhs.col(d));
-      out.iterations[d] = static_cast<int>(cg.iterations());
-      out.residual = std::max(out.residual, cg.error());
-      if (cg.info() != Eigen::Success) {
-        return absl::InternalError(absl::StrCat(
-            "flow: the pressure along ", std::string(1, "xyz"[d]), " did not converge in ",
-            cg.iterations(), " iterations (relative residual ", cg.error(), ")"));
-      }
-      for (size_t i = 0; i < n; ++i) {
-        pressure[d][static_cast<Eigen::Index>(i)] =
-            unknown[i] >= 0 ? p[unknown[i]] : fixed_pressure(i, d);
-      }
+    const Eigen::VectorXd p = cg.solve(rhs);
+    *iterations = static_cast<int>(cg.iterations());
+    *residual = std::max(*residual, cg.error());
+    if (cg.info() != Eigen::Success) {
+      return absl::InternalError(absl::StrCat("flow: the pressure along ", std::string(1, "xyz"[d]),
+                                              " did not converge in ", cg.iterations(),
+                                              " iterations (relative residual ", cg.error(), ")"));
     }
-  } else {
-    for (int d = 0; d < 3; ++d) {
-      for (size_t i = 0; i < n; ++i)
-        pressure[d][static_cast<Eigen::Index>(i)] = fixed_pressure(i, d);
+    for (size_t i = 0; i < n; ++i) {
+      if (unknown[i] >= 0) pressure[static_cast<Eigen::Index>(i)] = p[unknown[i]];
     }
-  }
-
-  // The mean fluxes: column d of the tensor, by kind of element.
-  std::array<std::array<Vec3, 3>, 3> flux{};  // [axis][kind]
-  auto add_flux = [&](const auto& e) {
-    constexpr int N = std::tuple_size_v<decltype(e.nodes)>;
-    for (int d = 0; d < 3; ++d) {
-      Vec3 g;
-      for (int a = 0; a < N; ++a) g += e.gradient[a] * pressure[d][e.nodes[a]];
-      flux[d][e.kind] += g * (-e.conductivity * e.measure / out.volume);
-    }
+    return pressure;
   };
-  for (const Element<4>& e : tets) add_flux(e);
-  for (const Element<3>& e : faces) add_flux(e);
+  // The mean flux of a solution, by kind of element.
+  auto mean_flux = [&](const Eigen::VectorXd& pressure) {
+    std::array<Vec3, 3> flux{};
+    auto add = [&](const auto& e) {
+      Vec3 g;
+      for (size_t a = 0; a < e.nodes.size(); ++a) g += e.gradient[a] * pressure[e.nodes[a]];
+      flux[e.kind] += g * (-e.conductivity * e.measure / out.volume);
+    };
+    for (const Element<4>& e : tets) add(e);
+    for (const Element<3>& e : faces) add(e);
+    return flux;
+  };
+
+  // The tensor: the pressure held linear on every face of the box.
+  std::vector<Eigen::VectorXd> pressure;
+  std::array<std::array<Vec3, 3>, 3> flux{};  // [axis][kind]
+  for (int d = 0; d < 3; ++d) {
+    SM_RETURN_IF_ERROR(
+        progress.Update(0.5 * d / 3, absl::StrCat("solve ", std::string(1, "xyz"[d]))));
+    SM_ASSIGN_OR_RETURN(Eigen::VectorXd p,
+                        solve(0x3f, d, &out.residual, &out.iterations[d], &out.unknowns));
+    flux[d] = mean_flux(p);
+    pressure.push_back(std::move(p));
+  }
+  out.fixed_nodes = n - out.unknowns;
+  // The permeameters: along d the pressure held on the two faces across d only.
+  for (int d = 0; d < 3; ++d) {
+    SM_RETURN_IF_ERROR(
+        progress.Update(0.5 + 0.5 * d / 3, absl::StrCat("permeameter ", std::string(1, "xyz"[d]))));
+    int iterations = 0;
+    SM_ASSIGN_OR_RETURN(const Eigen::VectorXd p,
+                        solve(uint8_t(3) << (2 * d), d, &out.residual, &iterations, nullptr));
+    const std::array<Vec3, 3> f = mean_flux(p);
+    out.permeameter[d] = (&f[0].x)[d] + (&f[1].x)[d] + (&f[2].x)[d];
+  }
   if (fields != nullptr) {
     const size_t cells = mesh.tets.size() + mesh.faces.size();
     for (int d = 0; d < 3; ++d) {

@@ -40,8 +40,12 @@ struct PermeabilityResult {
   Tensor3 tensor{};            // k_ij, m²: column j the mean flux of a unit gradient along j
   std::array<double, 3> principal{};         // eigenvalues, largest first
   std::array<Vec3, 3> principal_directions;  // unit vectors, in that order
-  std::array<double, 3> fracture_share{};    // per axis: the sheets' part of the mean flux
-  std::array<double, 3> body_share{};        // and the bodies'
+  // Per axis, a permeameter's: the pressure −x_d on the two faces across d, no flow through
+  // the other four (the laboratory's measurement; below the tensor's diagonal where the
+  // sheets reach the side faces but do not cross from inlet to outlet).
+  std::array<double, 3> permeameter{};
+  std::array<double, 3> fracture_share{};  // per axis: the sheets' part of the mean flux
+  std::array<double, 3> body_share{};      // and the bodies'
   std::array<int, 3> iterations{};
   double residual = 0;  // the largest relative residual of the three solves
   uint64_t unknowns = 0;
@@ -54,6 +58,9 @@ struct PermeabilityResult {
 
   nlohmann::json Fields() const;
 };
+
+// kInvalidArgument naming `field` and `k` unless 0 < k <= 1e-3 m².
+absl::Status CheckPermeability(double k, const char* field);
 
 // What one length unit ("m", "cm", "mm", "um", "µm", "nm") is in metres; 0 when unknown.
 double MetresPerUnit(const std::string& unit);

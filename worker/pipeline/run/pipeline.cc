@@ -362,8 +362,23 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
       report.volume_mesh = static_cast<const VolumeMeshStats&>(volume);
       if (options.flow.enabled) {
         StageTimer flow_timer(&report, "flow");
+        const Progress flow = progress.Stage("flow");
         SM_ASSIGN_OR_RETURN(report.flow, SolvePermeability(volume.mesh, options.flow,
-                                                           progress.Stage("flow"), &flow_fields));
+                                                           flow.Sub(0, 0.5), &flow_fields));
+        // The image's own answer beside it: the cubic law on the sheet voxels' thickness.
+        const double m = report.flow->metres_per_unit;
+        const Vec3& s = phase.info.placement.spacing;
+        absl::StatusOr<ImagePermeability> image =
+            SolveImagePermeability(sheet.set, sheet.thickness, Vec3(s.x * m, s.y * m, s.z * m),
+                                   options.flow, kImageReferenceCells, flow.Sub(0.5, 1));
+        if (image.ok()) {
+          CompareToImage(*report.flow, &*image);
+          report.flow_image = *std::move(image);
+        } else if (image.status().code() == absl::StatusCode::kResourceExhausted) {
+          report.flow_image_skipped = std::string(image.status().message());
+        } else {
+          return image.status();
+        }
       }
     } else {
       // Cancelled or out of time: stop. Otherwise the surface and its score stand.

@@ -14,6 +14,7 @@
 #include "common/progress.h"
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
+#include "worker/pipeline/flow/image_permeability.h"
 #include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/run/pipeline_options.h"
@@ -73,7 +74,9 @@ struct PipelineReport {
   std::optional<RepresentationReport> representation;  // unless every piece is a sheet
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
-  std::optional<PermeabilityResult> flow;  // with flow: the permeability tensor
+  std::optional<PermeabilityResult> flow;       // with flow: the permeability tensor
+  std::optional<ImagePermeability> flow_image;  // and the image's, where the volume is small
+  std::string flow_image_skipped;               // why not, where it is not
   // With input.grey: what the sheets were found on, and the apertures from the grey levels.
   std::optional<SheetnessStats> sheetness;
   std::optional<GreyApertureStats> grey_apertures;

@@ -77,7 +77,13 @@ std::string PipelineReport::ToJson() const {
     j["radius_search"]["target_similarity"] = options.radius_search.target_similarity;
   }
   if (volume_mesh) j["volume_mesh"] = volume_mesh->Fields();
-  if (flow) j["flow"] = flow->Fields();
+  if (flow) {
+    j["flow"] = flow->Fields();
+    if (flow_image) j["flow"]["image_reference"] = flow_image->Fields();
+    if (!flow_image_skipped.empty()) {
+      j["flow"]["image_reference"] = {{"skipped", flow_image_skipped}};
+    }
+  }
   if (sheetness) {
     j["grey"] = {{"sheetness", sheetness->Fields()}};
     if (grey_apertures) {

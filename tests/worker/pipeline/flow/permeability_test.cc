@@ -11,6 +11,7 @@
 
 #include "tests/testing/status_matchers.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/flow/image_permeability.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -168,6 +169,41 @@ TEST(PermeabilityTest, BadInputIsRefusedNamingFieldAndValue) {
               testing::StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("input.unit")));
   EXPECT_THAT(SolvePermeability(TetMesh{}, Options()),
               testing::StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("no tetrahedra")));
+}
+
+}  // namespace
+}  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// The image's reference on a voxel slab 2 voxels thick through a 20³ box: the cubic law of
+// its 2-voxel aperture along it, the rock in series with it across.
+TEST(ImagePermeabilityTest, AVoxelSlabCarriesTheCubicLawAlongIt) {
+  const Dims d{20, 20, 20};
+  VoxelSet::Builder b(d);
+  for (int z = 9; z < 11; ++z) {
+    for (int y = 0; y < 20; ++y) b.AddRun(y, z, 0, 20);
+  }
+  const VoxelSet slab = std::move(b).Build();
+  const std::vector<uint16_t> tau(slab.size(), 2);
+  const double h = 10e-6;
+  FlowOptions o;
+  o.matrix_permeability = 1e-18;
+  SM_ASSERT_OK_AND_ASSIGN(const ImagePermeability k,
+                          SolveImagePermeability(slab, tau, Vec3(h, h, h), o, 1 << 20));
+  const double a = 2 * h, l = 20 * h;
+  const double along = a * a * a / (12 * l) + o.matrix_permeability * (l - a) / l;
+  EXPECT_NEAR(k.tensor[0][0], along, 0.01 * along);
+  EXPECT_NEAR(k.tensor[1][1], along, 0.01 * along);
+  // Across: the rock's 18 voxels in series with the slab's (nearly free) 2.
+  EXPECT_NEAR(k.tensor[2][2], o.matrix_permeability * l / (l - a), 0.01 * o.matrix_permeability);
+  EXPECT_EQ(k.cells, 8000u);
+  EXPECT_THAT(
+      SolveImagePermeability(slab, tau, Vec3(h, h, h), o, 1000),
+      testing::StatusIs(absl::StatusCode::kResourceExhausted, ::testing::HasSubstr("8000")));
+  EXPECT_THAT(SolveImagePermeability(slab, {}, Vec3(h, h, h), o, 1 << 20),
+              testing::StatusIs(absl::StatusCode::kInvalidArgument));
 }
 
 }  // namespace

@@ -188,6 +188,26 @@ TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
   EXPECT_THAT(vtu, ::testing::HasSubstr("<PointData"));
 }
 
+// A planar slab of constant aperture through the box: the mesh's permeameters along it and
+// the image's own (the cubic law on its voxels) agree within 5%.
+TEST(PipelineTest, AFlatSlabsPermeabilityMatchesTheImagesWithinFivePercent) {
+  TempDir tmp;
+  std::string bytes(40 * 40 * 40, '\0');
+  for (int z = 18; z < 22; ++z) std::fill_n(bytes.begin() + z * 1600, 1600, '\xff');
+  ASSERT_TRUE(WriteFileAtomically(tmp.File("slab_40x40x40_u8.raw"), bytes).ok());
+  PipelineOptions o;
+  o.input.path = tmp.File("slab_40x40x40_u8.raw");
+  o.input.selection = PhaseSelection::Labels({255});
+  o.input.open.unit = "um";
+  o.input.open.spacing = Vec3(5, 5, 5);
+  o.surface.scvd.radius_voxels = 5;
+  o.flow.enabled = true;
+  o.score.hausdorff = false;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, {}));
+  ASSERT_TRUE(r.flow_image.has_value());
+  for (int d = 0; d < 2; ++d) EXPECT_NEAR(r.flow_image->mesh_to_image[d], 1, 0.05) << d;
+}
+
 TEST(PipelineTest, CancelledRunLeavesNoFiles) {
   TempDir tmp;
   PipelineOptions o;

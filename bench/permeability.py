@@ -84,8 +84,9 @@ def main():
         else:
             print("%s: %s absent, skipped" % (name, full))
     lines = ["| volume | r | k_xx / k_yy / k_zz (darcy) | against the answer | least principal "
-             "direction off the normal | sheets' share of the flux | tetrahedra | CG iterations "
-             "| flow s / volume mesh s |", "|---|---|---|---|---|---|---|---|---|"]
+             "direction off the normal | permeameters: mesh / image per axis | sheets' share of "
+             "the flux | tetrahedra | CG iterations | flow s (image s) / volume mesh s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, vol, extra, answer, normal in cases:
         for r in (3, 5, 7):
             rep, err = run(cli, vol, os.path.join(tmp, "%s_%g" % (name.replace(" ", "_"), r)), r,
@@ -105,11 +106,14 @@ def main():
                 c = abs(sum(u * v for u, v in zip(least, normal)))
                 angle = "%.2f°" % math.degrees(math.acos(min(1.0, c)))
             share = " / ".join("%.2f" % s for s in rep["flow"]["fracture_share_of_flux"])
+            image = rep["flow"].get("image_reference", {})
+            ratio = " / ".join("%.3f" % v for v in image.get("mesh_to_image_per_axis", [])) or \
+                image.get("skipped", "—")
             secs = rep["seconds"]
-            lines.append("| %s | %g | %s | %s | %s | %s | %d | %s | %.2f / %.2f |" % (
-                name, r, darcy, against, angle, share, rep["volume_mesh"]["tetrahedra"],
+            lines.append("| %s | %g | %s | %s | %s | %s | %s | %d | %s | %.2f (%.2f) / %.2f |" % (
+                name, r, darcy, against, angle, ratio, share, rep["volume_mesh"]["tetrahedra"],
                 "/".join(str(i) for i in rep["flow"]["iterations"]),
-                secs.get("flow", 0), secs.get("volume", 0)))
+                secs.get("flow", 0), image.get("seconds", 0), secs.get("volume", 0)))
             print(lines[-1], flush=True)
     text = "\n".join(lines)
     os.makedirs(os.path.join(ROOT, "bench", "out"), exist_ok=True)

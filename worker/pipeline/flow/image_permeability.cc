@@ -34,10 +34,20 @@ absl::StatusOr<ImagePermeability> SolveImagePermeability(
   }
   const double h[3] = {spacing_m.x, spacing_m.y, spacing_m.z};
   const double mean_h = std::cbrt(h[0] * h[1] * h[2]);
-  // Each cell's permeability: the rock's, or a sheet voxel's cubic law.
+  // Each cell's permeability: the rock's, or a sheet voxel's cubic law. Where sheets cross,
+  // a voxel's thickness (its shortest run along the axes) can be the whole crossing's
+  // length (two slabs crossing along y: 96 voxels along the line where they meet), which
+  // would make the line a pipe: τ is held to twice the sheets' median.
+  std::vector<uint16_t> sorted(thickness.begin(), thickness.end());
+  uint16_t cap = 1;
+  if (!sorted.empty()) {
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    cap = static_cast<uint16_t>(std::max(1, 2 * sorted[sorted.size() / 2]));
+  }
+  sorted = {};
   std::vector<double> k(cells, options.matrix_permeability);
   sheet.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
-    const double a = thickness[i] * mean_h;
+    const double a = std::min(thickness[i], cap) * mean_h;
     k[static_cast<size_t>((int64_t{z} * d.ny + y) * d.nx + x)] =
         std::max(options.matrix_permeability, a * a / 12);
   });

@@ -1,6 +1,7 @@
 // A reference for the mesh's permeability from the image itself (beyond the paper), so that
 // a user sees how much meshing changed the answer. Each voxel is a cell of the grid: a
-// sheet voxel of thickness τ (voxels) has the permeability (τ h)²/12, so that a sheet τ
+// sheet voxel of thickness τ (voxels; held to twice the sheets' median, as where sheets
+// cross it is the crossing's length) has the permeability (τ h)²/12, so that a sheet τ
 // voxels thick carries the cubic law's a³/12 with a = τ h; every other voxel has the rock's
 // k_m. Darcy flow is solved on the grid by finite volumes (two-point fluxes, harmonic
 // means between cells) as three permeameters: along each axis d the pressure −x_d on the

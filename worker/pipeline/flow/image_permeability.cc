@@ -146,16 +146,7 @@ absl::StatusOr<ImagePermeability> SolveImagePermeability(
     }
     for (int i = 0; i < 3; ++i) out.tensor[i][g] = integral[i] / volume;
   }
-  Eigen::Matrix3d sym;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) sym(i, j) = 0.5 * (out.tensor[i][j] + out.tensor[j][i]);
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sym);
-  for (int j = 0; j < 3; ++j) {
-    out.principal[j] = es.eigenvalues()[2 - j];
-    const Eigen::Vector3d v = es.eigenvectors().col(2 - j);
-    out.principal_directions[j] = Vec3(v[0], v[1], v[2]);
-  }
+  Principal(out.tensor, &out.principal, &out.principal_directions);
   out.seconds = absl::ToDoubleSeconds(absl::Now() - start);
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return out;

@@ -79,6 +79,19 @@ bool TriangleGradients(const std::array<Vec3, 3>& x, std::array<Vec3, 3>* g, dou
 
 }  // namespace
 
+void Principal(const Tensor3& t, std::array<double, 3>* values, std::array<Vec3, 3>* directions) {
+  Eigen::Matrix3d sym;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) sym(i, j) = 0.5 * (t[i][j] + t[j][i]);
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sym);
+  for (int k = 0; k < 3; ++k) {
+    (*values)[k] = es.eigenvalues()[2 - k];
+    const Eigen::Vector3d v = es.eigenvectors().col(2 - k);
+    (*directions)[k] = Vec3(v[0], v[1], v[2]);
+  }
+}
+
 double MetresPerUnit(const std::string& unit) {
   if (unit == "m") return 1;
   if (unit == "cm") return 1e-2;
@@ -307,16 +320,7 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     out.fracture_share[d] = along != 0 ? (&flux[d][1].x)[d] / along : 0;
     out.body_share[d] = along != 0 ? (&flux[d][2].x)[d] / along : 0;
   }
-  Eigen::Matrix3d sym;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) sym(i, j) = 0.5 * (out.tensor[i][j] + out.tensor[j][i]);
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sym);
-  for (int k = 0; k < 3; ++k) {
-    out.principal[k] = es.eigenvalues()[2 - k];
-    const Eigen::Vector3d v = es.eigenvectors().col(2 - k);
-    out.principal_directions[k] = Vec3(v[0], v[1], v[2]);
-  }
+  Principal(out.tensor, &out.principal, &out.principal_directions);
   if (faces.empty()) {
     out.note =
         "no sheet face carries an aperture: the tensor is the rock's (and the bodies') alone";

@@ -59,6 +59,9 @@ struct PermeabilityResult {
   nlohmann::json Fields() const;
 };
 
+// The principal values of `t`'s symmetric part, largest first, and their unit directions.
+void Principal(const Tensor3& t, std::array<double, 3>* values, std::array<Vec3, 3>* directions);
+
 // kInvalidArgument naming `field` and `k` unless 0 < k <= 1e-3 m².
 absl::Status CheckPermeability(double k, const char* field);
 

@@ -51,21 +51,24 @@ TEST(GreyLevelsTest, RockVoidAndNoiseFromTheHistogram) {
   }
 }
 
+// One sheet in rock with no band of void beside it: the histogram has no void peak.
+GreyVolume WithoutVoid(double aperture, double sigma, double cnr) {
+  GreyPhantomOptions o = OneSheet(aperture, sigma, cnr);
+  o.void_band = 0;
+  return testing::MakeGreyPhantom(o);
+}
+
 // A sheet's partial voxels, even a 2-voxel sheet's dark core, are not a void phase: no
 // void is taken from them (a wrong void would bias every aperture).
 TEST(GreyLevelsTest, ASheetsCoreIsNotTakenForTheVoid) {
-  GreyPhantomOptions o = OneSheet(2, 0.5, 10);
-  o.void_band = 0;
-  const GreyVolume g = testing::MakeGreyPhantom(o);
+  const GreyVolume g = WithoutVoid(2, 0.5, 10);
   SM_ASSERT_OK_AND_ASSIGN(GreyLevels l, MeasureGreyLevels(g, {}, {}, "g.raw"));
   EXPECT_FALSE(l.void_measured) << "void at " << l.void_level;
   EXPECT_THAT(l.problem, HasSubstr("no void phase"));
 }
 
 TEST(GreyLevelsTest, GivenLevelsAreKeptAndAMissingVoidIsSaid) {
-  GreyPhantomOptions o = OneSheet(1, 1, 10);
-  o.void_band = 0;
-  const GreyVolume g = testing::MakeGreyPhantom(o);
+  const GreyVolume g = WithoutVoid(1, 1, 10);
   SM_ASSERT_OK_AND_ASSIGN(GreyLevels none, MeasureGreyLevels(g, {}, {}, "g.raw"));
   EXPECT_THAT(none.problem, HasSubstr("no void phase in the histogram"));
   SM_ASSERT_OK_AND_ASSIGN(GreyLevels given, MeasureGreyLevels(g, 40.0, std::nullopt, "g.raw"));

@@ -1,7 +1,8 @@
 """Every output format loaded by the tool its users load it with, on a run with anisotropic
 spacing, so that each format's thickness is checked to be physical: meshio (PLY, surface
 VTU, OBJ, volume VTU, MSH, INP, Exodus II), VTK (PLY colours, VTP arrays), `gmsh -check`,
-CalculiX solving a small static analysis on the INP unchanged, python3-openvdb on model.vdb.
+CalculiX solving a small static analysis on the INP unchanged and on the mesh split along the
+sheets, netCDF4 on the split Exodus file's side sets, python3-openvdb on model.vdb.
 
 Usage: interop_test.py PATH_TO_sheetmesh-pipeline
 Tools missing from the machine skip their part with a message (exit 77 when none ran)."""
@@ -54,7 +55,8 @@ try:
     subprocess.run([CLI, "phantom", "--preset=sample", "-o", vol], check=True,
                    stdout=subprocess.DEVNULL)
     out = os.path.join(tmp, "run")
-    subprocess.run([CLI, "run", vol, "--r", "7", "--volume_mesh", "--similarity_hausdorff=false",
+    subprocess.run([CLI, "run", vol, "--r", "7", "--volume_mesh", "--output_split",
+                    "--similarity_hausdorff=false",
                     "--spacing", ",".join(map(str, SPACING)), "--unit", "mm", "-o", out],
                    check=True, stdout=subprocess.DEVNULL)
     f = lambda name: os.path.join(out, name)
@@ -175,6 +177,41 @@ try:
         block = frd.split("DISP", 1)[1].split("\n -3", 1)[0]
         uz = [float(l[13 + 24:13 + 36]) for l in block.split("\n") if l.startswith(" -1")]
         assert uz and abs(min(uz) + 0.01) < 1e-6, min(uz)
+
+    @part("volume_split_ccx.inp in CalculiX: compressed, the split sample solves with a "
+          "contact pair per sheet",
+          lambda: shutil.which("ccx"))
+    def _():
+        work = os.path.join(tmp, "ccx_split")
+        os.makedirs(work)
+        with open(os.path.join(work, "job.inp"), "w") as d:
+            d.write(f"*INCLUDE, INPUT={f('volume_split_ccx.inp')}\n"
+                    "*STEP\n*STATIC\n*BOUNDARY\nBOX_ZMIN, 1, 3, 0.\nBOX_ZMAX, 1, 2, 0.\n"
+                    "BOX_ZMAX, 3, 3, -0.05\n*NODE FILE\nU\n*END STEP\n")
+        r = subprocess.run(["ccx", "job"], cwd=work, capture_output=True, text=True, timeout=900,
+                           env=dict(os.environ, OMP_NUM_THREADS="2"))
+        assert r.returncode == 0 and "Job finished" in r.stdout, r.stdout[-3000:]
+        deck = open(f("volume_split_ccx.inp")).read()
+        pairs = deck.count("*CONTACT PAIR")
+        assert pairs > 0 and pairs == deck.count("*SURFACE INTERACTION"), pairs
+        import meshio
+        plain, split = meshio.read(f("volume.inp")), meshio.read(f("volume_split_ccx.inp"))
+        # The split adds nodes (the copies), never tetrahedra.
+        assert len(split.points) > len(plain.points)
+        assert len(split.cells_dict["tetra"]) == len(plain.cells_dict["tetra"])
+
+    @part("volume_split.exo in netCDF4: each sheet's two sides as side sets of equal size",
+          lambda: has_module("netCDF4"))
+    def _():
+        import netCDF4
+        ds = netCDF4.Dataset(f("volume_split.exo"))
+        ss = [bytes(n.compressed()).decode() for n in ds.variables["ss_names"][:]]
+        sheets = [n[:-4] for n in ss if n.endswith("_neg")]
+        assert sheets and all(f"{s}_pos" in ss for s in sheets), ss
+        for s in sheets:
+            neg = len(ds.variables[f"elem_ss{ss.index(s + '_neg') + 1}"][:])
+            pos = len(ds.variables[f"elem_ss{ss.index(s + '_pos') + 1}"][:])
+            assert neg == pos > 0, (s, neg, pos)
 
     @part("volume.exo in meshio (netCDF4): blocks, side sets, aperture and the cubic law",
           lambda: has_module("meshio") and has_module("netCDF4"))

@@ -23,6 +23,15 @@
 namespace sheetmesh {
 namespace {
 
+// The split along the sheets, where asked.
+void PrintSplit(const std::optional<SplitStats>& s, std::ostream& out) {
+  if (!s) return;
+  out << absl::StrFormat(
+      "split       %d sheet nodes, %d copies added (%d kept single on a rim); %d interfaces, %d "
+      "closed at a rim\n",
+      s->sheet_nodes, s->added_nodes, s->rim_nodes, s->interfaces, s->closed_faces);
+}
+
 void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
   const TetQuality& q = v.quality;
   out << absl::StrFormat(
@@ -188,6 +197,7 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
     out << "\n";
   }
   if (r.volume_mesh) PrintVolumeMesh(*r.volume_mesh, out);
+  PrintSplit(r.volume_split, out);
   if (r.flow) {
     const PermeabilityResult& k = *r.flow;
     out << absl::StrFormat(
@@ -239,11 +249,14 @@ absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
   report.timings.push_back({"volume", absl::ToDoubleSeconds(absl::Now() - start)});
   SM_RETURN_IF_ERROR(MakeDirs(options.output.dir));
   const std::string dir = options.output.dir;
-  SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, r.mesh, options.output, &report.files));
+  SplitStats split;
+  SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, r.mesh, options.output, &report.files, nullptr, &split));
   report.volume_mesh = static_cast<const VolumeMeshStats&>(r);
+  if (options.output.split) report.volume_split = split;
   report.files.push_back("volume_report.json");
   SM_RETURN_IF_ERROR(WriteFileAtomically(dir + "/volume_report.json", report.ToJson()));
   PrintVolumeMesh(*report.volume_mesh, out);
+  PrintSplit(report.volume_split, out);
   out << "wrote       " << dir << "\n";
   return absl::OkStatus();
 }

@@ -138,6 +138,12 @@ std::vector<ParamRow> OutputRows() {
                           {"inp", &OutputOptions::inp},
                           {"exo", &OutputOptions::exo}},
                          "volume mesh files to write"));
+  rows.push_back(Bool("output.split", SM_MEMBER(output.split),
+                      "also the volume mesh split along the sheets for mechanics, which it turns "
+                      "on: each sheet node copied per side (not on a rim inside the rock), "
+                      "volume_split.inp (Abaqus, COH3D6 cohesive elements), volume_split_ccx.inp "
+                      "(CalculiX, a contact pair per sheet) and volume_split.exo (side sets "
+                      "sheet_<p>_neg / _pos), as inp and exo are among the volume formats"));
   rows.push_back(Number("time_limit_seconds", SM_MEMBER(time_limit_seconds), "0 | (0, 2592000]",
                         "seconds",
                         "wall-clock limit of the run (0: none of its own; a server's "

@@ -50,6 +50,11 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
                   absl::StrCat("must be at least detect.t = ", detect.half_thickness_voxels,
                                " (a cylinder wider than it is thick)")};
   }
+  if (o.output.split && !o.output.inp && !o.output.exo) {
+    return Broken{"output.split", "true",
+                  "needs inp or exo among output.volume_formats (the split mesh is written "
+                  "only for mechanics)"};
+  }
   const RadiusSearchOptions& rs = o.radius_search;
   if (rs.max_radius_voxels != 0 && rs.max_radius_voxels < rs.min_radius_voxels) {
     return Broken{
@@ -60,9 +65,9 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
 }
 
 // Settings that follow another unless set: detect.scvd_r and recover.scvd_r of 0 take
-// separate.r; flow turns the volume mesh on.
+// separate.r; flow and output.split turn the volume mesh on.
 void ResolveFollowers(PipelineOptions& o) {
-  if (o.flow.enabled) o.volume_mesh = true;  // flow solves on the volume mesh
+  if (o.flow.enabled || o.output.split) o.volume_mesh = true;  // they need the volume mesh
   ExtractionOptions& x = o.extraction;
   for (ExtendOptions* e : {&x.detect_extend, &x.recover_extend}) {
     *e = Following(*e, x.separation);

@@ -111,7 +111,10 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
     report->files.push_back(labels);
   }
   if (volume != nullptr) {
-    SM_RETURN_IF_ERROR(WriteVolumeFiles(dir, *volume, options.output, &report->files, fields));
+    SplitStats split;
+    SM_RETURN_IF_ERROR(
+        WriteVolumeFiles(dir, *volume, options.output, &report->files, fields, &split));
+    if (options.output.split) report->volume_split = split;
   }
   if (options.output.previews) SM_RETURN_IF_ERROR(WritePreviews(dir, phase, mesh, pl, report));
   report->files.push_back("report.json");

@@ -15,6 +15,7 @@
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/flow/image_permeability.h"
+#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/run/pipeline_options.h"
@@ -74,6 +75,7 @@ struct PipelineReport {
   std::optional<RepresentationReport> representation;  // unless every piece is a sheet
   std::optional<SimilarityReport> similarity;
   std::optional<VolumeMeshStats> volume_mesh;
+  std::optional<SplitStats> volume_split;       // with output.split: what the split did
   std::optional<PermeabilityResult> flow;       // with flow: the permeability tensor
   std::optional<ImagePermeability> flow_image;  // and the image's, where the volume is small
   std::string flow_image_skipped;               // why not, where it is not

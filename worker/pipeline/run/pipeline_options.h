@@ -39,6 +39,9 @@ struct OutputOptions {
   bool inp = true;          // volume.inp (Abaqus/CalculiX)
   bool exo = true;          // volume.exo (Exodus II)
   bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
+  bool split = false;       // the volume mesh split along the sheets for mechanics (turns the
+                            // volume mesh on): volume_split.inp and volume_split_ccx.inp with
+                            // inp, volume_split.exo with exo
 };
 
 // Grey levels as the scanner gave them (input.grey): sheets found by their sheetness and
@@ -68,7 +71,9 @@ struct PipelineOptions {
 };
 
 // Whether the run makes the volume mesh: asked for, or needed by flow.
-inline bool MeshesVolume(const PipelineOptions& o) { return o.volume_mesh || o.flow.enabled; }
+inline bool MeshesVolume(const PipelineOptions& o) {
+  return o.volume_mesh || o.flow.enabled || o.output.split;
+}
 
 }  // namespace sheetmesh
 

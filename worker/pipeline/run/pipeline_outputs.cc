@@ -39,7 +39,7 @@ absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
 
 absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
                               const OutputOptions& output, std::vector<std::string>* files,
-                              const VolumeFields* fields) {
+                              const VolumeFields* fields, SplitStats* split) {
   if (output.vtu) {
     SM_RETURN_IF_ERROR(WriteVtu(In(dir, "volume.vtu"), mesh, fields));
     files->push_back("volume.vtu");
@@ -55,6 +55,19 @@ absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
   if (output.exo) {
     SM_RETURN_IF_ERROR(WriteExodus(In(dir, "volume.exo"), mesh));
     files->push_back("volume.exo");
+  }
+  if (!output.split) return absl::OkStatus();
+  SM_ASSIGN_OR_RETURN(const SplitMesh s, SplitAlongSheets(mesh));
+  if (split != nullptr) *split = s.stats;
+  if (output.inp) {
+    SM_RETURN_IF_ERROR(WriteSplitAbaqus(In(dir, "volume_split.inp"), s, false));
+    SM_RETURN_IF_ERROR(WriteSplitAbaqus(In(dir, "volume_split_ccx.inp"), s, true));
+    files->push_back("volume_split.inp");
+    files->push_back("volume_split_ccx.inp");
+  }
+  if (output.exo) {
+    SM_RETURN_IF_ERROR(WriteSplitExodus(In(dir, "volume_split.exo"), s));
+    files->push_back("volume_split.exo");
   }
   return absl::OkStatus();
 }

@@ -10,6 +10,7 @@
 #include "absl/status/status.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/run/pipeline_options.h"
+#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {
@@ -20,11 +21,13 @@ absl::Status WriteSurfaceFiles(const std::string& dir, const TriangleMesh& mesh,
                                const Placement& placement, const OutputOptions& output,
                                std::vector<std::string>* files);
 
-// volume.vtu (with `fields` when given), volume.msh, volume.inp into `dir` (which must
-// exist); appends their names.
+// volume.vtu (with `fields` when given), volume.msh, volume.inp, volume.exo into `dir` (which
+// must exist), and with output.split the mesh split along its sheets (volume_split.inp,
+// volume_split_ccx.inp, volume_split.exo; what the split did into `split` when given);
+// appends their names.
 absl::Status WriteVolumeFiles(const std::string& dir, const TetMesh& mesh,
                               const OutputOptions& output, std::vector<std::string>* files,
-                              const VolumeFields* fields = nullptr);
+                              const VolumeFields* fields = nullptr, SplitStats* split = nullptr);
 
 }  // namespace sheetmesh
 

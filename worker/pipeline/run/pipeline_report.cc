@@ -77,6 +77,7 @@ std::string PipelineReport::ToJson() const {
     j["radius_search"]["target_similarity"] = options.radius_search.target_similarity;
   }
   if (volume_mesh) j["volume_mesh"] = volume_mesh->Fields();
+  if (volume_split) j["volume_split"] = volume_split->Fields();
   if (flow) {
     j["flow"] = flow->Fields();
     if (flow_image) j["flow"]["image_reference"] = flow_image->Fields();

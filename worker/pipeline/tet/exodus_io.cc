@@ -53,18 +53,28 @@ class ExodusFile {
   bool committed_ = false;
 };
 
+// TETRA4 sides: 1 = (1,2,4), 2 = (2,3,4), 3 = (1,4,3), 4 = (1,3,2).
+constexpr int kTetSide[4][3] = {{0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 2, 1}};
+
+// The Exodus side (1–4) of t with the nodes of q; 0 where t has no such face.
+int TetSide(const Tet& t, const std::array<uint32_t, 3>& q) {
+  const FaceKey key = SortedFace(q[0], q[1], q[2]);
+  for (int k = 0; k < 4; ++k) {
+    if (SortedFace(t[kTetSide[k][0]], t[kTetSide[k][1]], t[kTetSide[k][2]]) == key) return k + 1;
+  }
+  return 0;
+}
+
 // The tetrahedron face on each face of the box: (element number, Exodus side), tetrahedron t
 // being element element_of[t].
-// TETRA4 sides: 1 = (1,2,4), 2 = (2,3,4), 3 = (1,4,3), 4 = (1,3,2).
 std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m,
                                                           const std::vector<int>& side,
                                                           const std::vector<int>& element_of) {
-  static const int kSide[4][3] = {{0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 2, 1}};
   std::map<FaceKey, std::pair<int, int>> owner;
   for (size_t t = 0; t < m.tets.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
       const Tet& q = m.tets[t];
-      owner.emplace(SortedFace(q[kSide[k][0]], q[kSide[k][1]], q[kSide[k][2]]),
+      owner.emplace(SortedFace(q[kTetSide[k][0]], q[kTetSide[k][1]], q[kTetSide[k][2]]),
                     std::make_pair(element_of[t], k + 1));
     }
   }
@@ -77,9 +87,8 @@ std::vector<std::vector<std::pair<int, int>>> BoxSideSets(const TetMesh& m,
   return sets;
 }
 
-}  // namespace
-
-absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
+// The mesh (`split`'s where given: with the two sides of each sheet as side sets).
+absl::Status WriteMesh(const std::string& path, const TetMesh& m, const SplitMesh* split) {
   const auto sheets = SheetFacesByPiece(m);
   // The tetrahedra by region (the rock, then each body), numbered in that order.
   std::map<int32_t, std::vector<size_t>> regions;
@@ -90,9 +99,31 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   for (const auto& [piece, tets] : regions)
     for (size_t t : tets) element_of[t] = next++;
   const std::vector<int> side = BoxSides(m);
-  const auto side_sets = BoxSideSets(m, side, element_of);
-  static const char* kSideName[6] = {"box_xmin", "box_xmax", "box_ymin",
-                                     "box_ymax", "box_zmin", "box_zmax"};
+  auto side_sets = BoxSideSets(m, side, element_of);
+  std::vector<std::string> set_names = {"box_xmin", "box_xmax", "box_ymin",
+                                        "box_ymax", "box_zmin", "box_zmax"};
+  std::vector<int> set_ids = {1, 2, 3, 4, 5, 6};
+  if (split != nullptr) {
+    for (const auto& [piece, faces] : sheets) {
+      std::vector<std::pair<int, int>> neg, pos;
+      for (const SheetInterface& in : split->interfaces) {
+        if (in.piece != piece) continue;
+        const int a = TetSide(m.tets[in.tet_neg], in.neg), b = TetSide(m.tets[in.tet_pos], in.pos);
+        if (a == 0 || b == 0) {
+          return absl::InternalError(
+              absl::StrCat(path, ": sheet face ", in.face, " is no face of its tetrahedron"));
+        }
+        neg.emplace_back(element_of[in.tet_neg], a);
+        pos.emplace_back(element_of[in.tet_pos], b);
+      }
+      side_sets.push_back(std::move(neg));
+      side_sets.push_back(std::move(pos));
+      set_names.push_back(absl::StrCat("sheet_", piece, "_neg"));
+      set_names.push_back(absl::StrCat("sheet_", piece, "_pos"));
+      set_ids.push_back(1000 + 2 * piece);
+      set_ids.push_back(1001 + 2 * piece);
+    }
+  }
   size_t sheet_elems = 0;
   for (const auto& [p, faces] : sheets) sheet_elems += faces.size();
   ExodusFile file(path + ".part");
@@ -104,7 +135,8 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   SM_RETURN_IF_ERROR(
       file.Check(ex_put_init(ex, title.c_str(), 3, static_cast<int64_t>(m.nodes.size()),
                              static_cast<int64_t>(m.tets.size() + sheet_elems),
-                             static_cast<int64_t>(regions.size() + sheets.size()), 6, 6),
+                             static_cast<int64_t>(regions.size() + sheets.size()), 6,
+                             static_cast<int64_t>(side_sets.size())),
                  "ex_put_init"));
   std::vector<double> x(m.nodes.size()), y(m.nodes.size()), z(m.nodes.size());
   for (size_t i = 0; i < m.nodes.size(); ++i) {
@@ -150,22 +182,24 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
   for (std::string& n : block_names) names.push_back(n.data());
   SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_ELEM_BLOCK, names.data()), "ex_put_names"));
 
-  // Side sets and node sets on the box's six faces.
-  std::vector<char*> set_names;
-  for (int k = 0; k < 6; ++k) {
-    set_names.push_back(const_cast<char*>(kSideName[k]));
+  // Side sets (the box's six faces, then each sheet's two sides) and the box's node sets.
+  std::vector<char*> names_of_sets;
+  for (std::string& n : set_names) names_of_sets.push_back(n.data());
+  for (size_t k = 0; k < side_sets.size(); ++k) {
     std::vector<int> elems, sides;
     for (const auto& [e, s] : side_sets[k]) {
       elems.push_back(e);
       sides.push_back(s);
     }
     SM_RETURN_IF_ERROR(
-        file.Check(ex_put_side_set_param(ex, k + 1, static_cast<int64_t>(elems.size()), 0),
+        file.Check(ex_put_side_set_param(ex, set_ids[k], static_cast<int64_t>(elems.size()), 0),
                    "ex_put_side_set_param"));
     if (!elems.empty()) {
-      SM_RETURN_IF_ERROR(
-          file.Check(ex_put_side_set(ex, k + 1, elems.data(), sides.data()), "ex_put_side_set"));
+      SM_RETURN_IF_ERROR(file.Check(ex_put_side_set(ex, set_ids[k], elems.data(), sides.data()),
+                                    "ex_put_side_set"));
     }
+  }
+  for (int k = 0; k < 6; ++k) {
     std::set<int> nodes;
     for (size_t f = 0; f < m.faces.size(); ++f)
       if (side[f] == k)
@@ -179,8 +213,10 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
           file.Check(ex_put_node_set(ex, k + 1, node_list.data()), "ex_put_node_set"));
     }
   }
-  SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_SIDE_SET, set_names.data()), "ex_put_names"));
-  SM_RETURN_IF_ERROR(file.Check(ex_put_names(ex, EX_NODE_SET, set_names.data()), "ex_put_names"));
+  SM_RETURN_IF_ERROR(
+      file.Check(ex_put_names(ex, EX_SIDE_SET, names_of_sets.data()), "ex_put_names"));
+  SM_RETURN_IF_ERROR(
+      file.Check(ex_put_names(ex, EX_NODE_SET, names_of_sets.data()), "ex_put_names"));
 
   // Element variables: the aperture and the cubic law on the sheets.
   if (!sheets.empty()) {
@@ -220,6 +256,16 @@ absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
     }
   }
   return file.Commit(path);
+}
+
+}  // namespace
+
+absl::Status WriteExodus(const std::string& path, const TetMesh& m) {
+  return WriteMesh(path, m, nullptr);
+}
+
+absl::Status WriteSplitExodus(const std::string& path, const SplitMesh& split) {
+  return WriteMesh(path, split.mesh, &split);
 }
 
 }  // namespace sheetmesh

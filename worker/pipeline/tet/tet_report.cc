@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_quality.h"
 #include "worker/pipeline/tet/volume_mesher.h"
@@ -11,6 +12,14 @@ namespace sheetmesh {
 
 nlohmann::json QualityStat::Fields() const {
   return {{"min", min}, {"mean", mean}, {"histogram_range", {lo, hi}}, {"histogram", histogram}};
+}
+
+nlohmann::json SplitStats::Fields() const {
+  return {{"sheet_nodes", sheet_nodes},
+          {"rim_nodes", rim_nodes},
+          {"added_nodes", added_nodes},
+          {"interfaces", interfaces},
+          {"closed_faces", closed_faces}};
 }
 
 nlohmann::json TetQuality::Fields() const {

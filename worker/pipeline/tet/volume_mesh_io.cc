@@ -2,9 +2,7 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
 
-#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "common/file_util.h"
@@ -13,13 +11,6 @@
 
 namespace sheetmesh {
 namespace {
-
-// Faces grouped: -1 = boundary, p >= 0 = sheet piece p.
-std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& m) {
-  std::map<int32_t, std::vector<size_t>> groups;
-  for (size_t f = 0; f < m.faces.size(); ++f) groups[m.face_piece[f]].push_back(f);
-  return groups;
-}
 
 std::string G7(double v) { return absl::StrFormat("%.7g", v); }
 
@@ -47,6 +38,12 @@ std::vector<int> BoxSides(const TetMesh& m) {
     }
   }
   return side;
+}
+
+std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& m) {
+  std::map<int32_t, std::vector<size_t>> groups;
+  for (size_t f = 0; f < m.faces.size(); ++f) groups[m.face_piece[f]].push_back(f);
+  return groups;
 }
 
 std::map<int32_t, std::vector<size_t>> SheetFacesByPiece(const TetMesh& m) {
@@ -217,110 +214,6 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& m) {
     for (size_t e = 0; e < total; ++e)
       absl::StrAppendFormat(&out, "%d %.7g\n", e + 1, voxels ? thickness_voxels[e] : thickness[e]);
     out += "$EndElementData\n";
-  }
-  return WriteFileAtomically(path, out);
-}
-
-absl::Status WriteAbaqus(const std::string& path, const TetMesh& m) {
-  const auto sheets = SheetFacesByPiece(m);
-  std::string out = absl::StrCat("*HEADING\nsheetmesh ", SHEETMESH_VERSION,
-                                 " volume mesh: rock tetrahedra with sheet faces\n** ",
-                                 m.UnitsText(), "\n*NODE\n");
-  for (size_t i = 0; i < m.nodes.size(); ++i) {
-    absl::StrAppendFormat(&out, "%d, %.12g, %.12g, %.12g\n", i + 1, m.nodes[i].x, m.nodes[i].y,
-                          m.nodes[i].z);
-  }
-  // The tetrahedra by region: ELSET=ROCK, ELSET=BODY_<p> for each body.
-  std::map<int32_t, std::vector<size_t>> regions;
-  regions[-1];
-  for (size_t t = 0; t < m.tets.size(); ++t) regions[m.Region(t)].push_back(t);
-  std::vector<size_t> element_of(m.tets.size());
-  size_t id = 1;
-  for (const auto& [piece, tets] : regions) {
-    if (tets.empty()) continue;
-    absl::StrAppend(&out, "*ELEMENT, TYPE=C3D4, ELSET=",
-                    piece < 0 ? std::string("ROCK") : absl::StrCat("BODY_", piece), "\n");
-    for (size_t i : tets) {
-      const Tet& t = m.tets[i];
-      element_of[i] = id;
-      absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, ", ", t[3] + 1,
-                      "\n");
-    }
-  }
-  for (const auto& [piece, faces] : sheets) {
-    absl::StrAppend(&out, "*ELEMENT, TYPE=S3, ELSET=SHEET_", piece, "\n");
-    for (size_t f : faces) {
-      const auto& t = m.faces[f];
-      absl::StrAppend(&out, id++, ", ", t[0] + 1, ", ", t[1] + 1, ", ", t[2] + 1, "\n");
-    }
-  }
-  // Node sets on the box's sides, for boundary conditions.
-  static const char* kSide[6] = {"XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"};
-  const std::vector<int> side = BoxSides(m);
-  std::set<uint32_t> box_nodes;
-  for (int k = 0; k < 6; ++k) {
-    std::set<uint32_t> nodes;
-    for (size_t f = 0; f < m.faces.size(); ++f)
-      if (side[f] == k) nodes.insert(m.faces[f].begin(), m.faces[f].end());
-    if (nodes.empty()) continue;
-    box_nodes.insert(nodes.begin(), nodes.end());
-    absl::StrAppend(&out, "*NSET, NSET=BOX_", kSide[k], "\n");
-    int n = 0;
-    for (uint32_t v : nodes) absl::StrAppend(&out, v + 1, ++n % 16 == 0 ? "\n" : ", ");
-    if (n % 16 != 0) out += "\n";
-  }
-  // Surfaces on the tetrahedra's faces. C3D4 face numbering: S1 = (1,2,3), S2 = (1,4,2),
-  // S3 = (2,4,3), S4 = (3,4,1).
-  static const int kFace[4][3] = {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}};
-  absl::flat_hash_map<std::array<uint32_t, 3>, std::pair<size_t, int>> owner;
-  for (size_t t = 0; t < m.tets.size(); ++t) {
-    for (int k = 0; k < 4; ++k) {
-      std::array<uint32_t, 3> key = {m.tets[t][kFace[k][0]], m.tets[t][kFace[k][1]],
-                                     m.tets[t][kFace[k][2]]};
-      std::sort(key.begin(), key.end());
-      owner.emplace(key, std::make_pair(element_of[t], k + 1));
-    }
-  }
-  for (const auto& [piece, faces] : FaceGroups(m)) {
-    absl::StrAppend(&out, "*SURFACE, TYPE=ELEMENT, NAME=SURF_",
-                    piece < 0 ? std::string("BOUNDARY")
-                              : absl::StrCat(m.IsBody(piece) ? "BODY_" : "SHEET_", piece),
-                    "\n");
-    for (size_t f : faces) {
-      std::array<uint32_t, 3> key = m.faces[f];
-      std::sort(key.begin(), key.end());
-      auto it = owner.find(key);
-      if (it == owner.end()) {
-        return absl::InternalError(absl::StrCat(path, ": face ", f, " belongs to no tetrahedron"));
-      }
-      absl::StrAppend(&out, it->second.first, ", S", it->second.second, "\n");
-    }
-  }
-  // Materials and sections: without a section CalculiX refuses the elements. The elastic
-  // constants are placeholders in the mesh's units; replace them for a real analysis.
-  out +=
-      "** Materials: placeholder elastic constants (Young's modulus, Poisson's ratio);\n"
-      "** replace them with the rock's and the fill's in the mesh's units.\n"
-      "*MATERIAL, NAME=ROCK\n*ELASTIC\n30000., 0.25\n"
-      "*MATERIAL, NAME=FRACTURE\n*ELASTIC\n3000., 0.3\n";
-  if (regions.size() > 1) out += "*MATERIAL, NAME=FILL\n*ELASTIC\n3000., 0.3\n";
-  for (const auto& [piece, tets] : regions) {
-    if (tets.empty()) continue;
-    if (piece < 0) {
-      out += "*SOLID SECTION, ELSET=ROCK, MATERIAL=ROCK\n";
-    } else {
-      absl::StrAppend(&out, "*SOLID SECTION, ELSET=BODY_", piece, ", MATERIAL=FILL\n");
-    }
-  }
-  for (const auto& [piece, faces] : sheets) {
-    double sum = 0;
-    for (size_t f : faces) sum += m.FaceThickness(f);
-    const double mean = faces.empty() ? 0 : sum / faces.size();
-    const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
-    absl::StrAppendFormat(&out,
-                          "** sheet %d: mean thickness %.7g (%.4g voxels) over %d triangles\n"
-                          "*SHELL SECTION, ELSET=SHEET_%d, MATERIAL=FRACTURE\n%.7g\n",
-                          piece, mean, mean / vox, faces.size(), piece, mean > 0 ? mean : vox);
   }
   return WriteFileAtomically(path, out);
 }

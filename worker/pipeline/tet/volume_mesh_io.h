@@ -1,7 +1,7 @@
 // Volume mesh files: VTU for ParaView and OpenGeoSys (tetrahedra and the tagged sheet and
 // boundary triangles, integer MaterialIDs), Gmsh MSH 4.1 with physical groups and the
-// thickness as element data, Abaqus/CalculiX INP with sections and materials, and
-// Exodus II (exodus_io.cc) for MOOSE. Each file appears atomically. Thickness is physical
+// thickness as element data, Abaqus/CalculiX INP with sections and materials (abaqus_io.cc),
+// and Exodus II (exodus_io.cc) for MOOSE; the last two also split along the sheets. Each file appears atomically. Thickness is physical
 // everywhere, with the voxel value beside it where the format has room.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_IO_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_IO_H_
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/tet_mesh.h"
 
 namespace sheetmesh {
@@ -45,15 +46,36 @@ absl::Status WriteGmsh(const std::string& path, const TetMesh& mesh);
 // thickness (physical). Ready for a step (*STEP … *END STEP) appended or *INCLUDEd.
 absl::Status WriteAbaqus(const std::string& path, const TetMesh& mesh);
 
+// The mesh split along its sheets (split_mesh.h) as an Abaqus/CalculiX input: the tetrahedra
+// on the split nodes, node sets SHEET_<p>_NEG and SHEET_<p>_POS and element-face surfaces
+// SURF_SHEET_<p>_NEG and SURF_SHEET_<p>_POS on the two sides of each sheet, the box's node
+// sets and the materials as WriteAbaqus. For Abaqus (`calculix` false) each sheet face is a
+// zero-thickness COH3D6 element in ELSET=SHEET_<p> (nodes 1–3 on the neg side, 4–6 on the
+// pos side: its thickness direction is the face's normal) with a *COHESIVE SECTION and a
+// placeholder traction-separation stiffness; faces with no node copied (closed at the rim) are
+// left out. CalculiX has no cohesive element: there the two sides are a *CONTACT PAIR per
+// sheet (surface to surface, a linear pressure-overclosure law) that lets them open and stops
+// them passing through each other.
+absl::Status WriteSplitAbaqus(const std::string& path, const SplitMesh& split, bool calculix);
+
 // Exodus II: element blocks "rock" (TETRA, 4 nodes, id 1; meshio 5 maps no TETRA4),
 // "body_<p>" (TETRA, id 100 + p) and "sheet_<p>" (TRI3, id 100 + p), side sets box_xmin … box_zmax
 // (ids 1–6) on the tetrahedra, node sets the same, element variables aperture, permeability and
 // transmissivity (0 on the rock).
 absl::Status WriteExodus(const std::string& path, const TetMesh& mesh);
 
+// The split mesh as Exodus II for MOOSE: as WriteExodus (each sheet's TRI3 block on its neg
+// side's nodes), with side sets sheet_<p>_neg and sheet_<p>_pos (ids 1000 + 2p and
+// 1001 + 2p) on the tetrahedra's faces on either side of each sheet, ready for a contact or
+// interface condition between them.
+absl::Status WriteSplitExodus(const std::string& path, const SplitMesh& split);
+
 // Per face, which side of the mesh's bounding box it lies on (0 x min, 1 x max, 2 y min,
 // … 5 z max), or -1 (a sheet face, or a face off the box).
 std::vector<int> BoxSides(const TetMesh& mesh);
+
+// The faces grouped by piece: -1 the box, p the faces of piece p (a sheet or a body's wall).
+std::map<int32_t, std::vector<size_t>> FaceGroups(const TetMesh& mesh);
 
 // The sheet faces grouped by piece (the box faces, piece -1, and the bodies' walls left
 // out).

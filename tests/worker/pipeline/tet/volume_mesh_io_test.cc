@@ -12,6 +12,7 @@
 #include "absl/strings/str_split.h"
 #include "common/file_util.h"
 #include "common/version.h"
+#include "tests/testing/python.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
@@ -21,21 +22,8 @@ namespace sheetmesh {
 namespace {
 
 using ::sheetmesh::testing::IsOk;
+using ::sheetmesh::testing::Python;
 using ::sheetmesh::testing::TempDir;
-
-// Runs /usr/bin/python3 on `script`; returns the last line it prints (meshio may print
-// notices first), or nullopt when meshio is missing.
-std::optional<std::string> Python(const std::string& script) {
-  if (std::system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") != 0) return std::nullopt;
-  std::string out;
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(
-      popen(("/usr/bin/python3 -W ignore -c '" + script + "'").c_str(), "r"), pclose);
-  std::array<char, 4096> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get()) != nullptr) {
-    if (std::string(buf.data()) != "\n") out = buf.data();
-  }
-  return out;
-}
 
 // A box with two sheets (pieces 0 and 3).
 TetMesh SampleMesh(const Placement& placement = {}) {

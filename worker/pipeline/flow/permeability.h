@@ -31,6 +31,7 @@ struct FlowOptions {
   double matrix_permeability = 1e-18;  // m², the rock between the sheets (about a microdarcy)
   double body_permeability = 1e-10;    // m², inside the pieces meshed as bodies (open vugs)
   double tolerance = 1e-10;            // the conjugate gradients' relative residual
+  bool image_reference = true;         // also the image's own answer (up to a million voxels)
 };
 
 using Tensor3 = std::array<std::array<double, 3>, 3>;

@@ -12,6 +12,7 @@
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/preview/bitmap_font.h"
+#include "worker/pipeline/preview/legend.h"
 
 namespace sheetmesh {
 namespace {
@@ -142,14 +143,17 @@ std::string LengthText(double voxels, const Placement& placement) {
   return absl::StrFormat("%.3g %s", PhysicalLength(voxels, placement), placement.unit);
 }
 
-// One line of a legend: a swatch of `swatch` (unless it is unset) and its text.
-struct LegendLine {
-  std::optional<std::array<uint8_t, 3>> swatch;
-  std::string text;
-};
+void PngToString(png_structp png, png_bytep data, png_size_t n) {
+  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), n);
+}
 
-// Adds the legend `lines` below `im` on `background` in `ink`, widening the picture (with
-// `background`) where a line needs it.
+void PngError(png_structp png, png_const_charp msg) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = msg;
+  png_longjmp(png, 1);
+}
+
+}  // namespace
+
 void AppendLegend(RgbImage* im, const std::vector<LegendLine>& lines,
                   const std::array<uint8_t, 3>& background, const std::array<uint8_t, 3>& ink) {
   constexpr int kMargin = 6, kLine = kGlyphHeight + 5, kSwatch = kGlyphHeight + 1;
@@ -180,17 +184,6 @@ void AppendLegend(RgbImage* im, const std::vector<LegendLine>& lines,
   }
   *im = std::move(out);
 }
-
-void PngToString(png_structp png, png_bytep data, png_size_t n) {
-  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), n);
-}
-
-void PngError(png_structp png, png_const_charp msg) {
-  *static_cast<std::string*>(png_get_error_ptr(png)) = msg;
-  png_longjmp(png, 1);
-}
-
-}  // namespace
 
 Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
                      const Placement& placement) {

@@ -48,6 +48,21 @@ Preview SlicePreview(const VoxelSet& phase, const TriangleMesh& mesh, int axis,
 // picture saying so in fields.
 Preview ThicknessPreview(const TriangleMesh& mesh, const Placement& placement = {});
 
+// A bar chart on a log scale (for the permeability: the tensor's diagonal, the
+// permeameters and the image's reference per axis, then the principal values): `groups`
+// along the bottom, each a bar per series (a value that is not positive and finite: no bar),
+// a grid line at each decade labelled 1eN, below it a legend of the series' colours and the
+// `caption` lines. fields: kind, series, groups (label and values), decades.
+struct LogBarChart {
+  std::string file;   // "preview_permeability.png"
+  std::string kind;   // "permeability"
+  std::string title;  // above the plot
+  std::vector<std::string> series;
+  std::vector<std::pair<std::string, std::vector<double>>> groups;
+  std::vector<std::string> caption;
+};
+Preview LogBarPreview(const LogBarChart& chart);
+
 // The PNG encoding of `image` (8-bit RGB).
 absl::StatusOr<std::string> EncodePng(const RgbImage& image);
 

@@ -112,6 +112,10 @@ std::vector<ParamRow> FlowRows() {
                         "microdarcy, a tight rock)"));
   rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "(0, 0.001]", "m²",
                         "permeability inside the pieces meshed as bodies (open vugs)"));
+  rows.push_back(Bool("permeability.image_reference", SM_MEMBER(flow.image_reference),
+                      "with flow: also the image's own answer (the cubic law on the sheet "
+                      "voxels, finite volumes on the voxel grid, up to a million voxels) and the "
+                      "mesh / image ratio per axis; it can take longer than the volume mesh"));
   return rows;
 }
 

@@ -6,6 +6,7 @@
 
 #include "absl/strings/cord.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "absl/time/clock.h"
@@ -64,6 +65,39 @@ absl::StatusOr<SimilarityReport> Score(const TriangleMesh& mesh, const SheetAnal
   return sim;
 }
 
+// The permeability in darcy per axis (the tensor's diagonal, the permeameter, the image's
+// reference where it ran) and the principal values, for the previews.
+LogBarChart PermeabilityChart(const PipelineReport& report) {
+  const PermeabilityResult& k = *report.flow;
+  LogBarChart c;
+  c.file = "preview_permeability.png";
+  c.kind = "permeability";
+  c.title = "permeability in darcy, log scale";
+  c.series = {"the tensor (pressure linear on the box)", "permeameter (sides closed)"};
+  if (report.flow_image) c.series.push_back("the image: permeameter on the voxel grid");
+  static const char* kAxis[3] = {"x", "y", "z"};
+  for (int d = 0; d < 3; ++d) {
+    std::vector<double> v = {k.tensor[d][d] / kSquareMetresPerDarcy,
+                             k.permeameter[d] / kSquareMetresPerDarcy};
+    if (report.flow_image) v.push_back(report.flow_image->tensor[d][d] / kSquareMetresPerDarcy);
+    c.groups.emplace_back(kAxis[d], v);
+  }
+  for (int i = 0; i < 3; ++i) {
+    c.groups.emplace_back(absl::StrCat("k", i + 1),
+                          std::vector<double>{k.principal[i] / kSquareMetresPerDarcy});
+  }
+  // (The previews' font has no apostrophe.)
+  c.caption = {"x, y, z: along each axis; k1-k3: principal values of the tensor",
+               "1 darcy = 9.87e-13 square metres"};
+  if (report.flow_image) {
+    c.caption.push_back(absl::StrFormat("mesh / image per axis: %.3f, %.3f, %.3f",
+                                        report.flow_image->mesh_to_image[0],
+                                        report.flow_image->mesh_to_image[1],
+                                        report.flow_image->mesh_to_image[2]));
+  }
+  return c;
+}
+
 // The previews of `phase` (the input's sheet phase) and `mesh`, described in the report.
 absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const TriangleMesh& mesh,
                            const Placement& placement, PipelineReport* report) {
@@ -78,6 +112,17 @@ absl::Status WritePreviews(const std::string& dir, const VoxelSet& phase, const 
     p.fields["width"] = p.image.width;
     p.fields["height"] = p.image.height;
     report->previews.push_back(p.fields.dump());
+  }
+  if (report->flow) {
+    const Preview p = LogBarPreview(PermeabilityChart(*report));
+    SM_ASSIGN_OR_RETURN(std::string png, EncodePng(p.image));
+    SM_RETURN_IF_ERROR(WriteFileAtomically((std::filesystem::path(dir) / p.file).string(), png));
+    report->files.push_back(p.file);
+    nlohmann::json fields = p.fields;
+    fields["file"] = p.file;
+    fields["width"] = p.image.width;
+    fields["height"] = p.image.height;
+    report->previews.push_back(fields.dump());
   }
   return absl::OkStatus();
 }
@@ -369,18 +414,22 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
         SM_ASSIGN_OR_RETURN(report.flow, SolvePermeability(volume.mesh, options.flow,
                                                            flow.Sub(0, 0.5), &flow_fields));
         // The image's own answer beside it: the cubic law on the sheet voxels' thickness.
-        const double m = report.flow->metres_per_unit;
-        const Vec3& s = phase.info.placement.spacing;
-        absl::StatusOr<ImagePermeability> image =
-            SolveImagePermeability(sheet.set, sheet.thickness, Vec3(s.x * m, s.y * m, s.z * m),
-                                   options.flow, kImageReferenceCells, flow.Sub(0.5, 1));
-        if (image.ok()) {
-          CompareToImage(*report.flow, &*image);
-          report.flow_image = *std::move(image);
-        } else if (image.status().code() == absl::StatusCode::kResourceExhausted) {
-          report.flow_image_skipped = std::string(image.status().message());
+        if (!options.flow.image_reference) {
+          report.flow_image_skipped = "not asked (permeability.image_reference false)";
         } else {
-          return image.status();
+          const double m = report.flow->metres_per_unit;
+          const Vec3& s = phase.info.placement.spacing;
+          absl::StatusOr<ImagePermeability> image = SolveImagePermeability(
+              sheet.set, sheet.thickness, Vec3(s.x * m, s.y * m, s.z * m), options.flow,
+              kImageReferenceCells, flow.Sub(0.5, 1));
+          if (image.ok()) {
+            CompareToImage(*report.flow, &*image);
+            report.flow_image = *std::move(image);
+          } else if (image.status().code() == absl::StatusCode::kResourceExhausted) {
+            report.flow_image_skipped = std::string(image.status().message());
+          } else {
+            return image.status();
+          }
         }
       }
     } else {

@@ -119,5 +119,36 @@ TEST(PreviewsTest, AnEmptyMeshGivesABlankThicknessMapNotAnError) {
   EXPECT_TRUE(EncodePng(p.image).ok());
 }
 
+// The log-scale bars: a bar's top rises with the log of its value, one decade per equal
+// height; a value that is not positive draws no bar; the fields list what is drawn.
+TEST(PreviewsTest, LogBarsRiseWithTheLogOfTheirValues) {
+  LogBarChart c;
+  c.file = "preview_permeability.png";
+  c.kind = "permeability";
+  c.title = "permeability in darcy, log scale";
+  c.series = {"tensor", "permeameter"};
+  c.groups = {{"x", {1e-3, 1e-5}}, {"y", {1e-1, 0}}, {"z", {1e-4, 1e-4}}};
+  const Preview p = LogBarPreview(c);
+  EXPECT_EQ(p.fields["decades"], nlohmann::json({-5, -1}));
+  EXPECT_TRUE(p.fields["groups"][1]["values"][1].is_null());
+  // Each bar's height in pixels of its series' colour, scanning its column from the bottom.
+  const std::array<uint8_t, 3> tensor = {74, 123, 208};  // the first series' colour
+  std::vector<int> heights;
+  for (int x = 0; x < p.image.width; ++x) {
+    int n = 0;
+    for (int y = 0; y < p.image.height; ++y) n += Pixel(p.image, x, y) == tensor;
+    if (n > 0 && (heights.empty() || n != heights.back())) heights.push_back(n);
+  }
+  // The swatch in the legend is a small square; the three bars are the tall columns, in order
+  // x (1e-3), y (1e-1), z (1e-4): 2, 4 and 1 decades above the floor of 1e-5.
+  std::vector<int> bars;
+  for (int h : heights)
+    if (h > 20) bars.push_back(h);
+  ASSERT_EQ(bars.size(), 3u);
+  EXPECT_NEAR(bars[0], 2 * bars[2], 2);
+  EXPECT_NEAR(bars[1], 4 * bars[2], 2);
+  EXPECT_TRUE(EncodePng(p.image).ok());
+}
+
 }  // namespace
 }  // namespace sheetmesh

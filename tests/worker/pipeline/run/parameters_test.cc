@@ -266,6 +266,9 @@ TEST(ParametersTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"volume_mesh": {"enabled": true}})", "'volume_mesh.enabled' is now 'volume_mesh'"},
       {R"({"similarity": {"grid_rates": [0]}})", "'similarity.grid_rates' = [0]"},
       {R"({"output": {"formats": ["stl"]}})", "names from ply, vtp, vtu, obj"},
+      {R"({"output": {"split": true, "volume_formats": ["vtu"]}})",
+       "'output.split' = true needs inp or exo among output.volume_formats"},
+      {R"({"permeability": {"image_reference": 2}})", "'permeability.image_reference' = 2"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

@@ -133,20 +133,28 @@ TEST(PipelineTest, VolumeStageWritesTheFemFormats) {
   o.input.path = SmallPhantom(tmp);
   o.output.dir = tmp.File("out");
   o.extract = true;
-  o.volume_mesh = true;
+  o.output.split = true;  // turns the volume mesh on
   o.score.hausdorff = false;
   Stages stages;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o, Progress(&stages, "")));
   EXPECT_EQ(stages.seen, PlannedStages(o));
+  ASSERT_TRUE(r.volume_mesh.has_value());
   EXPECT_GT(r.volume_mesh->tetrahedra, 100u);
   EXPECT_EQ(r.volume_mesh->conformity.conforming, r.volume_mesh->conformity.sheet_triangles);
   EXPECT_NEAR(r.volume_mesh->quality.volume, 64.0 * 56 * 48, 1e-6 * 64 * 56 * 48);
-  for (const char* f : {"volume.vtu", "volume.msh", "volume.inp"}) {
+  for (const char* f : {"volume.vtu", "volume.msh", "volume.inp", "volume.exo", "volume_split.inp",
+                        "volume_split_ccx.inp", "volume_split.exo"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
   const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
   EXPECT_EQ(j["volume_mesh"]["tetrahedra"].get<uint64_t>(), r.volume_mesh->tetrahedra);
   EXPECT_TRUE(j["volume_mesh"]["quality"].contains("radius_aspect"));
+  // The split: one interface per sheet face, a copy for every sheet node not on a rim.
+  ASSERT_TRUE(r.volume_split.has_value());
+  EXPECT_EQ(r.volume_split->interfaces, r.volume_mesh->sheet_faces);
+  EXPECT_GT(r.volume_split->added_nodes, 0u);
+  EXPECT_GE(r.volume_split->added_nodes, r.volume_split->sheet_nodes - r.volume_split->rim_nodes);
+  EXPECT_EQ(j["volume_split"]["interfaces"].get<uint64_t>(), r.volume_split->interfaces);
 }
 
 // The flow stage on the phantom's volume mesh (which flow turns on): a tensor in the report,
@@ -186,6 +194,26 @@ TEST(PipelineTest, FlowGivesThePermeabilityTensorOfTheVolumeMesh) {
     EXPECT_THAT(vtu, ::testing::HasSubstr(absl::StrCat("Name=\"", name, "\""))) << name;
   }
   EXPECT_THAT(vtu, ::testing::HasSubstr("<PointData"));
+  // The tensor's chart among the previews: its bars are the report's numbers in darcy.
+  EXPECT_TRUE(std::filesystem::exists(tmp.File("out/preview_permeability.png")));
+  const nlohmann::json chart = j["previews"].back();
+  EXPECT_EQ(chart["kind"], "permeability");
+  ASSERT_EQ(chart["groups"].size(), 6u);
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_NEAR(chart["groups"][d]["values"][0].get<double>(),
+                j["flow"]["permeability_darcy"][d][d].get<double>(),
+                1e-9 * chart["groups"][d]["values"][0].get<double>());
+  }
+  EXPECT_EQ(chart["groups"][0]["values"].size(), 3u);  // tensor, permeameter, the image's
+
+  // Without the image's reference: none, and the report says why.
+  PipelineOptions without = o;
+  without.flow.image_reference = false;
+  without.output.dir = tmp.File("without");
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport w, RunPipeline(without, {}));
+  EXPECT_FALSE(w.flow_image.has_value());
+  EXPECT_THAT(w.flow_image_skipped, ::testing::HasSubstr("permeability.image_reference"));
+  EXPECT_EQ(w.flow->tensor, r.flow->tensor);
 }
 
 // A planar slab of constant aperture through the box: the mesh's permeameters along it and

@@ -1,7 +1,8 @@
-// The aperture (or thickness) histogram of the surface's triangles.
-import { BarController, BarElement, CategoryScale, Chart, LinearScale, Tooltip } from "chart.js";
+// The aperture (or thickness) histogram of the surface's triangles, and the permeability's
+// bars.
+import { BarController, BarElement, CategoryScale, Chart, Legend, LinearScale, LogarithmicScale, Tooltip } from "chart.js";
 
-Chart.register(BarController, BarElement, CategoryScale, LinearScale, Tooltip);
+Chart.register(BarController, BarElement, CategoryScale, Legend, LinearScale, LogarithmicScale, Tooltip);
 
 // `axis` names what is counted, with its unit ("aperture (mm)").
 export function thicknessHistogram(canvas, values, axis = "thickness (voxels)", bins = 20) {
@@ -23,6 +24,42 @@ export function thicknessHistogram(canvas, values, axis = "thickness (voxels)", 
       scales: {
         x: { title: { display: true, text: axis } },
         y: { title: { display: true, text: "triangles" }, beginAtZero: true },
+      },
+    },
+  });
+}
+
+// The permeability in darcy on a log scale: per axis the tensor's diagonal, the permeameter
+// and the image's permeameter (where the report has it), then the tensor's principal values.
+// `flow` is report.json's flow section.
+export function permeabilityChart(canvas, flow) {
+  const diag = (t) => [0, 1, 2].map((d) => t[d][d]);
+  const labels = ["x", "y", "z", "k1", "k2", "k3"];
+  const none = [null, null, null];
+  const datasets = [
+    { label: "tensor (pressure linear on the box)", data: [...diag(flow.permeability_darcy), ...flow.principal_darcy], backgroundColor: "#4a7bd0" },
+    { label: "permeameter (sides closed)", data: [...flow.permeameter_darcy, ...none], backgroundColor: "#ffaa28" },
+  ];
+  const image = flow.image_reference;
+  if (image && image.permeability_m2) {
+    const darcy = diag(image.permeability_m2).map((k) => k / 9.869233e-13);
+    datasets.push({ label: "the image's permeameter (voxel grid)", data: [...darcy, ...none], backgroundColor: "#6ec878" });
+  }
+  canvas.dataset.values = JSON.stringify(datasets.map((d) => d.data));  // what is drawn
+  return new Chart(canvas, {
+    type: "bar",
+    data: { labels, datasets },
+    options: {
+      animation: false,
+      responsive: false,
+      plugins: { legend: { display: true, position: "bottom" }, tooltip: { enabled: true } },
+      scales: {
+        x: { title: { display: true, text: "along x, y, z; k1–k3 the principal values" } },
+        y: {
+          type: "logarithmic",
+          title: { display: true, text: "permeability (darcy)" },
+          ticks: { callback: (v) => Number(v).toExponential(1) },
+        },
       },
     },
   });

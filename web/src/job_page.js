@@ -1,6 +1,6 @@
 // One job: live progress, then its figures, tables, histogram, 3D view and downloads.
 import * as api from "./api.js";
-import { faceValues, thicknessHistogram } from "./charts.js";
+import { faceValues, permeabilityChart, thicknessHistogram } from "./charts.js";
 import { el, isTerminal, jobFraction, jobLabel, progressBar, showError } from "./dom.js";
 
 const fmt = (v, d = 4) => (v === undefined || v === null || Number.isNaN(v) ? "–" : Number(v).toFixed(d));
@@ -54,6 +54,26 @@ function qualityTable(report) {
       row("gamma", "gamma"), row("edge aspect", "edge_aspect")));
 }
 
+// The permeability tensor (darcy), its principal values and the mesh / image ratios.
+function permeabilityTable(flow) {
+  const k = flow.permeability_darcy;
+  const g = (v) => {
+    if (!Number.isFinite(v)) return "–";
+    const a = Math.abs(v);
+    return a === 0 || (a >= 1e-3 && a < 1e4) ? Number(v).toPrecision(4) : Number(v).toExponential(3);
+  };
+  const image = flow.image_reference || {};
+  const ratio = image.mesh_to_image_per_axis;
+  return el("table", { id: "permeability" },
+    el("thead", {}, el("tr", {}, ["tensor (darcy)", "x", "y", "z"].map((h) => el("th", {}, h)))),
+    el("tbody", {},
+      ["x", "y", "z"].map((a, i) => el("tr", {}, el("th", {}, a), k[i].map((v, j) => el("td", { "data-key": `k${i}${j}` }, g(v))))),
+      el("tr", {}, el("th", {}, "principal"), flow.principal_darcy.map((v, i) => el("td", { "data-key": `principal${i}` }, g(v)))),
+      el("tr", {}, el("th", {}, "permeameter"), flow.permeameter_darcy.map((v) => el("td", {}, g(v)))),
+      ratio ? el("tr", {}, el("th", {}, "mesh / image"), ratio.map((v) => el("td", {}, fmt(v, 3)))) :
+        el("tr", {}, el("th", {}, "mesh / image"), el("td", { colspan: 3 }, image.skipped || "–"))));
+}
+
 // The 3D view's colours: its thickness range in the volume's unit, blue to red; bodies grey.
 function colourLegend(range, unit) {
   const stops = [0, 0.25, 0.5, 0.75, 1].map((t) => `hsl(${Math.round((1 - t) * 0.66 * 360)}, 85%, 50%)`);
@@ -102,6 +122,11 @@ async function results(root, job) {
       el("figure", {}, linkedImage(job.name, n), el("figcaption", {}, n)))));
   }
   root.append(el("h3", {}, "Pieces"), piecesTable(report), el("h3", {}, "Volume mesh"), qualityTable(report));
+  if (report.flow) {
+    const canvas = el("canvas", { id: "permeability_chart", width: 560, height: 280 });
+    root.append(el("h3", {}, "Permeability"), permeabilityTable(report.flow), canvas);
+    permeabilityChart(canvas, report.flow);
+  }
   const ply = names.find((n) => n.endsWith(".ply"));
   if (!ply) return;
   const bytes = await (await api.fetchArtifact(job.name, ply)).arrayBuffer();

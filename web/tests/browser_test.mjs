@@ -216,7 +216,7 @@ async function main() {
       request_id: randomUUID(),
       input: { volume_digest: { hash, size_bytes: String(bytes.length) }, file_name: path.basename(volume),
         format: { spacing: [0.005, 0.005, 0.005], unit: "mm" } },
-      parameters: { r: 7, labels: [255] },
+      parameters: { r: 7, labels: [255], flow: true },
     }),
   })).json();
   check(typeof physical.name === "string", `a job with a 0.005 mm voxel starts (${JSON.stringify(physical).slice(0, 200)})`);
@@ -229,6 +229,29 @@ async function main() {
   check(physicalAxis === "aperture per triangle (mm)" && /[0-9.]+ mm.*[0-9.]+ mm/.test(physicalLegend) &&
     piecesHead.includes("mean aperture (mm)"),
   `with a 0.005 mm voxel, the histogram, the legend and the pieces table say mm (${physicalAxis}; ${physicalLegend}; ${piecesHead})`);
+  // With flow: the tensor as report.json has it, and its bars drawn on a log scale.
+  const physicalReport = await (await api(`/v1/${physical.name}/artifacts/report.json`)).json();
+  await page.waitForSelector("#permeability_chart", { timeout: 60000 });
+  const kxx = (await page.textContent('#permeability td[data-key="k00"]')).trim();
+  const wantKxx = Number(physicalReport.flow.permeability_darcy[0][0]).toExponential(3);  // micro-darcy
+  check(kxx === wantKxx, `the permeability table's k_xx ${kxx} darcy, report.json ${wantKxx}`);
+  const drawn = JSON.parse((await page.getAttribute("#permeability_chart", "data-values")) || "[]");
+  // The image's reference runs up to a million voxels (this volume has 1.4 million: skipped,
+  // and the table says why).
+  const imageRef = physicalReport.flow.image_reference || {};
+  const series = imageRef.permeability_m2 ? 3 : 2;
+  const ratioRow = await page.textContent("#permeability tbody tr:last-child");
+  check(drawn.length === series && drawn[0][3] === physicalReport.flow.principal_darcy[0] &&
+    (series === 3 || ratioRow.includes(imageRef.skipped.slice(0, 40))),
+  `the chart draws the tensor, the permeameters${series === 3 ? " and the image's" : ""} (${drawn.length} series), the largest principal value first; ${ratioRow.slice(0, 120)}`);
+  const kBars = await page.$eval("#permeability_chart", (c) => {
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) n += d[i] === 0x4a && d[i + 1] === 0x7b && d[i + 2] === 0xd0;
+    return n;
+  });
+  check(kBars > 300, `the tensor's bars are drawn (${kBars} pixels of their colour)`);
+  await page.screenshot({ path: path.join(outDir, "job_page_permeability.png"), fullPage: true });
   check(coveredPhysical > 0.5 * covered && coveredPhysical < 2 * covered,
     `with a 0.005 mm voxel the surface fills ${(100 * coveredPhysical).toFixed(1)}% of the view (${(100 * covered).toFixed(1)}% in voxels)`);
   // A job that fails (no voxel has the value 7) looks failed: a red bar and the error.

@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
 #include <thread>
@@ -294,6 +296,48 @@ TEST_F(ServiceTest, AFailedVolumeStageFailsTheJobWithWhatItKept) {
   ASSERT_TRUE(again.ok());
   EXPECT_TRUE(again->cached_from().empty());
   EXPECT_EQ(WaitFinished(again->name()).state(), v1::FAILED);
+}
+
+// Flow and the split mesh through the service: the job's parameters turn them on, the watch
+// sees the flow stage, the report carries the tensor and the split, and the fields, the split
+// decks and the tensor's chart come back as artifacts.
+TEST_F(ServiceTest, AFlowJobReturnsTheTensorTheFieldsAndTheSplitMesh) {
+  StartServer();
+  const std::string vol = WritePhantom(dir_.path(), "rock", 48, 8);
+  auto d = client_->Upload(vol);
+  ASSERT_TRUE(d.ok());
+  v1::CreateJobRequest r = UploadRequest(*d, std::filesystem::path(vol).filename(), "flow");
+  r.mutable_input()->mutable_format()->set_unit("um");
+  for (int k = 0; k < 3; ++k) r.mutable_input()->mutable_format()->add_spacing(5);
+  r.mutable_parameters()->set_flow(true);
+  r.mutable_parameters()->set_output_split(true);
+  r.mutable_parameters()->set_permeability_matrix(1e-17);
+  auto job = client_->CreateJob(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  std::vector<std::string> stages;
+  auto done = client_->Watch(job->name(), [&](const v1::WatchJobResponse& m) {
+    const std::string& stage = m.job().progress().stage();
+    if (m.job().state() == v1::RUNNING && (stages.empty() || stages.back() != stage)) {
+      stages.push_back(stage);
+    }
+  });
+  ASSERT_TRUE(done.ok()) << done.status();
+  ASSERT_EQ(done->state(), v1::SUCCEEDED) << done->error().message();
+  EXPECT_NE(std::find(stages.begin(), stages.end(), "flow"), stages.end())
+      << absl::StrJoin(stages, ",");
+  std::map<std::string, v1::Artifact> by_name;
+  for (const auto& a : done->artifacts()) by_name[a.name()] = a;
+  for (const char* f : {"volume.vtu", "volume_split.inp", "volume_split_ccx.inp",
+                        "volume_split.exo", "preview_permeability.png"}) {
+    EXPECT_TRUE(by_name.count(f)) << f;
+  }
+  EXPECT_EQ(by_name["volume_split.exo"].media_type(), "application/x-netcdf");
+  ASSERT_TRUE(client_->Download(by_name["report.json"].digest(), dir_.File("flow.json")).ok());
+  const nlohmann::json report = nlohmann::json::parse(*ReadFileToString(dir_.File("flow.json")));
+  EXPECT_GE(report["flow"]["permeability_m2"][0][0].get<double>(), 0.99e-17);
+  EXPECT_GT(report["volume_split"]["interfaces"].get<int>(), 0);
+  ASSERT_TRUE(client_->Download(by_name["volume.vtu"].digest(), dir_.File("v.vtu")).ok());
+  EXPECT_THAT(*ReadFileToString(dir_.File("v.vtu")), HasSubstr("Name=\"pressure_x\""));
 }
 
 TEST_F(ServiceTest, ListPagesDeleteAndGet) {

@@ -49,6 +49,7 @@ std::string MediaTypeOf(const std::string& name) {
   if (absl::EndsWith(name, ".msh")) return "model/x-gmsh";
   if (absl::EndsWith(name, ".inp")) return "text/x-abaqus-input";
   if (absl::EndsWith(name, ".png")) return "image/png";
+  if (absl::EndsWith(name, ".exo")) return "application/x-netcdf";  // Exodus II is netCDF
   return "application/octet-stream";
 }
 

@@ -161,6 +161,20 @@ TEST(SplitMeshTest, CrossingSheetsGiveFourSidesOnTheirCommonLine) {
   EXPECT_EQ(s.stats.rim_nodes, 0u);
 }
 
+TEST(SplitMeshTest, AMeshWithoutSheetsSplitsToItselfAndItsDecksAreWritten) {
+  const TetMesh m = Mesh(TriangleMesh{});
+  const SplitMesh s = Split(m);
+  EXPECT_EQ(s.stats.sheet_nodes, 0u);
+  EXPECT_EQ(s.stats.added_nodes, 0u);
+  EXPECT_TRUE(s.interfaces.empty());
+  EXPECT_EQ(s.mesh.nodes.size(), m.nodes.size());
+  TempDir tmp;
+  EXPECT_THAT(WriteSplitAbaqus(tmp.File("a.inp"), s, false), IsOk());
+  EXPECT_THAT(WriteSplitAbaqus(tmp.File("c.inp"), s, true), IsOk());
+  EXPECT_THAT(WriteSplitExodus(tmp.File("s.exo"), s), IsOk());
+  EXPECT_THAT(*ReadFileToString(tmp.File("c.inp")), ::testing::Not(HasSubstr("*CONTACT PAIR")));
+}
+
 TEST(SplitMeshTest, TheAbaqusDeckHasACohesiveElementPerOpenFace) {
   TempDir tmp;
   const SplitMesh s = Split(Crack());

@@ -161,7 +161,8 @@ def main():
         for r in [float(x) for x in args.r.split(",")]:
             d = os.path.join(out_dir, "%s_r%g" % (name.replace(" ", "_").replace("^", ""), r))
             subprocess.run([cli, "run", raw, "-o", d, "--labels=%g" % value, "--r=%g" % r,
-                            "--output_formats=ply", "--output_previews=false", "--similarity_grid_rates="]
+                            "--output_formats=ply", "--output_previews=false", "--similarity_grid_rates=",
+                            "--output_label_volume=raw"]
                            + fidelity.dims_flag(raw, dims) + extra, check=True, capture_output=True)
             m = measure(d, raw, dims, value)
             if m is None:

@@ -44,7 +44,7 @@ ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --v
 ABSL_FLAG(std::string, volume, "",
           "volume: the image whose box, spacing and origin the mesh fills");
 ABSL_FLAG(std::string, out_format, "",
-          "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip or vdb (default: by the "
+          "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb or hdf5 (default: by the "
           "output's extension, raw when it names none of them)");
 ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
 // phantom

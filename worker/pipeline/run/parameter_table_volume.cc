@@ -128,11 +128,20 @@ std::vector<ParamRow> OutputRows() {
                           {"obj", &OutputOptions::obj}},
                          "surface mesh files to write"));
   rows.push_back(Bool("output.model", SM_MEMBER(output.model),
-                      "with extraction: the model (model.vdb, a label volume, pieces.csv)"));
+                      "with extraction: the model (model.vdb, its voxels and labels, sparse; "
+                      "pieces.csv)"));
+  rows.push_back(Choice("output.label_volume", SM_MEMBER(output.label_volume),
+                        {{"none", DenseLabels::kNone},
+                         {"hdf5", DenseLabels::kHdf5},
+                         {"raw", DenseLabels::kRaw}},
+                        "with extraction: also the model's labels as a dense volume the size of "
+                        "the box — model_labels_<dims>.h5 (dataset labels, chunked and "
+                        "compressed) or model_labels_<dims>_u16.raw (2 bytes a voxel); none: "
+                        "model.vdb has them sparse"));
   rows.push_back(Bool("output.dropped", SM_MEMBER(output.dropped),
                       "with extraction: the voxels the model dropped, labelled by why "
-                      "(dropped_labels_<dims>_u16.raw: 1 refine, 2 specks, 3 crossings, 4 "
-                      "minor pieces)"));
+                      "(dropped_labels_<dims>.h5, or _u16.raw with output.label_volume raw: 1 "
+                      "refine, 2 specks, 3 crossings, 4 minor pieces)"));
   rows.push_back(Bool("output.previews", SM_MEMBER(output.previews),
                       "PNG previews: three slices through the middle with the phase and the "
                       "mesh's cross-section, and the largest sheet's thickness map"));

@@ -141,20 +141,32 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
   if (options.extract && options.output.model) {
     SM_RETURN_IF_ERROR(WriteVoxelSetVdb(path("model.vdb"), model.set, model.label, pl, "model"));
     report->files.push_back("model.vdb");
-    const std::string labels =
-        absl::StrCat("model_labels_", model.set.dims().ToString(), "_u16.raw");
-    SM_RETURN_IF_ERROR(WriteLabelVolume(model, path(labels), VolumeFormat::kRaw, pl));
-    report->files.push_back(labels);
     SM_RETURN_IF_ERROR(WriteFileAtomically(path("pieces.csv"), PieceGeologyCsv(report->geology)));
     report->files.push_back("pieces.csv");
   }
-  if (options.extract && options.output.dropped) {
-    // Labels 1 refine, 2 specks, 3 crossings, 4 minor pieces; 0 kept or never sheet.
-    const std::string labels =
-        absl::StrCat("dropped_labels_", model.set.dims().ToString(), "_u16.raw");
-    SM_RETURN_IF_ERROR(WriteLabelVolume(dropped, path(labels), VolumeFormat::kRaw, pl));
-    report->files.push_back(labels);
+  // Dense label volumes, the size of the box: only when asked, compressed unless raw is.
+  const bool raw = options.output.label_volume == DenseLabels::kRaw;
+  const auto dense = [&](const char* stem, const LabelledVoxels& labels) -> absl::Status {
+    const std::string name = absl::StrCat(stem, "_", model.set.dims().ToString(),
+                                          raw ? "_u16.raw" : ".h5");
+    SM_RETURN_IF_ERROR(WriteLabelVolume(labels, path(name),
+                                        raw ? VolumeFormat::kRaw : VolumeFormat::kHdf5, pl));
+    report->files.push_back(name);
+    return absl::OkStatus();
+  };
+  if (options.extract && options.output.model) {
+    if (options.output.label_volume != DenseLabels::kNone) {
+      SM_RETURN_IF_ERROR(dense("model_labels", model));
+    } else {
+      report->not_written.emplace_back(
+          "model_labels",
+          absl::StrCat("a dense label volume of ", model.set.dims().num_voxels(),
+                       " voxels; model.vdb has the labels sparse (output.label_volume=hdf5 or "
+                       "raw writes it)"));
+    }
   }
+  // Labels 1 refine, 2 specks, 3 crossings, 4 minor pieces; 0 kept or never sheet.
+  if (options.extract && options.output.dropped) SM_RETURN_IF_ERROR(dense("dropped_labels", dropped));
   if (volume != nullptr) {
     SplitStats split;
     SM_RETURN_IF_ERROR(

@@ -84,6 +84,9 @@ struct PipelineReport {
   std::optional<GreyApertureStats> grey_apertures;
   std::vector<StageTime> timings;
   std::vector<std::string> files;     // written, relative to output.dir
+  // Outputs left out because they are dense (the size of the box) and were not asked for:
+  // (name, why).
+  std::vector<std::pair<std::string, std::string>> not_written;
   std::vector<std::string> previews;  // each preview's description, as JSON text
   // A later stage that failed after the surface was made and scored (the volume mesh): its
   // name and error; what was done before it is written all the same.

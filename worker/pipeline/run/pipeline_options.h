@@ -24,16 +24,23 @@ struct ScoreOptions {
   std::vector<int> grid_rates = {2, 3, 4};  // grid-model baselines of Table 2 (empty: none)
 };
 
+// How a dense label volume (one value per voxel of the box) is written.
+enum class DenseLabels { kNone, kHdf5, kRaw };
+
 struct OutputOptions {
   std::string dir;          // where files go (created); empty: write nothing
   bool ply = true;          // surface.ply
   bool vtp = true;          // surface.vtp
   bool surface_vtu = true;  // surface.vtu (the same as an unstructured grid)
   bool obj = true;          // surface.obj
-  bool model = true;        // with extraction: model.vdb (mask + labels) and
-                            // model_labels_<dims>_u16.raw, and pieces.csv
-  bool dropped = false;     // with extraction: dropped_labels_<dims>_u16.raw, the voxels of
-                            // the phase the model lacks labelled by why (DroppedBy)
+  bool model = true;        // with extraction: model.vdb (mask + labels, sparse) and
+                            // pieces.csv
+  // With extraction: the model's labels as a dense volume the size of the box, written only
+  // when asked: model_labels_<dims>.h5 (chunked, compressed) or model_labels_<dims>_u16.raw.
+  DenseLabels label_volume = DenseLabels::kNone;
+  bool dropped = false;     // with extraction: dropped_labels_<dims>.h5 (or _u16.raw where
+                            // label_volume is raw), the voxels of the phase the model lacks
+                            // labelled by why (DroppedBy)
   bool vtu = true;          // with a volume mesh: volume.vtu
   bool msh = true;          // volume.msh (Gmsh 4.1)
   bool inp = true;          // volume.inp (Abaqus/CalculiX)

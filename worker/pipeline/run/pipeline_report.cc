@@ -102,6 +102,11 @@ std::string PipelineReport::ToJson() const {
     j["previews"] = list;
   }
   j["files"] = files;
+  if (!not_written.empty()) {
+    nlohmann::json skipped = nlohmann::json::array();
+    for (const auto& [name, why] : not_written) skipped.push_back({{"file", name}, {"why", why}});
+    j["not_written"] = skipped;
+  }
   return JsonText(j, 2);
 }
 

@@ -265,10 +265,11 @@ absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name) {
   if (n == "nrrd") return VolumeFormat::kNrrd;
   if (n == "nrrd-gzip") return VolumeFormat::kNrrdGzip;
   if (n == "vdb") return VolumeFormat::kVdb;
+  if (n == "hdf5" || n == "h5") return VolumeFormat::kHdf5;
   return absl::InvalidArgumentError(
       absl::StrCat("volume format '", name,
                    "' is not supported; use raw, tiff, tiff-folder, nrrd, "
-                   "nrrd-gzip or vdb"));
+                   "nrrd-gzip, vdb or hdf5"));
 }
 
 absl::StatusOr<VolumeFormat> OutputVolumeFormat(absl::string_view name, const std::string& path) {
@@ -277,6 +278,7 @@ absl::StatusOr<VolumeFormat> OutputVolumeFormat(absl::string_view name, const st
   if (ext == ".tif" || ext == ".tiff") return VolumeFormat::kTiff;
   if (ext == ".nrrd") return VolumeFormat::kNrrd;
   if (ext == ".vdb") return VolumeFormat::kVdb;
+  if (ext == ".h5" || ext == ".hdf5") return VolumeFormat::kHdf5;
   return VolumeFormat::kRaw;
 }
 
@@ -296,6 +298,8 @@ absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string
       return CreateNrrdWriter(path, info, NrrdEncoding::kGzip);
     case VolumeFormat::kVdb:
       return CreateVdbWriter(path, info);
+    case VolumeFormat::kHdf5:
+      return CreateHdf5Writer(path, info);
   }
   return absl::InvalidArgumentError("unknown volume format");
 }

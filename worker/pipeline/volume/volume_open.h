@@ -65,10 +65,10 @@ absl::StatusOr<DenseVolume> ReadDense(VolumeSource& source, int64_t max_bytes = 
 absl::Status WriteDense(const DenseVolume& volume, VolumeSink& sink);
 
 // Output formats for CreateVolumeWriter.
-enum class VolumeFormat { kRaw, kTiff, kTiffFolder, kNrrd, kNrrdGzip, kVdb };
+enum class VolumeFormat { kRaw, kTiff, kTiffFolder, kNrrd, kNrrdGzip, kVdb, kHdf5 };
 absl::StatusOr<VolumeFormat> ParseVolumeFormat(absl::string_view name);
 // `name` parsed, or when it is empty the format `path`'s extension names (.tif/.tiff, .nrrd,
-// .vdb), raw otherwise.
+// .vdb, .h5/.hdf5), raw otherwise.
 absl::StatusOr<VolumeFormat> OutputVolumeFormat(absl::string_view name, const std::string& path);
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateVolumeWriter(const std::string& path,
                                                                const VolumeInfo& info,

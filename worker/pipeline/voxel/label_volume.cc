@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/volume/hdf5_io.h"
 
 namespace sheetmesh {
 
@@ -21,7 +22,10 @@ absl::Status WriteLabelVolume(const LabelledVoxels& model, const std::string& pa
   info.dims = d;
   info.dtype = DType::kUInt16;
   info.placement = placement;
-  SM_ASSIGN_OR_RETURN(auto sink, CreateVolumeWriter(path, info, format));
+  // HDF5: the dataset named for what it holds.
+  SM_ASSIGN_OR_RETURN(auto sink, format == VolumeFormat::kHdf5
+                                     ? CreateHdf5Writer(path, info, "labels")
+                                     : CreateVolumeWriter(path, info, format));
   const int64_t slice = d.nx * d.ny;
   const int64_t slab = std::clamp<int64_t>((int64_t{16} << 20) / slice, 1, d.nz);
   std::vector<uint16_t> buf(static_cast<size_t>(slab * slice));

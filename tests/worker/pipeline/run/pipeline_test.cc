@@ -14,6 +14,7 @@
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/volume/raw_io.h"
+#include "worker/pipeline/volume/volume_open.h"
 
 namespace sheetmesh {
 namespace {
@@ -116,12 +117,37 @@ TEST(PipelineTest, RunWithExtractionWritesTheLabelledModelAndPieces) {
   EXPECT_GE(r.extraction->pieces, 2u);
   EXPECT_EQ(r.geology.size(), r.extraction->pieces);
   EXPECT_GT(r.similarity->raw->similarity, 0.4);
-  for (const char* f : {"model.vdb", "model_labels_64x56x48_u16.raw", "pieces.csv"}) {
+  for (const char* f : {"model.vdb", "pieces.csv"}) {
     EXPECT_TRUE(std::filesystem::exists(tmp.File(std::string("out/") + f))) << f;
   }
-  EXPECT_EQ(std::filesystem::file_size(tmp.File("out/model_labels_64x56x48_u16.raw")),
-            64u * 56 * 48 * 2);
+  // Nothing the size of the box unless asked: the report says what was left out.
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/model_labels_64x56x48.h5")));
+  EXPECT_FALSE(std::filesystem::exists(tmp.File("out/model_labels_64x56x48_u16.raw")));
   const nlohmann::json j = nlohmann::json::parse(*ReadFileToString(tmp.File("out/report.json")));
+  EXPECT_EQ(j["not_written"][0]["file"], "model_labels");
+  EXPECT_THAT(j["not_written"][0]["why"].get<std::string>(),
+              ::testing::HasSubstr("output.label_volume"));
+  // Asked for: chunked HDF5 whose labels are model.vdb's; raw, 2 bytes a voxel.
+  PipelineOptions h5 = o;
+  h5.output.dir = tmp.File("h5");
+  h5.output.label_volume = DenseLabels::kHdf5;
+  h5.output.dropped = true;
+  ASSERT_THAT(RunPipeline(h5, {}).status(), testing::IsOk());
+  SM_ASSERT_OK_AND_ASSIGN(auto labels, OpenVolume(tmp.File("h5/model_labels_64x56x48.h5")));
+  SM_ASSERT_OK_AND_ASSIGN(DenseVolume dense, ReadDense(*labels));
+  uint64_t labelled = 0;
+  const Dims& d = dense.info.dims;
+  for (int64_t z = 0; z < d.nz; ++z)
+    for (int64_t y = 0; y < d.ny; ++y)
+      for (int64_t x = 0; x < d.nx; ++x) labelled += dense.At(x, y, z) > 0;
+  EXPECT_EQ(labelled, r.extraction->model_voxels);
+  EXPECT_TRUE(std::filesystem::exists(tmp.File("h5/dropped_labels_64x56x48.h5")));
+  PipelineOptions raw = o;
+  raw.output.dir = tmp.File("raw");
+  raw.output.label_volume = DenseLabels::kRaw;
+  ASSERT_THAT(RunPipeline(raw, {}).status(), testing::IsOk());
+  EXPECT_EQ(std::filesystem::file_size(tmp.File("raw/model_labels_64x56x48_u16.raw")),
+            64u * 56 * 48 * 2);
   EXPECT_EQ(j["extraction"]["steps"].size(), 5u);
   EXPECT_EQ(j["pieces"].size(), r.extraction->pieces);
   EXPECT_EQ(j["similarity"]["against"], "extracted model");

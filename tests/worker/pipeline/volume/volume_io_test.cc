@@ -104,7 +104,8 @@ INSTANTIATE_TEST_SUITE_P(
                                          FormatCase{VolumeFormat::kTiffFolder, "_slices", true},
                                          FormatCase{VolumeFormat::kNrrd, ".nrrd", true},
                                          FormatCase{VolumeFormat::kNrrdGzip, ".nrrd", true},
-                                         FormatCase{VolumeFormat::kVdb, ".vdb", true}),
+                                         FormatCase{VolumeFormat::kVdb, ".vdb", true},
+                                         FormatCase{VolumeFormat::kHdf5, ".h5", true}),
                        ::testing::Values(DType::kUInt8, DType::kUInt16, DType::kFloat32)),
     [](const auto& info) {
       std::string name = std::get<0>(info.param).name;
@@ -490,6 +491,48 @@ TEST(VolumeSinkTest, UnfinishedWritesLeaveNoFile) {
   }
   EXPECT_FALSE(std::filesystem::exists(path));
   EXPECT_FALSE(HasPartFile(tmp.path()));
+  // The same for HDF5, which writes through its library.
+  const std::string h5 = tmp.File("partial.h5");
+  {
+    SM_ASSERT_OK_AND_ASSIGN(auto sink, CreateVolumeWriter(h5, info, VolumeFormat::kHdf5));
+    std::vector<std::byte> slice(4);
+    ASSERT_THAT(sink->WriteSlices(1, slice), IsOk());
+    EXPECT_THAT(sink->Finish(), StatusIs(absl::StatusCode::kFailedPrecondition));
+  }
+  EXPECT_FALSE(std::filesystem::exists(h5));
+  EXPECT_FALSE(HasPartFile(tmp.path()));
+}
+
+// HDF5 label volumes are chunked and compressed: a box of mostly zeros written slab by slab
+// takes a small part of its dense size, and reads back with its unit.
+TEST(Hdf5WriterTest, AMostlyEmptyBoxIsSmallAndReadsBackWithItsUnit) {
+  TempDir tmp;
+  VolumeInfo info;
+  info.dims = {300, 200, 40};
+  info.dtype = DType::kUInt16;
+  info.placement.spacing = {5, 5, 5};
+  info.placement.unit = "um";
+  DenseVolume in = DenseVolume::Zeros(info.dims, info.dtype);
+  in.info = info;
+  for (int z = 18; z < 21; ++z)
+    for (int y = 0; y < 200; ++y)
+      for (int x = 0; x < 300; ++x) in.Set(x, y, z, 1 + (x / 100));
+  const std::string path = tmp.File("labels.h5");
+  SM_ASSERT_OK_AND_ASSIGN(auto sink, CreateVolumeWriter(path, info, VolumeFormat::kHdf5));
+  const size_t slice = 300 * 200 * 2;
+  for (int z = 0; z < 40; z += 3) {  // slabs that do not line up with the chunks
+    const int n = std::min(3, 40 - z);
+    ASSERT_THAT(sink->WriteSlices(n, std::span<const std::byte>(in.data).subspan(z * slice,
+                                                                               n * slice)),
+                IsOk());
+  }
+  ASSERT_THAT(sink->Finish(), IsOk());
+  EXPECT_LT(std::filesystem::file_size(path), in.data.size() / 50);
+  SM_ASSERT_OK_AND_ASSIGN(auto source, OpenVolume(path));
+  EXPECT_EQ(source->info().placement.unit, "um");
+  EXPECT_NEAR(source->info().placement.spacing.y, 5, 1e-9);
+  SM_ASSERT_OK_AND_ASSIGN(DenseVolume out, ReadDense(*source));
+  ExpectSameVoxels(in, out);
 }
 
 }  // namespace

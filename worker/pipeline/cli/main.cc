@@ -43,9 +43,10 @@ ABSL_FLAG(bool, closed, false, "score: the mesh is a closed surface; score the v
 ABSL_FLAG(std::string, box, "", "volume: the box NXxNYxNZ in voxels, when no --volume is given");
 ABSL_FLAG(std::string, volume, "",
           "volume: the image whose box, spacing and origin the mesh fills");
-ABSL_FLAG(std::string, out_format, "",
-          "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb or hdf5 (default: by the "
-          "output's extension, raw when it names none of them)");
+ABSL_FLAG(
+    std::string, out_format, "",
+    "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb or hdf5 (default: by the "
+    "output's extension, raw when it names none of them)");
 ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
 // phantom
 ABSL_FLAG(std::string, preset, "",

@@ -130,14 +130,13 @@ std::vector<ParamRow> OutputRows() {
   rows.push_back(Bool("output.model", SM_MEMBER(output.model),
                       "with extraction: the model (model.vdb, its voxels and labels, sparse; "
                       "pieces.csv)"));
-  rows.push_back(Choice("output.label_volume", SM_MEMBER(output.label_volume),
-                        {{"none", DenseLabels::kNone},
-                         {"hdf5", DenseLabels::kHdf5},
-                         {"raw", DenseLabels::kRaw}},
-                        "with extraction: also the model's labels as a dense volume the size of "
-                        "the box — model_labels_<dims>.h5 (dataset labels, chunked and "
-                        "compressed) or model_labels_<dims>_u16.raw (2 bytes a voxel); none: "
-                        "model.vdb has them sparse"));
+  rows.push_back(Choice(
+      "output.label_volume", SM_MEMBER(output.label_volume),
+      {{"none", DenseLabels::kNone}, {"hdf5", DenseLabels::kHdf5}, {"raw", DenseLabels::kRaw}},
+      "with extraction: also the model's labels as a dense volume the size of "
+      "the box — model_labels_<dims>.h5 (dataset labels, chunked and "
+      "compressed) or model_labels_<dims>_u16.raw (2 bytes a voxel); none: "
+      "model.vdb has them sparse"));
   rows.push_back(Bool("output.dropped", SM_MEMBER(output.dropped),
                       "with extraction: the voxels the model dropped, labelled by why "
                       "(dropped_labels_<dims>.h5, or _u16.raw with output.label_volume raw: 1 "

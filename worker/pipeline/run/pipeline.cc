@@ -90,10 +90,9 @@ LogBarChart PermeabilityChart(const PipelineReport& report) {
   c.caption = {"x, y, z: along each axis; k1-k3: principal values of the tensor",
                "1 darcy = 9.87e-13 square metres"};
   if (report.flow_image) {
-    c.caption.push_back(absl::StrFormat("mesh / image per axis: %.3f, %.3f, %.3f",
-                                        report.flow_image->mesh_to_image[0],
-                                        report.flow_image->mesh_to_image[1],
-                                        report.flow_image->mesh_to_image[2]));
+    c.caption.push_back(absl::StrFormat(
+        "mesh / image per axis: %.3f, %.3f, %.3f", report.flow_image->mesh_to_image[0],
+        report.flow_image->mesh_to_image[1], report.flow_image->mesh_to_image[2]));
   }
   return c;
 }
@@ -147,10 +146,10 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
   // Dense label volumes, the size of the box: only when asked, compressed unless raw is.
   const bool raw = options.output.label_volume == DenseLabels::kRaw;
   const auto dense = [&](const char* stem, const LabelledVoxels& labels) -> absl::Status {
-    const std::string name = absl::StrCat(stem, "_", model.set.dims().ToString(),
-                                          raw ? "_u16.raw" : ".h5");
-    SM_RETURN_IF_ERROR(WriteLabelVolume(labels, path(name),
-                                        raw ? VolumeFormat::kRaw : VolumeFormat::kHdf5, pl));
+    const std::string name =
+        absl::StrCat(stem, "_", model.set.dims().ToString(), raw ? "_u16.raw" : ".h5");
+    SM_RETURN_IF_ERROR(
+        WriteLabelVolume(labels, path(name), raw ? VolumeFormat::kRaw : VolumeFormat::kHdf5, pl));
     report->files.push_back(name);
     return absl::OkStatus();
   };
@@ -166,7 +165,8 @@ absl::Status WriteOutputs(const PipelineOptions& options, const Placement& pl,
     }
   }
   // Labels 1 refine, 2 specks, 3 crossings, 4 minor pieces; 0 kept or never sheet.
-  if (options.extract && options.output.dropped) SM_RETURN_IF_ERROR(dense("dropped_labels", dropped));
+  if (options.extract && options.output.dropped)
+    SM_RETURN_IF_ERROR(dense("dropped_labels", dropped));
   if (volume != nullptr) {
     SplitStats split;
     SM_RETURN_IF_ERROR(
@@ -434,9 +434,9 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
         } else {
           const double m = report.flow->metres_per_unit;
           const Vec3& s = phase.info.placement.spacing;
-          absl::StatusOr<ImagePermeability> image = SolveImagePermeability(
-              sheet.set, sheet.thickness, Vec3(s.x * m, s.y * m, s.z * m), options.flow,
-              kImageReferenceCells, flow.Sub(0.5, 1));
+          absl::StatusOr<ImagePermeability> image =
+              SolveImagePermeability(sheet.set, sheet.thickness, Vec3(s.x * m, s.y * m, s.z * m),
+                                     options.flow, kImageReferenceCells, flow.Sub(0.5, 1));
           if (image.ok()) {
             CompareToImage(*report.flow, &*image);
             report.flow_image = *std::move(image);

@@ -15,7 +15,6 @@
 #include "worker/pipeline/extract/extraction.h"
 #include "worker/pipeline/extract/piece_geology.h"
 #include "worker/pipeline/flow/image_permeability.h"
-#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/run/pipeline_options.h"
@@ -25,6 +24,7 @@
 #include "worker/pipeline/surface/radius_search.h"
 #include "worker/pipeline/surface/representation.h"
 #include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 #include "worker/pipeline/voxel/sheet_input.h"
 #include "worker/pipeline/voxel/thickness.h"
@@ -83,7 +83,7 @@ struct PipelineReport {
   std::optional<SheetnessStats> sheetness;
   std::optional<GreyApertureStats> grey_apertures;
   std::vector<StageTime> timings;
-  std::vector<std::string> files;     // written, relative to output.dir
+  std::vector<std::string> files;  // written, relative to output.dir
   // Outputs left out because they are dense (the size of the box) and were not asked for:
   // (name, why).
   std::vector<std::pair<std::string, std::string>> not_written;

@@ -38,17 +38,17 @@ struct OutputOptions {
   // With extraction: the model's labels as a dense volume the size of the box, written only
   // when asked: model_labels_<dims>.h5 (chunked, compressed) or model_labels_<dims>_u16.raw.
   DenseLabels label_volume = DenseLabels::kNone;
-  bool dropped = false;     // with extraction: dropped_labels_<dims>.h5 (or _u16.raw where
-                            // label_volume is raw), the voxels of the phase the model lacks
-                            // labelled by why (DroppedBy)
-  bool vtu = true;          // with a volume mesh: volume.vtu
-  bool msh = true;          // volume.msh (Gmsh 4.1)
-  bool inp = true;          // volume.inp (Abaqus/CalculiX)
-  bool exo = true;          // volume.exo (Exodus II)
-  bool previews = true;     // preview_slice_{x,y,z}.png, preview_thickness.png
-  bool split = false;       // the volume mesh split along the sheets for mechanics (turns the
-                            // volume mesh on): volume_split.inp and volume_split_ccx.inp with
-                            // inp, volume_split.exo with exo
+  bool dropped = false;  // with extraction: dropped_labels_<dims>.h5 (or _u16.raw where
+                         // label_volume is raw), the voxels of the phase the model lacks
+                         // labelled by why (DroppedBy)
+  bool vtu = true;       // with a volume mesh: volume.vtu
+  bool msh = true;       // volume.msh (Gmsh 4.1)
+  bool inp = true;       // volume.inp (Abaqus/CalculiX)
+  bool exo = true;       // volume.exo (Exodus II)
+  bool previews = true;  // preview_slice_{x,y,z}.png, preview_thickness.png
+  bool split = false;    // the volume mesh split along the sheets for mechanics (turns the
+                         // volume mesh on): volume_split.inp and volume_split_ccx.inp with
+                         // inp, volume_split.exo with exo
 };
 
 // Grey levels as the scanner gave them (input.grey): sheets found by their sheetness and

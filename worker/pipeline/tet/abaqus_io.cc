@@ -47,8 +47,8 @@ double MeanThickness(const TetMesh& m, const std::vector<size_t>& faces) {
 
 // The deck of `m`; `split` (whose mesh `m` is) adds the two sides of each sheet and carries
 // the sheets as cohesive elements, or as contact pairs where `calculix`.
-absl::StatusOr<std::string> Deck(const std::string& path, const TetMesh& m,
-                                 const SplitMesh* split, bool calculix) {
+absl::StatusOr<std::string> Deck(const std::string& path, const TetMesh& m, const SplitMesh* split,
+                                 bool calculix) {
   const auto sheets = SheetFacesByPiece(m);
   std::string out = absl::StrCat(
       "*HEADING\nsheetmesh ", SHEETMESH_VERSION, " volume mesh: rock tetrahedra ",
@@ -183,7 +183,8 @@ absl::StatusOr<std::string> Deck(const std::string& path, const TetMesh& m,
   const double vox = m.voxel_length > 0 ? m.voxel_length : 1.0;
   for (const auto& [piece, faces] : sheets) {
     const double mean = MeanThickness(m, faces);
-    absl::StrAppendFormat(&out, "** sheet %d: mean thickness %.7g (%.4g voxels) over %d triangles\n",
+    absl::StrAppendFormat(&out,
+                          "** sheet %d: mean thickness %.7g (%.4g voxels) over %d triangles\n",
                           piece, mean, mean / vox, faces.size());
     if (split == nullptr) {
       absl::StrAppendFormat(&out, "*SHELL SECTION, ELSET=SHEET_%d, MATERIAL=FRACTURE\n%.7g\n",

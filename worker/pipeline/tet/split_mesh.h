@@ -8,9 +8,8 @@
 
 #include <array>
 #include <cstdint>
-#include <vector>
-
 #include <nlohmann/json_fwd.hpp>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "worker/pipeline/tet/tet_mesh.h"

@@ -1,8 +1,9 @@
 // Volume mesh files: VTU for ParaView and OpenGeoSys (tetrahedra and the tagged sheet and
 // boundary triangles, integer MaterialIDs), Gmsh MSH 4.1 with physical groups and the
 // thickness as element data, Abaqus/CalculiX INP with sections and materials (abaqus_io.cc),
-// and Exodus II (exodus_io.cc) for MOOSE; the last two also split along the sheets. Each file appears atomically. Thickness is physical
-// everywhere, with the voxel value beside it where the format has room.
+// and Exodus II (exodus_io.cc) for MOOSE; the last two also split along the sheets. Each file
+// appears atomically. Thickness is physical everywhere, with the voxel value beside it where the
+// format has room.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_IO_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_IO_H_
 

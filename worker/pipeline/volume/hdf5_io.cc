@@ -594,9 +594,9 @@ absl::StatusOr<std::unique_ptr<VolumeSink>> CreateHdf5Writer(const std::string& 
     H5Id type(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Id scalar(H5Screate(H5S_SCALAR), H5Sclose);
     ok = ok && type.ok() && H5Tset_size(type.get(), unit.size()) >= 0;
-    H5Id a(ok ? H5Acreate2(ds.get(), "unit", type.get(), scalar.get(), H5P_DEFAULT, H5P_DEFAULT)
-              : -1,
-           H5Aclose);
+    H5Id a(
+        ok ? H5Acreate2(ds.get(), "unit", type.get(), scalar.get(), H5P_DEFAULT, H5P_DEFAULT) : -1,
+        H5Aclose);
     ok = ok && a.ok() && H5Awrite(a.get(), type.get(), unit.data()) >= 0;
   }
   if (!ok) {

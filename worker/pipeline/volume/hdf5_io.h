@@ -25,9 +25,9 @@ bool HasHdf5Extension(const std::string& path);
 // Opens `dataset` of the HDF5 file `file`: 3D (z, y, x; a 2D one is one slice), any integer
 // or float type (uint8 and uint16 as they are, anything else read as float32). Spacing
 // from the dataset's attributes "spacing" (x, y, z) with "unit" (a string), else
-// "element_size_um" (z, y, x; unit "um"), else "spacing" alone. An empty `dataset` takes the file's only 2D/3D dataset. kNotFound naming the
-// dataset and those the file has; kInvalidArgument for a file that is not HDF5, a dataset
-// that is not 2D/3D or not numeric.
+// "element_size_um" (z, y, x; unit "um"), else "spacing" alone. An empty `dataset` takes the file's
+// only 2D/3D dataset. kNotFound naming the dataset and those the file has; kInvalidArgument for a
+// file that is not HDF5, a dataset that is not 2D/3D or not numeric.
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenHdf5Volume(const std::string& file,
                                                              const std::string& dataset,
                                                              const VolumeLimits& limits = {});

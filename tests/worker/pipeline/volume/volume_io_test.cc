@@ -522,9 +522,9 @@ TEST(Hdf5WriterTest, AMostlyEmptyBoxIsSmallAndReadsBackWithItsUnit) {
   const size_t slice = 300 * 200 * 2;
   for (int z = 0; z < 40; z += 3) {  // slabs that do not line up with the chunks
     const int n = std::min(3, 40 - z);
-    ASSERT_THAT(sink->WriteSlices(n, std::span<const std::byte>(in.data).subspan(z * slice,
-                                                                               n * slice)),
-                IsOk());
+    ASSERT_THAT(
+        sink->WriteSlices(n, std::span<const std::byte>(in.data).subspan(z * slice, n * slice)),
+        IsOk());
   }
   ASSERT_THAT(sink->Finish(), IsOk());
   EXPECT_LT(std::filesystem::file_size(path), in.data.size() / 50);

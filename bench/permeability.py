@@ -18,14 +18,15 @@ tensor's diagonal against the answer, the principal direction's angle, the sheet
 the flux, the solver's iterations and its time against the volume mesh's. The image's
 reference (r-independent but for the extraction's) runs once per volume, at r = 7; the
 others skip it (`--permeability_image_reference=false`) and are compared with it. The
-convergence plot (k against r, each axis over its value at r = 2) goes to
-docs/images/permeability_convergence.png.
+convergence plot (each axis's permeameter against r, over its value at r = 2) goes to
+docs/images/permeability_convergence.png (`--replot` draws it again from
+bench/out/permeability.md).
 
 With `--paper`: the paper phantom (1012×1024×931) at r = 7, `--volume_mesh` against `--flow`
 (the image's reference skipped: beyond a million voxels), wall time and peak memory (GNU
 time) of each, the flow stage's own seconds against the volume mesh's.
 
-Usage: /usr/bin/python3 bench/permeability.py [BUILD_DIR] [--paper]
+Usage: /usr/bin/python3 bench/permeability.py [BUILD_DIR] [--paper] | --replot
 Writes bench/out/permeability.md and prints it.
 """
 import json
@@ -124,31 +125,55 @@ def paper(cli, tmp):
 
 
 def plot(series, path):
-    """k against r per volume and axis, each over its value at the smallest r."""
+    """The permeameters (the laboratory's measurement) against r per volume and axis, each
+    over its value at the smallest r that ran."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
+    colours = plt.get_cmap("tab20").colors
+    markers = "osD^v<>ph*X"
     for axis, ax in enumerate(axes):
-        for name, points in series.items():
+        for i, (name, points) in enumerate(series.items()):
             points = [(r, k) for r, k in points if k is not None]
             if len(points) < 2:
                 continue
             base = points[0][1][axis]
-            ax.plot([r for r, _ in points], [k[axis] / base for _, k in points], marker="o",
+            ax.plot([r for r, _ in points], [k[axis] / base for _, k in points],
+                    marker=markers[i % len(markers)], color=colours[(2 * i) % len(colours)],
                     label=name)
-        ax.set_title("k_%s" % "xyz"[axis] * 2)
+        ax.set_title("permeameter along %s" % "xyz"[axis])
         ax.set_xlabel("r (voxels)")
         ax.axhline(1, color="grey", lw=0.5)
         ax.set_yscale("log")
     axes[0].set_ylabel("k(r) / k(r = 2)")
     axes[2].legend(fontsize=7, loc="best")
-    fig.suptitle("The permeability tensor's diagonal as the surface coarsens (--flow, 5 µm voxels)")
+    fig.suptitle("The permeameters as the surface coarsens (--flow, 5 µm voxels, r = 2 … 15)")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
 
 
+def replot(md, path):
+    """The plot again from a written table: the mesh / image column is the permeameter over
+    one number per volume, so its ratio to the first r is the permeameter's."""
+    series = {}
+    for line in open(md):
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 10 or not cells[1].replace(".", "").isdigit():
+            continue
+        try:
+            ratios = [float(x) for x in cells[5].split(" / ")]
+        except ValueError:
+            continue
+        series.setdefault(cells[0], []).append((float(cells[1]), ratios))
+    plot({k: sorted(v) for k, v in series.items()}, path)
+
+
 def main():
+    if "--replot" in sys.argv:
+        replot(os.path.join(ROOT, "bench", "out", "permeability.md"),
+               os.path.join(ROOT, "docs", "images", "permeability_convergence.png"))
+        return
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     build = args[0] if args else os.path.join(ROOT, "build-tests")
     cli = os.path.join(build, "worker", "pipeline", "sheetmesh-pipeline")
@@ -189,7 +214,7 @@ def main():
                 continue
             k = rep["flow"]["permeability_m2"]
             diag = [k[i][i] for i in range(3)]
-            points.append((r, diag))
+            points.append((r, rep["flow"]["permeameter_m2"]))
             darcy = " / ".join("%.3g" % (d / 9.869233e-13) for d in diag)
             against = "—"
             if answer:

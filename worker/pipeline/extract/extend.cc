@@ -96,30 +96,59 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
   }
   // Claims are kept as a list (sorted, the nearest plane's first) or, where the cylinders
   // cover much of the image, as the best claim per voxel of a dense array: the same result.
-  const double list_bytes = 2 * sizeof(Claim) * claims_bound;  // the parts and their union
+  // The list is gathered slab by slab along z (each window's bound spread over its slices),
+  // a slab's raw claims at most about o.slab_claims: what it holds at once is one slab's
+  // claims and their union, and the voxels claimed so far, counted as they come.
+  std::vector<double> per_slice(static_cast<size_t>(d.nz), 0.0);
+  for (const uint32_t g : active) {
+    const Window w = window_of(g);
+    const double share = std::min(static_cast<double>(w.voxels()), cylinder) /
+                         static_cast<double>(std::max<int64_t>(1, w.hi[2] - w.lo[2] + 1));
+    for (int64_t z = w.lo[2]; z <= w.hi[2]; ++z) per_slice[z] += share;
+  }
+  std::vector<std::pair<int64_t, int64_t>> slabs;  // [z0, z1)
+  double largest_slab = 0;
+  for (int64_t z0 = 0; z0 < d.nz;) {
+    double bound = per_slice[z0];
+    int64_t z1 = z0 + 1;
+    while (z1 < d.nz && bound + per_slice[z1] <= static_cast<double>(o.slab_claims)) {
+      bound += per_slice[z1++];
+    }
+    slabs.emplace_back(z0, z1);
+    largest_slab = std::max(largest_slab, bound);
+    z0 = z1;
+  }
+  const double list_bytes = 2 * sizeof(Claim) * largest_slab;  // a slab's parts and union
   const double dense_bytes = sizeof(uint64_t) * static_cast<double>(d.num_voxels());
   const bool dense = o.claims == ExtendOptions::ClaimStore::kAuto
-                         ? dense_bytes < list_bytes
+                         ? dense_bytes < 2 * sizeof(Claim) * claims_bound
                          : o.claims == ExtendOptions::ClaimStore::kDense;
   const double claim_bytes = dense ? dense_bytes : list_bytes;
-  if (claim_bytes > static_cast<double>(o.memory_bytes) || visits > o.max_visits) {
+  const auto too_much = [&](double bytes) {
     return absl::ResourceExhaustedError(absl::StrFormat(
         "extending %d rim cells with t = %g and R = %g voxels would look at %.3g voxels and "
         "hold %.3g GB of claims (limits: %.3g voxels, %.3g GB of memory); lower t and R "
         "(formula 4's flat cylinder) to about the sheets' thickness and a cell's radius",
-        active.size(), t, R, visits, claim_bytes / 1e9, o.max_visits, o.memory_bytes / 1e9));
+        active.size(), t, R, visits, bytes / 1e9, o.max_visits, o.memory_bytes / 1e9));
+  };
+  if (claim_bytes > static_cast<double>(o.memory_bytes) || visits > o.max_visits) {
+    return too_much(claim_bytes);
   }
-  // Calls claim(key, off_plane, label) for every voxel each rim cylinder may add.
-  auto scan = [&](auto&& claim) {
+  // Calls claim(key, off_plane, label) for every voxel each rim cylinder may add in the
+  // slices [z0, z1).
+  auto scan = [&](int64_t z0, int64_t z1, auto&& claim) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 16),
                       [&](const tbb::blocked_range<size_t>& r) {
                         for (size_t i = r.begin(); i < r.end(); ++i) {
                           const uint32_t g = active[i];
+                          const Window w = window_of(g);
+                          const int64_t from = std::max(w.lo[2], z0);
+                          const int64_t to = std::min(w.hi[2], z1 - 1);
+                          if (from > to) continue;
                           const Index3 z = scvd.generators[g];
                           const Vec3& n = normal[g];
                           const int32_t label = patch.label[scvd.generator_voxel[g]];
-                          const Window w = window_of(g);
-                          for (int64_t zz = w.lo[2]; zz <= w.hi[2]; ++zz) {
+                          for (int64_t zz = from; zz <= to; ++zz) {
                             for (int64_t y = w.lo[1]; y <= w.hi[1]; ++y) {
                               for (int64_t x = w.lo[0]; x <= w.hi[0]; ++x) {
                                 const Vec3 v(x - z.x, y - z.y, zz - z.z);
@@ -144,7 +173,7 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
     std::vector<std::atomic<uint64_t>> best(static_cast<size_t>(d.num_voxels()));
     tbb::parallel_for(size_t{0}, best.size(),
                       [&](size_t i) { best[i].store(kNone, std::memory_order_relaxed); });
-    scan([&](uint64_t key, float along, int32_t label) {
+    scan(0, d.nz, [&](uint64_t key, float along, int32_t label) {
       uint32_t bits;
       std::memcpy(&bits, &along, 4);
       const uint64_t word =
@@ -164,17 +193,27 @@ absl::StatusOr<std::vector<Claim>> Round(const LabelledVoxels& patch, const Exte
           {key, along, static_cast<int32_t>(static_cast<uint32_t>(word) ^ uint32_t{0x80000000u})});
     }
   } else {
-    tbb::combinable<std::vector<Claim>> parts;
-    scan([&](uint64_t key, float along, int32_t label) {
-      parts.local().push_back({key, along, label});
-    });
-    parts.combine_each(
-        [&](std::vector<Claim>& p) { claims.insert(claims.end(), p.begin(), p.end()); });
-    tbb::parallel_sort(claims.begin(), claims.end());
-    // The first claim of each voxel is the nearest plane's (ties: the lower label).
-    claims.erase(std::unique(claims.begin(), claims.end(),
+    std::vector<Claim> slab;
+    for (const auto& [z0, z1] : slabs) {
+      tbb::combinable<std::vector<Claim>> parts;
+      scan(z0, z1, [&](uint64_t key, float along, int32_t label) {
+        parts.local().push_back({key, along, label});
+      });
+      slab.clear();
+      parts.combine_each(
+          [&](std::vector<Claim>& p) { slab.insert(slab.end(), p.begin(), p.end()); });
+      tbb::parallel_sort(slab.begin(), slab.end());
+      // The first claim of each voxel is the nearest plane's (ties: the lower label). Slabs
+      // follow each other in z, so their voxels come in linear order.
+      slab.erase(std::unique(slab.begin(), slab.end(),
                              [](const Claim& a, const Claim& b) { return a.key == b.key; }),
-                 claims.end());
+                 slab.end());
+      claims.insert(claims.end(), slab.begin(), slab.end());
+      if (static_cast<double>(claims.size() * sizeof(Claim)) + list_bytes >
+          static_cast<double>(o.memory_bytes)) {
+        return too_much(static_cast<double>(claims.size() * sizeof(Claim)) + list_bytes);
+      }
+    }
   }
   if (built != nullptr) *built = std::move(s);
   return claims;

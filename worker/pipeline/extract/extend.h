@@ -27,6 +27,10 @@ struct ExtendOptions {
   // ties to the lower label).
   enum class ClaimStore { kAuto, kList, kDense };
   ClaimStore claims = ClaimStore::kAuto;
+  // The list is gathered slab by slab along z, each slab's claims reduced to one per voxel
+  // before the next: a slab holds about this many raw claims (cylinders overlap, so what is
+  // kept is far less than every cylinder's claims at once).
+  int64_t slab_claims = int64_t{1} << 25;
 };
 
 struct ExtendResult {
@@ -46,7 +50,8 @@ struct ScvdOfSet;  // scvd_of_set.h
 // `within` of other dims; kCancelled if asked.
 // With `first_round`, the SCVD the first round was built on is left there (when the patch
 // is not empty), for a later step with the same radius and seed. kResourceExhausted, naming t
-// and R, when a round's estimated cost passes options.memory_bytes or max_visits.
+// and R, when a round's estimated cost (a slab's claims, or the dense store) or the claims it
+// keeps pass options.memory_bytes, or its visits max_visits.
 absl::StatusOr<ExtendResult> Extend(const LabelledVoxels& patch, const ExtendOptions& options,
                                     const VoxelSet* within = nullptr, const Progress& progress = {},
                                     ScvdOfSet* first_round = nullptr);

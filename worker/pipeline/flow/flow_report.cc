@@ -44,6 +44,11 @@ nlohmann::json PermeabilityResult::Fields() const {
       {"box_volume_m3", volume},
       {"metres_per_unit", metres_per_unit},
       {"seconds", seconds}};
+  if (!body_permeability.empty()) {
+    nlohmann::json bodies = nlohmann::json::object();
+    for (const auto& [piece, k] : body_permeability) bodies[std::to_string(piece)] = k;
+    j["body_permeability_m2"] = bodies;
+  }
   if (!note.empty()) j["note"] = note;
   return j;
 }

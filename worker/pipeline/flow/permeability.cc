@@ -107,7 +107,9 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
                                                      VolumeFields* fields) {
   const absl::Time start = absl::Now();
   SM_RETURN_IF_ERROR(CheckPermeability(options.matrix_permeability, "permeability.matrix"));
-  SM_RETURN_IF_ERROR(CheckPermeability(options.body_permeability, "permeability.body"));
+  if (options.body_permeability != 0) {
+    SM_RETURN_IF_ERROR(CheckPermeability(options.body_permeability, "permeability.body"));
+  }
   if (!(options.tolerance > 0 && options.tolerance <= 1e-2)) {
     return absl::InvalidArgumentError(
         absl::StrCat("flow tolerance ", options.tolerance, ": must be in (0, 0.01]"));
@@ -139,6 +141,31 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     return absl::InvalidArgumentError("flow: the volume mesh's box has no volume");
   }
 
+  // Each body's permeability: the one given, or a²/12 of its thickness a = 2 V / A.
+  if (!mesh.body_pieces.empty()) {
+    std::map<int32_t, double> volume, area;
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      const int32_t p = mesh.Region(t);
+      if (p < 0) continue;
+      const Tet& q = mesh.tets[t];
+      volume[p] += std::abs(TetVolume(x[q[0]], x[q[1]], x[q[2]], x[q[3]]));
+    }
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      const int32_t p = mesh.face_piece[f];
+      if (p < 0 || !mesh.IsBody(p)) continue;
+      const auto& q = mesh.faces[f];
+      area[p] += 0.5 * Norm(Cross(x[q[1]] - x[q[0]], x[q[2]] - x[q[0]]));
+    }
+    for (int32_t p : mesh.body_pieces) {
+      double k = options.body_permeability;
+      if (k == 0 && area[p] > 0) {
+        const double a = 2 * volume[p] / area[p];
+        k = std::max(options.matrix_permeability, a * a / 12);
+      }
+      out.body_permeability[p] = k > 0 ? k : options.matrix_permeability;
+    }
+  }
+
   // The elements.
   std::vector<Element<4>> tets;
   tets.reserve(mesh.tets.size());
@@ -149,7 +176,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     for (int k = 0; k < 4; ++k) p[k] = x[e.nodes[k]];
     if (!TetGradients(p, &e.gradient, &e.measure)) continue;
     e.kind = mesh.Region(t) >= 0 ? 2 : 0;
-    e.conductivity = e.kind == 2 ? options.body_permeability : options.matrix_permeability;
+    e.conductivity = e.kind == 2 ? out.body_permeability.at(mesh.Region(t))
+                                 : options.matrix_permeability;
     e.velocity = e.conductivity;
     e.cell = t;
     out.body_tets += e.kind == 2;

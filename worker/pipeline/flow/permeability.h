@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 
@@ -29,7 +30,10 @@ inline constexpr double kSquareMetresPerDarcy = 9.869233e-13;
 struct FlowOptions {
   bool enabled = false;
   double matrix_permeability = 1e-18;  // m², the rock between the sheets (about a microdarcy)
-  double body_permeability = 1e-10;    // m², inside the pieces meshed as bodies (open vugs)
+  // m², inside the pieces meshed as bodies; 0: each body's own, the parallel-plate law a²/12
+  // of its thickness a = 2 × its volume / its wall area (what the body would carry as a
+  // sheet of that aperture: a thick fracture meshed as a body keeps its cubic law)
+  double body_permeability = 0;
   double tolerance = 1e-10;            // the conjugate gradients' relative residual
   bool image_reference = true;         // also the image's own answer (up to a million voxels)
 };
@@ -53,6 +57,7 @@ struct PermeabilityResult {
   uint64_t fixed_nodes = 0;  // on the box's faces
   uint64_t sheet_faces = 0;  // 2-D elements
   uint64_t body_tets = 0;    // tetrahedra in bodies
+  std::map<int32_t, double> body_permeability;  // m², per body piece, as used
   double volume = 0;         // of the box, m³
   double seconds = 0;
   std::string note;  // what the result does not show ("" when nothing)

@@ -110,8 +110,11 @@ std::vector<ParamRow> FlowRows() {
                         "m²",
                         "permeability of the rock between the sheets (1e-18 m²: about a "
                         "microdarcy, a tight rock)"));
-  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "(0, 0.001]", "m²",
-                        "permeability inside the pieces meshed as bodies (open vugs)"));
+  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability),
+                        "0 | (0, 0.001]", "m²",
+                        "permeability inside the pieces meshed as bodies; 0: each body's own, "
+                        "the parallel-plate law a²/12 of its thickness a = 2 × volume / wall area "
+                        "(a thick fracture meshed as a body carries what it would as a sheet)"));
   rows.push_back(Bool("permeability.image_reference", SM_MEMBER(flow.image_reference),
                       "with flow: also the image's own answer (the cubic law on the sheet "
                       "voxels, finite volumes on the voxel grid, up to a million voxels) and the "

@@ -127,14 +127,13 @@ absl::StatusOr<SplitMesh> SplitAlongSheets(const TetMesh& m) {
     if (tets.empty()) {
       return absl::InternalError(absl::StrCat("volume mesh: face ", f, " bounds no tetrahedron"));
     }
-    if (piece < 0 || m.IsBody(piece)) {
-      out.mesh.faces[f] = copies(tets[0], q);
-      continue;
-    }
+    out.mesh.faces[f] = copies(tets[0], q);
+    if (piece < 0 || m.IsBody(piece)) continue;
+    // A sheet face with rock on one side only (on the box's face), or whose two tetrahedra
+    // do not lie on opposite sides of it, is left whole and counted: it has nothing to open.
     if (tets.size() != 2) {
-      return absl::InternalError(absl::StrCat("volume mesh: sheet face ", f, " of piece ", piece,
-                                              " has ", tets.size(),
-                                              " tetrahedra beside it, not one on each side"));
+      ++out.stats.unsplit_faces;
+      continue;
     }
     const Vec3 n = Cross(m.nodes[q[1]] - m.nodes[q[0]], m.nodes[q[2]] - m.nodes[q[0]]);
     double side[2];
@@ -144,8 +143,8 @@ absl::StatusOr<SplitMesh> SplitAlongSheets(const TetMesh& m) {
       side[s] = Dot(n, m.nodes[apex] - m.nodes[q[0]]);
     }
     if (!(side[0] * side[1] < 0)) {
-      return absl::InternalError(absl::StrCat("volume mesh: the two tetrahedra beside sheet face ",
-                                              f, " lie on the same side of it"));
+      ++out.stats.unsplit_faces;
+      continue;
     }
     SheetInterface in;
     in.face = f;

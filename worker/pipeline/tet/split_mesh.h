@@ -36,6 +36,7 @@ struct SplitStats {
   size_t added_nodes = 0;   // copies made
   size_t interfaces = 0;    // sheet faces split in two
   size_t closed_faces = 0;  // interfaces with no node copied
+  size_t unsplit_faces = 0;  // sheet faces without a tetrahedron on each side: left whole
   nlohmann::json Fields() const;
 };
 
@@ -51,7 +52,8 @@ struct SplitMesh {
 
 // Splits `mesh` along its sheets (not the bodies' walls: a body is a region, not a crack).
 // The sides around a node are the tetrahedra that reach each other across faces that are not
-// sheet faces. kInternal where a sheet face does not have a tetrahedron on each side.
+// sheet faces. A sheet face without a tetrahedron on each side (on the box's face) is left
+// whole and counted in stats.unsplit_faces. kInternal where a face bounds no tetrahedron.
 absl::StatusOr<SplitMesh> SplitAlongSheets(const TetMesh& mesh);
 
 }  // namespace sheetmesh

@@ -19,7 +19,8 @@ nlohmann::json SplitStats::Fields() const {
           {"rim_nodes", rim_nodes},
           {"added_nodes", added_nodes},
           {"interfaces", interfaces},
-          {"closed_faces", closed_faces}};
+          {"closed_faces", closed_faces},
+          {"unsplit_faces", unsplit_faces}};
 }
 
 nlohmann::json TetQuality::Fields() const {

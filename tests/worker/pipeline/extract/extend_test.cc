@@ -76,6 +76,7 @@ TEST(ExtendTest, BadParametersAreInvalidArgument) {
               StatusIs(absl::StatusCode::kInvalidArgument));
 }
 
+// The dense store, one list, and a list gathered in many thin slabs give the same patch.
 TEST(ExtendTest, TheDenseAndTheListedClaimsGiveTheSamePatch) {
   // Two crossing slabs and a fragment, so that cylinders compete for voxels.
   const Dims d{64, 56, 40};
@@ -88,12 +89,18 @@ TEST(ExtendTest, TheDenseAndTheListedClaimsGiveTheSamePatch) {
     list.max_rounds = dense.max_rounds = 2;
     list.claims = ExtendOptions::ClaimStore::kList;
     dense.claims = ExtendOptions::ClaimStore::kDense;
+    ExtendOptions slabs = list;
+    slabs.slab_claims = 500;  // a slab of a slice or two: dozens of slabs, cut through cylinders
     SM_ASSERT_OK_AND_ASSIGN(ExtendResult a, Extend(Labelled(set), list));
     SM_ASSERT_OK_AND_ASSIGN(ExtendResult b, Extend(Labelled(set), dense));
+    SM_ASSERT_OK_AND_ASSIGN(ExtendResult c, Extend(Labelled(set), slabs));
     EXPECT_GT(a.added, 0u);
     EXPECT_EQ(a.added, b.added) << "t " << t;
     EXPECT_EQ(a.patch.set, b.patch.set) << "t " << t;
     EXPECT_EQ(a.patch.label, b.patch.label) << "t " << t;
+    EXPECT_EQ(c.added, b.added) << "t " << t;
+    EXPECT_EQ(c.patch.set, b.patch.set) << "t " << t;
+    EXPECT_EQ(c.patch.label, b.patch.label) << "t " << t;
   }
 }
 

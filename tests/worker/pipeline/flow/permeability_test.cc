@@ -147,6 +147,25 @@ TEST(PermeabilityTest, WithoutSheetsTheRockAloneAndANote) {
   EXPECT_THAT(k.note, HasSubstr("no sheet face"));
 }
 
+// A body takes the parallel-plate law of its thickness 2 V / A unless a permeability is
+// given: a cube of side s inside the box, a = s / 3, k = a² / 12.
+TEST(PermeabilityTest, ABodyTakesThePlateLawOfItsThicknessUnlessGivenOne) {
+  const TetMesh mesh = Mesh(testing::Cube(6, 14, 0));
+  ASSERT_TRUE(mesh.IsBody(0));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult own, SolvePermeability(mesh, Options()));
+  const double a = 8 * kVoxelMm * 1e-3 / 3;
+  ASSERT_EQ(own.body_permeability.size(), 1u);
+  EXPECT_NEAR(own.body_permeability.at(0), a * a / 12, 1e-9 * a * a / 12);
+  EXPECT_GT(own.body_tets, 0u);
+  FlowOptions given = Options();
+  given.body_permeability = 1e-12;
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult set, SolvePermeability(mesh, given));
+  EXPECT_EQ(set.body_permeability.at(0), 1e-12);
+  // An inclusion more permeable than the rock raises k, the more so the more permeable.
+  EXPECT_GT(own.tensor[0][0], set.tensor[0][0]);
+  EXPECT_GT(set.tensor[0][0], kMatrix);
+}
+
 TEST(PermeabilityTest, BadInputIsRefusedNamingFieldAndValue) {
   const TetMesh mesh = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 2, 0));
   FlowOptions o = Options();

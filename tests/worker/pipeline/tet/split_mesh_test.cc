@@ -92,6 +92,7 @@ TEST(SplitMeshTest, ACrackInsideTheBoxCopiesEveryNodeButItsRims) {
     EXPECT_EQ(k, 1) << v;
   }
   EXPECT_EQ(s.interfaces.size(), m.num_sheet_faces());
+  EXPECT_EQ(s.stats.unsplit_faces, 0u);
 }
 
 TEST(SplitMeshTest, InterfacesFaceTheWayTheSheetFacesDo) {

@@ -26,7 +26,9 @@ With `--paper`: the paper phantom (1012×1024×931) at r = 7, `--volume_mesh` ag
 (the image's reference skipped: beyond a million voxels), wall time and peak memory (GNU
 time) of each, the flow stage's own seconds against the volume mesh's.
 
-Usage: /usr/bin/python3 bench/permeability.py [BUILD_DIR] [--paper] | --replot
+Usage: /usr/bin/python3 bench/permeability.py [BUILD_DIR] [--paper] [--only=NAME,...] | --replot
+(`--only` runs the volumes named: "crossing slabs", NETL, a preset, ...; the table it writes
+then holds those alone).
 Writes bench/out/permeability.md and prints it.
 """
 import json
@@ -190,7 +192,12 @@ def main():
             cases.append((name, full, ["--labels=255"], None, None))
         else:
             print("%s: %s absent, skipped" % (name, full))
+    only = [a.split("=", 1)[1].split(",") for a in sys.argv if a.startswith("--only=")]
+    if only:
+        cases = [c for c in cases if c[0] in only[0]]
     for preset in PRESETS:
+        if only and preset not in only[0]:
+            continue
         p = os.path.join(tmp, "%s_96x96x96_u8.raw" % preset)
         subprocess.run([cli, "phantom", "--preset=" + preset, "--dims=96x96x96", "-o", p],
                        check=True, capture_output=True)

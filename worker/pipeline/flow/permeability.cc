@@ -176,8 +176,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     for (int k = 0; k < 4; ++k) p[k] = x[e.nodes[k]];
     if (!TetGradients(p, &e.gradient, &e.measure)) continue;
     e.kind = mesh.Region(t) >= 0 ? 2 : 0;
-    e.conductivity = e.kind == 2 ? out.body_permeability.at(mesh.Region(t))
-                                 : options.matrix_permeability;
+    e.conductivity =
+        e.kind == 2 ? out.body_permeability.at(mesh.Region(t)) : options.matrix_permeability;
     e.velocity = e.conductivity;
     e.cell = t;
     out.body_tets += e.kind == 2;

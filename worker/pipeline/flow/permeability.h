@@ -34,8 +34,8 @@ struct FlowOptions {
   // of its thickness a = 2 × its volume / its wall area (what the body would carry as a
   // sheet of that aperture: a thick fracture meshed as a body keeps its cubic law)
   double body_permeability = 0;
-  double tolerance = 1e-10;            // the conjugate gradients' relative residual
-  bool image_reference = true;         // also the image's own answer (up to a million voxels)
+  double tolerance = 1e-10;     // the conjugate gradients' relative residual
+  bool image_reference = true;  // also the image's own answer (up to a million voxels)
 };
 
 using Tensor3 = std::array<std::array<double, 3>, 3>;
@@ -54,11 +54,11 @@ struct PermeabilityResult {
   std::array<int, 3> iterations{};
   double residual = 0;  // the largest relative residual of the three solves
   uint64_t unknowns = 0;
-  uint64_t fixed_nodes = 0;  // on the box's faces
-  uint64_t sheet_faces = 0;  // 2-D elements
-  uint64_t body_tets = 0;    // tetrahedra in bodies
+  uint64_t fixed_nodes = 0;                     // on the box's faces
+  uint64_t sheet_faces = 0;                     // 2-D elements
+  uint64_t body_tets = 0;                       // tetrahedra in bodies
   std::map<int32_t, double> body_permeability;  // m², per body piece, as used
-  double volume = 0;         // of the box, m³
+  double volume = 0;                            // of the box, m³
   double seconds = 0;
   std::string note;  // what the result does not show ("" when nothing)
 

@@ -110,8 +110,8 @@ std::vector<ParamRow> FlowRows() {
                         "m²",
                         "permeability of the rock between the sheets (1e-18 m²: about a "
                         "microdarcy, a tight rock)"));
-  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability),
-                        "0 | (0, 0.001]", "m²",
+  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "0 | (0, 0.001]",
+                        "m²",
                         "permeability inside the pieces meshed as bodies; 0: each body's own, "
                         "the parallel-plate law a²/12 of its thickness a = 2 × volume / wall area "
                         "(a thick fracture meshed as a body carries what it would as a sheet)"));

@@ -31,11 +31,11 @@ struct SheetInterface {
 
 // What the split did, for the report.
 struct SplitStats {
-  size_t sheet_nodes = 0;   // nodes of the unsplit mesh on a sheet face
-  size_t rim_nodes = 0;     // of those, kept single (the tetrahedra around them are one side)
-  size_t added_nodes = 0;   // copies made
-  size_t interfaces = 0;    // sheet faces split in two
-  size_t closed_faces = 0;  // interfaces with no node copied
+  size_t sheet_nodes = 0;    // nodes of the unsplit mesh on a sheet face
+  size_t rim_nodes = 0;      // of those, kept single (the tetrahedra around them are one side)
+  size_t added_nodes = 0;    // copies made
+  size_t interfaces = 0;     // sheet faces split in two
+  size_t closed_faces = 0;   // interfaces with no node copied
   size_t unsplit_faces = 0;  // sheet faces without a tetrahedron on each side: left whole
   nlohmann::json Fields() const;
 };

@@ -15,12 +15,9 @@ nlohmann::json QualityStat::Fields() const {
 }
 
 nlohmann::json SplitStats::Fields() const {
-  return {{"sheet_nodes", sheet_nodes},
-          {"rim_nodes", rim_nodes},
-          {"added_nodes", added_nodes},
-          {"interfaces", interfaces},
-          {"closed_faces", closed_faces},
-          {"unsplit_faces", unsplit_faces}};
+  return {{"sheet_nodes", sheet_nodes},   {"rim_nodes", rim_nodes},
+          {"added_nodes", added_nodes},   {"interfaces", interfaces},
+          {"closed_faces", closed_faces}, {"unsplit_faces", unsplit_faces}};
 }
 
 nlohmann::json TetQuality::Fields() const {

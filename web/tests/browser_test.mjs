@@ -63,6 +63,13 @@ async function main() {
     `${tmp}/gport`, "sheetmesh-gateway");
   const base = `http://127.0.0.1:${gport}`;
   const api = (p, init = {}) => fetch(base + p, { ...init, headers: { Authorization: `Bearer ${TOKEN}`, ...(init.headers || {}) } });
+  // Pixels of the charts' bar colour (#4a7bd0) on the canvas `selector`: its bars are drawn.
+  const barColourPixels = (selector) => page.$eval(selector, (c) => {
+    const px = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < px.length; i += 4) n += px[i] === 0x4a && px[i + 1] === 0x7b && px[i + 2] === 0xd0;
+    return n;
+  });
 
   let browser;
   try {
@@ -151,12 +158,7 @@ async function main() {
   const counts = JSON.parse((await page.getAttribute("#histogram", "data-counts")) || "[]");
   const total = counts.reduce((a, b) => a + b, 0);
   check(total === report.surface.triangles, `the histogram counts ${total} triangles, report.json ${report.surface.triangles}`);
-  const barPixels = await page.$eval("#histogram", (c) => {
-    const px = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < px.length; i += 4) n += px[i] === 0x4a && px[i + 1] === 0x7b && px[i + 2] === 0xd0;
-    return n;
-  });
+  const barPixels = await barColourPixels("#histogram");
   check(barPixels > 500, `the histogram's bars are drawn (${barPixels} pixels of their colour)`);
   const axis = await page.getAttribute("#histogram", "data-axis");
   check(axis === "aperture per triangle (voxels)", `the histogram says what it counts and in what unit (${axis})`);
@@ -244,12 +246,7 @@ async function main() {
   check(drawn.length === series && drawn[0][3] === physicalReport.flow.principal_darcy[0] &&
     (series === 3 || ratioRow.includes(imageRef.skipped.slice(0, 40))),
   `the chart draws the tensor, the permeameters${series === 3 ? " and the image's" : ""} (${drawn.length} series), the largest principal value first; ${ratioRow.slice(0, 120)}`);
-  const kBars = await page.$eval("#permeability_chart", (c) => {
-    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) n += d[i] === 0x4a && d[i + 1] === 0x7b && d[i + 2] === 0xd0;
-    return n;
-  });
+  const kBars = await barColourPixels("#permeability_chart");
   check(kBars > 300, `the tensor's bars are drawn (${kBars} pixels of their colour)`);
   await page.screenshot({ path: path.join(outDir, "job_page_permeability.png"), fullPage: true });
   check(coveredPhysical > 0.5 * covered && coveredPhysical < 2 * covered,

@@ -24,6 +24,8 @@ packages=(
   # the HTTP gateway (Go in GOPATH mode, no module downloads), previews, browser tests
   golang-go golang-grpc-gateway golang-github-grpc-ecosystem-grpc-gateway-dev
   golang-goprotobuf-dev golang-google-grpc-dev golang-google-genproto-dev libpng-dev chromium
+  # bricks as a Slurm job array on a one-node cluster (SlurmBricksTest)
+  munge slurmctld slurmd slurm-client
   # the image and the compose file (ImageTest)
   docker.io debootstrap docker-compose
   # the formats labs and simulators use: readers (HDF5, DICOM, PNG/JPEG stacks), Exodus II,

@@ -23,6 +23,10 @@
 #include "common/huge_pages.h"
 #include "common/machine.h"
 #include "common/status_macros.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/time/clock.h"
+#include "worker/pipeline/brick/bricks.h"
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/parameter_flags.h"
 #include "worker/pipeline/cli/phantom_command.h"
@@ -59,6 +63,15 @@ ABSL_FLAG(uint64_t, seed, 1, "phantom: random seed");
 ABSL_FLAG(int, sheets, -1, "phantom: sheets (default: the preset's)");
 ABSL_FLAG(double, aperture, -1, "phantom: mean aperture in voxels (default: the preset's)");
 ABSL_FLAG(int, specks, -2, "phantom: specks (-1: one per 20^3 voxels; default: the preset's)");
+// plan, brick
+ABSL_FLAG(std::string, brick_size, "512",
+          "plan: the bricks' edge in voxels, N or NXxNYxNZ (the last bricks along an axis are "
+          "what is left)");
+ABSL_FLAG(std::string, grid_origin, "0,0,0",
+          "plan: where the brick grid starts, X,Y,Z voxels (each in [0, the brick size))");
+ABSL_FLAG(int, index, -1,
+          "brick: the brick to run (default: $SLURM_ARRAY_TASK_ID, or a Kubernetes indexed "
+          "Job's $JOB_COMPLETION_INDEX)");
 ABSL_FLAG(std::string, truth, "", "phantom: ground truth JSON (default: OUTPUT.truth.json)");
 
 namespace sheetmesh {
@@ -78,6 +91,9 @@ constexpr char kUsage[] =
     "surfaces)\n"
     "  phantom -o FILE         write a synthetic rock volume and its ground truth\n"
     "  convert VOLUME -o FILE  copy a volume into --out_format (raw, tiff, nrrd, vdb, ...)\n"
+    "  plan VOLUME -o PLAN     cut the volume into bricks (--brick_size) for a job's flags;\n"
+    "  brick PLAN --index=I    each brick read and selected by its own process (a Slurm array\n"
+    "  merge PLAN -o DIR       task); the merge joins them and runs the job (deploy/slurm/)\n"
     "  params                  the parameter table (--markdown, --json)\n\n"
     "Every parameter is a flag named after its key (--separate_r=6 or --separate.r 6) and a key\n"
     "of a --config JSON file ({\"separate\": {\"r\": 6}}); flags override the file. Flags may\n"
@@ -87,7 +103,9 @@ bool IsInput(const ParamSpec& s) { return absl::StartsWith(s.key, "input."); }
 
 // The parameters each command uses.
 std::function<bool(const ParamSpec&)> Accepts(const std::string& command) {
-  if (command == "surface" || command == "run") return [](const ParamSpec&) { return true; };
+  if (command == "surface" || command == "run" || command == "plan") {
+    return [](const ParamSpec&) { return true; };
+  }
   if (command == "volume") {
     return [](const ParamSpec& s) {
       return IsInput(s) || absl::StartsWith(s.key, "tet.") || absl::StartsWith(s.key, "plc.") ||
@@ -186,6 +204,81 @@ absl::Status Convert(const std::vector<std::string>& args, const PipelineOptions
   return RunConvert(args[0], o.input.open, absl::GetFlag(FLAGS_o), format, std::cout);
 }
 
+// "512" or "512x512x256".
+absl::StatusOr<Index3> ParseBrickSize(const std::string& text) {
+  int32_t n = 0;
+  if (absl::SimpleAtoi(text, &n)) return Index3{n, n, n};
+  SM_ASSIGN_OR_RETURN(const Dims d, ParseDims("brick_size", text));
+  if (d.nx > INT32_MAX || d.ny > INT32_MAX || d.nz > INT32_MAX) {
+    return absl::InvalidArgumentError(absl::StrCat("--brick_size=", text, " is too large"));
+  }
+  return Index3{static_cast<int32_t>(d.nx), static_cast<int32_t>(d.ny),
+                static_cast<int32_t>(d.nz)};
+}
+
+absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
+  if (args.size() != 1) return Usage("plan VOLUME -o PLAN_DIR [--brick_size=N] [job flags]");
+  const std::string dir = absl::GetFlag(FLAGS_o);
+  if (dir.empty()) return absl::InvalidArgumentError("plan needs -o PLAN_DIR");
+  o.input.path = args[0];
+  BrickGrid grid;
+  SM_ASSIGN_OR_RETURN(grid.size, ParseBrickSize(absl::GetFlag(FLAGS_brick_size)));
+  const std::vector<std::string> origin = absl::StrSplit(absl::GetFlag(FLAGS_grid_origin), ',');
+  if (origin.size() != 3 || !absl::SimpleAtoi(origin[0], &grid.origin.x) ||
+      !absl::SimpleAtoi(origin[1], &grid.origin.y) ||
+      !absl::SimpleAtoi(origin[2], &grid.origin.z)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--grid_origin=", absl::GetFlag(FLAGS_grid_origin), " must look like 0,0,0"));
+  }
+  SM_ASSIGN_OR_RETURN(const BrickPlan plan, MakeBrickPlan(o, grid));
+  SM_RETURN_IF_ERROR(WriteBrickPlan(plan, dir));
+  std::cout << "plan        " << plan.bricks.size() << " bricks of up to " << grid.size.x << "x"
+            << grid.size.y << "x" << grid.size.z << " over " << plan.info.dims.ToString()
+            << " (halo " << plan.halo << "; in bricks: " << absl::StrJoin(plan.in_bricks, ", ")
+            << ")\n"
+            << "next        sheetmesh-pipeline brick " << dir << " --index=I   (I = 0 .. "
+            << plan.bricks.size() - 1 << "), then: sheetmesh-pipeline merge " << dir
+            << " -o OUT\n";
+  return absl::OkStatus();
+}
+
+// --index, or the array task's index the scheduler gives.
+absl::StatusOr<int> BrickIndex() {
+  if (absl::GetFlag(FLAGS_index) >= 0) return absl::GetFlag(FLAGS_index);
+  for (const char* name : {"SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"}) {
+    const char* v = std::getenv(name);
+    int index = 0;
+    if (v == nullptr) continue;
+    if (!absl::SimpleAtoi(v, &index) || index < 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("$", name, " = \"", v, "\" is not a brick index"));
+    }
+    return index;
+  }
+  return absl::InvalidArgumentError(
+      "brick needs its index: --index=I, or run it as a Slurm array task ($SLURM_ARRAY_TASK_ID) "
+      "or a Kubernetes indexed Job ($JOB_COMPLETION_INDEX)");
+}
+
+absl::Status BrickCommand(const std::vector<std::string>& args) {
+  if (args.size() != 1) return Usage("brick PLAN_DIR --index=I");
+  SM_ASSIGN_OR_RETURN(const int index, BrickIndex());
+  const absl::Time start = absl::Now();
+  SM_ASSIGN_OR_RETURN(const BrickResult r, RunBrick(args[0], index));
+  std::cout << absl::StrFormat(
+      "brick       %d (%s): %d sheet voxels, %d bytes in %s, %.2f s\n", index,
+      r.core.ToString(), r.sheet.size(), r.file_bytes, BrickFile(args[0], index),
+      absl::ToDoubleSeconds(absl::Now() - start));
+  return absl::OkStatus();
+}
+
+absl::Status Merge(const std::vector<std::string>& args) {
+  if (args.size() != 1) return Usage("merge PLAN_DIR -o DIR");
+  const std::string dir = absl::GetFlag(FLAGS_o);
+  if (dir.empty()) return absl::InvalidArgumentError("merge needs -o DIR");
+  return RunMergeCommand(args[0], dir, std::cout);
+}
+
 absl::Status Surface(const std::vector<std::string>& args, const std::string& command,
                      PipelineOptions o) {
   if (args.size() != 1) return Usage(absl::StrCat(command, " VOLUME -o DIR [flags]"));
@@ -242,11 +335,14 @@ absl::Status Dispatch(const std::string& command, const std::vector<std::string>
                       const ParameterFlags& flags) {
   if (command == "phantom") return Phantom(args);
   if (command == "params") return Params();
+  if (command == "brick") return BrickCommand(args);
+  if (command == "merge") return Merge(args);
   SM_ASSIGN_OR_RETURN(PipelineOptions o, Options(flags, /*surface_command=*/command == "surface"));
   if (command == "info") return Info(args, o);
   if (command == "convert") return Convert(args, o);
   if (command == "surface" || command == "run") return Surface(args, command, o);
   if (command == "volume") return Volume(args, o);
+  if (command == "plan") return Plan(args, o);
   if (command == "score") return Score(args, o);
   return absl::InvalidArgumentError(
       absl::StrCat("unknown command '", command, "'; sheetmesh-pipeline --help lists them"));
@@ -302,7 +398,7 @@ int Main(int argc, char** argv) {
   }
   // phantom and params take no pipeline parameters: their flags are all their own.
   absl::StatusOr<ParameterFlags> flags =
-      command == "phantom" || command == "params"
+      command == "phantom" || command == "params" || command == "brick" || command == "merge"
           ? ParameterFlags{std::vector<char*>(argv, argv + argc), {}, {}}
           : TakeParameterFlags(argc, argv, Accepts(command), command);
   absl::Status status = flags.status();

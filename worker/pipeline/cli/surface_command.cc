@@ -13,8 +13,10 @@
 #include "common/json_text.h"
 #include "common/progress_line.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/brick/bricks.h"
 #include "worker/pipeline/flow/permeability.h"
 #include "worker/pipeline/mesh/mesh_io.h"
+#include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
@@ -79,6 +81,9 @@ class StderrProgress : public ProgressObserver {
   ProgressLine line_;
 };
 
+// The run's summary on `out`: what each stage made.
+void PrintRun(const PipelineReport& r, std::ostream& out);
+
 }  // namespace
 
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
@@ -86,6 +91,32 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   absl::StatusOr<PipelineReport> run = RunPipeline(options, Progress(&progress, ""));
   progress.Finish();
   SM_ASSIGN_OR_RETURN(PipelineReport r, std::move(run));
+  PrintRun(r, out);
+  return absl::OkStatus();
+}
+
+absl::Status RunMergeCommand(const std::string& plan_dir, const std::string& output_dir,
+                             std::ostream& out) {
+  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(plan_dir));
+  ParameterBuilder builder;
+  SM_RETURN_IF_ERROR(builder.AddJson(plan.parameters, PlanFile(plan_dir)));
+  SM_ASSIGN_OR_RETURN(const PipelineOptions options, builder.Build());
+  StderrProgress progress(options);
+  MergeSummary summary;
+  absl::StatusOr<PipelineReport> run =
+      MergeBricks(plan_dir, output_dir, Progress(&progress, ""), &summary);
+  progress.Finish();
+  SM_ASSIGN_OR_RETURN(PipelineReport r, std::move(run));
+  out << absl::StrFormat("bricks      %d joined (%d bytes) in %.2f s: %d sheet voxels\n",
+                         summary.bricks, summary.brick_bytes, summary.join_seconds,
+                         summary.sheet_voxels);
+  PrintRun(r, out);
+  return absl::OkStatus();
+}
+
+namespace {
+
+void PrintRun(const PipelineReport& r, std::ostream& out) {
   if (r.sheetness) {
     out << absl::StrFormat("sheet       %d voxels found by their sheetness (%d seeds)\n",
                            r.sheet_voxels, r.sheetness->seeds);
@@ -227,11 +258,13 @@ absl::Status RunSurface(const PipelineOptions& options, std::ostream& out) {
   out << "time       ";
   for (const StageTime& t : r.timings) out << absl::StrFormat(" %s %.2fs", t.stage, t.seconds);
   out << "\n";
-  if (!options.output.dir.empty()) out << "wrote       " << options.output.dir << "/{";
+  const std::string& dir = r.options.output.dir;
+  if (!dir.empty()) out << "wrote       " << dir << "/{";
   for (size_t i = 0; i < r.files.size(); ++i) out << (i ? "," : "") << r.files[i];
-  if (!options.output.dir.empty()) out << "}\n";
-  return absl::OkStatus();
+  if (!dir.empty()) out << "}\n";
 }
+
+}  // namespace
 
 absl::Status RunVolume(const std::string& surface, const VolumeInfo& box,
                        const PipelineOptions& options, std::ostream& out) {

@@ -14,6 +14,11 @@ namespace sheetmesh {
 // Runs the pipeline and prints a summary; files and report.json go to options.output.dir.
 absl::Status RunSurface(const PipelineOptions& options, std::ostream& out);
 
+// Joins the bricks of the plan in `plan_dir` and runs the plan's job on them (MergeBricks),
+// files in `output_dir`; prints what the bricks held and the summary RunSurface prints.
+absl::Status RunMergeCommand(const std::string& plan_dir, const std::string& output_dir,
+                             std::ostream& out);
+
 // Tetrahedralizes the box of `box` (dims and placement) around the sheets of the surface
 // file `surface` (PLY with thickness and piece from `surface`/`run`, or OBJ), writes the
 // volume files of options.output and a volume_report.json, and prints a summary.

@@ -225,25 +225,21 @@ LabelledVoxels Merge(const LabelledVoxels& patch, const std::vector<Claim>& clai
   VoxelSet::Builder b(d);
   LabelledVoxels out;
   out.label.reserve(patch.label.size() + claims.size());
-  // Walk the old voxels and the claims (both in linear order) together.
-  std::vector<std::pair<uint64_t, int32_t>> merged;
-  merged.reserve(patch.label.size() + claims.size());
-  size_t c = 0;
-  patch.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
-    const uint64_t key = (static_cast<uint64_t>(z) * d.ny + y) * d.nx + x;
-    while (c < claims.size() && claims[c].key < key) {
-      merged.emplace_back(claims[c].key, claims[c].label);
-      ++c;
-    }
-    merged.emplace_back(key, patch.label[i]);
-  });
-  for (; c < claims.size(); ++c) merged.emplace_back(claims[c].key, claims[c].label);
-  for (const auto& [key, label] : merged) {
+  // Walk the old voxels and the claims (both in linear order) together, straight into the
+  // builder: nothing the size of the patch besides its labels.
+  const auto add = [&](uint64_t key, int32_t label) {
     const int64_t x = static_cast<int64_t>(key % d.nx);
     const int64_t row = static_cast<int64_t>(key / d.nx);
     b.AddVoxel(x, row % d.ny, row / d.ny);
     out.label.push_back(label);
-  }
+  };
+  size_t c = 0;
+  patch.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+    const uint64_t key = (static_cast<uint64_t>(z) * d.ny + y) * d.nx + x;
+    for (; c < claims.size() && claims[c].key < key; ++c) add(claims[c].key, claims[c].label);
+    add(key, patch.label[i]);
+  });
+  for (; c < claims.size(); ++c) add(claims[c].key, claims[c].label);
   out.set = std::move(b).Build();
   return out;
 }

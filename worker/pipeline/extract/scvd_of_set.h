@@ -16,7 +16,7 @@
 namespace sheetmesh {
 
 struct ScvdOfSet {
-  SheetAnalysis sheet;
+  SheetAnalysis sheet;  // its neighbour table released once the triangles are made
   Scvd scvd;
   std::vector<Vec3> positions;  // the generators'
   std::vector<Face> faces;      // the dual triangles

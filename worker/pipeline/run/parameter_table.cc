@@ -55,6 +55,31 @@ std::vector<ParamRow> InputRows() {
     };
     rows.push_back(std::move(r));
   }
+  {
+    ParamRow r = Row("input.region", ParamType::kIntegers, "[0, 1048576]", "voxels",
+                     "read only this box of the volume, X0, Y0, Z0, X1, Y1, Z1 (voxels x in "
+                     "[X0, X1), ...): a region of interest; only its slices are read, and the "
+                     "meshes keep the volume's coordinates");
+    r.spec.count = 6;
+    r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
+      const std::optional<VoxelRegion>& b = o.input.open.region;
+      if (!b) return std::nullopt;
+      return ParamValue(std::vector<int64_t>{b->lo.x, b->lo.y, b->lo.z, b->hi.x, b->hi.y, b->hi.z});
+    };
+    r.set = [](const ParamValue& v, PipelineOptions& o) {
+      const auto& b = std::get<std::vector<int64_t>>(v);
+      const auto i = [&](int k) { return static_cast<int32_t>(b[k]); };
+      o.input.open.region = VoxelRegion{{i(0), i(1), i(2)}, {i(3), i(4), i(5)}};
+    };
+    r.check = [](const ParamValue& v) -> std::string {
+      const auto& b = std::get<std::vector<int64_t>>(v);
+      for (int k = 0; k < 3; ++k) {
+        if (b[k] >= b[k + 3]) return "must give X0 < X1, Y0 < Y1 and Z0 < Z1";
+      }
+      return "";
+    };
+    rows.push_back(std::move(r));
+  }
   rows.push_back(Choice("input.byte_order", SM_MEMBER(input.open.raw_byte_order),
                         {{"little", ByteOrder::kLittle}, {"big", ByteOrder::kBig}},
                         "raw volumes: byte order of 16- and 32-bit voxels"));

@@ -230,7 +230,8 @@ class DeadlineObserver : public ProgressObserver {
   std::string stage_;
 };
 
-absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress);
+absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress,
+                                         std::optional<SheetPhase> given);
 
 }  // namespace
 
@@ -249,12 +250,16 @@ absl::Status WithKeptFiles(absl::Status status, const std::vector<std::string>& 
   return status;
 }
 
-absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
-                                           const Progress& progress) {
-  if (options.time_limit_seconds <= 0) return RunStages(options, progress);
+namespace {
+
+absl::StatusOr<PipelineReport> RunWithDeadline(const PipelineOptions& options,
+                                               const Progress& progress,
+                                               std::optional<SheetPhase> given) {
+  if (options.time_limit_seconds <= 0) return RunStages(options, progress, std::move(given));
   DeadlineObserver deadline(progress.observer(),
                             absl::Now() + absl::Seconds(options.time_limit_seconds));
-  absl::StatusOr<PipelineReport> report = RunStages(options, Progress(&deadline, progress.stage()));
+  absl::StatusOr<PipelineReport> report =
+      RunStages(options, Progress(&deadline, progress.stage()), std::move(given));
   if (!report.ok() && report.status().code() == absl::StatusCode::kCancelled) {
     if (std::optional<std::string> stage = deadline.expired_in()) {
       return absl::DeadlineExceededError(absl::StrCat("the run went past its time limit of ",
@@ -265,9 +270,27 @@ absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
   return report;
 }
 
+}  // namespace
+
+absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
+                                           const Progress& progress) {
+  return RunWithDeadline(options, progress, std::nullopt);
+}
+
+absl::StatusOr<PipelineReport> RunPipelineOnPhase(const PipelineOptions& options, SheetPhase phase,
+                                                  const Progress& progress) {
+  if (options.grey.enabled) {
+    return absl::InvalidArgumentError(
+        "input.grey finds the sheets in the grey levels, which a sheet phase read before (by "
+        "bricks) does not carry: run it on the volume in one process");
+  }
+  return RunWithDeadline(options, progress, std::move(phase));
+}
+
 namespace {
 
-absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress) {
+absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress,
+                                         std::optional<SheetPhase> given) {
   SM_RETURN_IF_ERROR(CheckParameters(options));
   PipelineReport report;
   report.options = options;
@@ -275,7 +298,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   std::optional<GreySheetPhase> grey;
   {
     StageTimer t(&report, "read");
-    if (options.grey.enabled) {
+    if (given) {
+      phase = *std::move(given);
+      given.reset();
+      SM_RETURN_IF_ERROR(progress.Stage("read").Update(1.0));
+    } else if (options.grey.enabled) {
       SM_ASSIGN_OR_RETURN(grey, LoadGreySheetPhase(options.input, options.grey.levels,
                                                    options.grey.sheetness, progress.Stage("read")));
       phase = grey->phase;

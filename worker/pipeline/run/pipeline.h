@@ -106,6 +106,12 @@ struct PipelineReport {
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress = {});
 
+// The same on a sheet phase read before (the merge of bricks, brick/brick_merge.h): the
+// "read" stage takes it as it is; options.input names the volume it came from.
+// kInvalidArgument with input.grey, which needs the grey levels.
+absl::StatusOr<PipelineReport> RunPipelineOnPhase(const PipelineOptions& options, SheetPhase phase,
+                                                  const Progress& progress = {});
+
 // The files a failed run kept in output.dir (their names, in the order written): empty
 // unless the status is the error of a run that kept some. WithKeptFiles attaches them.
 std::vector<std::string> KeptFiles(const absl::Status& status);

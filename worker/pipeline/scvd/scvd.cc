@@ -179,12 +179,32 @@ absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& 
   return absl::OkStatus();
 }
 
-// Coordinates of every voxel, in index order.
-std::vector<Index3> Coordinates(const VoxelSet& set) {
-  std::vector<Index3> xyz(set.size());
-  set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) { xyz[i] = {x, y, z}; });
-  return xyz;
-}
+// Calls f(node, x, y, z) for every node in node order: the set's voxels in index order (no
+// array of coordinates: at 2048³ that would be 1 GB), or the columns' voxels.
+class NodeCoordinates {
+ public:
+  NodeCoordinates(const VoxelSet& set, const ColumnGraph* columns)
+      : set_(set), columns_(columns != nullptr) {
+    if (!columns_) return;
+    xyz_.resize(columns->num_nodes());
+    for (uint32_t n = 0; n < xyz_.size(); ++n) xyz_[n] = set.CoordOf(columns->node_voxel[n]);
+  }
+  template <class F>
+  void ForEach(F&& f) const {
+    if (!columns_) {
+      set_.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+        f(static_cast<uint32_t>(v), x, y, z);
+      });
+      return;
+    }
+    for (uint32_t n = 0; n < xyz_.size(); ++n) f(n, xyz_[n].x, xyz_[n].y, xyz_[n].z);
+  }
+
+ private:
+  const VoxelSet& set_;
+  const bool columns_;
+  std::vector<Index3> xyz_;  // with columns: each node's voxel
+};
 
 // Per cell sums for centroids and the energy against the current generators (formula 2:
 // every voxel weighs its density ρ, 1 without one).
@@ -197,23 +217,22 @@ struct CellStats {
   Vec3 Centroid(uint32_t c) const { return sum[c] / weight[c]; }
 };
 
-CellStats Accumulate(const std::vector<Index3>& xyz, const std::vector<uint32_t>& cell,
+CellStats Accumulate(const VoxelSet& set, const std::vector<uint32_t>& cell,
                      const std::vector<Index3>& generators, std::span<const float> density) {
   CellStats s;
   s.sum.assign(generators.size(), Vec3());
   s.weight.assign(generators.size(), 0.0);
   s.count.assign(generators.size(), 0);
-  for (size_t v = 0; v < xyz.size(); ++v) {
+  set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
     const uint32_t c = cell[v];
-    if (c == kNoCell) continue;
+    if (c == kNoCell) return;
     const double rho = density.empty() ? 1.0 : density[v];
-    const Index3& p = xyz[v];
-    s.sum[c] += Vec3(p.x, p.y, p.z) * rho;
+    s.sum[c] += Vec3(x, y, z) * rho;
     s.weight[c] += rho;
     ++s.count[c];
-    const double dx = p.x - generators[c].x, dy = p.y - generators[c].y, dz = p.z - generators[c].z;
+    const double dx = x - generators[c].x, dy = y - generators[c].y, dz = z - generators[c].z;
     s.energy += rho * (dx * dx + dy * dy + dz * dz);
-  }
+  });
   return s;
 }
 
@@ -285,23 +304,21 @@ absl::StatusOr<std::vector<uint32_t>> SeedGenerators(const VoxelSet& set,
 // Each cell's node nearest to its centroid (ties to the lower node, so the result does not
 // depend on visiting order); `seeds` where a cell is empty.
 template <class VoxelOf>
-std::vector<uint32_t> NearestToCentroids(const std::vector<Index3>& xyz,
+std::vector<uint32_t> NearestToCentroids(const NodeCoordinates& nodes,
                                          const std::vector<uint32_t>& cell, const CellStats& stats,
-                                         uint32_t num_nodes, const VoxelOf& voxel_of,
+                                         const VoxelOf& voxel_of,
                                          const std::vector<uint32_t>& seeds) {
   std::vector<double> best(seeds.size(), std::numeric_limits<double>::max());
   std::vector<uint32_t> moved(seeds);
-  for (uint32_t n = 0; n < num_nodes; ++n) {
-    const uint32_t v = voxel_of(n);
-    const uint32_t c = cell[v];
-    if (c == kNoCell) continue;
-    const Vec3 centroid = stats.Centroid(c);
-    const double d2 = Norm2(Vec3(xyz[v].x, xyz[v].y, xyz[v].z) - centroid);
+  nodes.ForEach([&](uint32_t n, int32_t x, int32_t y, int32_t z) {
+    const uint32_t c = cell[voxel_of(n)];
+    if (c == kNoCell) return;
+    const double d2 = Norm2(Vec3(x, y, z) - stats.Centroid(c));
     if (d2 < best[c]) {
       best[c] = d2;
       moved[c] = n;
     }
-  }
+  });
   return moved;
 }
 
@@ -341,9 +358,9 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   SM_ASSIGN_OR_RETURN(std::vector<uint32_t> seeds,
                       SeedGenerators(set, components, num_nodes, voxel_of, options, &scvd));
 
-  const std::vector<Index3> xyz = Coordinates(set);
+  const NodeCoordinates nodes(set, columns ? &cg : nullptr);
   std::vector<Index3> gen(seeds.size());
-  for (size_t i = 0; i < seeds.size(); ++i) gen[i] = xyz[voxel_of(seeds[i])];
+  for (size_t i = 0; i < seeds.size(); ++i) gen[i] = set.CoordOf(voxel_of(seeds[i]));
 
   const int max_growths = std::max(1, options.lloyd_max_iter + 1);
   std::vector<uint32_t> cell(set.size());
@@ -355,9 +372,10 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
       SM_ASSIGN_OR_RETURN(node_cell, GrowCells(cg.graph, seeds, step));
       for (uint32_t v = 0; v < cell.size(); ++v) cell[v] = node_cell[cg.node_of_voxel[v]];
     } else {
+      std::vector<uint32_t>().swap(cell);  // not needed while the cells grow again
       SM_ASSIGN_OR_RETURN(cell, GrowCells(neighbors, seeds, step));
     }
-    stats = Accumulate(xyz, cell, gen, options.density);
+    stats = Accumulate(set, cell, gen, options.density);
     scvd.energy.push_back(stats.energy);
     scvd.iterations = it + 1;
     if (it > 0) {
@@ -370,13 +388,13 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
     if (it + 1 == max_growths) break;
     // Formula 2 with ρ = 1: the centroid; the generator moves to the node of its cell
     // nearest to it, since the centroid of a curved sheet can fall off the sheet.
-    std::vector<uint32_t> moved = NearestToCentroids(xyz, cell, stats, num_nodes, voxel_of, seeds);
+    std::vector<uint32_t> moved = NearestToCentroids(nodes, cell, stats, voxel_of, seeds);
     if (moved == seeds) {
       scvd.converged = true;
       break;
     }
     seeds.swap(moved);
-    for (size_t i = 0; i < seeds.size(); ++i) gen[i] = xyz[voxel_of(seeds[i])];
+    for (size_t i = 0; i < seeds.size(); ++i) gen[i] = set.CoordOf(voxel_of(seeds[i]));
   }
   scvd.generator_voxel.resize(seeds.size());
   for (size_t i = 0; i < seeds.size(); ++i) scvd.generator_voxel[i] = voxel_of(seeds[i]);

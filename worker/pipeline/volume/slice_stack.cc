@@ -118,6 +118,53 @@ absl::Status PlaceDicomSlices(const std::string& folder, std::vector<Slice>& sli
   return absl::OkStatus();
 }
 
+// Files numbered alike (a prefix, a number, a suffix) must follow each other at one step: a
+// number that is missing is a slice that is missing, and the volume would silently close
+// the gap. kInvalidArgument naming the folder, the missing number and its neighbours.
+absl::Status CheckNumbering(const std::string& path, const std::vector<std::string>& files) {
+  if (files.size() < 3) return absl::OkStatus();
+  struct Numbered {
+    std::string prefix, suffix;
+    int64_t number = 0;
+  };
+  std::vector<Numbered> n;
+  for (const std::string& f : files) {
+    const std::string name = std::filesystem::path(f).filename().string();
+    size_t end = name.size();
+    while (end > 0 && !absl::ascii_isdigit(name[end - 1])) --end;
+    size_t begin = end;
+    while (begin > 0 && absl::ascii_isdigit(name[begin - 1])) --begin;
+    Numbered x;
+    if (begin == end || end - begin > 15) return absl::OkStatus();  // not numbered
+    x.prefix = name.substr(0, begin);
+    x.suffix = name.substr(end);
+    x.number = std::stoll(name.substr(begin, end - begin));
+    if (!n.empty() && (x.prefix != n[0].prefix || x.suffix != n[0].suffix)) {
+      return absl::OkStatus();  // named otherwise: the order is all there is
+    }
+    n.push_back(std::move(x));
+  }
+  int64_t step = INT64_MAX;
+  for (size_t i = 1; i < n.size(); ++i) step = std::min(step, n[i].number - n[i - 1].number);
+  for (size_t i = 1; i < n.size(); ++i) {
+    const int64_t gap = n[i].number - n[i - 1].number;
+    if (gap == step && step > 0) continue;
+    const std::string a = std::filesystem::path(files[i - 1]).filename().string();
+    const std::string b = std::filesystem::path(files[i]).filename().string();
+    if (step <= 0) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": ", a, " and ", b,
+                                                     " have the same slice number ", n[i].number,
+                                                     ": keep one"));
+    }
+    return absl::InvalidArgumentError(absl::StrCat(
+        path, ": slice number ", n[i - 1].number + step, " is missing (between ", a, " and ", b,
+        "; the other ", n.size(), " files go by ", step,
+        "): a volume without it would close the gap; restore the slice, or stack the files "
+        "apart"));
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenStack(const std::string& path,
                                                         std::vector<std::string> files,
                                                         std::shared_ptr<const SliceCodec> codec,
@@ -128,6 +175,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenStack(const std::string& path,
         absl::StrCat(path, ": ", files.size(), " slices, more than ", limits.max_extent));
   }
   std::sort(files.begin(), files.end(), NaturalLess);
+  // DICOM slices say where they lie (checked below); other files only by their names.
+  if (codec->name() != "dicom") SM_RETURN_IF_ERROR(CheckNumbering(path, files));
   // Every slice's header up front, so that a mismatch fails before any work.
   std::vector<Slice> slices;
   slices.reserve(files.size());

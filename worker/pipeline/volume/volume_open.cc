@@ -41,6 +41,52 @@ class PlacedSource : public VolumeSource {
   std::unique_ptr<VolumeSource> inner_;
 };
 
+// A box of the inner source: its slices read one at a time (a mapped slice where the reader
+// maps) and cut to the region's rows, so that a brick of a large volume costs its own slices'
+// rows, not the volume's slabs.
+class RegionSource : public VolumeSource {
+ public:
+  RegionSource(std::unique_ptr<VolumeSource> inner, const VoxelRegion& region)
+      : inner_(std::move(inner)), region_(region) {
+    info_ = inner_->info();
+    info_.dims = region.dims();
+    info_.placement.origin =
+        info_.placement.ToPhysical(Vec3(region.lo.x, region.lo.y, region.lo.z));
+  }
+  absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
+    SM_RETURN_IF_ERROR(CheckSliceRequest(z0, count, out.size()));
+    const Dims& full = inner_->info().dims;
+    const int64_t bpv = BytesPerVoxel(info_.dtype);
+    const int64_t row = info_.dims.nx * bpv;
+    const int64_t slice = full.nx * full.ny * bpv;
+    const int64_t out_slice = info_.dims.ny * row;
+    for (int64_t k = 0; k < count; ++k) {
+      const int64_t z = region_.lo.z + z0 + k;
+      std::span<const std::byte> data;
+      MappedSlices mapped;
+      if (inner_->CanMap()) {
+        SM_ASSIGN_OR_RETURN(mapped, inner_->MapSlices(z, 1));
+        data = mapped.data();
+      } else {
+        buffer_.resize(static_cast<size_t>(slice));
+        SM_RETURN_IF_ERROR(inner_->ReadSlices(z, 1, buffer_));
+        data = buffer_;
+      }
+      for (int64_t y = 0; y < info_.dims.ny; ++y) {
+        const int64_t from = ((region_.lo.y + y) * full.nx + region_.lo.x) * bpv;
+        std::memcpy(out.data() + k * out_slice + y * row, data.data() + from,
+                    static_cast<size_t>(row));
+      }
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  std::unique_ptr<VolumeSource> inner_;
+  const VoxelRegion region_;
+  std::vector<std::byte> buffer_;  // one slice of the inner volume, where it cannot map
+};
+
 // The dims a file name gives, and its type token if it has one ("_u8", "_i7").
 struct NamedDims {
   Dims dims;
@@ -77,6 +123,27 @@ absl::StatusOr<DType> TypeOfToken(const std::string& path, const std::string& to
 }
 
 }  // namespace
+
+std::string VoxelRegion::ToString() const {
+  return absl::StrCat(lo.x, ",", lo.y, ",", lo.z, ",", hi.x, ",", hi.y, ",", hi.z);
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenRegion(std::unique_ptr<VolumeSource> source,
+                                                         const VoxelRegion& region) {
+  const Dims& d = source->info().dims;
+  const int64_t lo[3] = {region.lo.x, region.lo.y, region.lo.z};
+  const int64_t hi[3] = {region.hi.x, region.hi.y, region.hi.z};
+  const int64_t n[3] = {d.nx, d.ny, d.nz};
+  for (int k = 0; k < 3; ++k) {
+    if (lo[k] < 0 || hi[k] <= lo[k] || hi[k] > n[k]) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          source->info().path, ": input.region ", region.ToString(), " is ",
+          hi[k] <= lo[k] ? "empty" : "outside the volume", " along ", std::string(1, "xyz"[k]), " (the volume is ",
+          d.ToString(), "; give X0,Y0,Z0,X1,Y1,Z1 with 0 <= X0 < X1 <= ", d.nx, ", ...)"));
+    }
+  }
+  return std::make_unique<RegionSource>(std::move(source), region);
+}
 
 absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std::string& path) {
   const std::optional<NamedDims> named = ParseNamedDims(path);
@@ -196,8 +263,11 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   SM_RETURN_IF_ERROR(CheckAllocation(got.dims.nx * got.dims.ny * BytesPerVoxel(got.dtype),
                                      options.limits,
                                      absl::StrCat(path, ": one slice of ", got.dims.ToString())));
-  if (!options.spacing && !options.origin && options.unit.empty()) return source;
-  return std::make_unique<PlacedSource>(std::move(source), options);
+  if (options.spacing || options.origin || !options.unit.empty()) {
+    source = std::make_unique<PlacedSource>(std::move(source), options);
+  }
+  if (options.region) return OpenRegion(std::move(source), *options.region);
+  return source;
 }
 
 DenseVolume DenseVolume::Zeros(const Dims& dims, DType dtype) {

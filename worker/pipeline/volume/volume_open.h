@@ -16,6 +16,15 @@
 
 namespace sheetmesh {
 
+// A box of voxels [lo, hi) in a volume's index space.
+struct VoxelRegion {
+  Index3 lo;
+  Index3 hi;
+  Dims dims() const { return {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}; }
+  std::string ToString() const;  // "X0,Y0,Z0,X1,Y1,Z1"
+  friend bool operator==(const VoxelRegion&, const VoxelRegion&) = default;
+};
+
 struct OpenOptions {
   std::string format;              // "", "raw", "tiff", "nrrd", "vdb" ("" = by name)
   std::optional<Dims> raw_dims;    // raw: required unless the name says "_NxNxN_u8"
@@ -26,6 +35,9 @@ struct OpenOptions {
   std::optional<Vec3> spacing;  // overrides the file's spacing
   std::optional<Vec3> origin;   // overrides the file's origin
   std::string unit;             // overrides the file's length unit when set
+  // Read only this box of the volume (a region of interest, a brick): the source's dims are
+  // the region's and its origin the region's first voxel's; only its slices are read.
+  std::optional<VoxelRegion> region;
   VolumeLimits limits;
 };
 
@@ -35,6 +47,12 @@ struct OpenOptions {
 // (the message says how to give them).
 absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
                                                          const OpenOptions& options = {});
+
+// `source` seen through `region`: dims the region's, origin moved to its first voxel, slices
+// read one at a time and cut to the region's rows. kInvalidArgument, naming input.region, the
+// value and the volume's dims, unless the region is non-empty and inside the volume.
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenRegion(std::unique_ptr<VolumeSource> source,
+                                                         const VoxelRegion& region);
 
 // Dims and dtype encoded in a file name like "rock_100x100x100_u8.raw"; nullopt if none.
 // kInvalidArgument when the name gives a type that is not u8, u16 or f32 ("_i7").

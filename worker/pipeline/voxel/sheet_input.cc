@@ -48,6 +48,12 @@ absl::Status CheckOtsuMinority(const SheetInput& input, const SheetPhase& phase)
 
 }  // namespace
 
+absl::Status CheckSheetPhase(const SheetInput& input, const SheetPhase& phase) {
+  SM_RETURN_IF_ERROR(CheckNotEmpty(phase.sheet, phase.info, phase.selection, phase.stats));
+  SM_RETURN_IF_ERROR(CheckNotGrayscale(input, phase));
+  return CheckOtsuMinority(input, phase);
+}
+
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress) {
   const absl::Time start = absl::Now();
   SheetPhase out;
@@ -77,9 +83,7 @@ absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progres
   }
   SM_ASSIGN_OR_RETURN(out.sheet, SelectPhase(*source, out.selection,
                                              out.mask ? &*out.mask : nullptr, &out.stats, select));
-  SM_RETURN_IF_ERROR(CheckNotEmpty(out.sheet, out.info, out.selection, out.stats));
-  SM_RETURN_IF_ERROR(CheckNotGrayscale(input, out));
-  SM_RETURN_IF_ERROR(CheckOtsuMinority(input, out));
+  SM_RETURN_IF_ERROR(CheckSheetPhase(input, out));
   out.read_seconds = absl::ToDoubleSeconds(absl::Now() - start);
   return out;
 }

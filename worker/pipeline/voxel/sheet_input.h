@@ -63,6 +63,10 @@ absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
 // kCancelled if asked.
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});
 
+// The checks LoadSheetPhase makes of what it selected (the errors above): for a phase
+// selected elsewhere (by bricks).
+absl::Status CheckSheetPhase(const SheetInput& input, const SheetPhase& phase);
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_VOXEL_SHEET_INPUT_H_

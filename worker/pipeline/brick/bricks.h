@@ -1,0 +1,109 @@
+// Bricks: one volume cut into boxes that separate processes (cluster array tasks, the
+// service's workers) read at once, each writing a small file of its own, and a merge that
+// joins them and runs the rest of the job.
+//
+// Stage chain of this version: a brick reads its box (only that box's slices, input.region)
+// and selects the sheet phase there; the merge joins the bricks' sheet voxels into the
+// volume's sparse sheet set and runs every later stage on it in one process
+// (RunPipelineOnPhase). Selection is per voxel, so a brick needs no halo and the merge's
+// set is the set one process reads, voxel for voxel: the result is the same, whatever the
+// brick size or the grid's origin. What the merge holds follows the sheets, not the box.
+//
+//   sheetmesh-pipeline plan VOLUME --brick_size=512 -o PLAN  (plus the job's parameters)
+//   sheetmesh-pipeline brick PLAN --index=I                  (I = 0 .. count - 1, any order,
+//                                                             anywhere the files are seen)
+//   sheetmesh-pipeline merge PLAN -o OUT
+#ifndef SHEETMESH_WORKER_PIPELINE_BRICK_BRICKS_H_
+#define SHEETMESH_WORKER_PIPELINE_BRICK_BRICKS_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "common/progress.h"
+#include "worker/pipeline/run/pipeline.h"
+#include "worker/pipeline/volume/volume_open.h"
+
+namespace sheetmesh {
+
+// How to cut: brick edges per axis, and where the grid starts (a brick corner, in voxels;
+// bricks along an axis start at origin - k * size, clipped to the volume).
+struct BrickGrid {
+  Index3 size{512, 512, 512};
+  Index3 origin{0, 0, 0};
+};
+
+struct Brick {
+  int index = 0;
+  VoxelRegion core;  // the voxels this brick owns (and writes)
+  VoxelRegion read;  // what it reads: the core and its halo, clipped to the volume
+};
+
+struct BrickPlan {
+  std::string volume;      // the volume's path (absolute)
+  std::string parameters;  // the job's parameters, canonical JSON (CanonicalParametersJson)
+  VolumeInfo info;         // the volume's, as opened
+  BrickGrid grid;
+  int halo = 0;                  // voxels around each core a brick reads besides it
+  std::vector<std::string> in_bricks;  // the stages bricks run ("read", "select")
+  std::vector<Brick> bricks;
+
+  std::string ToJson() const;
+};
+
+// The plan of `options`'s job (options.input names the volume) on `grid`. kInvalidArgument
+// naming the field and value for a brick size below 1 or below twice the halo, an origin
+// outside [0, size), options the bricks cannot run (input.grey, a threshold of "otsu": give
+// its value, which `info --threshold=otsu` prints; input.region), and the reader's errors.
+absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const BrickGrid& grid);
+
+// The plan folder's files: plan.json, and bricks/brick_<index>.bin.
+std::string PlanFile(const std::string& plan_dir);
+std::string BrickFile(const std::string& plan_dir, int index);
+
+// Writes plan.json into `plan_dir` (made if missing). A folder holding another plan's
+// bricks is refused (kFailedPrecondition), so that no merge mixes two plans.
+absl::Status WriteBrickPlan(const BrickPlan& plan, const std::string& plan_dir);
+// Reads plan.json back. kInvalidArgument naming the file and field when it is not a plan.
+absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir);
+
+// What one brick found.
+struct BrickResult {
+  int index = 0;
+  VoxelRegion core;
+  uint64_t plan_hash = 0;      // of the plan.json it ran from
+  VoxelSet sheet;              // the core's sheet voxels, in the core's coordinates
+  SelectionStats stats;        // of the brick's box
+  uint64_t file_bytes = 0;     // of its file
+};
+
+// Runs brick `index` of the plan in `plan_dir` and writes its file atomically (a brick killed
+// mid-run leaves none; run again, it writes the same bytes). kInvalidArgument for an index
+// outside the plan (naming it and the count); the reader's errors name the file.
+absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
+                                     const Progress& progress = {});
+
+// Reads brick `index`'s file. kNotFound when it has not run; kInvalidArgument (naming the
+// file) when it is damaged or belongs to another plan.
+absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPlan& plan,
+                                      int index);
+
+struct MergeSummary {
+  int bricks = 0;
+  uint64_t brick_bytes = 0;    // the bricks' files, in all
+  uint64_t sheet_voxels = 0;
+  double join_seconds = 0;     // reading and joining the bricks
+};
+
+// Joins every brick of the plan in `plan_dir` into the volume's sheet phase and runs the job
+// on it with its outputs in `output_dir` (plus bricks.json). kFailedPrecondition naming the
+// bricks that have not run (nothing is written then); the job's errors pass through.
+absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
+                                           const std::string& output_dir,
+                                           const Progress& progress = {},
+                                           MergeSummary* summary = nullptr);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_BRICK_BRICKS_H_

@@ -81,8 +81,14 @@ ParamValue SomeOtherValue(const ParamSpec& s, const std::optional<ParamValue>& a
       return v;
     }
     case ParamType::kIntegers: {
+      // Increasing, as boxes (input.region: the low corner, then the high) need them.
       const int n = s.count > 0 ? s.count : 1;
-      return std::vector<int64_t>(n, static_cast<int64_t>(pick(5)));
+      std::vector<int64_t> v;
+      for (int i = 0; i < n; ++i) {
+        const int64_t x = static_cast<int64_t>(pick(5));
+        v.push_back(s.range.Contains(x + i) ? x + i : x);
+      }
+      return v;
     }
     case ParamType::kChoices:
       return std::vector<std::string>{s.choices.back()};

@@ -331,7 +331,7 @@ TEST(TiffIoTest, FolderSlicesAreOrderedByNumberNotByText) {
   TempDir tmp;
   const std::string folder = tmp.File("numbered");
   std::filesystem::create_directories(folder);
-  for (int z : {1, 2, 10}) {
+  for (int z : {8, 9, 10}) {
     VolumeInfo info;
     info.dims = {3, 2, 1};
     DenseVolume v = DenseVolume::Zeros(info.dims, DType::kUInt8);
@@ -342,8 +342,8 @@ TEST(TiffIoTest, FolderSlicesAreOrderedByNumberNotByText) {
   }
   SM_ASSERT_OK_AND_ASSIGN(auto source, OpenTiffFolder(folder));
   SM_ASSERT_OK_AND_ASSIGN(DenseVolume v, ReadDense(*source));
-  EXPECT_EQ(v.At(0, 0, 0), 1);
-  EXPECT_EQ(v.At(0, 0, 1), 2);
+  EXPECT_EQ(v.At(0, 0, 0), 8);
+  EXPECT_EQ(v.At(0, 0, 1), 9);
   EXPECT_EQ(v.At(0, 0, 2), 10);
 }
 

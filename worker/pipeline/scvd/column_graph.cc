@@ -120,8 +120,22 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
   if (g.node_voxel.size() >= kUnset) {
     return absl::ResourceExhaustedError(absl::StrCat(g.node_voxel.size(), " columns are too many"));
   }
-  // Edges: columns whose voxels touch across a face.
-  std::vector<uint64_t> edges;
+  // Edges: columns whose voxels touch across a face, each once as (lower, higher). A
+  // column's voxels name the same neighbours over and over, so the edges are gathered in
+  // chunks, each reduced and merged as it fills: what is held follows the columns' edges,
+  // not the voxels' faces (at 2048³ that list was gigabytes).
+  std::vector<uint64_t> edges, chunk;
+  constexpr size_t kChunk = size_t{1} << 22;
+  chunk.reserve(kChunk);
+  const auto flush = [&] {
+    tbb::parallel_sort(chunk.begin(), chunk.end());
+    chunk.erase(std::unique(chunk.begin(), chunk.end()), chunk.end());
+    const size_t old_size = edges.size();
+    edges.insert(edges.end(), chunk.begin(), chunk.end());
+    std::inplace_merge(edges.begin(), edges.begin() + old_size, edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    chunk.clear();
+  };
   for (uint32_t v = 0; v < n; ++v) {
     const uint32_t a = g.node_of_voxel[v];
     for (int k : {1, 3, 5}) {
@@ -129,19 +143,26 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
       if (u == kNoNeighbor) continue;
       const uint32_t b = g.node_of_voxel[u];
       if (a == b) continue;
-      edges.push_back((static_cast<uint64_t>(a) << 32) | b);
-      edges.push_back((static_cast<uint64_t>(b) << 32) | a);
+      chunk.push_back((static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b));
+      if (chunk.size() == kChunk) flush();
     }
   }
-  tbb::parallel_sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  flush();
+  chunk = {};
+  // Each edge in both nodes' rows; sorted (lower, higher), so every row comes out ascending.
   g.graph.offsets.assign(g.node_voxel.size() + 1, 0);
-  g.graph.targets.resize(edges.size());
-  for (size_t i = 0; i < edges.size(); ++i) {
-    ++g.graph.offsets[(edges[i] >> 32) + 1];
-    g.graph.targets[i] = static_cast<uint32_t>(edges[i] & 0xFFFFFFFFu);
+  for (const uint64_t e : edges) {
+    ++g.graph.offsets[(e >> 32) + 1];
+    ++g.graph.offsets[(e & 0xFFFFFFFFu) + 1];
   }
   for (size_t i = 1; i < g.graph.offsets.size(); ++i) g.graph.offsets[i] += g.graph.offsets[i - 1];
+  g.graph.targets.resize(2 * edges.size());
+  std::vector<uint64_t> fill(g.graph.offsets.begin(), g.graph.offsets.end() - 1);
+  for (const uint64_t e : edges) {
+    const uint32_t a = static_cast<uint32_t>(e >> 32), b = static_cast<uint32_t>(e & 0xFFFFFFFFu);
+    g.graph.targets[fill[a]++] = b;
+    g.graph.targets[fill[b]++] = a;
+  }
   return g;
 }
 

@@ -306,14 +306,14 @@ bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool 
 }
 
 // The thick parts of a piece: 6-connected sets of its voxels whose τ is at least `least`,
-// of kMinLensVoxels or more.
-absl::StatusOr<std::vector<VoxelSet>> ThickParts(const PieceVoxels& pv, const Dims& dims,
-                                                 double least) {
+// of kMinLensVoxels or more, each as its sorted voxel keys.
+absl::StatusOr<std::vector<std::vector<uint64_t>>> ThickParts(const PieceVoxels& pv,
+                                                               const Dims& dims, double least) {
   std::vector<uint64_t> thick;
   for (size_t i = 0; i < pv.keys.size(); ++i) {
     if (pv.tau[i] >= least) thick.push_back(pv.keys[i]);
   }
-  std::vector<VoxelSet> parts;
+  std::vector<std::vector<uint64_t>> parts;
   if (thick.size() < kMinLensVoxels) return parts;
   const VoxelSet set = VoxelSetFromSortedLinear(dims, thick);
   SM_ASSIGN_OR_RETURN(Components c, LabelComponents(set, Connectivity::k6));
@@ -324,8 +324,8 @@ absl::StatusOr<std::vector<VoxelSet>> ThickParts(const PieceVoxels& pv, const Di
     keys[label[i]].push_back(static_cast<uint64_t>(x) +
                              dims.nx * (y + static_cast<uint64_t>(dims.ny) * z));
   });
-  for (const std::vector<uint64_t>& k : keys) {
-    if (!k.empty()) parts.push_back(VoxelSetFromSortedLinear(dims, k));
+  for (std::vector<uint64_t>& k : keys) {
+    if (!k.empty()) parts.push_back(std::move(k));
   }
   return parts;
 }
@@ -370,10 +370,13 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
   const Dims& dims = sheet.set.dims();
   // Voxels at least twice as thick as the piece's median (and body_min_thickness).
   const double least = std::max(options.body_min_thickness, 2 * median);
-  SM_ASSIGN_OR_RETURN(std::vector<VoxelSet> parts, ThickParts(pv, dims, least));
+  SM_ASSIGN_OR_RETURN(const std::vector<std::vector<uint64_t>> parts,
+                      ThickParts(pv, dims, least));
   std::optional<VoxelSet> own;
   double score = 0;  // the piece's, as it stands
-  for (const VoxelSet& part : parts) {
+  for (const std::vector<uint64_t>& keys : parts) {
+    // One part's set at a time: a set holds an index of the box's rows (33 MB at 2048³).
+    const VoxelSet part = VoxelSetFromSortedLinear(dims, keys);
     std::vector<uint32_t> over, rest;
     SplitFaces(*sheet_part, part, &over, &rest);
     if (over.size() < kMinLensFaces || NearOthers(mesh, piece, part, kNearVoxels)) continue;

@@ -4,12 +4,18 @@ the same run, then plan, the bricks run by 1, 2 and 3 processes at once (wall ti
 brick's time and peak memory, the bytes they write), the merge (time, peak) and, where
 asked, the one-process run of the same job, with a byte comparison of the two surfaces.
 
+Each brick runs with --memory_limit_gb=3 (a worker's cap). With --kill, one brick of the last
+run is started again and SIGKILLed mid-run: it must leave no file, and run again write the
+bytes it wrote before.
+
 Usage: bench/bricks_bench.py BUILD VOLUME... [--brick=512] [--workers=1,2,3] [--one]
-       [--merge] [--json=FILE] [-- job flags]
+       [--merge] [--kill] [--json=FILE] [-- job flags]
 Default job flags: --labels=255 --r=15 --output_previews=false --similarity_hausdorff=false
 """
+import hashlib
 import json
 import os
+import signal
 import shutil
 import subprocess
 import sys
@@ -68,7 +74,7 @@ def main(argv):
             start = time.monotonic()
             with ThreadPoolExecutor(max_workers=w) as pool:
                 each = list(pool.map(
-                    lambda i: timed([cli, "brick", plan, "--index=%d" % i],
+                    lambda i: timed([cli, "brick", plan, "--index=%d" % i, "--memory_limit_gb=3"],
                                     os.path.join(work, "brick_%d.log" % i)), range(count)))
             wall = time.monotonic() - start
             run = {"workers": w, "wall_seconds": wall,
@@ -81,6 +87,26 @@ def main(argv):
                   "%.0f MiB; %d bytes" % (vol, count, w, wall, r["cat_seconds"],
                                           run["brick_seconds_max"], run["brick_peak_mib_max"],
                                           run["brick_bytes"]), flush=True)
+        if "--kill" in opts:
+            i = count // 2
+            path = os.path.join(plan, "bricks", "brick_%06d.bin" % i)
+            before = hashlib.sha256(open(path, "rb").read()).hexdigest()
+            os.remove(path)
+            child = subprocess.Popen([cli, "brick", plan, "--index=%d" % i],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            time.sleep(0.3)
+            finished = child.poll() is not None
+            if not finished:
+                child.send_signal(signal.SIGKILL)
+            child.wait()
+            left = os.path.exists(path) and not finished
+            timed([cli, "brick", plan, "--index=%d" % i])
+            again = hashlib.sha256(open(path, "rb").read()).hexdigest()
+            r["kill"] = {"brick": i, "finished_before_kill": finished, "file_after_kill": left,
+                         "same_bytes": again == before}
+            print("  brick %d SIGKILLed: %s; run again: %s" %
+                  (i, "a file was left" if left else "no file left",
+                   "the same bytes" if again == before else "OTHER BYTES"), flush=True)
         if "--merge" in opts:
             merged = os.path.join(work, "merged")
             r["merge_seconds"], r["merge_peak_mib"] = timed(

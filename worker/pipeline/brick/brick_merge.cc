@@ -20,15 +20,16 @@ namespace {
 std::string MissingText(const std::vector<int>& missing) {
   std::vector<int> shown(missing.begin(), missing.begin() + std::min<size_t>(10, missing.size()));
   std::string s = absl::StrJoin(shown, ", ");
-  if (missing.size() > shown.size()) absl::StrAppend(&s, " and ", missing.size() - shown.size(), " more");
+  if (missing.size() > shown.size())
+    absl::StrAppend(&s, " and ", missing.size() - shown.size(), " more");
   return s;
 }
 
 }  // namespace
 
 absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
-                                           const std::string& output_dir,
-                                           const Progress& progress, MergeSummary* summary) {
+                                           const std::string& output_dir, const Progress& progress,
+                                           MergeSummary* summary) {
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(plan_dir));
   // Every brick present before anything is written.
@@ -87,7 +88,7 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
     }
     done += static_cast<int>(layer.size());
     SM_RETURN_IF_ERROR(progress.Stage("read").Update(double(done) / plan.bricks.size(),
-                                                      absl::StrCat(done, " bricks joined")));
+                                                     absl::StrCat(done, " bricks joined")));
   }
   phase.sheet = std::move(joined).Build();
   phase.selection = options.input.selection;
@@ -104,16 +105,16 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
   SM_ASSIGN_OR_RETURN(PipelineReport report,
                       RunPipelineOnPhase(options, std::move(phase), progress));
   if (!output_dir.empty()) {
-    nlohmann::json j = {{"plan", std::filesystem::absolute(PlanFile(plan_dir)).string()},
-                        {"bricks", sum.bricks},
-                        {"brick_size", {plan.grid.size.x, plan.grid.size.y, plan.grid.size.z}},
-                        {"grid_origin",
-                         {plan.grid.origin.x, plan.grid.origin.y, plan.grid.origin.z}},
-                        {"halo", plan.halo},
-                        {"in_bricks", plan.in_bricks},
-                        {"brick_bytes", sum.brick_bytes},
-                        {"sheet_voxels", sum.sheet_voxels},
-                        {"join_seconds", sum.join_seconds}};
+    nlohmann::json j = {
+        {"plan", std::filesystem::absolute(PlanFile(plan_dir)).string()},
+        {"bricks", sum.bricks},
+        {"brick_size", {plan.grid.size.x, plan.grid.size.y, plan.grid.size.z}},
+        {"grid_origin", {plan.grid.origin.x, plan.grid.origin.y, plan.grid.origin.z}},
+        {"halo", plan.halo},
+        {"in_bricks", plan.in_bricks},
+        {"brick_bytes", sum.brick_bytes},
+        {"sheet_voxels", sum.sheet_voxels},
+        {"join_seconds", sum.join_seconds}};
     SM_RETURN_IF_ERROR(WriteFileAtomically(
         (std::filesystem::path(output_dir) / "bricks.json").string(), j.dump(1) + "\n"));
   }

@@ -101,7 +101,8 @@ std::string BrickPlan::ToJson() const {
   j["in_bricks"] = in_bricks;
   nlohmann::json list = nlohmann::json::array();
   for (const Brick& b : bricks) {
-    list.push_back({{"index", b.index}, {"core", RegionJson(b.core)}, {"read", RegionJson(b.read)}});
+    list.push_back(
+        {{"index", b.index}, {"core", RegionJson(b.core)}, {"read", RegionJson(b.read)}});
   }
   j["bricks"] = std::move(list);
   return j.dump(1) + "\n";
@@ -116,10 +117,10 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const Br
   plan.in_bricks = {"read", "select"};
   for (int k = 0; k < 3; ++k) {
     if (size[k] < 1 || size[k] < 2 * plan.halo) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "brick_size ", size[k], " along ", std::string(1, "xyz"[k]), " is below ",
-          std::max(1, 2 * plan.halo), " (at least one voxel, and twice the halo of ", plan.halo,
-          " voxels the bricked stages need)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("brick_size ", size[k], " along ", std::string(1, "xyz"[k]), " is below ",
+                       std::max(1, 2 * plan.halo), " (at least one voxel, and twice the halo of ",
+                       plan.halo, " voxels the bricked stages need)"));
     }
     if (origin[k] < 0 || origin[k] >= size[k]) {
       return absl::InvalidArgumentError(absl::StrCat("grid_origin ", origin[k], " along ",
@@ -230,14 +231,15 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
       plan.bricks.push_back({b.at("index").get<int>(), region(b.at("core")), region(b.at("read"))});
     }
   } catch (const nlohmann::json::exception& e) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": a field is missing or of the wrong "
+    return absl::InvalidArgumentError(absl::StrCat(path,
+                                                   ": a field is missing or of the wrong "
                                                    "type: ",
                                                    e.what()));
   }
   for (size_t i = 0; i < plan.bricks.size(); ++i) {
     if (plan.bricks[i].index != static_cast<int>(i)) {
-      return absl::InvalidArgumentError(absl::StrCat(path, ": bricks[", i, "].index is ",
-                                                     plan.bricks[i].index, ", not ", i));
+      return absl::InvalidArgumentError(
+          absl::StrCat(path, ": bricks[", i, "].index is ", plan.bricks[i].index, ", not ", i));
     }
   }
   return plan;
@@ -262,10 +264,10 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
                         return w;
                       }()));
   if (!(whole->info().dims == plan.info.dims) || whole->info().dtype != plan.info.dtype) {
-    return absl::FailedPreconditionError(absl::StrCat(
-        plan.volume, " is ", whole->info().dims.ToString(), " ", DTypeName(whole->info().dtype),
-        " now, and the plan was made for ", plan.info.dims.ToString(), " ",
-        DTypeName(plan.info.dtype), ": plan again"));
+    return absl::FailedPreconditionError(
+        absl::StrCat(plan.volume, " is ", whole->info().dims.ToString(), " ",
+                     DTypeName(whole->info().dtype), " now, and the plan was made for ",
+                     plan.info.dims.ToString(), " ", DTypeName(plan.info.dtype), ": plan again"));
   }
   whole.reset();
   BrickResult out;
@@ -275,8 +277,8 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
   if (!in.mask_path.empty() || in.mask_from_volume) {
     SM_ASSIGN_OR_RETURN(auto msource,
                         OpenVolume(in.mask_from_volume ? in.path : in.mask_path, in.open));
-    SM_ASSIGN_OR_RETURN(mask, SelectPhase(*msource, in.mask_selection, nullptr, nullptr,
-                                          progress.Sub(0, 0.5)));
+    SM_ASSIGN_OR_RETURN(
+        mask, SelectPhase(*msource, in.mask_selection, nullptr, nullptr, progress.Sub(0, 0.5)));
   }
   SM_ASSIGN_OR_RETURN(auto source, OpenVolume(in.path, in.open));
   PhaseSelection selection = in.selection;
@@ -340,8 +342,8 @@ absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPl
   SM_ASSIGN_OR_RETURN(const std::string bytes, ReadFileToString(path, int64_t{1} << 40));
   const auto damaged = [&](absl::string_view what) {
     return absl::InvalidArgumentError(
-        absl::StrCat(path, ": ", what, "; run the brick again (sheetmesh-pipeline brick ",
-                     plan_dir, " --index=", index, ")"));
+        absl::StrCat(path, ": ", what, "; run the brick again (sheetmesh-pipeline brick ", plan_dir,
+                     " --index=", index, ")"));
   };
   if (bytes.size() < sizeof(kBrickMagic) + 8 ||
       std::memcmp(bytes.data(), kBrickMagic, sizeof(kBrickMagic)) != 0) {
@@ -349,7 +351,8 @@ absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPl
   }
   uint64_t stored = 0;
   std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
-  if (stored != Fnv1a(bytes.data(), bytes.size() - 8)) return damaged("its checksum does not match");
+  if (stored != Fnv1a(bytes.data(), bytes.size() - 8))
+    return damaged("its checksum does not match");
   SM_ASSIGN_OR_RETURN(const std::string plan_text, ReadFileToString(PlanFile(plan_dir)));
   Cursor c(absl::string_view(bytes).substr(sizeof(kBrickMagic), bytes.size() - 8 - 8));
   BrickResult out;

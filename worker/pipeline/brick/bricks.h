@@ -45,7 +45,7 @@ struct BrickPlan {
   std::string parameters;  // the job's parameters, canonical JSON (CanonicalParametersJson)
   VolumeInfo info;         // the volume's, as opened
   BrickGrid grid;
-  int halo = 0;                  // voxels around each core a brick reads besides it
+  int halo = 0;                        // voxels around each core a brick reads besides it
   std::vector<std::string> in_bricks;  // the stages bricks run ("read", "select")
   std::vector<Brick> bricks;
 
@@ -72,10 +72,10 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir);
 struct BrickResult {
   int index = 0;
   VoxelRegion core;
-  uint64_t plan_hash = 0;      // of the plan.json it ran from
-  VoxelSet sheet;              // the core's sheet voxels, in the core's coordinates
-  SelectionStats stats;        // of the brick's box
-  uint64_t file_bytes = 0;     // of its file
+  uint64_t plan_hash = 0;   // of the plan.json it ran from
+  VoxelSet sheet;           // the core's sheet voxels, in the core's coordinates
+  SelectionStats stats;     // of the brick's box
+  uint64_t file_bytes = 0;  // of its file
 };
 
 // Runs brick `index` of the plan in `plan_dir` and writes its file atomically (a brick killed
@@ -91,9 +91,9 @@ absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPl
 
 struct MergeSummary {
   int bricks = 0;
-  uint64_t brick_bytes = 0;    // the bricks' files, in all
+  uint64_t brick_bytes = 0;  // the bricks' files, in all
   uint64_t sheet_voxels = 0;
-  double join_seconds = 0;     // reading and joining the bricks
+  double join_seconds = 0;  // reading and joining the bricks
 };
 
 // Joins every brick of the plan in `plan_dir` into the volume's sheet phase and runs the job

@@ -16,16 +16,16 @@
 #include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
+#include "absl/time/clock.h"
 #include "common/exit_codes.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
 #include "common/huge_pages.h"
 #include "common/machine.h"
 #include "common/status_macros.h"
-#include "absl/strings/str_format.h"
-#include "absl/strings/str_join.h"
-#include "absl/time/clock.h"
 #include "worker/pipeline/brick/bricks.h"
 #include "worker/pipeline/cli/info_command.h"
 #include "worker/pipeline/cli/parameter_flags.h"
@@ -212,8 +212,7 @@ absl::StatusOr<Index3> ParseBrickSize(const std::string& text) {
   if (d.nx > INT32_MAX || d.ny > INT32_MAX || d.nz > INT32_MAX) {
     return absl::InvalidArgumentError(absl::StrCat("--brick_size=", text, " is too large"));
   }
-  return Index3{static_cast<int32_t>(d.nx), static_cast<int32_t>(d.ny),
-                static_cast<int32_t>(d.nz)};
+  return Index3{static_cast<int32_t>(d.nx), static_cast<int32_t>(d.ny), static_cast<int32_t>(d.nz)};
 }
 
 absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
@@ -227,8 +226,8 @@ absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
   if (origin.size() != 3 || !absl::SimpleAtoi(origin[0], &grid.origin.x) ||
       !absl::SimpleAtoi(origin[1], &grid.origin.y) ||
       !absl::SimpleAtoi(origin[2], &grid.origin.z)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--grid_origin=", absl::GetFlag(FLAGS_grid_origin), " must look like 0,0,0"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--grid_origin=", absl::GetFlag(FLAGS_grid_origin), " must look like 0,0,0"));
   }
   SM_ASSIGN_OR_RETURN(const BrickPlan plan, MakeBrickPlan(o, grid));
   SM_RETURN_IF_ERROR(WriteBrickPlan(plan, dir));
@@ -237,8 +236,7 @@ absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
             << " (halo " << plan.halo << "; in bricks: " << absl::StrJoin(plan.in_bricks, ", ")
             << ")\n"
             << "next        sheetmesh-pipeline brick " << dir << " --index=I   (I = 0 .. "
-            << plan.bricks.size() - 1 << "), then: sheetmesh-pipeline merge " << dir
-            << " -o OUT\n";
+            << plan.bricks.size() - 1 << "), then: sheetmesh-pipeline merge " << dir << " -o OUT\n";
   return absl::OkStatus();
 }
 
@@ -265,10 +263,10 @@ absl::Status BrickCommand(const std::vector<std::string>& args) {
   SM_ASSIGN_OR_RETURN(const int index, BrickIndex());
   const absl::Time start = absl::Now();
   SM_ASSIGN_OR_RETURN(const BrickResult r, RunBrick(args[0], index));
-  std::cout << absl::StrFormat(
-      "brick       %d (%s): %d sheet voxels, %d bytes in %s, %.2f s\n", index,
-      r.core.ToString(), r.sheet.size(), r.file_bytes, BrickFile(args[0], index),
-      absl::ToDoubleSeconds(absl::Now() - start));
+  std::cout << absl::StrFormat("brick       %d (%s): %d sheet voxels, %d bytes in %s, %.2f s\n",
+                               index, r.core.ToString(), r.sheet.size(), r.file_bytes,
+                               BrickFile(args[0], index),
+                               absl::ToDoubleSeconds(absl::Now() - start));
   return absl::OkStatus();
 }
 

@@ -308,7 +308,7 @@ bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool 
 // The thick parts of a piece: 6-connected sets of its voxels whose τ is at least `least`,
 // of kMinLensVoxels or more, each as its sorted voxel keys.
 absl::StatusOr<std::vector<std::vector<uint64_t>>> ThickParts(const PieceVoxels& pv,
-                                                               const Dims& dims, double least) {
+                                                              const Dims& dims, double least) {
   std::vector<uint64_t> thick;
   for (size_t i = 0; i < pv.keys.size(); ++i) {
     if (pv.tau[i] >= least) thick.push_back(pv.keys[i]);
@@ -370,8 +370,7 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
   const Dims& dims = sheet.set.dims();
   // Voxels at least twice as thick as the piece's median (and body_min_thickness).
   const double least = std::max(options.body_min_thickness, 2 * median);
-  SM_ASSIGN_OR_RETURN(const std::vector<std::vector<uint64_t>> parts,
-                      ThickParts(pv, dims, least));
+  SM_ASSIGN_OR_RETURN(const std::vector<std::vector<uint64_t>> parts, ThickParts(pv, dims, least));
   std::optional<VoxelSet> own;
   double score = 0;  // the piece's, as it stands
   for (const std::vector<uint64_t>& keys : parts) {

@@ -37,7 +37,8 @@ std::vector<float> FitFaceThickness(const TriangleMesh& mesh, const VoxelSet& se
   Coverage cover(set);
   // Columns are gathered in parallel a block of faces at a time; the descent over them is
   // sequential (each face's choice depends on the ones before).
-  constexpr size_t kBlock = 1024;  // each column holds its prism's voxels: at r = 15, 0.2 GB a block
+  constexpr size_t kBlock =
+      1024;  // each column holds its prism's voxels: at r = 15, 0.2 GB a block
   std::vector<std::vector<ColumnVoxel>> columns(kBlock);
   for (int pass = 0; pass < passes; ++pass) {
     for (size_t start = 0; start < mesh.faces.size(); start += kBlock) {

@@ -152,9 +152,8 @@ absl::Status CheckNumbering(const std::string& path, const std::vector<std::stri
     const std::string a = std::filesystem::path(files[i - 1]).filename().string();
     const std::string b = std::filesystem::path(files[i]).filename().string();
     if (step <= 0) {
-      return absl::InvalidArgumentError(absl::StrCat(path, ": ", a, " and ", b,
-                                                     " have the same slice number ", n[i].number,
-                                                     ": keep one"));
+      return absl::InvalidArgumentError(absl::StrCat(
+          path, ": ", a, " and ", b, " have the same slice number ", n[i].number, ": keep one"));
     }
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": slice number ", n[i - 1].number + step, " is missing (between ", a, " and ", b,

@@ -136,10 +136,11 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenRegion(std::unique_ptr<VolumeS
   const int64_t n[3] = {d.nx, d.ny, d.nz};
   for (int k = 0; k < 3; ++k) {
     if (lo[k] < 0 || hi[k] <= lo[k] || hi[k] > n[k]) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          source->info().path, ": input.region ", region.ToString(), " is ",
-          hi[k] <= lo[k] ? "empty" : "outside the volume", " along ", std::string(1, "xyz"[k]), " (the volume is ",
-          d.ToString(), "; give X0,Y0,Z0,X1,Y1,Z1 with 0 <= X0 < X1 <= ", d.nx, ", ...)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(source->info().path, ": input.region ", region.ToString(), " is ",
+                       hi[k] <= lo[k] ? "empty" : "outside the volume", " along ",
+                       std::string(1, "xyz"[k]), " (the volume is ", d.ToString(),
+                       "; give X0,Y0,Z0,X1,Y1,Z1 with 0 <= X0 < X1 <= ", d.nx, ", ...)"));
     }
   }
   return std::make_unique<RegionSource>(std::move(source), region);

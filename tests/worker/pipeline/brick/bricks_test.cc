@@ -80,8 +80,10 @@ TEST(BricksTest, TheJoinedPhaseIsTheVolumesWhateverTheBricksAndTheGridsOrigin) {
     const SheetPhase whole = *LoadSheetPhase(o.input);
     // Bricks of one voxel's width, smaller than a cell, uneven, and larger than the volume;
     // grids started at a corner and inside.
-    const std::vector<BrickGrid> grids = {{{1, 47, 53}, {0, 0, 0}},   {{7, 7, 7}, {3, 5, 2}},
-                                          {{16, 9, 20}, {0, 4, 19}}, {{33, 20, 50}, {0, 0, 0}},
+    const std::vector<BrickGrid> grids = {{{1, 47, 53}, {0, 0, 0}},
+                                          {{7, 7, 7}, {3, 5, 2}},
+                                          {{16, 9, 20}, {0, 4, 19}},
+                                          {{33, 20, 50}, {0, 0, 0}},
                                           {{64, 64, 64}, {11, 0, 0}}};
     for (size_t g = 0; g < grids.size(); ++g) {
       const std::string dir = tmp.File(preset + "_plan" + std::to_string(g));
@@ -113,14 +115,16 @@ TEST(BricksTest, TheMergeGivesTheOneProcessRunsMeshAndReport) {
   PipelineOptions one = o;
   one.output.dir = tmp.File("one");
   ASSERT_TRUE(RunPipeline(one).ok());
-  for (const BrickGrid& grid : {BrickGrid{{40, 50, 30}, {7, 0, 11}}, BrickGrid{{5, 128, 9}, {0, 0, 0}}}) {
+  for (const BrickGrid& grid :
+       {BrickGrid{{40, 50, 30}, {7, 0, 11}}, BrickGrid{{5, 128, 9}, {0, 0, 0}}}) {
     const std::string dir = tmp.File("plan" + std::to_string(grid.size.x));
     PlanAndRun(o, grid, dir);
     const std::string out = tmp.File("merged" + std::to_string(grid.size.x));
     MergeSummary summary;
     absl::StatusOr<PipelineReport> merged = MergeBricks(dir, out, {}, &summary);
     ASSERT_TRUE(merged.ok()) << merged.status();
-    EXPECT_EQ(*ReadFileToString(out + "/surface.ply"), *ReadFileToString(one.output.dir + "/surface.ply"));
+    EXPECT_EQ(*ReadFileToString(out + "/surface.ply"),
+              *ReadFileToString(one.output.dir + "/surface.ply"));
     EXPECT_EQ(ReadFileToString(out + "/model.vdb")->size(),
               ReadFileToString(one.output.dir + "/model.vdb")->size());
     EXPECT_EQ(Comparable(out + "/report.json"), Comparable(one.output.dir + "/report.json"));
@@ -208,16 +212,16 @@ TEST(BricksTest, BadPlansAreRefusedNamingTheFieldAndValue) {
   ASSERT_TRUE(WriteFileAtomically(liar, std::string(1000, '\1')).ok());
   PipelineOptions l = o;
   l.input.path = liar;
-  EXPECT_THAT(MakeBrickPlan(l, {}).status(), StatusIs(absl::StatusCode::kInvalidArgument,
-                                                      HasSubstr("liar_200x200x200_u8.raw")));
+  EXPECT_THAT(MakeBrickPlan(l, {}).status(),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("liar_200x200x200_u8.raw")));
   // The volume cut short after planning: the brick names the file and what it lacks.
   ASSERT_TRUE(std::filesystem::remove(o.input.path));
   Phantom(tmp, "sample", {128, 112, 90});
   std::filesystem::rename(tmp.File("sample_128x112x90_u8.raw"), o.input.path);
-  EXPECT_THAT(RunBrick(dir, 0).status(),
-              StatusIs(absl::StatusCode::kInvalidArgument,
-                       ::testing::AllOf(HasSubstr("sample_128x112x96_u8.raw"),
-                                        HasSubstr("truncated"))));
+  EXPECT_THAT(
+      RunBrick(dir, 0).status(),
+      StatusIs(absl::StatusCode::kInvalidArgument,
+               ::testing::AllOf(HasSubstr("sample_128x112x96_u8.raw"), HasSubstr("truncated"))));
 }
 
 TEST(BricksTest, ARegionReadsItsBoxOfTheVolumeAndKeepsTheVolumesCoordinates) {

@@ -7,7 +7,8 @@
 # Usage: deploy/slurm/submit_bricks.sh VOLUME OUT_DIR [job flags, as for sheetmesh-pipeline run]
 # Environment:
 #   SHEETMESH_PIPELINE  the program (default: sheetmesh-pipeline on PATH)
-#   BRICK_SIZE          the bricks' edge in voxels, N or NXxNYxNZ (default 512)
+#   BRICK_SIZE          the bricks' edge in voxels, N or NXxNYxNZ (default auto: slabs of
+#                       whole slices, about 128 M voxels each)
 #   PLAN_DIR            where the plan and the bricks go (default OUT_DIR.plan)
 #   BRICK_MEM           memory per brick task for sbatch --mem (default 2G)
 #   MERGE_MEM           memory of the merge (default 16G)
@@ -16,7 +17,7 @@
 # Prints the array's and the merge's job ids; the merge's log is OUT_DIR.merge.log.
 set -euo pipefail
 if [ $# -lt 2 ]; then
-  sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
 fi
 volume=$1
@@ -26,7 +27,7 @@ pipeline=${SHEETMESH_PIPELINE:-sheetmesh-pipeline}
 plan=${PLAN_DIR:-$out.plan}
 read -r -a extra <<< "${SBATCH_ARGS:-}"
 
-"$pipeline" plan "$volume" -o "$plan" --brick_size="${BRICK_SIZE:-512}" "$@"
+"$pipeline" plan "$volume" -o "$plan" --brick_size="${BRICK_SIZE:-auto}" "$@"
 count=$(grep -c '"index":' "$plan/plan.json")
 array="0-$((count - 1))"
 [ -n "${MAX_PARALLEL:-}" ] && array="$array%$MAX_PARALLEL"

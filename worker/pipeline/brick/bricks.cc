@@ -108,7 +108,36 @@ std::string BrickPlan::ToJson() const {
   return j.dump(1) + "\n";
 }
 
-absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const BrickGrid& grid) {
+absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
+                                        const BrickGrid& requested) {
+  BrickGrid grid = requested;
+  const int32_t given[3] = {grid.size.x, grid.size.y, grid.size.z};
+  for (int k = 0; k < 3; ++k) {
+    if (given[k] < 0) {
+      return absl::InvalidArgumentError(absl::StrCat("brick_size ", given[k], " along ",
+                                                     std::string(1, "xyz"[k]),
+                                                     " must be a voxel count (or 0: chosen)"));
+    }
+  }
+  // The volume's dims first: a chosen edge follows them.
+  std::error_code ec;
+  const std::string volume =
+      std::filesystem::absolute(options.input.path, ec).lexically_normal().string();
+  VolumeInfo info;
+  {
+    SM_ASSIGN_OR_RETURN(auto source, OpenVolume(volume, options.input.open));
+    info = source->info();
+  }
+  const Dims& d = info.dims;
+  const auto clamp32 = [](int64_t v) {
+    return static_cast<int32_t>(std::clamp<int64_t>(v, 1, INT32_MAX));
+  };
+  if (grid.size.x == 0) grid.size.x = clamp32(d.nx);
+  if (grid.size.y == 0) grid.size.y = clamp32(d.ny);
+  if (grid.size.z == 0) {
+    grid.size.z = clamp32(std::min<int64_t>(
+        d.nz, kAutoBrickVoxels / std::max<int64_t>(1, int64_t{grid.size.x} * grid.size.y)));
+  }
   const int32_t size[3] = {grid.size.x, grid.size.y, grid.size.z};
   const int32_t origin[3] = {grid.origin.x, grid.origin.y, grid.origin.z};
   BrickPlan plan;
@@ -144,17 +173,14 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const Br
         "input.region and bricks both choose what to read: plan the region as its own volume "
         "(sheetmesh-pipeline convert VOLUME --region=... -o REGION.h5)");
   }
-  std::error_code ec;
-  plan.volume = std::filesystem::absolute(options.input.path, ec).lexically_normal().string();
+  plan.volume = volume;
   PipelineOptions o = options;
   if (!o.input.mask_path.empty()) {
     o.input.mask_path = std::filesystem::absolute(o.input.mask_path, ec).string();
   }
   plan.parameters = CanonicalParametersJson(o, /*include_local=*/true);
-  SM_ASSIGN_OR_RETURN(auto source, OpenVolume(plan.volume, o.input.open));
-  plan.info = source->info();
+  plan.info = info;
   plan.grid = grid;
-  const Dims& d = plan.info.dims;
   const auto xs = Cuts(d.nx, size[0], origin[0]);
   const auto ys = Cuts(d.ny, size[1], origin[1]);
   const auto zs = Cuts(d.nz, size[2], origin[2]);

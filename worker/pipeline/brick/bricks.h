@@ -28,11 +28,16 @@
 namespace sheetmesh {
 
 // How to cut: brick edges per axis, and where the grid starts (a brick corner, in voxels;
-// bricks along an axis start at origin - k * size, clipped to the volume).
+// bricks along an axis start at origin - k * size, clipped to the volume). An edge of 0 is
+// chosen: x and y the whole volume's, z so that a brick holds about kAutoBrickVoxels.
+// Every reader reads slices, and raw files lie slice after slice: such slabs read each byte
+// of the file once, where cubes of a file larger than memory read it again for every brick
+// along x (bench/RESULTS.md).
 struct BrickGrid {
-  Index3 size{512, 512, 512};
+  Index3 size{0, 0, 0};
   Index3 origin{0, 0, 0};
 };
+inline constexpr int64_t kAutoBrickVoxels = int64_t{1} << 27;
 
 struct Brick {
   int index = 0;
@@ -53,7 +58,7 @@ struct BrickPlan {
 };
 
 // The plan of `options`'s job (options.input names the volume) on `grid`. kInvalidArgument
-// naming the field and value for a brick size below 1 or below twice the halo, an origin
+// naming the field and value for a brick size below 0 or below twice the halo, an origin
 // outside [0, size), options the bricks cannot run (input.grey, a threshold of "otsu": give
 // its value, which `info --threshold=otsu` prints; input.region), and the reader's errors.
 absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const BrickGrid& grid);

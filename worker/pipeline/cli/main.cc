@@ -64,9 +64,10 @@ ABSL_FLAG(int, sheets, -1, "phantom: sheets (default: the preset's)");
 ABSL_FLAG(double, aperture, -1, "phantom: mean aperture in voxels (default: the preset's)");
 ABSL_FLAG(int, specks, -2, "phantom: specks (-1: one per 20^3 voxels; default: the preset's)");
 // plan, brick
-ABSL_FLAG(std::string, brick_size, "512",
+ABSL_FLAG(std::string, brick_size, "auto",
           "plan: the bricks' edge in voxels, N or NXxNYxNZ (the last bricks along an axis are "
-          "what is left)");
+          "what is left; 0 along an axis: chosen); auto: slabs of whole slices, about 128 M "
+          "voxels each, which read every byte of a file once");
 ABSL_FLAG(std::string, grid_origin, "0,0,0",
           "plan: where the brick grid starts, X,Y,Z voxels (each in [0, the brick size))");
 ABSL_FLAG(int, index, -1,
@@ -206,6 +207,7 @@ absl::Status Convert(const std::vector<std::string>& args, const PipelineOptions
 
 // "512" or "512x512x256".
 absl::StatusOr<Index3> ParseBrickSize(const std::string& text) {
+  if (text == "auto") return Index3{0, 0, 0};
   int32_t n = 0;
   if (absl::SimpleAtoi(text, &n)) return Index3{n, n, n};
   SM_ASSIGN_OR_RETURN(const Dims d, ParseDims("brick_size", text));
@@ -231,8 +233,9 @@ absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
   }
   SM_ASSIGN_OR_RETURN(const BrickPlan plan, MakeBrickPlan(o, grid));
   SM_RETURN_IF_ERROR(WriteBrickPlan(plan, dir));
-  std::cout << "plan        " << plan.bricks.size() << " bricks of up to " << grid.size.x << "x"
-            << grid.size.y << "x" << grid.size.z << " over " << plan.info.dims.ToString()
+  const Index3& size = plan.grid.size;
+  std::cout << "plan        " << plan.bricks.size() << " bricks of up to " << size.x << "x"
+            << size.y << "x" << size.z << " over " << plan.info.dims.ToString()
             << " (halo " << plan.halo << "; in bricks: " << absl::StrJoin(plan.in_bricks, ", ")
             << ")\n"
             << "next        sheetmesh-pipeline brick " << dir << " --index=I   (I = 0 .. "

@@ -190,8 +190,14 @@ TEST(BricksTest, BadPlansAreRefusedNamingTheFieldAndValue) {
   TempDir tmp;
   PipelineOptions o;
   o.input.path = Phantom(tmp, "sample", {128, 112, 96});
-  EXPECT_THAT(MakeBrickPlan(o, {{0, 64, 64}, {0, 0, 0}}).status(),
-              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("brick_size 0 along x")));
+  EXPECT_THAT(MakeBrickPlan(o, {{-1, 64, 64}, {0, 0, 0}}).status(),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("brick_size -1 along x")));
+  // Chosen: slabs of whole slices.
+  const BrickPlan slabs = *MakeBrickPlan(o, {});
+  EXPECT_EQ(slabs.grid.size, (Index3{128, 112, 96}));  // the sample is under 2^27 voxels
+  const BrickPlan thin = *MakeBrickPlan(o, {{0, 0, 10}, {0, 0, 0}});
+  EXPECT_EQ(thin.bricks.size(), 10u);
+  EXPECT_EQ(thin.bricks[9].core.dims(), (Dims{128, 112, 6}));
   EXPECT_THAT(MakeBrickPlan(o, {{64, 64, 64}, {0, 64, 0}}).status(),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("grid_origin 64 along y")));
   PipelineOptions otsu = o;

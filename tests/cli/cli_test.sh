@@ -10,6 +10,12 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$cli" phantom --preset=sample -o "$tmp/s_128x112x96_u8.raw" | grep -q "sheet voxels" || fail phantom
 [ -f "$tmp/s_128x112x96_u8.raw.truth.json" ] || fail "phantom truth"
+# A raw name without dims: the phantom says how to read it back, and that works.
+hint=$("$cli" phantom --preset=sample -o "$tmp/nameless.raw" | grep -o -- "--dims=[^ ]* --dtype=[a-z0-9]*") ||
+  fail "phantom: no read-back hint for a raw name without dims"
+"$cli" info "$tmp/nameless.raw" $hint > /dev/null || fail "phantom: its read-back hint"
+"$cli" phantom --preset=sample -o "$tmp/s2_128x112x96_u8.raw" | grep -q "holds no dims" &&
+  fail "phantom: a hint where the name has the dims"
 "$cli" info "$tmp/s_128x112x96_u8.raw" --json > "$tmp/info.json"
 /usr/bin/python3 -c "import json,sys; j=json.load(open('$tmp/info.json')); sys.exit(0 if j['dims']==[128,112,96] and j['sheet_voxels']>0 else 1)" || fail "info json"
 "$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip | grep -q wrote || fail convert

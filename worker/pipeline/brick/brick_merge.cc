@@ -91,6 +91,16 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
                                                      absl::StrCat(done, " bricks joined")));
   }
   phase.sheet = std::move(joined).Build();
+  // What killed bricks left half-written: every brick is in, so no .part is needed.
+  {
+    std::error_code ec;
+    for (const auto& e :
+         std::filesystem::directory_iterator(std::filesystem::path(plan_dir) / "bricks", ec)) {
+      if (e.path().extension() == ".part" && std::filesystem::remove(e.path(), ec)) {
+        ++sum.stale_parts_removed;
+      }
+    }
+  }
   phase.selection = options.input.selection;
   if (!options.input.threshold.empty()) {
     SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(options.input.threshold));

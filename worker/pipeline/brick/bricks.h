@@ -98,12 +98,14 @@ struct MergeSummary {
   int bricks = 0;
   uint64_t brick_bytes = 0;  // the bricks' files, in all
   uint64_t sheet_voxels = 0;
-  double join_seconds = 0;  // reading and joining the bricks
+  double join_seconds = 0;      // reading and joining the bricks
+  int stale_parts_removed = 0;  // half-written files of killed bricks, removed
 };
 
 // Joins every brick of the plan in `plan_dir` into the volume's sheet phase and runs the job
-// on it with its outputs in `output_dir` (plus bricks.json). kFailedPrecondition naming the
-// bricks that have not run (nothing is written then); the job's errors pass through.
+// on it with its outputs in `output_dir` (plus bricks.json); removes what killed bricks left
+// half-written. kFailedPrecondition naming the bricks that have not run (nothing is written
+// then); the job's errors pass through.
 absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
                                            const std::string& output_dir,
                                            const Progress& progress = {},

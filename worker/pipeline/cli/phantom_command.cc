@@ -6,6 +6,26 @@
 #include "common/status_macros.h"
 
 namespace sheetmesh {
+namespace {
+
+// A raw file says neither its dims nor its type: where its name does not either, how to read
+// it back ("" where it does).
+std::string RawReadBackHint(const std::string& path, VolumeFormat format, const VolumeInfo& info) {
+  if (format != VolumeFormat::kRaw) return "";
+  const auto named = DimsFromFileName(path);
+  if (named.ok() && *named && (*named)->first == info.dims && (*named)->second == info.dtype) {
+    return "";
+  }
+  return absl::StrFormat(
+      "a raw file holds no dims: read it back with --dims=%s --dtype=%s, or name it like "
+      "rock_%s_%s.raw\n",
+      info.dims.ToString(), DTypeName(info.dtype), info.dims.ToString(),
+      info.dtype == DType::kUInt8    ? "u8"
+      : info.dtype == DType::kUInt16 ? "u16"
+                                     : "f32");
+}
+
+}  // namespace
 
 absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out) {
   const absl::Time start = absl::Now();
@@ -24,6 +44,7 @@ absl::Status RunPhantom(const PhantomCommandOptions& options, std::ostream& out)
       truth.sheets.size(), truth.specks.size(), truth.sheet_voxels,
       100.0 * truth.sheet_voxels / options.phantom.dims.num_voxels(), truth_path,
       absl::ToDoubleSeconds(absl::Now() - start));
+  out << RawReadBackHint(options.output, options.format, info);
   return absl::OkStatus();
 }
 
@@ -43,6 +64,7 @@ absl::Status RunConvert(const std::string& input, const OpenOptions& open,
   }
   SM_RETURN_IF_ERROR(sink->Finish());
   out << absl::StrFormat("wrote %s (%s %s)\n", output, info.dims.ToString(), DTypeName(info.dtype));
+  out << RawReadBackHint(output, format, info);
   return absl::OkStatus();
 }
 

@@ -154,7 +154,10 @@ TEST(BricksTest, ABrickRunAgainWritesTheSameBytesAndAHalfWrittenOneDoesNotCount)
               StatusIs(absl::StatusCode::kFailedPrecondition, HasSubstr("(5)")));
   EXPECT_FALSE(std::filesystem::exists(out)) << "nothing is written before every brick is in";
   ASSERT_TRUE(RunBrick(dir, 5).ok());
-  EXPECT_TRUE(MergeBricks(dir, out).ok());
+  MergeSummary summary;
+  EXPECT_TRUE(MergeBricks(dir, out, {}, &summary).ok());
+  EXPECT_EQ(summary.stale_parts_removed, 1);
+  EXPECT_FALSE(std::filesystem::exists(BrickFile(dir, 5) + ".123-0.part"));
 }
 
 TEST(BricksTest, ADamagedBrickOrOneOfAnotherPlanIsRefusedNamingItsFile) {

@@ -106,4 +106,7 @@ case_ seed_above_its_range 2 "surface_seed|9007199254740992" -- "$cli" surface "
 case_ all_nan_names_no_sentinel 2 "every voxel is NaN" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1
 "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1 2>&1 | grep -q "inf" && fail "all-NaN: the message quotes the empty range's sentinel"
 case_ spacing_1e-6_m 0 "model.vdb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/tiny" --spacing=1e-6,1e-6,1e-6 --unit=m
+# A job beyond the memory it may use: an error naming the stage, exit 2, no file.
+case_ out_of_memory 2 "out of memory in stage|--memory_limit_gb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/oom" --memory_limit_gb=0.2
+[ ! -e "$tmp/oom/report.json" ] || fail "out_of_memory: a report was written"
 echo "hardening CLI: $cases cases passed"

@@ -1,7 +1,10 @@
 #include "worker/pipeline/run/pipeline.h"
 
+#include <sys/resource.h>
+
 #include <filesystem>
 #include <mutex>
+#include <new>
 #include <optional>
 
 #include "absl/strings/cord.h"
@@ -252,6 +255,57 @@ absl::Status WithKeptFiles(absl::Status status, const std::vector<std::string>& 
 
 namespace {
 
+// Remembers the stage last reported, for an error that cannot say where it happened.
+class LastStage : public ProgressObserver {
+ public:
+  explicit LastStage(ProgressObserver* inner) : inner_(inner) {}
+  bool OnProgress(absl::string_view stage, double fraction, absl::string_view message) override {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stage_ != stage) stage_ = std::string(stage);
+    }
+    return inner_ == nullptr || inner_->OnProgress(stage, fraction, message);
+  }
+  std::string stage() {
+    std::lock_guard<std::mutex> lock(mu_);
+    return stage_.empty() ? std::string("read") : stage_;
+  }
+
+ private:
+  ProgressObserver* inner_;
+  std::mutex mu_;
+  std::string stage_;
+};
+
+// What this process may allocate, for the message of a run that ran out: "at most 17.6 GiB of
+// address space" or "".
+std::string AddressSpaceLimit() {
+  struct rlimit rl;
+  if (::getrlimit(RLIMIT_AS, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY) return "";
+  return absl::StrFormat(" (this process may use %.2f GiB of address space)",
+                         static_cast<double>(rl.rlim_cur) / double(uint64_t{1} << 30));
+}
+
+absl::StatusOr<PipelineReport> RunWithDeadline(const PipelineOptions& options,
+                                               const Progress& progress,
+                                               std::optional<SheetPhase> given);
+
+// A stage that asks for more memory than there is ends the run with an error naming it, not
+// the process: the outputs are written only at the end, atomically, so nothing is half made.
+absl::StatusOr<PipelineReport> RunWithin(const PipelineOptions& options, const Progress& progress,
+                                         std::optional<SheetPhase> given) {
+  LastStage last(progress.observer());
+  try {
+    return RunWithDeadline(options, Progress(&last, progress.stage()), std::move(given));
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        options.input.path, ": out of memory in stage ", last.stage(), AddressSpaceLimit(),
+        "; give the job more memory (sheetmesh-pipeline --memory_limit_gb, the worker's "
+        "--job_memory_gb), or less to hold: a larger r, or a region of the volume "
+        "(input.region)"));
+  }
+}
+
 absl::StatusOr<PipelineReport> RunWithDeadline(const PipelineOptions& options,
                                                const Progress& progress,
                                                std::optional<SheetPhase> given) {
@@ -274,7 +328,7 @@ absl::StatusOr<PipelineReport> RunWithDeadline(const PipelineOptions& options,
 
 absl::StatusOr<PipelineReport> RunPipeline(const PipelineOptions& options,
                                            const Progress& progress) {
-  return RunWithDeadline(options, progress, std::nullopt);
+  return RunWithin(options, progress, std::nullopt);
 }
 
 absl::StatusOr<PipelineReport> RunPipelineOnPhase(const PipelineOptions& options, SheetPhase phase,
@@ -284,7 +338,7 @@ absl::StatusOr<PipelineReport> RunPipelineOnPhase(const PipelineOptions& options
         "input.grey finds the sheets in the grey levels, which a sheet phase read before (by "
         "bricks) does not carry: run it on the volume in one process");
   }
-  return RunWithDeadline(options, progress, std::move(phase));
+  return RunWithin(options, progress, std::move(phase));
 }
 
 namespace {

@@ -235,9 +235,8 @@ absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
   SM_RETURN_IF_ERROR(WriteBrickPlan(plan, dir));
   const Index3& size = plan.grid.size;
   std::cout << "plan        " << plan.bricks.size() << " bricks of up to " << size.x << "x"
-            << size.y << "x" << size.z << " over " << plan.info.dims.ToString()
-            << " (halo " << plan.halo << "; in bricks: " << absl::StrJoin(plan.in_bricks, ", ")
-            << ")\n"
+            << size.y << "x" << size.z << " over " << plan.info.dims.ToString() << " (halo "
+            << plan.halo << "; in bricks: " << absl::StrJoin(plan.in_bricks, ", ") << ")\n"
             << "next        sheetmesh-pipeline brick " << dir << " --index=I   (I = 0 .. "
             << plan.bricks.size() - 1 << "), then: sheetmesh-pipeline merge " << dir << " -o OUT\n";
   return absl::OkStatus();

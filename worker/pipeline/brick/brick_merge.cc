@@ -11,7 +11,6 @@
 #include "common/status_macros.h"
 #include "worker/pipeline/brick/bricks.h"
 #include "worker/pipeline/run/parameters.h"
-#include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
 namespace {
@@ -101,12 +100,7 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
       }
     }
   }
-  phase.selection = options.input.selection;
-  if (!options.input.threshold.empty()) {
-    SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(options.input.threshold));
-    phase.threshold = spec.value;
-    phase.selection = SideOfThreshold(spec.value, options.input.threshold_above);
-  }
+  SM_ASSIGN_OR_RETURN(phase.selection, StatedSelection(options.input, &phase.threshold));
   SM_RETURN_IF_ERROR(CheckSheetPhase(options.input, phase));
   sum.bricks = static_cast<int>(plan.bricks.size());
   sum.sheet_voxels = phase.sheet.size();

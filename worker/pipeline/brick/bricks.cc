@@ -9,7 +9,6 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/run/parameters.h"
-#include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
 namespace {
@@ -200,6 +199,8 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
       }
     }
   }
+  const std::string text = plan.ToJson();  // as WriteBrickPlan writes it
+  plan.fingerprint = Fnv1a(text.data(), text.size());
   return plan;
 }
 
@@ -230,6 +231,7 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
                      "\"); sheetmesh-pipeline plan writes one"));
   }
   BrickPlan plan;
+  plan.fingerprint = Fnv1a(text.data(), text.size());
   try {
     plan.volume = j.at("volume").get<std::string>();
     plan.parameters = j.at("parameters").dump();
@@ -281,37 +283,31 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
   }
   const Brick& brick = plan.bricks[index];
   SM_ASSIGN_OR_RETURN(PipelineOptions o, PlanOptions(plan, PlanFile(plan_dir)));
-  o.input.open.region = brick.read;
-  SheetInput& in = o.input;
+  const SheetInput& in = o.input;
   // The volume must still be the one planned: a file replaced since would mix two volumes.
-  SM_ASSIGN_OR_RETURN(auto whole, OpenVolume(plan.volume, [&] {
-                        OpenOptions w = in.open;
-                        w.region.reset();
-                        return w;
-                      }()));
+  // Opened once, checked, then seen through the brick's box.
+  SM_ASSIGN_OR_RETURN(auto whole, OpenVolume(plan.volume, in.open));
   if (!(whole->info().dims == plan.info.dims) || whole->info().dtype != plan.info.dtype) {
     return absl::FailedPreconditionError(
         absl::StrCat(plan.volume, " is ", whole->info().dims.ToString(), " ",
                      DTypeName(whole->info().dtype), " now, and the plan was made for ",
                      plan.info.dims.ToString(), " ", DTypeName(plan.info.dtype), ": plan again"));
   }
-  whole.reset();
+  SM_ASSIGN_OR_RETURN(auto source, OpenRegion(std::move(whole), brick.read));
   BrickResult out;
   out.index = index;
   out.core = brick.core;
   std::optional<VoxelSet> mask;
   if (!in.mask_path.empty() || in.mask_from_volume) {
+    OpenOptions region = in.open;
+    region.region = brick.read;
     SM_ASSIGN_OR_RETURN(auto msource,
-                        OpenVolume(in.mask_from_volume ? in.path : in.mask_path, in.open));
+                        OpenVolume(in.mask_from_volume ? in.path : in.mask_path, region));
     SM_ASSIGN_OR_RETURN(
         mask, SelectPhase(*msource, in.mask_selection, nullptr, nullptr, progress.Sub(0, 0.5)));
   }
-  SM_ASSIGN_OR_RETURN(auto source, OpenVolume(in.path, in.open));
-  PhaseSelection selection = in.selection;
-  if (!in.threshold.empty()) {
-    SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(in.threshold));
-    selection = SideOfThreshold(spec.value, in.threshold_above);
-  }
+  std::optional<double> threshold;
+  SM_ASSIGN_OR_RETURN(const PhaseSelection selection, StatedSelection(in, &threshold));
   SM_ASSIGN_OR_RETURN(VoxelSet local,
                       SelectPhase(*source, selection, mask ? &*mask : nullptr, &out.stats,
                                   mask ? progress.Sub(0.5, 1) : progress));
@@ -330,8 +326,7 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
     if (x0 < x1) builder.AddRun(gy - core.lo.y, gz - core.lo.z, x0 - core.lo.x, x1 - core.lo.x);
   });
   out.sheet = std::move(builder).Build();
-  SM_ASSIGN_OR_RETURN(const std::string plan_text, ReadFileToString(PlanFile(plan_dir)));
-  out.plan_hash = Fnv1a(plan_text.data(), plan_text.size());
+  out.plan_hash = plan.fingerprint;
   // The file: magic, plan hash, index, core, stats, runs (y, z, x0, x1 in the volume's
   // coordinates), checksum.
   std::string bytes(kBrickMagic, sizeof(kBrickMagic));
@@ -379,7 +374,6 @@ absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPl
   std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
   if (stored != Fnv1a(bytes.data(), bytes.size() - 8))
     return damaged("its checksum does not match");
-  SM_ASSIGN_OR_RETURN(const std::string plan_text, ReadFileToString(PlanFile(plan_dir)));
   Cursor c(absl::string_view(bytes).substr(sizeof(kBrickMagic), bytes.size() - 8 - 8));
   BrickResult out;
   out.file_bytes = bytes.size();
@@ -390,7 +384,7 @@ absl::StatusOr<BrickResult> ReadBrick(const std::string& plan_dir, const BrickPl
   ok = ok && c.Get(&out.stats.min_value) && c.Get(&out.stats.max_value) &&
        c.Get(&out.stats.selected) && c.Get(&out.stats.outside_mask) && c.Get(&runs);
   if (!ok) return damaged("it ends inside its header");
-  if (out.plan_hash != Fnv1a(plan_text.data(), plan_text.size())) {
+  if (out.plan_hash != plan.fingerprint) {
     return damaged("it was made from another plan.json");
   }
   out.core = {{box[0], box[1], box[2]}, {box[3], box[4], box[5]}};

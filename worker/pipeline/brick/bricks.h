@@ -53,6 +53,7 @@ struct BrickPlan {
   int halo = 0;                        // voxels around each core a brick reads besides it
   std::vector<std::string> in_bricks;  // the stages bricks run ("read", "select")
   std::vector<Brick> bricks;
+  uint64_t fingerprint = 0;  // of plan.json's text (each brick file carries it)
 
   std::string ToJson() const;
 };

@@ -48,6 +48,18 @@ absl::Status CheckOtsuMinority(const SheetInput& input, const SheetPhase& phase)
 
 }  // namespace
 
+absl::StatusOr<PhaseSelection> StatedSelection(const SheetInput& input,
+                                               std::optional<double>* threshold) {
+  if (input.threshold.empty()) return input.selection;
+  SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(input.threshold));
+  if (spec.otsu) {
+    return absl::InvalidArgumentError(
+        "input.threshold = otsu is found on the volume's histogram, not stated: give its value");
+  }
+  *threshold = spec.value;
+  return SideOfThreshold(spec.value, input.threshold_above);
+}
+
 absl::Status CheckSheetPhase(const SheetInput& input, const SheetPhase& phase) {
   SM_RETURN_IF_ERROR(CheckNotEmpty(phase.sheet, phase.info, phase.selection, phase.stats));
   SM_RETURN_IF_ERROR(CheckNotGrayscale(input, phase));

@@ -63,6 +63,12 @@ absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
 // kCancelled if asked.
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});
 
+// The selection `input` states without reading the volume: its labels or window, or the
+// side of a threshold given as a number (then *threshold is it). kInvalidArgument for a
+// threshold that is not a number ("otsu" needs the volume's histogram).
+absl::StatusOr<PhaseSelection> StatedSelection(const SheetInput& input,
+                                               std::optional<double>* threshold);
+
 // The checks LoadSheetPhase makes of what it selected (the errors above): for a phase
 // selected elsewhere (by bricks).
 absl::Status CheckSheetPhase(const SheetInput& input, const SheetPhase& phase);

@@ -10,6 +10,7 @@
 #include "common/sha256.h"
 #include "common/status_macros.h"
 #include "common/version.h"
+#include "server/bricked_jobs.h"
 #include "server/references.h"
 #include "server/status_util.h"
 #include "server/watch_job.h"
@@ -167,6 +168,13 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
   if (!parameters.ok()) return ToGrpcStatus(parameters.status());
 
   v1::Job job;
+  if (!r->bricks().empty()) {
+    // Checked now; the worker that plans cuts the volume (and refuses what bricks cannot run).
+    if (absl::Status st = runtime::CheckBrickRequest(r->bricks()); !st.ok()) {
+      return ToGrpcStatus(st);
+    }
+    job.mutable_bricks()->set_size(r->bricks());
+  }
   job.set_tenant(tenant);
   job.set_request_id(r->request_id());
   *job.mutable_input() = in;
@@ -230,6 +238,7 @@ grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context, const v1::Li
     if (j.state() == v1::RUNNING) {
       if (auto p = ctx_->host->Progress(j.name())) *j.mutable_progress() = *p;
     }
+    PresentSplit(&j, nullptr);
     *response->add_jobs() = std::move(j);
   }
   response->set_next_page_token(next);
@@ -246,6 +255,14 @@ grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext* context, const v1::C
   absl::StatusOr<v1::Job> job = ctx_->jobs->RequestCancel(r->name());
   if (!job.ok()) return ToGrpcStatus(job.status());
   if (job->state() == v1::RUNNING) ctx_->host->MarkCancelled(job->name());
+  // A split job's bricks stop with it.
+  if (IsSplit(*job)) {
+    if (absl::Status st = CancelTasks(*ctx_->jobs, *job); !st.ok()) return ToGrpcStatus(st);
+    for (const std::string& task : job->bricks().tasks()) {
+      ctx_->host->MarkCancelled(task);
+      ctx_->events->Notify(task);
+    }
+  }
   ctx_->events->Notify(job->name());
   absl::StatusOr<v1::Job> fresh = FreshJob(*ctx_, tenant, r->name());
   *response = fresh.ok() ? *fresh : *job;
@@ -256,8 +273,12 @@ grpc::Status JobServiceImpl::DeleteJob(grpc::ServerContext* context, const v1::D
                                        v1::DeleteJobResponse*) {
   std::string tenant;
   if (grpc::Status a = ctx_->tenants->Authenticate(*context, &tenant); !a.ok()) return a;
-  if (absl::StatusOr<v1::Job> mine = FreshJob(*ctx_, tenant, r->name()); !mine.ok()) {
-    return ToGrpcStatus(mine.status());
+  absl::StatusOr<v1::Job> mine = FreshJob(*ctx_, tenant, r->name());
+  if (!mine.ok()) return ToGrpcStatus(mine.status());
+  if (!mine->bricks().parent().empty()) {
+    return ToGrpcStatus(absl::FailedPreconditionError(
+        absl::StrCat(r->name(), " is brick ", mine->bricks().index(), " of ",
+                     mine->bricks().parent(), ": it goes when that job is deleted")));
   }
   absl::Status st = ctx_->jobs->Delete(r->name());
   if (st.ok()) ctx_->events->Notify(r->name());

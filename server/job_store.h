@@ -36,12 +36,12 @@ class JobStore {
   // The job of `tenant` created with `request_id`, if any.
   virtual absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& tenant,
                                                                  const std::string& request_id) = 0;
-  // The jobs of `tenant`, newest first; page_token is opaque ("" = first page). Sets
+  // The jobs of `tenant` (not brick tasks), newest first; page_token is opaque ("" = first page). Sets
   // *next_token ("" = last).
   virtual absl::StatusOr<std::vector<v1::Job>> List(const std::string& tenant, v1::JobState state,
                                                     int page_size, const std::string& page_token,
                                                     std::string* next_token) = 0;
-  // The oldest QUEUED job, now RUNNING under `worker` until now + lease; attempts + 1.
+  // The oldest QUEUED job (a split job only once its tasks have all ended), now RUNNING under `worker` until now + lease; attempts + 1.
   virtual absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker,
                                                            absl::Duration lease) = 0;
   // kFailedPrecondition when the job is not RUNNING under `worker`.
@@ -56,10 +56,19 @@ class JobStore {
                                          const std::vector<v1::Artifact>& artifacts) = 0;
   // Puts a RUNNING job of `worker` back in the queue, its attempt not counted.
   virtual absl::Status Release(const std::string& name, const std::string& worker) = 0;
+  // Splits a job run as bricks, RUNNING under `worker`, into `count` brick tasks
+  // (BrickTasks): stores them QUEUED, records the plan and their names in the job's bricks, and puts the
+  // job back in the queue (its attempt not counted), where LeaseNext passes it by until
+  // every task has ended. kFailedPrecondition when the job is not RUNNING under `worker`,
+  // or is split already; kInvalidArgument for a count outside [1, kMaxBricks].
+  virtual absl::StatusOr<v1::Job> Split(const std::string& name, const std::string& worker,
+                                        const v1::Artifact& plan, int count) = 0;
+  // The brick tasks of a split job, in the plan's order (none for another job).
+  virtual absl::StatusOr<std::vector<v1::Job>> Tasks(const std::string& name) = 0;
   // QUEUED: CANCELLED now. RUNNING: marked, the worker stops it. Finished: unchanged.
   virtual absl::StatusOr<v1::Job> RequestCancel(const std::string& name) = 0;
   virtual absl::StatusOr<bool> CancelRequested(const std::string& name) = 0;
-  // kFailedPrecondition unless the job has finished.
+  // kFailedPrecondition unless the job has finished. A split job's tasks go with it.
   virtual absl::Status Delete(const std::string& name) = 0;
   // RUNNING jobs whose lease ended go back to QUEUED, or FAILED after max_attempts.
   // `all` treats every RUNNING job as expired (a restart: no worker of the old process

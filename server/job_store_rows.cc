@@ -1,5 +1,6 @@
 #include "server/job_store_rows.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "absl/strings/str_cat.h"
@@ -37,6 +38,7 @@ std::set<std::string> BlobsOf(const v1::Job& job) {
     out.insert(f.digest().hash());
   }
   for (const v1::Artifact& a : job.artifacts()) out.insert(a.digest().hash());
+  if (job.bricks().has_plan()) out.insert(job.bricks().plan().digest().hash());
   return out;
 }
 
@@ -67,7 +69,8 @@ void ApplyCancelBeforeStart(v1::Job* job, absl::Time now) {
   job->set_state(v1::CANCELLED);
   *job->mutable_end_time() = TimestampOf(now);
   job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
-  job->mutable_error()->set_message("cancelled before it started");
+  job->mutable_error()->set_message(job->bricks().count() > 0 ? "cancelled while its bricks ran"
+                                                               : "cancelled before it started");
 }
 
 void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts, bool not_the_jobs_fault,
@@ -90,6 +93,58 @@ void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts, bool
   } else {
     job->set_state(v1::QUEUED);
   }
+}
+
+std::vector<v1::Job> BrickTasks(const v1::Job& parent, const v1::Artifact& plan, int count) {
+  std::vector<v1::Job> tasks;
+  tasks.reserve(static_cast<size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    v1::Job t;
+    t.set_request_id(absl::StrCat(parent.request_id(), "/brick/", i));
+    *t.mutable_input() = parent.input();
+    *t.mutable_parameters() = parent.parameters();
+    t.set_resolved_parameters(parent.resolved_parameters());
+    t.set_pipeline_version(parent.pipeline_version());
+    t.set_tenant(parent.tenant());
+    t.set_state(v1::QUEUED);
+    v1::JobBricks& b = *t.mutable_bricks();
+    b.set_size(parent.bricks().size());
+    *b.mutable_plan() = plan;
+    b.set_count(count);
+    b.set_parent(parent.name());
+    b.set_index(i);
+    tasks.push_back(std::move(t));
+  }
+  return tasks;
+}
+
+void ApplySplit(v1::Job* parent, const v1::Artifact& plan, const std::vector<std::string>& names) {
+  parent->set_state(v1::QUEUED);
+  parent->set_attempts(std::max(0, parent->attempts() - 1));
+  v1::JobBricks& b = *parent->mutable_bricks();
+  *b.mutable_plan() = plan;
+  b.set_count(static_cast<int>(names.size()));
+  b.clear_tasks();
+  for (const std::string& n : names) b.add_tasks(n);
+  v1::JobProgress& p = *parent->mutable_progress();
+  p.set_stage("bricks");
+  p.set_fraction(0);
+  p.set_message(absl::StrCat("0 of ", names.size(), " bricks done"));
+}
+
+absl::Status CheckSplittable(const v1::Job& job, int count) {
+  if (count < 1 || count > kMaxBricks) {
+    return absl::InvalidArgumentError(absl::StrCat("count ", count, " is not a number of bricks (1 to ", kMaxBricks, ")"));
+  }
+  if (job.bricks().size().empty() || !job.bricks().parent().empty()) {
+    return absl::FailedPreconditionError(
+        absl::StrCat(job.name(), " is not a job run as bricks: it cannot be split"));
+  }
+  if (job.bricks().count() > 0) {
+    return absl::FailedPreconditionError(absl::StrCat(job.name(), " is split already, into ",
+                                                      job.bricks().count(), " bricks"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh::server

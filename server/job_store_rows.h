@@ -13,6 +13,7 @@
 #include "absl/time/time.h"
 #include "google/protobuf/timestamp.pb.h"
 #include "sheetmesh/v1/jobs.pb.h"
+#include "worker/runtime/job_host.h"
 
 namespace sheetmesh::server {
 
@@ -55,6 +56,26 @@ void ApplyCancelBeforeStart(v1::Job* job, absl::Time now = absl::Now());
 // max_attempts.
 void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts,
                      bool not_the_jobs_fault = false, absl::Time now = absl::Now());
+
+// The brick tasks of `parent` for a plan of `count` bricks: each its input, parameters and
+// tenant, request id "<parent's>/brick/<index>", and bricks.parent / index / plan.
+std::vector<v1::Job> BrickTasks(const v1::Job& parent, const v1::Artifact& plan, int count);
+
+// `parent` split into the tasks named `names`: QUEUED again (its attempt not counted),
+// waiting for them.
+void ApplySplit(v1::Job* parent, const v1::Artifact& plan, const std::vector<std::string>& names);
+
+// The most brick tasks one job may have.
+inline constexpr int kMaxBricks = runtime::kMaxJobBricks;
+
+// kFailedPrecondition unless `job` may be split (has bricks.size, is not a task, has no
+// plan yet); kInvalidArgument for a count outside [1, kMaxBricks].
+absl::Status CheckSplittable(const v1::Job& job, int count);
+
+// Whether a task in `state` keeps its split job waiting (QUEUED or RUNNING).
+inline bool TaskPending(v1::JobState state) {
+  return state == v1::QUEUED || state == v1::RUNNING;
+}
 
 }  // namespace sheetmesh::server
 

@@ -2,6 +2,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "server/bricked_jobs.h"
 
 namespace sheetmesh::server {
 
@@ -13,6 +14,15 @@ absl::StatusOr<v1::Job> FreshJob(const ServiceContext& ctx, const std::string& t
   }
   if (job.state() == v1::RUNNING) {
     if (auto p = ctx.host->Progress(job.name())) *job.mutable_progress() = *p;
+  }
+  if (IsSplit(job) && job.state() == v1::QUEUED) {
+    // Its bricks run: their progress is the job's (a brick still running here, fresher).
+    SM_ASSIGN_OR_RETURN(std::vector<v1::Job> tasks, ctx.jobs->Tasks(job.name()));
+    for (v1::Job& t : tasks) {
+      if (t.state() != v1::RUNNING) continue;
+      if (auto p = ctx.host->Progress(t.name())) *t.mutable_progress() = *p;
+    }
+    PresentSplit(&job, &tasks);
   }
   return job;
 }

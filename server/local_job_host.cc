@@ -10,6 +10,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "google/protobuf/util/time_util.h"
+#include "server/bricked_jobs.h"
 #include "server/references.h"
 
 namespace sheetmesh::server {
@@ -39,9 +40,18 @@ absl::StatusOr<std::optional<v1::Job>> LocalJobHost::Lease(const std::string& wo
     }
     SM_ASSIGN_OR_RETURN(std::optional<v1::Job> job, store_->LeaseNext(worker, options_.lease));
     if (job.has_value()) {
+      const std::string name = job->name();
+      // A split job comes back for its merge, or ends here when a brick did not succeed.
+      SM_ASSIGN_OR_RETURN(job, PrepareMerge(*store_, *std::move(job), worker));
+      if (!job.has_value()) {
+        events_->NotifyFinished(name);
+        continue;
+      }
       {
         std::lock_guard<std::mutex> lock(mu_);
-        live_[job->name()] = Live{};
+        Live live;
+        live.parent = job->bricks().parent();
+        live_[job->name()] = std::move(live);
       }
       events_->Notify(job->name());
       return job;
@@ -67,6 +77,7 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
   const absl::Time now = absl::Now();
   bool notify = false, store = false, new_stage = false, check_cancel = false;
   v1::JobProgress snapshot;
+  std::string parent;
   {
     std::lock_guard<std::mutex> lock(mu_);
     if (cancelled_.count(job)) return false;
@@ -95,6 +106,7 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
       live.cancel_checked = now;
     }
     snapshot = live.progress;
+    parent = live.parent;
     // A stage's start is recorded before anyone can read it as the live progress (Progress
     // takes mu_), so a watcher that sees stage k has every stage before k in its log too.
     if (new_stage) events_->NotifyStage(job, snapshot);
@@ -108,6 +120,7 @@ bool LocalJobHost::ReportProgress(const std::string& job, const std::string& wor
     }
   }
   if (!new_stage && notify) events_->Notify(job);
+  if (notify && !parent.empty()) events_->Notify(parent);  // a brick: its job's watchers too
   return true;
 }
 
@@ -189,11 +202,38 @@ absl::Status LocalJobHost::Finish(const std::string& job, const std::string& wor
     live_.erase(job);
     cancelled_.erase(job);
   }
+  RemoveInputs(job);
+  events_->NotifyFinished(job);
+  if (done.ok()) TaskEnded(*store_, *events_, *done);
+  return done.status();
+}
+
+void LocalJobHost::RemoveInputs(const std::string& job) {
   std::error_code ec;
   std::filesystem::remove_all(
       absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}})), ec);
-  events_->NotifyFinished(job);
-  return done.status();
+}
+
+absl::Status LocalJobHost::Split(const std::string& job, const std::string& worker,
+                                 const v1::Artifact& plan, int count) {
+  absl::StatusOr<v1::Job> split = store_->Split(job, worker, plan, count);
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    live_.erase(job);
+  }
+  RemoveInputs(job);
+  events_->Notify(job);
+  WakeWorkers();  // the bricks are queued
+  return split.status();
+}
+
+absl::Status LocalJobHost::FetchBlob(const v1::Digest& digest, const std::string& path) {
+  SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(digest));
+  ::unlink(path.c_str());
+  if (::link(blob.c_str(), path.c_str()) == 0) return absl::OkStatus();
+  std::error_code ec;
+  std::filesystem::copy_file(blob, path, ec);
+  return ec ? ErrnoStatus(ec.value(), path) : absl::OkStatus();
 }
 
 absl::Status LocalJobHost::Release(const std::string& job, const std::string& worker) {

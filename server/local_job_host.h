@@ -47,6 +47,9 @@ class LocalJobHost : public runtime::JobHost {
   absl::Status Finish(const std::string& job, const std::string& worker, const absl::Status& result,
                       const std::vector<v1::Artifact>& artifacts) override;
   absl::Status Release(const std::string& job, const std::string& worker) override;
+  absl::Status Split(const std::string& job, const std::string& worker, const v1::Artifact& plan,
+                     int count) override;
+  absl::Status FetchBlob(const v1::Digest& digest, const std::string& path) override;
 
   // Wakes workers waiting in Lease (a job was queued).
   void WakeWorkers();
@@ -62,7 +65,11 @@ class LocalJobHost : public runtime::JobHost {
     absl::Time notified;  // when watchers were last told
     double notified_fraction = -1;
     absl::Time cancel_checked;  // when the store was last asked whether to stop
+    std::string parent;         // of a brick task: its job, whose watchers hear of it too
   };
+
+  // Removes the links to a job's uploaded input.
+  void RemoveInputs(const std::string& job);
 
   JobStore* store_;
   BlobStore* blobs_;

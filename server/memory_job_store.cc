@@ -109,7 +109,7 @@ class MemoryJobStore : public JobStore {
     const std::string who = tenant.empty() ? std::string(kDefaultTenant) : tenant;
     std::vector<const Row*> rows;
     for (const auto& [id, row] : t_->jobs) {
-      if (row.job.tenant() == who && row.seq < before &&
+      if (row.job.tenant() == who && row.seq < before && row.job.bricks().parent().empty() &&
           (state == v1::JOB_STATE_UNSPECIFIED || row.job.state() == state)) {
         rows.push_back(&row);
       }
@@ -132,7 +132,8 @@ class MemoryJobStore : public JobStore {
     std::lock_guard<std::mutex> lock(t_->mu);
     Row* oldest = nullptr;
     for (auto& [id, row] : t_->jobs) {
-      if (row.job.state() == v1::QUEUED && (oldest == nullptr || row.seq < oldest->seq)) {
+      if (row.job.state() == v1::QUEUED && (oldest == nullptr || row.seq < oldest->seq) &&
+          !WaitsLocked(row.job)) {
         oldest = &row;
       }
     }
@@ -188,6 +189,42 @@ class MemoryJobStore : public JobStore {
     return absl::OkStatus();
   }
 
+  absl::StatusOr<v1::Job> Split(const std::string& name, const std::string& worker,
+                                const v1::Artifact& plan, int count) override {
+    std::lock_guard<std::mutex> lock(t_->mu);
+    Row* row;
+    SM_ASSIGN_OR_RETURN(row, RunningLocked(name, worker));
+    SM_RETURN_IF_ERROR(CheckSplittable(row->job, count));
+    std::vector<v1::Job> tasks = BrickTasks(row->job, plan, count);
+    std::vector<std::string> names;
+    for (v1::Job& task : tasks) {
+      Row r;
+      r.seq = ++t_->last_seq;
+      const std::string id = NewJobId(r.seq, rng_.Next());
+      task.set_name(absl::StrCat("jobs/", id));
+      *task.mutable_create_time() = TimestampOf(clock_());
+      r.request_key = ScopedRequestId(task.tenant(), task.request_id());
+      r.job = std::move(task);
+      names.push_back(r.job.name());
+      t_->jobs.emplace(id, std::move(r));
+    }
+    ApplySplit(&row->job, plan, names);
+    row->owner.clear();
+    return row->job;
+  }
+
+  absl::StatusOr<std::vector<v1::Job>> Tasks(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(t_->mu);
+    Row* row;
+    SM_ASSIGN_OR_RETURN(row, RowLocked(name));
+    std::vector<v1::Job> out;
+    for (const std::string& task : row->job.bricks().tasks()) {
+      auto it = t_->jobs.find(JobIdOf(task));
+      if (it != t_->jobs.end()) out.push_back(it->second.job);
+    }
+    return out;
+  }
+
   absl::StatusOr<v1::Job> RequestCancel(const std::string& name) override {
     std::lock_guard<std::mutex> lock(t_->mu);
     Row* row;
@@ -215,6 +252,7 @@ class MemoryJobStore : public JobStore {
       return absl::FailedPreconditionError(absl::StrCat(
           name, " is ", v1::JobState_Name(row->job.state()), "; cancel it before deleting it"));
     }
+    for (const std::string& task : row->job.bricks().tasks()) t_->jobs.erase(JobIdOf(task));
     t_->jobs.erase(JobIdOf(name));
     return absl::OkStatus();
   }
@@ -279,6 +317,14 @@ class MemoryJobStore : public JobStore {
   }
 
  private:
+  // Whether `job` is split and waits for a task.
+  bool WaitsLocked(const v1::Job& job) {
+    for (const std::string& task : job.bricks().tasks()) {
+      auto it = t_->jobs.find(JobIdOf(task));
+      if (it != t_->jobs.end() && TaskPending(it->second.job.state())) return true;
+    }
+    return false;
+  }
   // The row of job `name`; kNotFound naming it.
   absl::StatusOr<Row*> RowLocked(const std::string& name) {
     auto it = t_->jobs.find(JobIdOf(name));

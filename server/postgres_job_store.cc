@@ -47,6 +47,9 @@ class PostgresJobStore : public JobStore {
                "CREATE TABLE IF NOT EXISTS job_blobs ("
                "  job_id TEXT NOT NULL, hash TEXT NOT NULL, PRIMARY KEY (job_id, hash))",
                "CREATE INDEX IF NOT EXISTS job_blobs_hash ON job_blobs(hash)",
+               // A brick task names its job (stores from before bricks get the column).
+               "ALTER TABLE jobs ADD COLUMN IF NOT EXISTS parent TEXT",
+               "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent, state)",
            }) {
         SM_RETURN_IF_ERROR(c->Exec(sql));
       }
@@ -118,11 +121,11 @@ class PostgresJobStore : public JobStore {
         state == v1::JOB_STATE_UNSPECIFIED
             ? c->Query(
                   "SELECT job, seq FROM jobs WHERE tenant = $1 AND seq < $2 "
-                  "ORDER BY seq DESC LIMIT $3",
+                  "AND parent IS NULL ORDER BY seq DESC LIMIT $3",
                   {P(t), P(before), P(int64_t{page_size} + 1)})
             : c->Query(
                   "SELECT job, seq FROM jobs WHERE tenant = $1 AND seq < $2 AND state = $3 "
-                  "ORDER BY seq DESC LIMIT $4",
+                  "AND parent IS NULL ORDER BY seq DESC LIMIT $4",
                   {P(t), P(before), P(int64_t{state}), P(int64_t{page_size} + 1)});
     SM_RETURN_IF_ERROR(q.status());
     std::vector<v1::Job> out;
@@ -142,9 +145,13 @@ class PostgresJobStore : public JobStore {
                                                    absl::Duration lease) override {
     std::optional<v1::Job> out;
     SM_RETURN_IF_ERROR(pool_->Transaction([&](Conn& c) -> absl::Status {
-      SM_ASSIGN_OR_RETURN(PgResult q, c->Query("SELECT id, job FROM jobs WHERE state = $1 "
-                                               "ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED",
-                                               {P(int64_t{v1::QUEUED})}));
+      // A split job waits while one of its tasks is QUEUED or RUNNING.
+      SM_ASSIGN_OR_RETURN(
+          PgResult q,
+          c->Query("SELECT id, job FROM jobs j WHERE state = $1 AND NOT EXISTS (SELECT 1 FROM "
+                   "jobs t WHERE t.parent = j.id AND t.state IN ($1, $2)) "
+                   "ORDER BY seq LIMIT 1 FOR UPDATE OF j SKIP LOCKED",
+                   {P(int64_t{v1::QUEUED}), P(int64_t{v1::RUNNING})}));
       if (q.rows() == 0) return absl::OkStatus();
       const std::string id = q.Text(0, 0);
       SM_ASSIGN_OR_RETURN(v1::Job job, ParseStoredJob(q.Bytes(0, 1)));
@@ -219,6 +226,60 @@ class PostgresJobStore : public JobStore {
     });
   }
 
+  absl::StatusOr<v1::Job> Split(const std::string& name, const std::string& worker,
+                                const v1::Artifact& plan, int count) override {
+    v1::Job out;
+    SM_RETURN_IF_ERROR(pool_->Transaction([&](Conn& c) -> absl::Status {
+      const std::string id = JobIdOf(name);
+      SM_ASSIGN_OR_RETURN(Row row, RowOf(c, id, true));
+      if (row.job.state() != v1::RUNNING || row.owner != worker) {
+        return NotRunningUnder(name, worker);
+      }
+      SM_RETURN_IF_ERROR(CheckSplittable(row.job, count));
+      std::vector<v1::Job> tasks = BrickTasks(row.job, plan, count);
+      std::vector<std::string> names;
+      for (v1::Job& task : tasks) {
+        SM_ASSIGN_OR_RETURN(PgResult seq, c->Query("SELECT nextval('job_seq')"));
+        const int64_t n = seq.Int(0, 0);
+        std::string task_id;
+        {
+          std::lock_guard<std::mutex> lock(rng_mu_);
+          task_id = NewJobId(n, rng_.Next());
+        }
+        task.set_name(absl::StrCat("jobs/", task_id));
+        *task.mutable_create_time() = NowTimestamp();
+        SM_RETURN_IF_ERROR(
+            c->Query("INSERT INTO jobs (id, seq, request_id, state, job, tenant, parent) "
+                     "VALUES ($1, $2, $3, $4, $5, $6, $7)",
+                     {P(task_id), P(n), P(ScopedRequestId(task.tenant(), task.request_id())),
+                      P(int64_t{v1::QUEUED}), J(task), P(task.tenant()), P(id)})
+                .status());
+        SM_RETURN_IF_ERROR(AddJobBlobs(c, task_id, task));
+        names.push_back(task.name());
+      }
+      ApplySplit(&row.job, plan, names);
+      SM_RETURN_IF_ERROR(SetState(c, id, row.job));
+      SM_RETURN_IF_ERROR(AddJobBlobs(c, id, row.job));
+      out = row.job;
+      return absl::OkStatus();
+    }));
+    return out;
+  }
+
+  absl::StatusOr<std::vector<v1::Job>> Tasks(const std::string& name) override {
+    SM_ASSIGN_OR_RETURN(Conn c, pool_->Get());
+    SM_RETURN_IF_ERROR(RowOf(c, JobIdOf(name), false).status());
+    SM_ASSIGN_OR_RETURN(
+        PgResult q,
+        c->Query("SELECT job FROM jobs WHERE parent = $1 ORDER BY seq", {P(JobIdOf(name))}));
+    std::vector<v1::Job> out;
+    for (int i = 0; i < q.rows(); ++i) {
+      SM_ASSIGN_OR_RETURN(v1::Job j, ParseStoredJob(q.Bytes(i, 0)));
+      out.push_back(std::move(j));
+    }
+    return out;
+  }
+
   absl::StatusOr<v1::Job> RequestCancel(const std::string& name) override {
     v1::Job out;
     SM_RETURN_IF_ERROR(pool_->Transaction([&](Conn& c) -> absl::Status {
@@ -254,8 +315,11 @@ class PostgresJobStore : public JobStore {
         return absl::FailedPreconditionError(absl::StrCat(
             name, " is ", v1::JobState_Name(row.job.state()), "; cancel it before deleting it"));
       }
+      // The tasks of a split job first, with it.
       for (const char* sql :
-           {"DELETE FROM jobs WHERE id = $1", "DELETE FROM job_blobs WHERE job_id = $1"}) {
+           {"DELETE FROM job_blobs WHERE job_id IN (SELECT id FROM jobs WHERE parent = $1)",
+            "DELETE FROM jobs WHERE parent = $1", "DELETE FROM jobs WHERE id = $1",
+            "DELETE FROM job_blobs WHERE job_id = $1"}) {
         SM_RETURN_IF_ERROR(c->Query(sql, {P(JobIdOf(name))}).status());
       }
       return absl::OkStatus();

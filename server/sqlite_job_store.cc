@@ -62,6 +62,15 @@ class SqliteJobStore : public JobStore {
           Exec("ALTER TABLE jobs ADD COLUMN tenant TEXT NOT NULL DEFAULT 'default'"));
     }
     SM_RETURN_IF_ERROR(Exec("CREATE INDEX IF NOT EXISTS jobs_tenant_seq ON jobs(tenant, seq)"));
+    // Stores written before bricks: the column naming a brick task's job.
+    bool has_parent = false;
+    {
+      Stmt q(db_, "PRAGMA table_info(jobs)");
+      SM_RETURN_IF_ERROR(q.ok());
+      while (q.Step() == SQLITE_ROW) has_parent |= q.Text(1) == "parent";
+    }
+    if (!has_parent) SM_RETURN_IF_ERROR(Exec("ALTER TABLE jobs ADD COLUMN parent TEXT"));
+    SM_RETURN_IF_ERROR(Exec("CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent, state)"));
     bool has_job_blobs = false;
     {
       Stmt q(db_, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'job_blobs'");
@@ -168,9 +177,9 @@ class SqliteJobStore : public JobStore {
     }
     Stmt q(db_, state == v1::JOB_STATE_UNSPECIFIED
                     ? "SELECT job, seq FROM jobs WHERE tenant = ? AND seq < ? "
-                      "ORDER BY seq DESC LIMIT ?"
+                      "AND parent IS NULL ORDER BY seq DESC LIMIT ?"
                     : "SELECT job, seq FROM jobs WHERE tenant = ? AND seq < ? AND state = ? "
-                      "ORDER BY seq DESC LIMIT ?");
+                      "AND parent IS NULL ORDER BY seq DESC LIMIT ?");
     SM_RETURN_IF_ERROR(q.ok());
     q.Bind(1, tenant.empty() ? std::string(kDefaultTenant) : tenant).Bind(2, before);
     if (state == v1::JOB_STATE_UNSPECIFIED) {
@@ -199,9 +208,12 @@ class SqliteJobStore : public JobStore {
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
     std::optional<v1::Job> out;
     absl::Status st = [&]() -> absl::Status {
-      Stmt q(db_, "SELECT id, job FROM jobs WHERE state = ? ORDER BY seq LIMIT 1");
+      // A split job waits while one of its tasks is QUEUED or RUNNING.
+      Stmt q(db_,
+             "SELECT id, job FROM jobs j WHERE state = ?1 AND NOT EXISTS (SELECT 1 FROM jobs t "
+             "WHERE t.parent = j.id AND t.state IN (?1, ?2)) ORDER BY seq LIMIT 1");
       SM_RETURN_IF_ERROR(q.ok());
-      q.Bind(1, int64_t{v1::QUEUED});
+      q.Bind(1, int64_t{v1::QUEUED}).Bind(2, int64_t{v1::RUNNING});
       if (q.Step() != SQLITE_ROW) return absl::OkStatus();
       const std::string id = q.Text(0);
       SM_ASSIGN_OR_RETURN(v1::Job job, Parse(q.Blob(1)));
@@ -291,6 +303,70 @@ class SqliteJobStore : public JobStore {
     return SetStateLocked(JobIdOf(name), row.job);
   }
 
+  absl::StatusOr<v1::Job> Split(const std::string& name, const std::string& worker,
+                                const v1::Artifact& plan, int count) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    const std::string id = JobIdOf(name);
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    absl::StatusOr<v1::Job> out = [&]() -> absl::StatusOr<v1::Job> {
+      SM_ASSIGN_OR_RETURN(Row row, RowLocked(id));
+      if (row.job.state() != v1::RUNNING || row.owner != worker) {
+        return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));
+      }
+      SM_RETURN_IF_ERROR(CheckSplittable(row.job, count));
+      std::vector<v1::Job> tasks = BrickTasks(row.job, plan, count);
+      int64_t seq = 1;
+      {
+        Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
+        if (q.Step() == SQLITE_ROW) seq = q.Int(0);
+      }
+      std::vector<std::string> names;
+      for (v1::Job& task : tasks) {
+        const std::string task_id = NewJobId(seq, rng_.Next());
+        task.set_name(absl::StrCat("jobs/", task_id));
+        *task.mutable_create_time() = NowTimestamp();
+        Stmt ins(db_,
+                 "INSERT INTO jobs (id, seq, request_id, state, job, tenant, parent) "
+                 "VALUES (?, ?, ?, ?, ?, ?, ?)");
+        SM_RETURN_IF_ERROR(ins.ok());
+        ins.Bind(1, task_id)
+            .Bind(2, seq++)
+            .Bind(3, ScopedRequestId(task.tenant(), task.request_id()))
+            .Bind(4, int64_t{v1::QUEUED})
+            .BindBlob(5, task.SerializeAsString())
+            .Bind(6, task.tenant())
+            .Bind(7, id);
+        SM_RETURN_IF_ERROR(ins.Run());
+        SM_RETURN_IF_ERROR(AddJobBlobsLocked(task_id, task));
+        names.push_back(task.name());
+      }
+      ApplySplit(&row.job, plan, names);
+      SM_RETURN_IF_ERROR(SetStateLocked(id, row.job));
+      SM_RETURN_IF_ERROR(AddJobBlobsLocked(id, row.job));
+      return row.job;
+    }();
+    if (!out.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return out;
+    }
+    SM_RETURN_IF_ERROR(Exec("COMMIT"));
+    return out;
+  }
+
+  absl::StatusOr<std::vector<v1::Job>> Tasks(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    SM_RETURN_IF_ERROR(RowLocked(JobIdOf(name)).status());
+    Stmt q(db_, "SELECT job FROM jobs WHERE parent = ? ORDER BY seq");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, JobIdOf(name));
+    std::vector<v1::Job> out;
+    while (q.Step() == SQLITE_ROW) {
+      SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(0)));
+      out.push_back(std::move(j));
+    }
+    return out;
+  }
+
   absl::StatusOr<v1::Job> RequestCancel(const std::string& name) override {
     std::lock_guard<std::mutex> lock(mu_);
     SM_ASSIGN_OR_RETURN(Row row, RowLocked(JobIdOf(name)));
@@ -325,8 +401,11 @@ class SqliteJobStore : public JobStore {
     }
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
     absl::Status st = [&]() -> absl::Status {
+      // The tasks of a split job first, with it.
       for (const char* sql :
-           {"DELETE FROM jobs WHERE id = ?", "DELETE FROM job_blobs WHERE job_id = ?"}) {
+           {"DELETE FROM job_blobs WHERE job_id IN (SELECT id FROM jobs WHERE parent = ?1)",
+            "DELETE FROM jobs WHERE parent = ?1", "DELETE FROM jobs WHERE id = ?1",
+            "DELETE FROM job_blobs WHERE job_id = ?1"}) {
         Stmt d(db_, sql);
         SM_RETURN_IF_ERROR(d.ok());
         d.Bind(1, JobIdOf(name));

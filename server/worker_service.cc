@@ -3,8 +3,10 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "common/excerpt.h"
+#include "common/status_macros.h"
 #include "server/auth.h"
 #include "server/blob_service.h"
+#include "server/bricked_jobs.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
 #include "server/local_job_host.h"
@@ -54,6 +56,17 @@ bool WorkerServiceImpl::MustStop(const std::string& job) const {
   return !stop.ok() || *stop;
 }
 
+std::string WorkerServiceImpl::ParentOf(const std::string& job) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (auto it = parent_.find(job); it != parent_.end()) return it->second;
+  }
+  absl::StatusOr<v1::Job> j = ctx_->jobs->Get(job);
+  if (!j.ok()) return "";
+  std::lock_guard<std::mutex> lock(mu_);
+  return parent_[job] = j->bricks().parent();
+}
+
 grpc::Status WorkerServiceImpl::LeaseJob(grpc::ServerContext* context,
                                          const v1::LeaseJobRequest* request,
                                          v1::LeaseJobResponse* response) {
@@ -61,12 +74,23 @@ grpc::Status WorkerServiceImpl::LeaseJob(grpc::ServerContext* context,
   if (request->worker().empty()) {
     return ToGrpcStatus(absl::InvalidArgumentError("worker is required (the worker's name)"));
   }
-  absl::StatusOr<std::optional<v1::Job>> job =
-      ctx_->jobs->LeaseNext(request->worker(), ctx_->worker_lease);
-  if (!job.ok()) return ToGrpcStatus(job.status());
-  if (job->has_value()) {
+  // A split job comes back for its merge, or ends at the lease when a brick did not succeed:
+  // then the next one.
+  for (;;) {
+    absl::StatusOr<std::optional<v1::Job>> job =
+        ctx_->jobs->LeaseNext(request->worker(), ctx_->worker_lease);
+    if (!job.ok()) return ToGrpcStatus(job.status());
+    if (!job->has_value()) break;
+    const std::string name = (*job)->name();
+    job = PrepareMerge(*ctx_->jobs, **std::move(job), request->worker());
+    if (!job.ok()) return ToGrpcStatus(job.status());
+    if (!job->has_value()) {
+      ctx_->events->NotifyFinished(name);
+      continue;
+    }
     *response->mutable_job() = **job;
-    ctx_->events->Notify((*job)->name());
+    ctx_->events->Notify(name);
+    break;
   }
   response->set_lease_milliseconds(absl::ToInt64Milliseconds(ctx_->worker_lease));
   return grpc::Status::OK;
@@ -113,6 +137,10 @@ grpc::Status WorkerServiceImpl::ReportProgress(grpc::ServerContext* context,
   } else {
     ctx_->events->Notify(request->name());
   }
+  // A brick's progress is its job's too.
+  if (const std::string parent = ParentOf(request->name()); !parent.empty()) {
+    ctx_->events->Notify(parent);
+  }
   response->set_stop(MustStop(request->name()));
   return grpc::Status::OK;
 }
@@ -127,31 +155,8 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
         absl::StrCat("state ", v1::JobState_Name(state),
                      " does not end a job (SUCCEEDED, FAILED or CANCELLED)")));
   }
-  // Every artifact has a plain file name, and is a blob this job's worker uploaded for this
-  // job (with worker tokens: an open server has one tenant), stored already.
   for (const v1::Artifact& a : request->artifacts()) {
-    if (!IsArtifactName(a.name())) {
-      return ToGrpcStatus(absl::InvalidArgumentError(
-          absl::StrCat("artifact name '", Excerpt(a.name(), 80),
-                       "' is not a plain file name ([A-Za-z0-9._-], not starting "
-                       "with '.', at most 255 characters)")));
-    }
-    if (absl::Status d = CheckDigest(a.digest()); !d.ok()) return ToGrpcStatus(d);
-    if (ctx_->tenants->has_worker_tokens()) {
-      absl::StatusOr<bool> owned =
-          ctx_->jobs->OwnsBlob(ArtifactOwner(request->name()), a.digest().hash());
-      if (!owned.ok()) return ToGrpcStatus(owned.status());
-      if (!*owned) {
-        return ToGrpcStatus(absl::PermissionDeniedError(
-            absl::StrCat("artifact ", a.name(), " (", DigestString(a.digest()),
-                         ") was not uploaded for ", request->name(), " by its worker")));
-      }
-    }
-    if (!ctx_->blobs->Contains(a.digest())) {
-      return ToGrpcStatus(absl::FailedPreconditionError(
-          absl::StrCat("artifact ", a.name(), " (", a.digest().hash(), "/", a.digest().size_bytes(),
-                       ") is not stored: upload it first")));
-    }
+    if (absl::Status st = CheckArtifact(a, request->name()); !st.ok()) return ToGrpcStatus(st);
   }
   absl::StatusOr<v1::Job> done =
       ctx_->jobs->Finish(request->name(), request->worker(), state, request->error(),
@@ -160,9 +165,57 @@ grpc::Status WorkerServiceImpl::FinishJob(grpc::ServerContext* context,
   {
     std::lock_guard<std::mutex> lock(mu_);
     stage_.erase(request->name());
+    parent_.erase(request->name());
   }
   ctx_->events->NotifyFinished(request->name());
+  TaskEnded(*ctx_->jobs, *ctx_->events, *done);
   *response = *done;
+  return grpc::Status::OK;
+}
+
+absl::Status WorkerServiceImpl::CheckArtifact(const v1::Artifact& a, const std::string& job) const {
+  // Every artifact has a plain file name, and is a blob this job's worker uploaded for this
+  // job (with worker tokens: an open server has one tenant), stored already.
+  if (!IsArtifactName(a.name())) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("artifact name '", Excerpt(a.name(), 80),
+                     "' is not a plain file name ([A-Za-z0-9._-], not starting "
+                     "with '.', at most 255 characters)"));
+  }
+  SM_RETURN_IF_ERROR(CheckDigest(a.digest()));
+  if (ctx_->tenants->has_worker_tokens()) {
+    SM_ASSIGN_OR_RETURN(const bool owned, ctx_->jobs->OwnsBlob(ArtifactOwner(job), a.digest().hash()));
+    if (!owned) {
+      return absl::PermissionDeniedError(absl::StrCat("artifact ", a.name(), " (",
+                                                      DigestString(a.digest()),
+                                                      ") was not uploaded for ", job, " by its worker"));
+    }
+  }
+  if (!ctx_->blobs->Contains(a.digest())) {
+    return absl::FailedPreconditionError(
+        absl::StrCat("artifact ", a.name(), " (", a.digest().hash(), "/", a.digest().size_bytes(),
+                     ") is not stored: upload it first"));
+  }
+  return absl::OkStatus();
+}
+
+grpc::Status WorkerServiceImpl::SplitJob(grpc::ServerContext* context,
+                                         const v1::SplitJobRequest* request, v1::Job* response) {
+  if (grpc::Status a = Authorize(*context); !a.ok()) return a;
+  if (grpc::Status n = NeedNames(request->name(), request->worker()); !n.ok()) return n;
+  if (absl::Status st = CheckArtifact(request->plan(), request->name()); !st.ok()) {
+    return ToGrpcStatus(st);
+  }
+  absl::StatusOr<v1::Job> split =
+      ctx_->jobs->Split(request->name(), request->worker(), request->plan(), request->count());
+  if (!split.ok()) return ToGrpcStatus(split.status());
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    stage_.erase(request->name());
+  }
+  ctx_->events->Notify(request->name());
+  if (ctx_->host != nullptr) ctx_->host->WakeWorkers();  // the bricks are queued
+  *response = *split;
   return grpc::Status::OK;
 }
 
@@ -177,6 +230,7 @@ grpc::Status WorkerServiceImpl::ReleaseJob(grpc::ServerContext* context,
   {
     std::lock_guard<std::mutex> lock(mu_);
     stage_.erase(request->name());
+    parent_.erase(request->name());
   }
   ctx_->events->Notify(request->name());
   if (ctx_->host != nullptr) ctx_->host->WakeWorkers();

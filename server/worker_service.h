@@ -29,15 +29,24 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
                          v1::Job* response) override;
   grpc::Status ReleaseJob(grpc::ServerContext* context, const v1::ReleaseJobRequest* request,
                           v1::ReleaseJobResponse* response) override;
+  grpc::Status SplitJob(grpc::ServerContext* context, const v1::SplitJobRequest* request,
+                        v1::Job* response) override;
 
  private:
   grpc::Status Authorize(const grpc::ServerContext& context) const;
   // Whether the worker must stop `job`: a cancel was asked, or it no longer runs.
   bool MustStop(const std::string& job) const;
 
+  // kInvalidArgument, kPermissionDenied or kFailedPrecondition unless `a` may become an
+  // artifact of `job`: a plain file name, a blob its worker uploaded for it, stored.
+  absl::Status CheckArtifact(const v1::Artifact& a, const std::string& job) const;
+  // The job a brick task belongs to ("" for another job), remembered while it runs.
+  std::string ParentOf(const std::string& job);
+
   ServiceContext* ctx_;
   std::mutex mu_;
-  std::map<std::string, int> stage_;  // job -> the last stage told to watchers
+  std::map<std::string, int> stage_;           // job -> the last stage told to watchers
+  std::map<std::string, std::string> parent_;  // job -> its parent ("" for none)
 };
 
 }  // namespace sheetmesh::server

@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
 #include "server/job_store.h"
+#include "server/job_store_rows.h"
 #include "server/memory_job_store.h"
 #include "tests/testing/temp_dir.h"
 
@@ -321,6 +322,91 @@ TEST_P(JobStoreConformanceTest, BlobOwnersByUploadAndByJob) {
   EXPECT_EQ(*store_->ReferencedBlobs(), std::set<std::string>{std::string(64, 'a')});
   ASSERT_TRUE(store_->ForgetBlob(std::string(64, 'b')).ok());
   EXPECT_FALSE(*store_->OwnsBlob("bob", std::string(64, 'b')));
+}
+
+TEST_P(JobStoreConformanceTest, ASplitJobWaitsForItsBricksThenComesBackToBeMerged) {
+  bool created = false;
+  v1::Job bricked = NewJob("big");
+  bricked.mutable_bricks()->set_size("auto");
+  auto made = store_->Create(bricked, "k", &created);
+  ASSERT_TRUE(made.ok()) << made.status();
+  const std::string job = made->name(), other = Add("small");
+  auto l = store_->LeaseNext("w1", absl::Seconds(30));
+  ASSERT_TRUE(l.ok() && l->has_value());
+  ASSERT_EQ((*l)->name(), job);
+  v1::Artifact plan;
+  plan.set_name("plan.json");
+  plan.mutable_digest()->set_hash(std::string(64, 'p'));
+  EXPECT_EQ(store_->Split(job, "w2", plan, 3).status().code(),
+            absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(store_->Split(job, "w1", plan, 0).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(store_->Split(job, "w1", plan, kMaxBricks + 1).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  auto split = store_->Split(job, "w1", plan, 3);
+  ASSERT_TRUE(split.ok()) << split.status();
+  EXPECT_EQ(split->state(), v1::QUEUED);
+  EXPECT_EQ(split->attempts(), 0) << "planning is not an attempt";
+  EXPECT_EQ(split->bricks().count(), 3);
+  ASSERT_EQ(split->bricks().tasks_size(), 3);
+  EXPECT_EQ(store_->Split(job, "w1", plan, 3).status().code(),
+            absl::StatusCode::kFailedPrecondition)
+      << "split once";
+  Open();  // the split survives a restart
+  auto tasks = store_->Tasks(job);
+  ASSERT_TRUE(tasks.ok()) << tasks.status();
+  ASSERT_EQ(tasks->size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const v1::Job& t = (*tasks)[i];
+    EXPECT_EQ(t.name(), split->bricks().tasks(i));
+    EXPECT_EQ(t.bricks().parent(), job);
+    EXPECT_EQ(t.bricks().index(), i);
+    EXPECT_EQ(t.bricks().plan().digest().hash(), plan.digest().hash());
+    EXPECT_EQ(t.input().volume_path(), "/data/big");
+    EXPECT_EQ(t.state(), v1::QUEUED);
+  }
+  EXPECT_TRUE(store_->Tasks(other)->empty());
+  EXPECT_TRUE(store_->ReferencedBlobs()->count(std::string(64, 'p'))) << "the plan is kept";
+  std::string next;
+  EXPECT_EQ(store_->List("default", v1::JOB_STATE_UNSPECIFIED, 10, "", &next)->size(), 2u)
+      << "bricks are not listed";
+  // The older job first, then the bricks in order; the split job waits for them.
+  std::vector<std::string> leased;
+  for (int i = 0; i < 4; ++i) {
+    auto n = store_->LeaseNext(absl::StrCat("w", i), i == 3 ? absl::Milliseconds(1)
+                                                            : absl::Seconds(30));
+    ASSERT_TRUE(n.ok() && n->has_value());
+    leased.push_back((*n)->name());
+  }
+  EXPECT_EQ(leased, (std::vector<std::string>{other, split->bricks().tasks(0),
+                                              split->bricks().tasks(1), split->bricks().tasks(2)}));
+  EXPECT_FALSE(store_->LeaseNext("w", absl::Seconds(30))->has_value());
+  v1::Artifact out;
+  out.set_name("brick_0.bin");
+  out.mutable_digest()->set_hash(std::string(64, 'c'));
+  ASSERT_TRUE(store_->Finish(leased[1], "w1", v1::SUCCEEDED, {}, {out}).ok());
+  ASSERT_TRUE(store_->Finish(leased[2], "w2", v1::SUCCEEDED, {}, {out}).ok());
+  EXPECT_FALSE(store_->LeaseNext("w", absl::Seconds(30))->has_value()) << "a brick still runs";
+  // The last brick's worker is lost: the brick runs again, and only then the merge.
+  PassTime(absl::Milliseconds(30));
+  EXPECT_EQ(*store_->RequeueExpired(3, false), 1);
+  auto again = store_->LeaseNext("w9", absl::Seconds(30));
+  ASSERT_TRUE(again.ok() && again->has_value());
+  EXPECT_EQ((*again)->name(), leased[3]);
+  EXPECT_EQ((*again)->attempts(), 2);
+  ASSERT_TRUE(store_->Finish(leased[3], "w9", v1::SUCCEEDED, {}, {out}).ok());
+  auto merge = store_->LeaseNext("w5", absl::Seconds(30));
+  ASSERT_TRUE(merge.ok() && merge->has_value());
+  EXPECT_EQ((*merge)->name(), job);
+  EXPECT_EQ((*merge)->attempts(), 1);
+  EXPECT_EQ((*merge)->bricks().count(), 3);
+  ASSERT_TRUE(store_->Finish(job, "w5", v1::SUCCEEDED, {}, {}).ok());
+  // Deleting the job deletes its bricks; a brick alone is not deleted by the store's caller
+  // (the service refuses it), but the store takes them with their job.
+  ASSERT_TRUE(store_->Delete(job).ok());
+  for (const std::string& t : split->bricks().tasks()) {
+    EXPECT_EQ(store_->Get(t).status().code(), absl::StatusCode::kNotFound) << t;
+  }
+  EXPECT_FALSE(store_->ReferencedBlobs()->count(std::string(64, 'c')));
 }
 
 INSTANTIATE_TEST_SUITE_P(Stores, JobStoreConformanceTest,

@@ -209,4 +209,23 @@ absl::Status RemoteJobHost::Release(const std::string& job, const std::string& w
   return st;
 }
 
+absl::Status RemoteJobHost::Split(const std::string& job, const std::string& worker,
+                                  const v1::Artifact& plan, int count) {
+  v1::SplitJobRequest req;
+  req.set_name(job);
+  req.set_worker(worker);
+  *req.mutable_plan() = plan;
+  req.set_count(count);
+  v1::Job split;
+  auto ctx = Context();
+  absl::Status st = FromGrpc(workers_->SplitJob(ctx.get(), req, &split), "splitting " + job);
+  Forget(job);
+  return st;
+}
+
+absl::Status RemoteJobHost::FetchBlob(const v1::Digest& digest, const std::string& path) {
+  SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(options_.server));
+  return c->Download(digest, path);
+}
+
 }  // namespace sheetmesh::remote

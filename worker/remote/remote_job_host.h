@@ -41,6 +41,9 @@ class RemoteJobHost : public runtime::JobHost {
   absl::Status Finish(const std::string& job, const std::string& worker, const absl::Status& result,
                       const std::vector<v1::Artifact>& artifacts) override;
   absl::Status Release(const std::string& job, const std::string& worker) override;
+  absl::Status Split(const std::string& job, const std::string& worker, const v1::Artifact& plan,
+                     int count) override;
+  absl::Status FetchBlob(const v1::Digest& digest, const std::string& path) override;
 
   // Wakes a Lease waiting for work (drain).
   void Stop();

@@ -55,6 +55,9 @@ std::string InputFileName(const v1::JobInput& input);
 // folder's or the header's name) without folders, or "volume".
 std::string InputFolderName(const v1::JobInput& input);
 
+// The most bricks one job run as bricks may be cut into.
+inline constexpr int kMaxJobBricks = 1 << 16;
+
 // The most files one volume may have (a stack of slices).
 inline constexpr int kMaxVolumeFiles = 1 << 17;
 
@@ -101,6 +104,13 @@ class JobHost {
                               const std::vector<v1::Artifact>& artifacts) = 0;
   // Gives a leased job back to the queue without counting it as a failure (shutdown).
   virtual absl::Status Release(const std::string& job, const std::string& worker) = 0;
+  // Splits a leased job run as bricks into `count` brick tasks, with its plan stored first
+  // (PutArtifact) as `plan`: the job goes back to the queue until they have all ended, and
+  // the worker reports nothing more for this lease.
+  virtual absl::Status Split(const std::string& job, const std::string& worker,
+                             const v1::Artifact& plan, int count) = 0;
+  // Copies a stored blob a leased job names (its plan, a brick's output) to `path`.
+  virtual absl::Status FetchBlob(const v1::Digest& digest, const std::string& path) = 0;
 };
 
 }  // namespace sheetmesh::runtime

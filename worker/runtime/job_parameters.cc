@@ -6,6 +6,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/brick/bricks.h"
 #include "worker/pipeline/run/parameters.h"
 
 namespace sheetmesh::runtime {
@@ -113,6 +114,15 @@ absl::StatusOr<PipelineOptions> OptionsFromResolved(const std::string& canonical
   SM_ASSIGN_OR_RETURN(PipelineOptions o, builder.Build());
   o.input.path = volume_path;
   return o;
+}
+
+absl::Status CheckBrickRequest(const std::string& bricks) {
+  SM_ASSIGN_OR_RETURN(const Index3 size, ParseBrickSize(bricks, "bricks"));
+  if (size.x < 0 || size.y < 0 || size.z < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("bricks '", bricks, "' has a negative edge: each is at least 1 (0: chosen)"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh::runtime

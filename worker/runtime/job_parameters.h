@@ -31,6 +31,10 @@ absl::StatusOr<PipelineOptions> OptionsFromResolved(const std::string& canonical
 absl::StatusOr<PipelineOptions> JobPipelineOptions(const v1::Job& job,
                                                    const std::string& volume_path);
 
+// kInvalidArgument naming the field `bricks` and its text unless it is a brick size a job
+// may ask for (JobBricks.size: "auto", "512", "512x512x256"; no edge below 0).
+absl::Status CheckBrickRequest(const std::string& bricks);
+
 }  // namespace sheetmesh::runtime
 
 #endif  // SHEETMESH_WORKER_RUNTIME_JOB_PARAMETERS_H_

@@ -25,6 +25,7 @@
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline.h"
 #include "worker/pipeline/volume/volume_open.h"
+#include "worker/runtime/brick_tasks.h"
 #include "worker/runtime/sandbox.h"
 
 namespace sheetmesh::runtime {
@@ -141,8 +142,13 @@ int ChildMain(const std::string& spec_path) {
     const std::string out = spec.at("output_dir").get<std::string>();
     const bool data_files = spec.value("data_files", false);
     std::vector<std::string> roots = spec.value("allowed_roots", std::vector<std::string>{});
+    BrickTaskSpec task;
+    task.task = spec.value("task", std::string());
+    task.brick_size = spec.value("brick_size", std::string());
+    task.index = spec.value("brick_index", 0);
+    const bool merge = task.task == "merge";  // reads the bricks, not the volume
     SandboxPaths fence;
-    fence.read.push_back(volume);
+    if (!merge) fence.read.push_back(volume);
     if (data_files) fence.read.insert(fence.read.end(), roots.begin(), roots.end());
     fence.read_write.push_back(out);
     const absl::Status fenced = RestrictFilesystem(fence);
@@ -162,12 +168,23 @@ int ChildMain(const std::string& spec_path) {
     // Readers refuse what would not fit: half the job's address space, at once.
     if (memory > 0) limits.memory_bytes = static_cast<int64_t>(memory / 2);
     if (absl::Status opened =
-            ProbeOpen(*options, display, volume, spec.value("open_seconds", int64_t{0}));
+            merge ? absl::OkStatus()
+                  : ProbeOpen(*options, display, volume, spec.value("open_seconds", int64_t{0}));
         !opened.ok()) {
       return fail(opened.code(), std::string(opened.message()));
     }
     if (spec.value("inspect", false)) return InspectChild(*options, display, volume);
     options->output.dir = out;
+    if (!task.task.empty()) {
+      absl::StatusOr<std::vector<std::string>> files =
+          RunBrickTask(task, *options, display, Progress(&observer, "read"));
+      if (!files.ok()) {
+        return fail(files.status().code(), AsClientSees(files.status(), display, volume),
+                    KeptFiles(files.status()));
+      }
+      Tell({{"result", {{"code", 0}, {"files", *files}}}});
+      return 0;
+    }
     absl::StatusOr<PipelineReport> report = RunPipeline(*options, Progress(&observer, "read"));
     if (!report.ok()) {
       return fail(report.status().code(), AsClientSees(report.status(), display, volume),
@@ -294,6 +311,9 @@ absl::StatusOr<Json> RunChild(const std::string& self, const JobSpec& spec, cons
                   {"allowed_roots", spec.allowed_roots},
                   {"data_files", spec.data_files},
                   {"inspect", spec.inspect},
+                  {"task", spec.brick.task},
+                  {"brick_size", spec.brick.brick_size},
+                  {"brick_index", spec.brick.index},
                   {"memory_limit_bytes", limits.memory_bytes},
                   {"open_seconds", absl::ToInt64Seconds(limits.open)}};
   SM_RETURN_IF_ERROR(WriteFileAtomically(spec_path, JsonText(j)));

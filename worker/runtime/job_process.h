@@ -15,6 +15,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "worker/runtime/brick_tasks.h"
 
 namespace sheetmesh {
 struct VolumeInfo;  // volume_source.h
@@ -34,6 +35,9 @@ struct JobSpec {
   bool data_files = false;
   // Only open the volume and say what it holds (InspectVolumeInChild); no stage runs.
   bool inspect = false;
+  // One task of a job run as bricks instead of the whole pipeline (brick_tasks.h); a merge
+  // reads no volume (volume_path only names it).
+  BrickTaskSpec brick;
 };
 
 // The limits of one child.

@@ -9,6 +9,7 @@
 #include "common/file_util.h"
 #include "common/progress.h"
 #include "common/status_macros.h"
+#include "worker/runtime/brick_tasks.h"
 #include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::runtime {
@@ -73,18 +74,36 @@ absl::StatusOr<std::vector<v1::Artifact>> StoreArtifacts(const v1::Job& job,
   return artifacts;
 }
 
-// The pipeline's outputs for `job`: their names in `dir`.
+// The volume's name as the client gave it, without reading it (a merge reads none).
+std::string InputName(const v1::JobInput& in) {
+  if (!in.volume_path().empty()) return in.volume_path();
+  if (!in.file_name().empty()) return in.file_name();
+  if (in.has_volume_files()) return InputFolderName(in);
+  return in.volume_digest().hash();
+}
+
+// The pipeline's outputs for `job` (or those of its brick task `task`): their names in `dir`.
 absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const std::string& worker,
                                                     JobHost& host, const JobRunOptions& run,
-                                                    const std::string& dir) {
-  SM_ASSIGN_OR_RETURN(LocalVolume volume, host.ResolveInput(job));
+                                                    const std::string& dir,
+                                                    const BrickTaskSpec& task) {
+  LocalVolume volume;
+  if (task.task == "merge") {
+    volume.path = volume.display_name = InputName(job.input());
+  } else {
+    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job));
+  }
   SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
   options.output.dir = dir;
-  HostObserver observer(host, job.name(), worker, PlannedStages(options));
+  HostObserver observer(host, job.name(), worker,
+                        task.task == "merge" || task.task.empty()
+                            ? PlannedStages(options)
+                            : std::vector<std::string>{"read"});
   std::vector<std::string> files;
   if (run.isolate) {
     SM_RETURN_IF_ERROR(MakeDirs(dir));
     JobSpec spec;
+    spec.brick = task;
     spec.volume_path = volume.path;
     spec.display_name = volume.display_name;
     spec.output_dir = dir;
@@ -112,6 +131,9 @@ absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const st
     options.input.open.limits.confine_named_files = true;
     options.input.open.limits.named_file_roots =
         volume.data_files ? volume.data_file_roots : std::vector<std::string>{};
+    if (!task.task.empty()) {
+      return RunBrickTask(task, options, volume.display_name, Progress(&observer, "read"));
+    }
     absl::StatusOr<PipelineReport> report = RunPipeline(options, Progress(&observer, "read"));
     if (!report.ok()) {
       // Name the volume the client knows, not the server's path for it; the files the run
@@ -128,6 +150,66 @@ absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const st
     files = report->files;
   }
   return files;
+}
+
+// Which run `job` is: the whole pipeline, or a task of a job run as bricks.
+BrickTaskSpec TaskOf(const v1::Job& job) {
+  BrickTaskSpec t;
+  const v1::JobBricks& b = job.bricks();
+  if (!b.parent().empty()) {
+    t.task = "brick";
+    t.index = b.index();
+  } else if (b.count() > 0) {
+    t.task = "merge";
+  } else if (!b.size().empty()) {
+    t.task = "plan";
+    t.brick_size = b.size();
+  }
+  return t;
+}
+
+// The plan, and for the merge every brick's output, fetched into the plan folder.
+absl::Status FetchPlan(const v1::Job& job, JobHost& host, const std::string& dir,
+                       const BrickTaskSpec& task) {
+  const v1::JobBricks& b = job.bricks();
+  SM_RETURN_IF_ERROR(MakeDirs(TaskPlanDir(dir) + "/bricks"));
+  SM_RETURN_IF_ERROR(host.FetchBlob(b.plan().digest(), TaskPlanFile(dir)));
+  if (task.task != "merge") return absl::OkStatus();
+  if (b.outputs_size() != b.count()) {
+    return absl::InternalError(absl::StrCat(job.name(), " came to be merged with ",
+                                            b.outputs_size(), " of its ", b.count(),
+                                            " bricks' outputs"));
+  }
+  for (int i = 0; i < b.outputs_size(); ++i) {
+    SM_RETURN_IF_ERROR(host.FetchBlob(b.outputs(i).digest(), TaskBrickFile(dir, i)));
+  }
+  return absl::OkStatus();
+}
+
+// A task of a job run as bricks: the plan (then the job is split into its bricks) or a brick
+// (its file the one artifact). The merge runs as a job does, with its plan fetched.
+JobOutcome RunTask(const v1::Job& job, const std::string& worker, JobHost& host,
+                   const JobRunOptions& run, const std::string& dir, const BrickTaskSpec& task) {
+  JobOutcome outcome;
+  outcome.status = [&]() -> absl::Status {
+    if (task.task == "brick") SM_RETURN_IF_ERROR(FetchPlan(job, host, dir, task));
+    // The files are where the task writes them; the child's list is not needed.
+    SM_RETURN_IF_ERROR(RunOutputs(job, worker, host, run, dir, task).status());
+    const bool plan = task.task == "plan";
+    const std::string path = plan ? TaskPlanFile(dir) : TaskBrickFile(dir, task.index);
+    SM_ASSIGN_OR_RETURN(v1::Artifact a, host.PutArtifact(job.name(), worker, path,
+                                                         MediaTypeOf(path)));
+    a.set_name(plan ? "plan.json" : absl::StrCat("brick_", task.index, ".bin"));
+    if (!plan) {
+      outcome.artifacts.push_back(std::move(a));
+      return absl::OkStatus();
+    }
+    SM_ASSIGN_OR_RETURN(const int count, PlannedBricks(dir, kMaxJobBricks));
+    SM_RETURN_IF_ERROR(host.Split(job.name(), worker, a, count));
+    outcome.split = true;
+    return absl::OkStatus();
+  }();
+  return outcome;
 }
 
 }  // namespace
@@ -147,7 +229,14 @@ JobOutcome RunJob(const v1::Job& job, const std::string& worker, JobHost& host,
     }
   } cleanup{dir};
   JobOutcome outcome;
-  absl::StatusOr<std::vector<std::string>> files = RunOutputs(job, worker, host, run, dir);
+  const BrickTaskSpec task = TaskOf(job);
+  if (task.task == "plan" || task.task == "brick") return RunTask(job, worker, host, run, dir, task);
+  // The merge's bricks first.
+  const absl::Status fetched =
+      task.task == "merge" ? FetchPlan(job, host, dir, task) : absl::OkStatus();
+  absl::StatusOr<std::vector<std::string>> files =
+      fetched.ok() ? RunOutputs(job, worker, host, run, dir, task)
+                   : absl::StatusOr<std::vector<std::string>>(fetched);
   std::vector<std::string> kept = files.ok() ? *files : KeptFiles(files.status());
   if (!files.ok()) {
     // The client knows no scratch folder: the kept files are the job's artifacts.

@@ -28,6 +28,8 @@ struct JobRunOptions {
 struct JobOutcome {
   absl::Status status;
   std::vector<v1::Artifact> artifacts;
+  // The job was planned and split into brick tasks (JobHost::Split): nothing to finish.
+  bool split = false;
 };
 
 // Runs `job` for `worker`, writing outputs under options.scratch_dir (removed afterwards),

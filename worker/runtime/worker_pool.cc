@@ -54,6 +54,13 @@ class PoolObserverHost : public JobHost {
   absl::Status Release(const std::string& j, const std::string& w) override {
     return pool_->host_->Release(j, w);
   }
+  absl::Status Split(const std::string& j, const std::string& w, const v1::Artifact& plan,
+                     int count) override {
+    return pool_->host_->Split(j, w, plan, count);
+  }
+  absl::Status FetchBlob(const v1::Digest& d, const std::string& path) override {
+    return pool_->host_->FetchBlob(d, path);
+  }
 
  private:
   WorkerPool* pool_;
@@ -101,8 +108,9 @@ void WorkerPool::Work(int index) {
       lost_.erase(job.name());
       cancelled_.erase(job.name());
     }
-    if (lost) {
-      // Someone else owns the job now (or it was deleted): report nothing.
+    if (lost || result.split) {
+      // Someone else owns the job now (or it was deleted), or it went back to the queue
+      // split into its bricks: report nothing.
     } else if (aborting_.load() && !cancelled &&
                result.status.code() == absl::StatusCode::kCancelled) {
       host_->Release(job.name(), worker).IgnoreError();  // runs again after restart

@@ -61,6 +61,12 @@ class CancelledAtRenewalHost : public JobHost {
     cv_.notify_all();
     return absl::OkStatus();
   }
+  absl::Status Split(const std::string&, const std::string&, const v1::Artifact&, int) override {
+    return absl::UnimplementedError("no bricks here");
+  }
+  absl::Status FetchBlob(const v1::Digest&, const std::string&) override {
+    return absl::UnimplementedError("no blobs here");
+  }
 
   // Waits until the job was finished or released; false if neither came (a job left to
   // its lease: the bound only keeps a failure from hanging the suite).

@@ -28,9 +28,10 @@ std::string MissingText(const std::vector<int>& missing) {
 
 absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
                                            const std::string& output_dir, const Progress& progress,
-                                           MergeSummary* summary) {
+                                           MergeSummary* summary, const BrickSite& site) {
   const absl::Time start = absl::Now();
-  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(plan_dir));
+  SM_ASSIGN_OR_RETURN(BrickPlan plan, ReadBrickPlan(plan_dir));
+  if (!site.volume.empty()) plan.volume = site.volume;
   // Every brick present before anything is written.
   std::vector<int> missing;
   for (const Brick& b : plan.bricks) {

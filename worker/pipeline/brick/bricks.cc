@@ -6,6 +6,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/numbers.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/run/parameters.h"
@@ -105,6 +107,20 @@ std::string BrickPlan::ToJson() const {
   }
   j["bricks"] = std::move(list);
   return j.dump(1) + "\n";
+}
+
+absl::StatusOr<Index3> ParseBrickSize(const std::string& text, const std::string& field) {
+  if (text == "auto") return Index3{0, 0, 0};
+  int32_t n = 0;
+  if (absl::SimpleAtoi(text, &n)) return Index3{n, n, n};
+  const std::vector<std::string> parts = absl::StrSplit(text, 'x');
+  Index3 size;
+  if (parts.size() != 3 || !absl::SimpleAtoi(parts[0], &size.x) ||
+      !absl::SimpleAtoi(parts[1], &size.y) || !absl::SimpleAtoi(parts[2], &size.z)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        field, " '", text, "' is not a brick size: \"auto\", \"512\" or \"512x512x256\""));
+  }
+  return size;
 }
 
 absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
@@ -274,8 +290,9 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
 }
 
 absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
-                                     const Progress& progress) {
-  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(plan_dir));
+                                     const Progress& progress, const BrickSite& site) {
+  SM_ASSIGN_OR_RETURN(BrickPlan plan, ReadBrickPlan(plan_dir));
+  if (!site.volume.empty()) plan.volume = site.volume;
   if (index < 0 || index >= static_cast<int>(plan.bricks.size())) {
     return absl::InvalidArgumentError(absl::StrCat("brick index ", index, " is outside the plan's ",
                                                    plan.bricks.size(), " bricks (0 to ",
@@ -283,6 +300,7 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
   }
   const Brick& brick = plan.bricks[index];
   SM_ASSIGN_OR_RETURN(PipelineOptions o, PlanOptions(plan, PlanFile(plan_dir)));
+  if (site.limits) o.input.open.limits = *site.limits;
   const SheetInput& in = o.input;
   // The volume must still be the one planned: a file replaced since would mix two volumes.
   // Opened once, checked, then seen through the brick's box.

@@ -17,6 +17,7 @@
 #define SHEETMESH_WORKER_PIPELINE_BRICK_BRICKS_H_
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,10 @@ struct BrickGrid {
   Index3 origin{0, 0, 0};
 };
 inline constexpr int64_t kAutoBrickVoxels = int64_t{1} << 27;
+
+// BrickGrid::size from "auto" (every edge chosen), "512" or "512x512x256";
+// kInvalidArgument naming `field` and the text otherwise.
+absl::StatusOr<Index3> ParseBrickSize(const std::string& text, const std::string& field);
 
 struct Brick {
   int index = 0;
@@ -84,11 +89,18 @@ struct BrickResult {
   uint64_t file_bytes = 0;  // of its file
 };
 
+// Where a brick or a merge runs, when not where the plan was made (a service's worker, which
+// sees the volume under its own path and reads it within the job's limits).
+struct BrickSite {
+  std::string volume;                 // the volume's path here ("": the plan's)
+  std::optional<VolumeLimits> limits;  // what its reader may do (unset: the defaults)
+};
+
 // Runs brick `index` of the plan in `plan_dir` and writes its file atomically (a brick killed
 // mid-run leaves none; run again, it writes the same bytes). kInvalidArgument for an index
 // outside the plan (naming it and the count); the reader's errors name the file.
 absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
-                                     const Progress& progress = {});
+                                     const Progress& progress = {}, const BrickSite& site = {});
 
 // Reads brick `index`'s file. kNotFound when it has not run; kInvalidArgument (naming the
 // file) when it is damaged or belongs to another plan.
@@ -110,7 +122,8 @@ struct MergeSummary {
 absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
                                            const std::string& output_dir,
                                            const Progress& progress = {},
-                                           MergeSummary* summary = nullptr);
+                                           MergeSummary* summary = nullptr,
+                                           const BrickSite& site = {});
 
 }  // namespace sheetmesh
 

@@ -205,25 +205,13 @@ absl::Status Convert(const std::vector<std::string>& args, const PipelineOptions
   return RunConvert(args[0], o.input.open, absl::GetFlag(FLAGS_o), format, std::cout);
 }
 
-// "512" or "512x512x256".
-absl::StatusOr<Index3> ParseBrickSize(const std::string& text) {
-  if (text == "auto") return Index3{0, 0, 0};
-  int32_t n = 0;
-  if (absl::SimpleAtoi(text, &n)) return Index3{n, n, n};
-  SM_ASSIGN_OR_RETURN(const Dims d, ParseDims("brick_size", text));
-  if (d.nx > INT32_MAX || d.ny > INT32_MAX || d.nz > INT32_MAX) {
-    return absl::InvalidArgumentError(absl::StrCat("--brick_size=", text, " is too large"));
-  }
-  return Index3{static_cast<int32_t>(d.nx), static_cast<int32_t>(d.ny), static_cast<int32_t>(d.nz)};
-}
-
 absl::Status Plan(const std::vector<std::string>& args, PipelineOptions o) {
   if (args.size() != 1) return Usage("plan VOLUME -o PLAN_DIR [--brick_size=N] [job flags]");
   const std::string dir = absl::GetFlag(FLAGS_o);
   if (dir.empty()) return absl::InvalidArgumentError("plan needs -o PLAN_DIR");
   o.input.path = args[0];
   BrickGrid grid;
-  SM_ASSIGN_OR_RETURN(grid.size, ParseBrickSize(absl::GetFlag(FLAGS_brick_size)));
+  SM_ASSIGN_OR_RETURN(grid.size, ParseBrickSize(absl::GetFlag(FLAGS_brick_size), "--brick_size"));
   const std::vector<std::string> origin = absl::StrSplit(absl::GetFlag(FLAGS_grid_origin), ',');
   if (origin.size() != 3 || !absl::SimpleAtoi(origin[0], &grid.origin.x) ||
       !absl::SimpleAtoi(origin[1], &grid.origin.y) ||

@@ -1,0 +1,44 @@
+// Jobs run as bricks (JobBricks in jobs.proto), the server's side: what a caller sees of a
+// split job while its bricks run, what the worker that merges is handed, and what follows
+// when a brick task ends or the job is cancelled. The store keeps the tasks (JobStore::Split,
+// Tasks); the workers plan, run and merge (worker/runtime/job_runner.h).
+#ifndef SHEETMESH_SERVER_BRICKED_JOBS_H_
+#define SHEETMESH_SERVER_BRICKED_JOBS_H_
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "server/job_events.h"
+#include "server/job_store.h"
+#include "sheetmesh/v1/jobs.pb.h"
+
+namespace sheetmesh::server {
+
+// Whether `job` has been split into brick tasks (it is not one).
+inline bool IsSplit(const v1::Job& job) {
+  return job.bricks().count() > 0 && job.bricks().parent().empty();
+}
+
+// A split job as callers see it: RUNNING while its bricks run (the store keeps it QUEUED,
+// for the merge), and with `tasks` (its tasks as stored, in order) its progress: stage
+// "bricks", the fraction of the bricks' work done, how many ended and succeeded.
+void PresentSplit(v1::Job* job, const std::vector<v1::Job>* tasks);
+
+// A split job just leased, for the merge: its bricks' outputs in bricks.outputs, in the
+// plan's order. When a brick did not succeed the job ends here (FAILED naming the brick and
+// its error, or CANCELLED) and nullopt comes back: lease another.
+absl::StatusOr<std::optional<v1::Job>> PrepareMerge(JobStore& store, v1::Job job,
+                                                    const std::string& worker);
+
+// After a brick task ended (FinishJob, a lost worker): a failed brick cancels its siblings
+// (the job will fail); the job's watchers hear of it.
+void TaskEnded(JobStore& store, JobEvents& events, const v1::Job& task);
+
+// Cancels the tasks of a split job (the job itself is cancelled by the caller).
+absl::Status CancelTasks(JobStore& store, const v1::Job& job);
+
+}  // namespace sheetmesh::server
+
+#endif  // SHEETMESH_SERVER_BRICKED_JOBS_H_

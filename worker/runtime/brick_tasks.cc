@@ -1,0 +1,57 @@
+#include "worker/runtime/brick_tasks.h"
+
+#include "absl/strings/str_cat.h"
+#include "common/status_macros.h"
+#include "worker/pipeline/brick/bricks.h"
+
+namespace sheetmesh::runtime {
+
+std::string TaskPlanDir(const std::string& dir) { return dir + "/plan"; }
+std::string TaskPlanFile(const std::string& dir) { return PlanFile(TaskPlanDir(dir)); }
+std::string TaskBrickFile(const std::string& dir, int index) {
+  return BrickFile(TaskPlanDir(dir), index);
+}
+
+absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
+                                                      PipelineOptions options,
+                                                      const std::string& display,
+                                                      const Progress& progress) {
+  const std::string dir = options.output.dir;
+  if (spec.task == "plan") {
+    BrickGrid grid;
+    SM_ASSIGN_OR_RETURN(grid.size, ParseBrickSize(spec.brick_size, "bricks"));
+    SM_ASSIGN_OR_RETURN(BrickPlan plan, MakeBrickPlan(options, grid));
+    plan.volume = display;  // each worker reads the volume where it sees it
+    SM_RETURN_IF_ERROR(WriteBrickPlan(plan, TaskPlanDir(dir)));
+    return std::vector<std::string>{TaskPlanFile(dir).substr(dir.size() + 1)};
+  }
+  BrickSite site;
+  site.volume = options.input.path;
+  site.limits = options.input.open.limits;
+  if (spec.task == "brick") {
+    SM_RETURN_IF_ERROR(RunBrick(TaskPlanDir(dir), spec.index, progress, site).status());
+    return std::vector<std::string>{TaskBrickFile(dir, spec.index).substr(dir.size() + 1)};
+  }
+  if (spec.task == "merge") {
+    site.volume = display;  // the merge reads no volume: the name is for its messages
+    SM_ASSIGN_OR_RETURN(PipelineReport report,
+                        MergeBricks(TaskPlanDir(dir), dir, progress, nullptr, site));
+    std::vector<std::string> files = report.files;
+    files.push_back("bricks.json");
+    return files;
+  }
+  return absl::InvalidArgumentError(absl::StrCat("'", spec.task, "' is not a brick task"));
+}
+
+absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
+  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(TaskPlanDir(dir)));
+  const int64_t n = static_cast<int64_t>(plan.bricks.size());
+  if (n > max) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("bricks: the plan cuts ", plan.info.dims.ToString(), " into ", n,
+                     " bricks, more than the ", max, " one job may have: ask for larger bricks"));
+  }
+  return static_cast<int>(n);
+}
+
+}  // namespace sheetmesh::runtime

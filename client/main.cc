@@ -44,6 +44,9 @@ ABSL_FLAG(std::string, config, "",
           "flags (--r=5, --extract, --separate_r=6, --labels=255, --dims=64x64x64, ...: "
           "sheetmesh-pipeline params lists them) override it");
 ABSL_FLAG(bool, no_cache, false, "mesh: run even when identical work is done");
+ABSL_FLAG(std::string, bricks, "",
+          "mesh: run the job as bricks of this size (auto, 512, 512x512x256), spread over the "
+          "server's workers; the result is the same");
 ABSL_FLAG(std::string, state, "", "jobs list: only jobs in this state (QUEUED, RUNNING, ...)");
 ABSL_FLAG(int, page_size, 50, "jobs list: jobs per page");
 ABSL_FLAG(bool, all_pages, false, "jobs list: follow every page");
@@ -169,6 +172,7 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
   v1::CreateJobRequest req;
   req.set_request_id(NewRequestId());
   req.set_no_cache(absl::GetFlag(FLAGS_no_cache));
+  req.set_bricks(absl::GetFlag(FLAGS_bricks));
   v1::JobInput& in = *req.mutable_input();
   in.set_file_name(std::filesystem::path(args[0]).filename().string());
   // The user's own volume, a folder of slices or a file.h5:/dataset: a missing one is theirs

@@ -241,7 +241,7 @@ class SheetmeshClient:
     # -- jobs ------------------------------------------------------------------------------
 
     def create_job(self, volume_digest=None, volume_path=None, file_name="", parameters=None,
-                   volume_format=None, request_id=None, no_cache=False, volume_files=None):
+                   volume_format=None, request_id=None, no_cache=False, volume_files=None, bricks=""):
         """Creates a job on an uploaded volume (``volume_digest``), on uploaded files
         (``volume_files``, from upload_volume_files) or on one on the server's storage
         (``volume_path``). ``parameters`` is a PipelineParameters or a dict of its fields,
@@ -261,7 +261,7 @@ class SheetmeshClient:
         else:
             job_input.volume_path = volume_path
         request = jobs_pb2.CreateJobRequest(request_id=request_id or str(uuid.uuid4()), input=job_input,
-                                            parameters=parameters, no_cache=no_cache)
+                                            parameters=parameters, no_cache=no_cache, bricks=bricks)
         return self.jobs.CreateJob(request, metadata=self._metadata)
 
     def get_job(self, name):

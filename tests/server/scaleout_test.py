@@ -137,6 +137,59 @@ class ScaleOutTest(unittest.TestCase):
         watcher.close()
         print("100 jobs SUCCEEDED, %d run again after the kills, %d artifacts digest-checked" % (rerun, checked))
 
+    def test_a_bricked_job_over_postgres_survives_a_killed_worker_and_gives_the_one_process_surface(self):
+        from sheetmesh_client import SheetmeshClient
+        _, a_addr = self.server("a")
+        _, b_addr = self.server("b")
+        client = SheetmeshClient(a_addr)
+        watcher = SheetmeshClient(b_addr)
+        params = {"r": 5, "labels": [255]}
+        one = client.create_job(volume_path=str(self.sample), parameters=params, request_id="one", no_cache=True)
+        bricked = client.create_job(volume_path=str(self.sample), parameters=params, request_id="bricked",
+                                    no_cache=True, bricks="48x40x24")
+        # One worker first: the brick it runs when it is killed is surely its.
+        w1 = self.worker("w1", a_addr)
+        deadline = time.time() + 120
+        while True:
+            self.assertLess(time.time(), deadline, "no brick started")
+            j = watcher.get_job(bricked.name)
+            running = [t for t in j.bricks.tasks if watcher.get_job(t).state == self.pb.RUNNING]
+            if running:
+                break
+            time.sleep(0.05)
+        w1.send_signal(signal.SIGKILL)
+        w1.wait()
+        killed = running[0]
+        # Still RUNNING under the dead worker (not ended between the look and the kill)?
+        interrupted = watcher.get_job(killed).state == self.pb.RUNNING
+        self.worker("w2", a_addr)
+        self.worker("w3", b_addr)
+        messages = []
+        done = watcher.watch(bricked.name, on_update=lambda r: messages.append(r.job.progress.message)
+                             if r.job.progress.stage == "bricks" else None)
+        first = watcher.watch(one.name)
+        self.assertEqual(done.state, self.pb.SUCCEEDED, done.error.message)
+        self.assertEqual(first.state, self.pb.SUCCEEDED, first.error.message)
+        n = done.bricks.count
+        self.assertEqual(n, 3 * 3 * 4)
+        tasks = [watcher.get_job(t) for t in done.bricks.tasks]
+        self.assertTrue(all(t.state == self.pb.SUCCEEDED for t in tasks))
+        self.assertEqual(sorted(t.bricks.index for t in tasks), list(range(n)))
+        # The killed worker's brick ran again, once; no other ran twice.
+        self.assertEqual({t.name: t.attempts for t in tasks if t.attempts > 1},
+                         {killed: 2} if interrupted else {})
+        self.assertTrue(any("bricks done" in m for m in messages), messages)
+        mine = {a.name: a.digest.hash for a in done.artifacts}
+        theirs = {a.name: a.digest.hash for a in first.artifacts}
+        self.assertEqual(mine["surface.ply"], theirs["surface.ply"])
+        self.assertIn("bricks.json", mine)
+        # Bricks are not listed as the tenant's jobs.
+        self.assertEqual(sorted(j.name for j in client.list_jobs()), sorted([one.name, bricked.name]))
+        client.close()
+        watcher.close()
+        print("%d bricks over two servers; the killed worker's brick %s %s; the same surface" %
+              (n, killed, "ran again" if interrupted else "had ended before the kill"))
+
 
 if __name__ == "__main__":
     SERVER_BIN, WORKER_BIN, PIPELINE_BIN = sys.argv[1:4]

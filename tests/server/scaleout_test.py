@@ -3,7 +3,9 @@
 (--local_workers=false) over one PostgreSQL and one blob folder, three sheetmesh-workers;
 100 jobs from 8 client threads across both servers; one worker SIGKILLed and one server
 SIGKILLed (and started again) mid-run. Every job ends SUCCEEDED, none is lost, none runs
-to completion twice, every artifact's digest is right.
+to completion twice, every artifact's digest is right. And one job run as bricks (36 brick
+tasks on the same queue), its only worker SIGKILLed while it runs a brick: the brick runs
+again on the workers started after, once, and the merge gives the one-process surface.
 
     /usr/bin/python3 tests/server/scaleout_test.py SERVER_BIN WORKER_BIN PIPELINE_BIN
 (SHEETMESH_PYTHON_STUBS; SHEETMESH_TEST_POSTGRES_FILE from tools/pg_cluster.sh; exits 77
@@ -165,8 +167,8 @@ class ScaleOutTest(unittest.TestCase):
         self.worker("w2", a_addr)
         self.worker("w3", b_addr)
         messages = []
-        done = watcher.watch(bricked.name, on_update=lambda r: messages.append(r.job.progress.message)
-                             if r.job.progress.stage == "bricks" else None)
+        done = watcher.watch(bricked.name, on_update=lambda job, _: messages.append(job.progress.message)
+                             if job.progress.stage == "bricks" else None)
         first = watcher.watch(one.name)
         self.assertEqual(done.state, self.pb.SUCCEEDED, done.error.message)
         self.assertEqual(first.state, self.pb.SUCCEEDED, first.error.message)

@@ -109,17 +109,18 @@ TEST_F(ServiceTest, BadBrickSizesAreRefusedNamingTheFieldAndWhatBricksCannotRunF
     EXPECT_EQ(job.status().code(), absl::StatusCode::kInvalidArgument) << bad;
     EXPECT_THAT(job.status().message(), HasSubstr("bricks '" + bad + "'"));
   }
-  // Otsu's threshold needs the whole histogram: the plan refuses it, the job fails saying so.
+  // The grey levels' sheet detection looks around each voxel: the plan refuses it, and the
+  // job fails saying so.
   v1::CreateJobRequest r;
-  r.set_request_id("otsu");
+  r.set_request_id("grey");
   r.mutable_input()->set_volume_path(vol);
-  r.mutable_parameters()->set_config_json(R"({"input": {"threshold": "otsu"}})");
+  r.mutable_parameters()->set_config_json(R"({"input": {"grey": true}})");
   r.set_bricks("auto");
   auto job = client_->CreateJob(r);
   ASSERT_TRUE(job.ok()) << job.status();
   const v1::Job end = WaitFinished(job->name());
   EXPECT_EQ(end.state(), v1::FAILED);
-  EXPECT_THAT(end.error().message(), HasSubstr("input.threshold = otsu"));
+  EXPECT_THAT(end.error().message(), HasSubstr("input.grey"));
   EXPECT_EQ(end.bricks().count(), 0) << "never split";
 }
 

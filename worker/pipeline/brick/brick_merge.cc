@@ -101,7 +101,7 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
       }
     }
   }
-  SM_ASSIGN_OR_RETURN(phase.selection, StatedSelection(options.input, &phase.threshold));
+  SM_ASSIGN_OR_RETURN(phase.selection, StatedSelection(options.input, &phase.threshold, plan.otsu));
   SM_RETURN_IF_ERROR(CheckSheetPhase(options.input, phase));
   sum.bricks = static_cast<int>(plan.bricks.size());
   sum.sheet_voxels = phase.sheet.size();

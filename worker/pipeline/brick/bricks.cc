@@ -11,6 +11,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
 namespace {
@@ -98,6 +99,7 @@ std::string BrickPlan::ToJson() const {
   j["unit"] = p.unit;
   j["brick_size"] = {grid.size.x, grid.size.y, grid.size.z};
   j["grid_origin"] = {grid.origin.x, grid.origin.y, grid.origin.z};
+  if (otsu) j["otsu_threshold"] = *otsu;
   j["halo"] = halo;
   j["in_bricks"] = in_bricks;
   nlohmann::json list = nlohmann::json::array();
@@ -177,16 +179,15 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
         "input.grey finds sheets by their neighbourhood in the grey levels, which bricks do not "
         "run yet: run the job in one process");
   }
-  if (options.input.threshold == "otsu") {
-    return absl::InvalidArgumentError(
-        "input.threshold = otsu needs the whole volume's histogram before any brick selects: "
-        "give the threshold's value (sheetmesh-pipeline info VOLUME --threshold=otsu prints "
-        "it)");
-  }
   if (options.input.open.region) {
     return absl::InvalidArgumentError(
         "input.region and bricks both choose what to read: plan the region as its own volume "
         "(sheetmesh-pipeline convert VOLUME --region=... -o REGION.h5)");
+  }
+  if (options.input.threshold == "otsu") {
+    // The whole volume's histogram, before any brick selects: one pass, slab by slab.
+    SM_ASSIGN_OR_RETURN(auto source, OpenVolume(volume, options.input.open));
+    SM_ASSIGN_OR_RETURN(plan.otsu, OtsuThreshold(*source));
   }
   plan.volume = volume;
   PipelineOptions o = options;
@@ -265,6 +266,7 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
     plan.grid.size = {s.at(0).get<int32_t>(), s.at(1).get<int32_t>(), s.at(2).get<int32_t>()};
     const auto& g = j.at("grid_origin");
     plan.grid.origin = {g.at(0).get<int32_t>(), g.at(1).get<int32_t>(), g.at(2).get<int32_t>()};
+    if (j.contains("otsu_threshold")) plan.otsu = j.at("otsu_threshold").get<double>();
     plan.halo = j.at("halo").get<int>();
     plan.in_bricks = j.at("in_bricks").get<std::vector<std::string>>();
     const auto region = [](const nlohmann::json& r) {
@@ -325,7 +327,7 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
         mask, SelectPhase(*msource, in.mask_selection, nullptr, nullptr, progress.Sub(0, 0.5)));
   }
   std::optional<double> threshold;
-  SM_ASSIGN_OR_RETURN(const PhaseSelection selection, StatedSelection(in, &threshold));
+  SM_ASSIGN_OR_RETURN(const PhaseSelection selection, StatedSelection(in, &threshold, plan.otsu));
   SM_ASSIGN_OR_RETURN(VoxelSet local,
                       SelectPhase(*source, selection, mask ? &*mask : nullptr, &out.stats,
                                   mask ? progress.Sub(0.5, 1) : progress));

@@ -55,6 +55,9 @@ struct BrickPlan {
   std::string parameters;  // the job's parameters, canonical JSON (CanonicalParametersJson)
   VolumeInfo info;         // the volume's, as opened
   BrickGrid grid;
+  // With input.threshold = otsu: Otsu's threshold of the whole volume, found by the plan
+  // (one pass over the file, a histogram's memory) so that every brick selects alike.
+  std::optional<double> otsu;
   int halo = 0;                        // voxels around each core a brick reads besides it
   std::vector<std::string> in_bricks;  // the stages bricks run ("read", "select")
   std::vector<Brick> bricks;
@@ -65,8 +68,8 @@ struct BrickPlan {
 
 // The plan of `options`'s job (options.input names the volume) on `grid`. kInvalidArgument
 // naming the field and value for a brick size below 0 or below twice the halo, an origin
-// outside [0, size), options the bricks cannot run (input.grey, a threshold of "otsu": give
-// its value, which `info --threshold=otsu` prints; input.region), and the reader's errors.
+// outside [0, size), options the bricks cannot run (input.grey, input.region), and the
+// reader's errors. A threshold of "otsu" is found here, reading the whole volume once.
 absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const BrickGrid& grid);
 
 // The plan folder's files: plan.json, and bricks/brick_<index>.bin.

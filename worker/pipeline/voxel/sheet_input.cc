@@ -49,15 +49,16 @@ absl::Status CheckOtsuMinority(const SheetInput& input, const SheetPhase& phase)
 }  // namespace
 
 absl::StatusOr<PhaseSelection> StatedSelection(const SheetInput& input,
-                                               std::optional<double>* threshold) {
+                                               std::optional<double>* threshold,
+                                               std::optional<double> otsu) {
   if (input.threshold.empty()) return input.selection;
   SM_ASSIGN_OR_RETURN(const ThresholdSpec spec, ParseThreshold(input.threshold));
-  if (spec.otsu) {
+  if (spec.otsu && !otsu) {
     return absl::InvalidArgumentError(
         "input.threshold = otsu is found on the volume's histogram, not stated: give its value");
   }
-  *threshold = spec.value;
-  return SideOfThreshold(spec.value, input.threshold_above);
+  *threshold = spec.otsu ? *otsu : spec.value;
+  return SideOfThreshold(**threshold, input.threshold_above);
 }
 
 absl::Status CheckSheetPhase(const SheetInput& input, const SheetPhase& phase) {

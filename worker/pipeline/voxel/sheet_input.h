@@ -64,10 +64,11 @@ absl::StatusOr<GreySheetPhase> LoadGreySheetPhase(const SheetInput& input,
 absl::StatusOr<SheetPhase> LoadSheetPhase(const SheetInput& input, const Progress& progress = {});
 
 // The selection `input` states without reading the volume: its labels or window, or the
-// side of a threshold given as a number (then *threshold is it). kInvalidArgument for a
-// threshold that is not a number ("otsu" needs the volume's histogram).
+// side of a threshold given as a number, or of "otsu" when `otsu` (its value, found
+// before) is given (then *threshold is it). kInvalidArgument for "otsu" without it.
 absl::StatusOr<PhaseSelection> StatedSelection(const SheetInput& input,
-                                               std::optional<double>* threshold);
+                                               std::optional<double>* threshold,
+                                               std::optional<double> otsu = std::nullopt);
 
 // The checks LoadSheetPhase makes of what it selected (the errors above): for a phase
 // selected elsewhere (by bricks).

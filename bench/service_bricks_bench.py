@@ -85,8 +85,8 @@ def main(argv):
     build = pathlib.Path(args[0]).resolve()
     sys.path.insert(0, str(ROOT / "client/python"))
     os.environ.setdefault("SHEETMESH_PYTHON_STUBS", str(build / "python"))
+    from sheetmesh_client import SheetmeshClient  # finds the stubs
     from sheetmesh.v1 import jobs_pb2
-    from sheetmesh_client import SheetmeshClient
     workers = [int(w) for w in opts.get("--workers", "1,2,3").split(",")]
     bricks = opts.get("--bricks", "auto")
     results = []

@@ -35,10 +35,10 @@ void PresentSplit(v1::Job* job, const std::vector<v1::Job>* tasks) {
   p.set_stage_index(0);
   p.set_stage_count(0);
   p.set_fraction(tasks->empty() ? 0 : work / static_cast<double>(tasks->size()));
-  p.set_message(ended == b.count()
-                    ? absl::StrCat("all ", b.count(), " bricks done; waiting for a worker to merge")
-                    : absl::StrCat(ended, " of ", b.count(), " bricks done, ", running,
-                                   " running"));
+  p.set_message(
+      ended == b.count()
+          ? absl::StrCat("all ", b.count(), " bricks done; waiting for a worker to merge")
+          : absl::StrCat(ended, " of ", b.count(), " bricks done, ", running, " running"));
 }
 
 absl::StatusOr<std::optional<v1::Job>> PrepareMerge(JobStore& store, v1::Job job,
@@ -50,8 +50,8 @@ absl::StatusOr<std::optional<v1::Job>> PrepareMerge(JobStore& store, v1::Job job
   for (const v1::Job& t : tasks) {
     if (t.state() == v1::SUCCEEDED && t.artifacts_size() == 1) {
       *job.mutable_bricks()->add_outputs() = t.artifacts(0);
-    } else if (failed == nullptr || (failed->state() == v1::CANCELLED &&
-                                     t.state() != v1::CANCELLED)) {
+    } else if (failed == nullptr ||
+               (failed->state() == v1::CANCELLED && t.state() != v1::CANCELLED)) {
       failed = &t;  // the first that failed, else the first cancelled
     }
   }
@@ -68,10 +68,9 @@ absl::StatusOr<std::optional<v1::Job>> PrepareMerge(JobStore& store, v1::Job job
   const v1::JobState state = failed->state() == v1::CANCELLED ? v1::CANCELLED : v1::FAILED;
   e.set_code(failed->error().code() != 0 ? failed->error().code()
                                          : static_cast<int>(absl::StatusCode::kInternal));
-  e.set_message(absl::StrCat("brick ", failed->bricks().index(), " of ", job.bricks().count(),
-                             " (", failed->name(), ") ",
-                             state == v1::CANCELLED ? "was cancelled" : "failed", ": ",
-                             failed->error().message()));
+  e.set_message(absl::StrCat(
+      "brick ", failed->bricks().index(), " of ", job.bricks().count(), " (", failed->name(), ") ",
+      state == v1::CANCELLED ? "was cancelled" : "failed", ": ", failed->error().message()));
   SM_RETURN_IF_ERROR(store.Finish(job.name(), worker, state, e, {}).status());
   return std::optional<v1::Job>();
 }

@@ -36,12 +36,13 @@ class JobStore {
   // The job of `tenant` created with `request_id`, if any.
   virtual absl::StatusOr<std::optional<v1::Job>> FindByRequestId(const std::string& tenant,
                                                                  const std::string& request_id) = 0;
-  // The jobs of `tenant` (not brick tasks), newest first; page_token is opaque ("" = first page). Sets
-  // *next_token ("" = last).
+  // The jobs of `tenant` (not brick tasks), newest first; page_token is opaque ("" = first page).
+  // Sets *next_token ("" = last).
   virtual absl::StatusOr<std::vector<v1::Job>> List(const std::string& tenant, v1::JobState state,
                                                     int page_size, const std::string& page_token,
                                                     std::string* next_token) = 0;
-  // The oldest QUEUED job (a split job only once its tasks have all ended), now RUNNING under `worker` until now + lease; attempts + 1.
+  // The oldest QUEUED job (a split job only once its tasks have all ended), now RUNNING under
+  // `worker` until now + lease; attempts + 1.
   virtual absl::StatusOr<std::optional<v1::Job>> LeaseNext(const std::string& worker,
                                                            absl::Duration lease) = 0;
   // kFailedPrecondition when the job is not RUNNING under `worker`.
@@ -57,8 +58,8 @@ class JobStore {
   // Puts a RUNNING job of `worker` back in the queue, its attempt not counted.
   virtual absl::Status Release(const std::string& name, const std::string& worker) = 0;
   // Splits a job run as bricks, RUNNING under `worker`, into `count` brick tasks
-  // (BrickTasks): stores them QUEUED, records the plan and their names in the job's bricks, and puts the
-  // job back in the queue (its attempt not counted), where LeaseNext passes it by until
+  // (BrickTasks): stores them QUEUED, records the plan and their names in the job's bricks, and
+  // puts the job back in the queue (its attempt not counted), where LeaseNext passes it by until
   // every task has ended. kFailedPrecondition when the job is not RUNNING under `worker`,
   // or is split already; kInvalidArgument for a count outside [1, kMaxBricks].
   virtual absl::StatusOr<v1::Job> Split(const std::string& name, const std::string& worker,

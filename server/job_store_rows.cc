@@ -70,7 +70,7 @@ void ApplyCancelBeforeStart(v1::Job* job, absl::Time now) {
   *job->mutable_end_time() = TimestampOf(now);
   job->mutable_error()->set_code(static_cast<int>(absl::StatusCode::kCancelled));
   job->mutable_error()->set_message(job->bricks().count() > 0 ? "cancelled while its bricks ran"
-                                                               : "cancelled before it started");
+                                                              : "cancelled before it started");
 }
 
 void ApplyLostWorker(v1::Job* job, bool cancel_requested, int max_attempts, bool not_the_jobs_fault,
@@ -134,15 +134,16 @@ void ApplySplit(v1::Job* parent, const v1::Artifact& plan, const std::vector<std
 
 absl::Status CheckSplittable(const v1::Job& job, int count) {
   if (count < 1 || count > kMaxBricks) {
-    return absl::InvalidArgumentError(absl::StrCat("count ", count, " is not a number of bricks (1 to ", kMaxBricks, ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("count ", count, " is not a number of bricks (1 to ", kMaxBricks, ")"));
   }
   if (job.bricks().size().empty() || !job.bricks().parent().empty()) {
     return absl::FailedPreconditionError(
         absl::StrCat(job.name(), " is not a job run as bricks: it cannot be split"));
   }
   if (job.bricks().count() > 0) {
-    return absl::FailedPreconditionError(absl::StrCat(job.name(), " is split already, into ",
-                                                      job.bricks().count(), " bricks"));
+    return absl::FailedPreconditionError(
+        absl::StrCat(job.name(), " is split already, into ", job.bricks().count(), " bricks"));
   }
   return absl::OkStatus();
 }

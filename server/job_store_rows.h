@@ -73,9 +73,7 @@ inline constexpr int kMaxBricks = runtime::kMaxJobBricks;
 absl::Status CheckSplittable(const v1::Job& job, int count);
 
 // Whether a task in `state` keeps its split job waiting (QUEUED or RUNNING).
-inline bool TaskPending(v1::JobState state) {
-  return state == v1::QUEUED || state == v1::RUNNING;
-}
+inline bool TaskPending(v1::JobState state) { return state == v1::QUEUED || state == v1::RUNNING; }
 
 }  // namespace sheetmesh::server
 

@@ -229,9 +229,10 @@ absl::Status LocalJobHost::Split(const std::string& job, const std::string& work
 
 absl::Status LocalJobHost::FetchBlob(const v1::Digest& digest, const std::string& path) {
   SM_ASSIGN_OR_RETURN(const std::string blob, blobs_->PathOf(digest));
-  ::unlink(path.c_str());
-  if (::link(blob.c_str(), path.c_str()) == 0) return absl::OkStatus();
+  // A copy, not a link: the job's child may write in the folder it lies in, and a stored
+  // blob must stay what its digest says.
   std::error_code ec;
+  std::filesystem::remove(path, ec);
   std::filesystem::copy_file(blob, path, ec);
   return ec ? ErrnoStatus(ec.value(), path) : absl::OkStatus();
 }

@@ -269,9 +269,8 @@ class PostgresJobStore : public JobStore {
   absl::StatusOr<std::vector<v1::Job>> Tasks(const std::string& name) override {
     SM_ASSIGN_OR_RETURN(Conn c, pool_->Get());
     SM_RETURN_IF_ERROR(RowOf(c, JobIdOf(name), false).status());
-    SM_ASSIGN_OR_RETURN(
-        PgResult q,
-        c->Query("SELECT job FROM jobs WHERE parent = $1 ORDER BY seq", {P(JobIdOf(name))}));
+    SM_ASSIGN_OR_RETURN(PgResult q, c->Query("SELECT job FROM jobs WHERE parent = $1 ORDER BY seq",
+                                             {P(JobIdOf(name))}));
     std::vector<v1::Job> out;
     for (int i = 0; i < q.rows(); ++i) {
       SM_ASSIGN_OR_RETURN(v1::Job j, ParseStoredJob(q.Bytes(i, 0)));

@@ -184,11 +184,12 @@ absl::Status WorkerServiceImpl::CheckArtifact(const v1::Artifact& a, const std::
   }
   SM_RETURN_IF_ERROR(CheckDigest(a.digest()));
   if (ctx_->tenants->has_worker_tokens()) {
-    SM_ASSIGN_OR_RETURN(const bool owned, ctx_->jobs->OwnsBlob(ArtifactOwner(job), a.digest().hash()));
+    SM_ASSIGN_OR_RETURN(const bool owned,
+                        ctx_->jobs->OwnsBlob(ArtifactOwner(job), a.digest().hash()));
     if (!owned) {
-      return absl::PermissionDeniedError(absl::StrCat("artifact ", a.name(), " (",
-                                                      DigestString(a.digest()),
-                                                      ") was not uploaded for ", job, " by its worker"));
+      return absl::PermissionDeniedError(
+          absl::StrCat("artifact ", a.name(), " (", DigestString(a.digest()),
+                       ") was not uploaded for ", job, " by its worker"));
     }
   }
   if (!ctx_->blobs->Contains(a.digest())) {

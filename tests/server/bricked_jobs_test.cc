@@ -92,8 +92,7 @@ TEST_F(ServiceTest, ABrickedJobRunsAsBrickTasksAndGivesTheOneProcessSurface) {
   EXPECT_THAT(alone.error_message(), HasSubstr("brick 0 of " + done->name()));
   del.set_name(done->name());
   ASSERT_TRUE(client_->jobs()->DeleteJob(client_->Context().get(), del, &deleted).ok());
-  EXPECT_EQ(client_->GetJob(done->bricks().tasks(0)).status().code(),
-            absl::StatusCode::kNotFound);
+  EXPECT_EQ(client_->GetJob(done->bricks().tasks(0)).status().code(), absl::StatusCode::kNotFound);
 }
 
 TEST_F(ServiceTest, BadBrickSizesAreRefusedNamingTheFieldAndWhatBricksCannotRunFailsTheJob) {
@@ -227,8 +226,8 @@ TEST_F(BrickProtocolTest, AFailedBrickStopsItsSiblingsAndFailsTheJobNamingIt) {
   EXPECT_EQ(seen->progress().message(), "0 of 3 bricks done, 0 running");
   std::vector<std::string> tasks;
   for (const char* w : {"a", "b", "c"}) tasks.push_back(Lease(w).name());
-  EXPECT_EQ(tasks, std::vector<std::string>(split.bricks().tasks().begin(),
-                                            split.bricks().tasks().end()));
+  EXPECT_EQ(tasks,
+            std::vector<std::string>(split.bricks().tasks().begin(), split.bricks().tasks().end()));
   EXPECT_EQ(client_->GetJob(job)->progress().message(), "0 of 3 bricks done, 3 running");
   ASSERT_TRUE(End(tasks[0], "a", v1::SUCCEEDED).ok());
   ASSERT_TRUE(End(tasks[1], "b", v1::FAILED, "the volume changed").ok());

@@ -372,8 +372,8 @@ TEST_P(JobStoreConformanceTest, ASplitJobWaitsForItsBricksThenComesBackToBeMerge
   // The older job first, then the bricks in order; the split job waits for them.
   std::vector<std::string> leased;
   for (int i = 0; i < 4; ++i) {
-    auto n = store_->LeaseNext(absl::StrCat("w", i), i == 3 ? absl::Milliseconds(1)
-                                                            : absl::Seconds(30));
+    auto n =
+        store_->LeaseNext(absl::StrCat("w", i), i == 3 ? absl::Milliseconds(1) : absl::Seconds(30));
     ASSERT_TRUE(n.ok() && n->has_value());
     leased.push_back((*n)->name());
   }

@@ -34,12 +34,15 @@ export function progressBar(fraction, label, state = "") {
 export function jobFraction(j) {
   if (j.state === "SUCCEEDED") return 1;
   const p = j.progress || {};
+  // A job run as bricks, while they run: the share of their work done.
+  if (p.stage === "bricks") return Math.min(1, p.fraction || 0);
   if (!p.stage_count) return 0;
   return Math.min(1, ((p.stage_index || 1) - 1 + (p.fraction || 0)) / p.stage_count);
 }
 
 export function jobLabel(j) {
   const p = j.progress || {};
+  if (j.state === "RUNNING" && p.stage === "bricks") return `RUNNING ${p.message || "bricks"}`;
   if (j.state === "RUNNING") return `RUNNING ${p.stage || ""} ${Math.round(100 * jobFraction(j))}%`;
   return j.state;
 }

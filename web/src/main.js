@@ -28,6 +28,8 @@ function parametersForm() {
     el("label", {}, el("input", { id: "extract", type: "checkbox", checked: defaults.extract }), " extraction"),
     el("label", {}, el("input", { id: "volume_mesh", type: "checkbox", checked: defaults.volume_mesh }),
       " volume mesh"),
+    el("label", { title: "a volume too big for one process: cut into bricks of this size (auto, 512, 512x512x256) that the server's workers read at once; the result is the same" },
+      "Bricks ", el("input", { id: "bricks", value: "", size: 10, placeholder: "one process" })),
     el("label", {}, el("input", { id: "no_cache", type: "checkbox" }), " run again (no cache)"));
 }
 
@@ -62,6 +64,7 @@ async function startJob() {
       input: { volume_digest: { hash: digest.hash, size_bytes: digest.size_bytes }, file_name: chosenFile.name },
       parameters: readParameters(),
       no_cache: document.getElementById("no_cache").checked,
+      bricks: document.getElementById("bricks").value.trim(),
     });
     location.hash = `#/${job.name}`;
   } catch (e) {

@@ -129,6 +129,9 @@ async function main() {
   await page.selectOption("#budget", "r");
   await page.fill("#budget_value", "7");
   await page.fill("#labels", "255");
+  // Run as bricks: the service's workers read them at once, and every result below is the
+  // one process's.
+  await page.fill("#bricks", "64");
   await page.screenshot({ path: path.join(outDir, "jobs_page.png"), fullPage: true });
   await page.click("#start");
   await page.waitForFunction(() => location.hash.startsWith("#/jobs/") || !document.getElementById("error").hidden,
@@ -144,6 +147,8 @@ async function main() {
 
   const job = await (await api(`/v1/${name}`)).json();
   check(job.state === "SUCCEEDED", "the job SUCCEEDED");
+  check(job.bricks && job.bricks.count === 8 && job.bricks.tasks.length === 8,
+    `the job ran as 8 bricks (${JSON.stringify(job.bricks && job.bricks.count)})`);
   const rep = job.artifacts.find((a) => a.name === "report.json");
   const report = await (await api(`/v1/${name}/artifacts/report.json`)).json();
   await page.waitForSelector("#numbers");

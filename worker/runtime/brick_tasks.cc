@@ -1,5 +1,7 @@
 #include "worker/runtime/brick_tasks.h"
 
+#include <filesystem>
+
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/brick/bricks.h"
@@ -34,6 +36,7 @@ absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
   }
   if (spec.task == "merge") {
     site.volume = display;  // the merge reads no volume: the name is for its messages
+    site.plan_name = "plan.json (the job's bricks.plan)";
     SM_ASSIGN_OR_RETURN(PipelineReport report,
                         MergeBricks(TaskPlanDir(dir), dir, progress, nullptr, site));
     std::vector<std::string> files = report.files;
@@ -44,6 +47,17 @@ absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
 }
 
 absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
+  // The plan was written by the job's child, which read the volume: read back in this
+  // process, it may hold at most what `max` bricks take.
+  std::error_code ec;
+  const uintmax_t bytes = std::filesystem::file_size(TaskPlanFile(dir), ec);
+  const uintmax_t most = 4096 + uintmax_t{1024} * static_cast<uintmax_t>(max);
+  if (ec || bytes > most) {
+    return absl::InternalError(absl::StrCat(
+        "the job's plan (plan.json) ",
+        ec ? ec.message()
+           : absl::StrCat("holds ", bytes, " bytes, more than ", most, " for ", max, " bricks")));
+  }
   SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(TaskPlanDir(dir)));
   const int64_t n = static_cast<int64_t>(plan.bricks.size());
   if (n > max) {

@@ -197,8 +197,8 @@ JobOutcome RunTask(const v1::Job& job, const std::string& worker, JobHost& host,
     SM_RETURN_IF_ERROR(RunOutputs(job, worker, host, run, dir, task).status());
     const bool plan = task.task == "plan";
     const std::string path = plan ? TaskPlanFile(dir) : TaskBrickFile(dir, task.index);
-    SM_ASSIGN_OR_RETURN(v1::Artifact a, host.PutArtifact(job.name(), worker, path,
-                                                         MediaTypeOf(path)));
+    SM_ASSIGN_OR_RETURN(v1::Artifact a,
+                        host.PutArtifact(job.name(), worker, path, MediaTypeOf(path)));
     a.set_name(plan ? "plan.json" : absl::StrCat("brick_", task.index, ".bin"));
     if (!plan) {
       outcome.artifacts.push_back(std::move(a));
@@ -230,7 +230,8 @@ JobOutcome RunJob(const v1::Job& job, const std::string& worker, JobHost& host,
   } cleanup{dir};
   JobOutcome outcome;
   const BrickTaskSpec task = TaskOf(job);
-  if (task.task == "plan" || task.task == "brick") return RunTask(job, worker, host, run, dir, task);
+  if (task.task == "plan" || task.task == "brick")
+    return RunTask(job, worker, host, run, dir, task);
   // The merge's bricks first.
   const absl::Status fetched =
       task.task == "merge" ? FetchPlan(job, host, dir, task) : absl::OkStatus();

@@ -111,7 +111,8 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
                       RunPipelineOnPhase(options, std::move(phase), progress));
   if (!output_dir.empty()) {
     nlohmann::json j = {
-        {"plan", std::filesystem::absolute(PlanFile(plan_dir)).string()},
+        {"plan", site.plan_name.empty() ? std::filesystem::absolute(PlanFile(plan_dir)).string()
+                                        : site.plan_name},
         {"bricks", sum.bricks},
         {"brick_size", {plan.grid.size.x, plan.grid.size.y, plan.grid.size.z}},
         {"grid_origin", {plan.grid.origin.x, plan.grid.origin.y, plan.grid.origin.z}},

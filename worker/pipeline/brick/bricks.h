@@ -95,8 +95,9 @@ struct BrickResult {
 // Where a brick or a merge runs, when not where the plan was made (a service's worker, which
 // sees the volume under its own path and reads it within the job's limits).
 struct BrickSite {
-  std::string volume;                 // the volume's path here ("": the plan's)
+  std::string volume;                  // the volume's path here ("": the plan's)
   std::optional<VolumeLimits> limits;  // what its reader may do (unset: the defaults)
+  std::string plan_name;               // the plan in bricks.json ("": its absolute path)
 };
 
 // Runs brick `index` of the plan in `plan_dir` and writes its file atomically (a brick killed

@@ -132,6 +132,8 @@ void ApplySplit(v1::Job* parent, const v1::Artifact& plan, const std::vector<std
   p.set_message(absl::StrCat("0 of ", names.size(), " bricks done"));
 }
 
+void ApplyMerged(v1::Job* task) { task->clear_artifacts(); }
+
 absl::Status CheckSplittable(const v1::Job& job, int count) {
   if (count < 1 || count > kMaxBricks) {
     return absl::InvalidArgumentError(

@@ -72,6 +72,13 @@ inline constexpr int kMaxBricks = runtime::kMaxJobBricks;
 // plan yet); kInvalidArgument for a count outside [1, kMaxBricks].
 absl::Status CheckSplittable(const v1::Job& job, int count);
 
+// Whether `job`, just finished, is a split job merged: its bricks' outputs are of no more
+// use, and its tasks drop them (ApplyMerged), so that the blob store may let them go.
+inline bool MergedSplitJob(const v1::Job& job) {
+  return job.state() == v1::SUCCEEDED && job.bricks().count() > 0 && job.bricks().parent().empty();
+}
+void ApplyMerged(v1::Job* task);
+
 // Whether a task in `state` keeps its split job waiting (QUEUED or RUNNING).
 inline bool TaskPending(v1::JobState state) { return state == v1::QUEUED || state == v1::RUNNING; }
 

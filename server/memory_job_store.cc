@@ -174,6 +174,13 @@ class MemoryJobStore : public JobStore {
     SM_ASSIGN_OR_RETURN(row, RunningLocked(name, worker));
     ApplyFinish(&row->job, state, error, artifacts, clock_());
     row->owner.clear();
+    if (MergedSplitJob(row->job)) {
+      for (const std::string& task : row->job.bricks().tasks()) {
+        if (auto it = t_->jobs.find(JobIdOf(task)); it != t_->jobs.end()) {
+          ApplyMerged(&it->second.job);
+        }
+      }
+    }
     return row->job;
   }
 

@@ -209,6 +209,7 @@ class PostgresJobStore : public JobStore {
       ApplyFinish(&job, state, error, artifacts);
       SM_RETURN_IF_ERROR(SetState(c, JobIdOf(name), job));
       SM_RETURN_IF_ERROR(AddJobBlobs(c, JobIdOf(name), job));
+      if (MergedSplitJob(job)) SM_RETURN_IF_ERROR(DropTaskOutputs(c, JobIdOf(name)));
       out = job;
       return absl::OkStatus();
     }));
@@ -433,6 +434,22 @@ class PostgresJobStore : public JobStore {
             "UPDATE jobs SET state = $1, lease_owner = NULL, lease_expires = NULL, job = $2 "
             "WHERE id = $3",
             {P(int64_t{job.state()}), J(job), P(id)})
+        .status();
+  }
+
+  // The tasks of the merged job `id` drop their outputs (their input and plan are the job's).
+  static absl::Status DropTaskOutputs(Conn& c, const std::string& id) {
+    SM_ASSIGN_OR_RETURN(PgResult q,
+                        c->Query("SELECT id, job FROM jobs WHERE parent = $1 FOR UPDATE", {P(id)}));
+    for (int i = 0; i < q.rows(); ++i) {
+      SM_ASSIGN_OR_RETURN(v1::Job task, ParseStoredJob(q.Bytes(i, 1)));
+      ApplyMerged(&task);
+      SM_RETURN_IF_ERROR(
+          c->Query("UPDATE jobs SET job = $1 WHERE id = $2", {J(task), P(q.Text(i, 0))}).status());
+    }
+    return c
+        ->Query("DELETE FROM job_blobs WHERE job_id IN (SELECT id FROM jobs WHERE parent = $1)",
+                {P(id)})
         .status();
   }
 

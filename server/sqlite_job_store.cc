@@ -285,6 +285,7 @@ class SqliteJobStore : public JobStore {
     SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
     absl::Status st = u.Run();
     if (st.ok()) st = AddJobBlobsLocked(JobIdOf(name), job);
+    if (st.ok() && MergedSplitJob(job)) st = DropTaskOutputsLocked(JobIdOf(name));
     if (!st.ok()) {
       Exec("ROLLBACK").IgnoreError();
       return st;
@@ -520,6 +521,28 @@ class SqliteJobStore : public JobStore {
   }
 
   static absl::StatusOr<v1::Job> Parse(const std::string& blob) { return ParseStoredJob(blob); }
+
+  // The tasks of the merged job `id` drop their outputs (their input and plan are the job's).
+  absl::Status DropTaskOutputsLocked(const std::string& id) {
+    std::vector<std::pair<std::string, v1::Job>> tasks;
+    {
+      Stmt q(db_, "SELECT id, job FROM jobs WHERE parent = ?");
+      SM_RETURN_IF_ERROR(q.ok());
+      q.Bind(1, id);
+      while (q.Step() == SQLITE_ROW) {
+        SM_ASSIGN_OR_RETURN(v1::Job t, Parse(q.Blob(1)));
+        tasks.emplace_back(q.Text(0), std::move(t));
+      }
+    }
+    for (auto& [task_id, task] : tasks) {
+      ApplyMerged(&task);
+      SM_RETURN_IF_ERROR(WriteJobLocked(task_id, task));
+    }
+    Stmt d(db_, "DELETE FROM job_blobs WHERE job_id IN (SELECT id FROM jobs WHERE parent = ?)");
+    SM_RETURN_IF_ERROR(d.ok());
+    d.Bind(1, id);
+    return d.Run();
+  }
 
   absl::StatusOr<Row> RowLocked(const std::string& id) {
     Stmt q(db_, "SELECT job, lease_owner FROM jobs WHERE id = ?");

@@ -399,7 +399,13 @@ TEST_P(JobStoreConformanceTest, ASplitJobWaitsForItsBricksThenComesBackToBeMerge
   EXPECT_EQ((*merge)->name(), job);
   EXPECT_EQ((*merge)->attempts(), 1);
   EXPECT_EQ((*merge)->bricks().count(), 3);
+  EXPECT_TRUE(store_->ReferencedBlobs()->count(std::string(64, 'c'))) << "to be merged";
   ASSERT_TRUE(store_->Finish(job, "w5", v1::SUCCEEDED, {}, {}).ok());
+  // Merged: the bricks' outputs are let go (the tasks stay, without them).
+  EXPECT_FALSE(store_->ReferencedBlobs()->count(std::string(64, 'c')));
+  EXPECT_EQ(store_->Get(leased[1])->artifacts_size(), 0);
+  EXPECT_EQ(store_->Get(leased[1])->state(), v1::SUCCEEDED);
+  EXPECT_TRUE(store_->ReferencedBlobs()->count(std::string(64, 'p'))) << "the job's plan stays";
   // Deleting the job deletes its bricks; a brick alone is not deleted by the store's caller
   // (the service refuses it), but the store takes them with their job.
   ASSERT_TRUE(store_->Delete(job).ok());

@@ -8,8 +8,9 @@
 namespace sheetmesh::server {
 
 void PresentSplit(v1::Job* job, const std::vector<v1::Job>* tasks) {
-  if (!IsSplit(*job) || job->state() != v1::QUEUED) return;
-  job->set_state(v1::RUNNING);
+  if (!IsSplit(*job)) return;
+  const bool live = job->state() == v1::QUEUED;  // stored QUEUED, for its merge
+  if (live) job->set_state(v1::RUNNING);
   if (tasks == nullptr) return;
   int ended = 0, succeeded = 0, running = 0;
   double work = 0;
@@ -30,6 +31,7 @@ void PresentSplit(v1::Job* job, const std::vector<v1::Job>* tasks) {
   v1::JobBricks& b = *job->mutable_bricks();
   b.set_ended(ended);
   b.set_succeeded(succeeded);
+  if (!live) return;
   v1::JobProgress& p = *job->mutable_progress();
   p.set_stage("bricks");
   p.set_stage_index(0);

@@ -22,8 +22,8 @@ inline bool IsSplit(const v1::Job& job) {
 }
 
 // A split job as callers see it: RUNNING while its bricks run (the store keeps it QUEUED,
-// for the merge), and with `tasks` (its tasks as stored, in order) its progress: stage
-// "bricks", the fraction of the bricks' work done, how many ended and succeeded.
+// for the merge); with `tasks` (its tasks as stored, in order) how many ended and
+// succeeded, and while they run its progress: stage "bricks", the fraction of their work.
 void PresentSplit(v1::Job* job, const std::vector<v1::Job>* tasks);
 
 // A split job just leased, for the merge: its bricks' outputs in bricks.outputs, in the

@@ -80,6 +80,7 @@ class JobStore {
                                              bool not_the_jobs_fault = false) = 0;
   // A SUCCEEDED job with this cache key.
   virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
+  // The jobs in `state`, brick tasks not counted (a job's bricks are one job's work).
   virtual absl::StatusOr<int64_t> CountInState(v1::JobState state) = 0;
 
   // Records that `tenant` uploaded the blob `hash`.

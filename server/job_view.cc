@@ -15,8 +15,8 @@ absl::StatusOr<v1::Job> FreshJob(const ServiceContext& ctx, const std::string& t
   if (job.state() == v1::RUNNING) {
     if (auto p = ctx.host->Progress(job.name())) *job.mutable_progress() = *p;
   }
-  if (IsSplit(job) && job.state() == v1::QUEUED) {
-    // Its bricks run: their progress is the job's (a brick still running here, fresher).
+  if (IsSplit(job)) {
+    // Its bricks: their progress is the job's while they run (a brick running here, fresher).
     SM_ASSIGN_OR_RETURN(std::vector<v1::Job> tasks, ctx.jobs->Tasks(job.name()));
     for (v1::Job& t : tasks) {
       if (t.state() != v1::RUNNING) continue;

@@ -291,8 +291,9 @@ class MemoryJobStore : public JobStore {
 
   absl::StatusOr<int64_t> CountInState(v1::JobState state) override {
     std::lock_guard<std::mutex> lock(t_->mu);
-    return std::count_if(t_->jobs.begin(), t_->jobs.end(),
-                         [&](const auto& j) { return j.second.job.state() == state; });
+    return std::count_if(t_->jobs.begin(), t_->jobs.end(), [&](const auto& j) {
+      return j.second.job.state() == state && j.second.job.bricks().parent().empty();
+    });
   }
 
   absl::Status AddUploadedBlob(const std::string& tenant, const std::string& hash) override {

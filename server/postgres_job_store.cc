@@ -362,8 +362,9 @@ class PostgresJobStore : public JobStore {
 
   absl::StatusOr<int64_t> CountInState(v1::JobState state) override {
     SM_ASSIGN_OR_RETURN(Conn c, pool_->Get());
-    SM_ASSIGN_OR_RETURN(
-        PgResult q, c->Query("SELECT COUNT(*) FROM jobs WHERE state = $1", {P(int64_t{state})}));
+    SM_ASSIGN_OR_RETURN(PgResult q,
+                        c->Query("SELECT COUNT(*) FROM jobs WHERE state = $1 AND parent IS NULL",
+                                 {P(int64_t{state})}));
     return q.Int(0, 0);
   }
 

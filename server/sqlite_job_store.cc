@@ -460,7 +460,7 @@ class SqliteJobStore : public JobStore {
 
   absl::StatusOr<int64_t> CountInState(v1::JobState state) override {
     std::lock_guard<std::mutex> lock(mu_);
-    Stmt q(db_, "SELECT COUNT(*) FROM jobs WHERE state = ?");
+    Stmt q(db_, "SELECT COUNT(*) FROM jobs WHERE state = ? AND parent IS NULL");
     SM_RETURN_IF_ERROR(q.ok());
     q.Bind(1, int64_t{state});
     return q.Step() == SQLITE_ROW ? q.Int(0) : 0;

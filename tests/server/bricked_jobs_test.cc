@@ -71,6 +71,7 @@ TEST_F(ServiceTest, ABrickedJobRunsAsBrickTasksAndGivesTheOneProcessSurface) {
   // the jobs.
   ASSERT_EQ(done->bricks().count(), 18);
   ASSERT_EQ(done->bricks().tasks_size(), 18);
+  EXPECT_EQ(client_->GetJob(done->name())->bricks().succeeded(), 18);
   for (int i = 0; i < 18; ++i) {
     auto t = client_->GetJob(done->bricks().tasks(i));
     ASSERT_TRUE(t.ok()) << t.status();

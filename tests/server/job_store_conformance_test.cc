@@ -365,6 +365,7 @@ TEST_P(JobStoreConformanceTest, ASplitJobWaitsForItsBricksThenComesBackToBeMerge
     EXPECT_EQ(t.state(), v1::QUEUED);
   }
   EXPECT_TRUE(store_->Tasks(other)->empty());
+  EXPECT_EQ(*store_->CountInState(v1::QUEUED), 2) << "the job and the other; not its bricks";
   EXPECT_TRUE(store_->ReferencedBlobs()->count(std::string(64, 'p'))) << "the plan is kept";
   std::string next;
   EXPECT_EQ(store_->List("default", v1::JOB_STATE_UNSPECIFIED, 10, "", &next)->size(), 2u)

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """sheetmesh-worker processes against a real sheetmesh-server (no workers of its own) on
-loopback: uploaded and shared-storage volumes run remotely with their progress streamed,
+loopback: uploaded and shared-storage volumes run remotely with their progress streamed
+(a job run as bricks on an upload reads one copy of it per worker),
 artifacts come back digest-checked, a cancel stops a remote job, a SIGKILLed worker's job
 runs again elsewhere, a draining worker gives its job back, and wrong tokens or a finish
 without the lease are refused.
@@ -118,6 +119,31 @@ class RemoteWorkersTest(unittest.TestCase):
                 out = self.tmp / "download.bin"
                 self.client.download(a.digest, str(out))
                 self.assertEqual(hashlib.sha256(out.read_bytes()).hexdigest(), a.digest.hash, a.name)
+
+    def test_a_bricked_job_on_an_upload_reads_one_copy_per_worker(self):
+        digest = self.client.upload(str(self.sample))
+        params = {"r": 5, "labels": [255]}
+        one = self.client.create_job(volume_digest=digest, file_name=self.sample.name, parameters=params,
+                                     no_cache=True)
+        bricked = self.client.create_job(volume_digest=digest, file_name=self.sample.name, parameters=params,
+                                         no_cache=True, bricks="64x56x48")
+        done = self.client.watch(bricked.name)
+        first = self.client.watch(one.name)
+        self.assertEqual(done.state, self.pb.SUCCEEDED, done.error.message)
+        self.assertEqual(done.bricks.count, 8)
+        same = {a.name: a.digest.hash for a in done.artifacts}["surface.ply"]
+        self.assertEqual(same, {a.name: a.digest.hash for a in first.artifacts}["surface.ply"])
+        # Each worker kept one copy of the upload, under its digest, for all the bricks it ran;
+        # no job's input folder is left behind.
+        kept = 0
+        for name in ("w1", "w2"):
+            scratch = self.tmp / ("scratch-" + name)
+            cached = sorted(p.name for p in (scratch / "cache").iterdir()) if (scratch / "cache").exists() else []
+            self.assertIn(cached, ([], [digest.hash]))
+            kept += len(cached)
+            inputs = scratch / "inputs"
+            self.assertEqual(list(inputs.iterdir()) if inputs.exists() else [], [])
+        self.assertGreaterEqual(kept, 1, "no worker kept the upload for its next brick")
 
     def test_a_files_of_one_volume_are_laid_out_on_the_worker(self):
         # A folder of TIFF slices and a detached NRRD header with its data file, uploaded

@@ -28,7 +28,9 @@ ABSL_FLAG(std::string, token_file, "",
           "file with the server's worker token (--worker_token_file there)");
 ABSL_FLAG(bool, tls, false, "TLS to the server (system roots, or --tls_root_cert)");
 ABSL_FLAG(std::string, tls_root_cert, "", "PEM roots to trust for the server");
-ABSL_FLAG(std::string, scratch_dir, "", "where inputs and outputs of running jobs go (required)");
+ABSL_FLAG(std::string, scratch_dir, "",
+          "where inputs and outputs of running jobs go (required); the last uploaded volume "
+          "stays in DIR/cache for the next brick of its job");
 ABSL_FLAG(std::string, allowed_root, "",
           "shared storage jobs may name by path, comma-separated (none: only uploaded volumes)");
 ABSL_FLAG(int, workers, 1, "jobs run at once");

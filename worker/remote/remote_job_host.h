@@ -66,6 +66,15 @@ class RemoteJobHost : public runtime::JobHost {
     int stage = 0;
   };
   std::map<std::string, Live> live_;
+
+  // Uploaded volumes, downloaded once into scratch_dir/cache/<hash> (the download checks the
+  // digest) and linked into each job's input folder: the brick tasks of one job, run one
+  // after another here, read one copy. A volume no job uses stays until another replaces it.
+  absl::StatusOr<std::string> CachedBlob(const std::string& job, const v1::Digest& digest);
+  void ReleaseBlob(const std::string& job);
+  std::map<std::string, int> blob_users_;        // hash -> jobs using it
+  std::map<std::string, std::string> job_blob_;  // job -> the hash it uses
+  std::string idle_blob_;                        // the hash kept with no job using it
 };
 
 }  // namespace sheetmesh::remote

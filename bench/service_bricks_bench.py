@@ -8,7 +8,9 @@ from /proc while it runs: VmHWM), the bytes the bricks stored, and whether the t
 surface.ply are the same bytes. `cat` of the file in the same run gives the scale.
 
 Usage: /usr/bin/python3 bench/service_bricks_bench.py BUILD VOLUME... [--bricks=auto]
-       [--workers=1,2,3] [--json=FILE] [-- parameters as JSON]
+       [--workers=1,2,3] [--upload] [--json=FILE] [-- parameters as JSON]
+With --upload the volume is uploaded and the workers read it from the server (each keeps
+one copy for the bricks it runs) instead of naming it on the shared root.
 Default parameters: {"labels": [255], "r": 15, "output_previews": false,
                      "similarity_hausdorff": false}
 """
@@ -70,9 +72,13 @@ def bricks_json(client, job, tmp):
     return json.load(open(tmp / "bricks.json"))
 
 
-def run_job(client, jobs_pb2, vol, params, bricks=""):
+def run_job(client, jobs_pb2, vol, params, bricks="", digest=None):
     t = time.monotonic()
-    job = client.create_job(volume_path=str(vol), parameters=params, no_cache=True, bricks=bricks)
+    if digest is not None:
+        job = client.create_job(volume_digest=digest, file_name=vol.name, parameters=params, no_cache=True,
+                                bricks=bricks)
+    else:
+        job = client.create_job(volume_path=str(vol), parameters=params, no_cache=True, bricks=bricks)
     done = client.watch(job.name)
     if done.state != jobs_pb2.SUCCEEDED:
         raise RuntimeError("%s: %s" % (job.name, done.error.message))
@@ -108,8 +114,10 @@ def main(argv):
             peaks = ChildPeaks()
             try:
                 client = SheetmeshClient(stack.address)
-                one, one_s = run_job(client, jobs_pb2, vol, params)
-                split, split_s = run_job(client, jobs_pb2, vol, params, bricks)
+                # --upload: the volume uploaded, each worker reading it from the server.
+                digest = client.upload(str(vol)) if "--upload" in opts else None
+                one, one_s = run_job(client, jobs_pb2, vol, params, digest=digest)
+                split, split_s = run_job(client, jobs_pb2, vol, params, bricks, digest)
                 tasks = [client.get_job(t) for t in split.bricks.tasks]
                 starts = [t.start_time for t in tasks]
                 ends = [t.end_time for t in tasks]
@@ -118,6 +126,7 @@ def main(argv):
                 brick_s = sorted(seconds(t.start_time, t.end_time) for t in tasks)
                 r = {
                     "volume": vol.name, "voxels": vol.stat().st_size, "workers": n, "bricks": len(tasks),
+                    "input": "upload" if digest is not None else "path",
                     "brick_size": bricks, "cat_s": round(cat, 2), "one_process_s": round(one_s, 1),
                     "bricked_s": round(split_s, 1),
                     "plan_s": round(seconds(split.create_time, first), 2),

@@ -15,6 +15,7 @@
 #include "common/status_macros.h"
 #include "server/job_store.h"
 #include "server/job_store_rows.h"
+#include "server/sqlite_job_schema.h"
 #include "server/sqlite_util.h"
 
 namespace sheetmesh::server {
@@ -28,76 +29,8 @@ class SqliteJobStore : public JobStore {
       : db_(db), rng_(static_cast<uint64_t>(absl::GetCurrentTimeNanos())) {}
   ~SqliteJobStore() override { sqlite3_close(db_); }
 
-  absl::Status Init() {
-    for (const char* sql : {
-             "PRAGMA journal_mode=WAL",
-             "PRAGMA synchronous=FULL",
-             "PRAGMA busy_timeout=5000",
-             "CREATE TABLE IF NOT EXISTS jobs ("
-             "  id TEXT PRIMARY KEY, seq INTEGER NOT NULL, request_id TEXT UNIQUE NOT NULL,"
-             "  state INTEGER NOT NULL, lease_owner TEXT, lease_expires INTEGER,"
-             "  cancel_requested INTEGER NOT NULL DEFAULT 0, cache_key TEXT, job BLOB NOT NULL,"
-             "  tenant TEXT NOT NULL DEFAULT 'default')",
-             "CREATE INDEX IF NOT EXISTS jobs_state_seq ON jobs(state, seq)",
-             "CREATE INDEX IF NOT EXISTS jobs_cache ON jobs(cache_key, state)",
-             "CREATE TABLE IF NOT EXISTS blob_owners ("
-             "  tenant TEXT NOT NULL, hash TEXT NOT NULL, PRIMARY KEY (tenant, hash))",
-         }) {
-      SM_RETURN_IF_ERROR(Exec(sql));
-    }
-    return Migrate();
-  }
-
-  // Stores written before tenants: add the tenant column (their jobs are the default
-  // tenant's) and fill job_blobs from the jobs.
-  absl::Status Migrate() {
-    bool has_tenant = false;
-    {
-      Stmt q(db_, "PRAGMA table_info(jobs)");
-      SM_RETURN_IF_ERROR(q.ok());
-      while (q.Step() == SQLITE_ROW) has_tenant |= q.Text(1) == "tenant";
-    }
-    if (!has_tenant) {
-      SM_RETURN_IF_ERROR(
-          Exec("ALTER TABLE jobs ADD COLUMN tenant TEXT NOT NULL DEFAULT 'default'"));
-    }
-    SM_RETURN_IF_ERROR(Exec("CREATE INDEX IF NOT EXISTS jobs_tenant_seq ON jobs(tenant, seq)"));
-    // Stores written before bricks: the column naming a brick task's job.
-    bool has_parent = false;
-    {
-      Stmt q(db_, "PRAGMA table_info(jobs)");
-      SM_RETURN_IF_ERROR(q.ok());
-      while (q.Step() == SQLITE_ROW) has_parent |= q.Text(1) == "parent";
-    }
-    if (!has_parent) SM_RETURN_IF_ERROR(Exec("ALTER TABLE jobs ADD COLUMN parent TEXT"));
-    SM_RETURN_IF_ERROR(Exec("CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent, state)"));
-    bool has_job_blobs = false;
-    {
-      Stmt q(db_, "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'job_blobs'");
-      SM_RETURN_IF_ERROR(q.ok());
-      has_job_blobs = q.Step() == SQLITE_ROW;
-    }
-    if (has_job_blobs) return absl::OkStatus();
-    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
-    absl::Status st = [&]() -> absl::Status {
-      SM_RETURN_IF_ERROR(
-          Exec("CREATE TABLE job_blobs (job_id TEXT NOT NULL, hash TEXT NOT NULL,"
-               "  PRIMARY KEY (job_id, hash))"));
-      SM_RETURN_IF_ERROR(Exec("CREATE INDEX job_blobs_hash ON job_blobs(hash)"));
-      Stmt q(db_, "SELECT id, job FROM jobs");
-      SM_RETURN_IF_ERROR(q.ok());
-      while (q.Step() == SQLITE_ROW) {
-        SM_ASSIGN_OR_RETURN(v1::Job j, Parse(q.Blob(1)));
-        SM_RETURN_IF_ERROR(AddJobBlobsLocked(q.Text(0), j));
-      }
-      return absl::OkStatus();
-    }();
-    if (!st.ok()) {
-      Exec("ROLLBACK").IgnoreError();
-      return st;
-    }
-    return Exec("COMMIT");
-  }
+  // The tables, made or brought up to date (sqlite_job_schema.h).
+  absl::Status Init() { return InitSqliteJobSchema(db_); }
 
   absl::StatusOr<v1::Job> Create(v1::Job job, const std::string& cache_key,
                                  bool* created) override {
@@ -511,13 +444,7 @@ class SqliteJobStore : public JobStore {
   absl::Status Exec(const char* sql) { return server::Exec(db_, sql); }
 
   absl::Status AddJobBlobsLocked(const std::string& id, const v1::Job& job) {
-    for (const std::string& hash : BlobsOf(job)) {
-      Stmt q(db_, "INSERT OR IGNORE INTO job_blobs (job_id, hash) VALUES (?, ?)");
-      SM_RETURN_IF_ERROR(q.ok());
-      q.Bind(1, id).Bind(2, hash);
-      SM_RETURN_IF_ERROR(q.Run());
-    }
-    return absl::OkStatus();
+    return AddSqliteJobBlobs(db_, id, job);
   }
 
   static absl::StatusOr<v1::Job> Parse(const std::string& blob) { return ParseStoredJob(blob); }

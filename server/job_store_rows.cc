@@ -26,6 +26,14 @@ std::string NewJobId(int64_t seq, uint64_t random) {
   return id;
 }
 
+std::string NameNewJob(v1::Job* job, int64_t seq, uint64_t random, absl::Time now) {
+  const std::string id = NewJobId(seq, random);
+  job->set_name(absl::StrCat("jobs/", id));
+  *job->mutable_create_time() = TimestampOf(now);
+  if (job->state() == v1::JOB_STATE_UNSPECIFIED) job->set_state(v1::QUEUED);
+  return id;
+}
+
 std::string ScopedRequestId(const std::string& tenant, const std::string& request_id) {
   if (tenant.empty() || tenant == kDefaultTenant) return request_id;
   return absl::StrCat("\x1f", tenant, "\x1f", request_id);

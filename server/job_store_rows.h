@@ -30,6 +30,10 @@ std::string JobIdOf(const std::string& name);
 // them unguessable.
 std::string NewJobId(int64_t seq, uint64_t random);
 
+// Names a new job: its id (returned) from `seq` and `random`, "jobs/ID", its create time
+// and, when unset, the QUEUED state. Every store's Create and Split make their rows so.
+std::string NameNewJob(v1::Job* job, int64_t seq, uint64_t random, absl::Time now = absl::Now());
+
 // The request_id column is unique: it holds the tenant and the client's request id, the
 // default tenant's bare (as stores before tenants held them). Request ids hold no control
 // characters (the service refuses them), so the keys of two tenants never meet.

@@ -68,10 +68,7 @@ class MemoryJobStore : public JobStore {
     }
     Row row;
     row.seq = ++t_->last_seq;
-    const std::string id = NewJobId(row.seq, rng_.Next());
-    job.set_name(absl::StrCat("jobs/", id));
-    *job.mutable_create_time() = TimestampOf(clock_());
-    if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
+    const std::string id = NameNewJob(&job, row.seq, rng_.Next(), clock_());
     row.request_key = key;
     row.cache_key = cache_key;
     row.job = job;
@@ -207,9 +204,7 @@ class MemoryJobStore : public JobStore {
     for (v1::Job& task : tasks) {
       Row r;
       r.seq = ++t_->last_seq;
-      const std::string id = NewJobId(r.seq, rng_.Next());
-      task.set_name(absl::StrCat("jobs/", id));
-      *task.mutable_create_time() = TimestampOf(clock_());
+      const std::string id = NameNewJob(&task, r.seq, rng_.Next(), clock_());
       r.request_key = ScopedRequestId(task.tenant(), task.request_id());
       r.job = std::move(task);
       names.push_back(r.job.name());

@@ -66,16 +66,8 @@ class PostgresJobStore : public JobStore {
     if (existing) return *existing;
     v1::Job out;
     absl::Status st = pool_->Transaction([&](Conn& c) -> absl::Status {
-      SM_ASSIGN_OR_RETURN(PgResult seq, c->Query("SELECT nextval('job_seq')"));
-      const int64_t n = seq.Int(0, 0);
-      std::string id;
-      {
-        std::lock_guard<std::mutex> lock(rng_mu_);
-        id = NewJobId(n, rng_.Next());
-      }
-      job.set_name(absl::StrCat("jobs/", id));
-      *job.mutable_create_time() = NowTimestamp();
-      if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
+      int64_t n = 0;
+      SM_ASSIGN_OR_RETURN(const std::string id, NameNew(c, &job, &n));
       SM_ASSIGN_OR_RETURN(
           PgResult ins,
           c->Query("INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant) "
@@ -240,15 +232,8 @@ class PostgresJobStore : public JobStore {
       std::vector<v1::Job> tasks = BrickTasks(row.job, plan, count);
       std::vector<std::string> names;
       for (v1::Job& task : tasks) {
-        SM_ASSIGN_OR_RETURN(PgResult seq, c->Query("SELECT nextval('job_seq')"));
-        const int64_t n = seq.Int(0, 0);
-        std::string task_id;
-        {
-          std::lock_guard<std::mutex> lock(rng_mu_);
-          task_id = NewJobId(n, rng_.Next());
-        }
-        task.set_name(absl::StrCat("jobs/", task_id));
-        *task.mutable_create_time() = NowTimestamp();
+        int64_t n = 0;
+        SM_ASSIGN_OR_RETURN(const std::string task_id, NameNew(c, &task, &n));
         SM_RETURN_IF_ERROR(
             c->Query("INSERT INTO jobs (id, seq, request_id, state, job, tenant, parent) "
                      "VALUES ($1, $2, $3, $4, $5, $6, $7)",
@@ -404,6 +389,14 @@ class PostgresJobStore : public JobStore {
     v1::Job job;
     std::string owner;
   };
+
+  // Names a new job (NameNewJob) with the next number of the database's sequence (*seq).
+  absl::StatusOr<std::string> NameNew(Conn& c, v1::Job* job, int64_t* seq) {
+    SM_ASSIGN_OR_RETURN(PgResult q, c->Query("SELECT nextval('job_seq')"));
+    *seq = q.Int(0, 0);
+    std::lock_guard<std::mutex> lock(rng_mu_);
+    return NameNewJob(job, *seq, rng_.Next());
+  }
 
   static absl::Status NotRunningUnder(const std::string& name, const std::string& worker) {
     return absl::FailedPreconditionError(absl::StrCat(name, " is not running under ", worker));

@@ -52,15 +52,8 @@ class SqliteJobStore : public JobStore {
       Exec("ROLLBACK").IgnoreError();
       return *found;
     }
-    int64_t seq = 1;
-    {
-      Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
-      if (q.Step() == SQLITE_ROW) seq = q.Int(0);
-    }
-    const std::string id = NewJobId(seq, rng_.Next());
-    job.set_name(absl::StrCat("jobs/", id));
-    *job.mutable_create_time() = NowTimestamp();
-    if (job.state() == v1::JOB_STATE_UNSPECIFIED) job.set_state(v1::QUEUED);
+    const int64_t seq = NextSeqLocked();
+    const std::string id = NameNewJob(&job, seq, rng_.Next());
     Stmt ins(db_,
              "INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant) "
              "VALUES (?, ?, ?, ?, ?, ?, ?)");
@@ -249,16 +242,10 @@ class SqliteJobStore : public JobStore {
       }
       SM_RETURN_IF_ERROR(CheckSplittable(row.job, count));
       std::vector<v1::Job> tasks = BrickTasks(row.job, plan, count);
-      int64_t seq = 1;
-      {
-        Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
-        if (q.Step() == SQLITE_ROW) seq = q.Int(0);
-      }
+      int64_t seq = NextSeqLocked();
       std::vector<std::string> names;
       for (v1::Job& task : tasks) {
-        const std::string task_id = NewJobId(seq, rng_.Next());
-        task.set_name(absl::StrCat("jobs/", task_id));
-        *task.mutable_create_time() = NowTimestamp();
+        const std::string task_id = NameNewJob(&task, seq, rng_.Next());
         Stmt ins(db_,
                  "INSERT INTO jobs (id, seq, request_id, state, job, tenant, parent) "
                  "VALUES (?, ?, ?, ?, ?, ?, ?)");
@@ -442,6 +429,12 @@ class SqliteJobStore : public JobStore {
   };
 
   absl::Status Exec(const char* sql) { return server::Exec(db_, sql); }
+
+  // The next job's sequence number (under the write lock).
+  int64_t NextSeqLocked() {
+    Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
+    return q.Step() == SQLITE_ROW ? q.Int(0) : 1;
+  }
 
   absl::Status AddJobBlobsLocked(const std::string& id, const v1::Job& job) {
     return AddSqliteJobBlobs(db_, id, job);

@@ -87,6 +87,13 @@ void TaskEnded(JobStore& store, JobEvents& events, const v1::Job& task) {
   events.Notify(parent);
 }
 
+void LostJobsEnded(JobStore& store, JobEvents& events, const std::vector<v1::Job>& ended) {
+  for (const v1::Job& job : ended) {
+    events.NotifyFinished(job.name());
+    TaskEnded(store, events, job);
+  }
+}
+
 absl::Status CancelTasks(JobStore& store, const v1::Job& job) {
   absl::Status first;
   for (const std::string& task : job.bricks().tasks()) {

@@ -36,6 +36,11 @@ absl::StatusOr<std::optional<v1::Job>> PrepareMerge(JobStore& store, v1::Job job
 // (the job will fail); the job's watchers hear of it.
 void TaskEnded(JobStore& store, JobEvents& events, const v1::Job& task);
 
+// After RequeueExpired ended `ended` (their workers were lost once too often, or they were
+// cancelled meanwhile): their watchers hear of it at once, and a brick task among them is
+// handled as one that finished (TaskEnded: a failed brick cancels its siblings).
+void LostJobsEnded(JobStore& store, JobEvents& events, const std::vector<v1::Job>& ended);
+
 // Cancels the tasks of a split job (the job itself is cancelled by the caller).
 absl::Status CancelTasks(JobStore& store, const v1::Job& job);
 

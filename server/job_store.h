@@ -75,9 +75,12 @@ class JobStore {
   // `all` treats every RUNNING job as expired (a restart: no worker of the old process
   // lives). With `not_the_jobs_fault` (the server that ran them died, and its jobs ran
   // isolated, so none of them took it down) the lost run is not counted as an attempt.
-  // Returns how many were requeued or failed.
+  // Returns how many were requeued or ended; `ended` (when given) receives those that ended
+  // (FAILED or CANCELLED) as stored, so that the caller can act on them (a brick task's
+  // siblings, its job's watchers).
   virtual absl::StatusOr<int> RequeueExpired(int max_attempts, bool all,
-                                             bool not_the_jobs_fault = false) = 0;
+                                             bool not_the_jobs_fault = false,
+                                             std::vector<v1::Job>* ended = nullptr) = 0;
   // A SUCCEEDED job with this cache key.
   virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
   // The jobs in `state`, brick tasks not counted (a job's bricks are one job's work).

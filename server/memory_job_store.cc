@@ -259,7 +259,8 @@ class MemoryJobStore : public JobStore {
     return absl::OkStatus();
   }
 
-  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault) override {
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault,
+                                     std::vector<v1::Job>* ended) override {
     std::lock_guard<std::mutex> lock(t_->mu);
     const absl::Time now = clock_();
     int n = 0;
@@ -267,6 +268,7 @@ class MemoryJobStore : public JobStore {
       if (row.job.state() != v1::RUNNING || (!all && !(row.lease_expires < now))) continue;
       ApplyLostWorker(&row.job, row.cancel_requested, max_attempts, not_the_jobs_fault, now);
       row.owner.clear();
+      if (ended != nullptr && row.job.state() != v1::QUEUED) ended->push_back(row.job);
       ++n;
     }
     return n;

@@ -311,9 +311,13 @@ class PostgresJobStore : public JobStore {
     });
   }
 
-  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault) override {
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault,
+                                     std::vector<v1::Job>* ended) override {
     int n = 0;
+    std::vector<v1::Job> gone;  // what the transaction ended (it may run more than once)
     SM_RETURN_IF_ERROR(pool_->Transaction([&](Conn& c) -> absl::Status {
+      n = 0;
+      gone.clear();
       // Rows another replica is requeueing are skipped, not waited for.
       SM_ASSIGN_OR_RETURN(
           PgResult q,
@@ -328,10 +332,12 @@ class PostgresJobStore : public JobStore {
         SM_ASSIGN_OR_RETURN(v1::Job job, ParseStoredJob(q.Bytes(i, 1)));
         ApplyLostWorker(&job, q.Text(i, 2) == "t", max_attempts, not_the_jobs_fault);
         SM_RETURN_IF_ERROR(SetState(c, q.Text(i, 0), job));
+        if (job.state() != v1::QUEUED) gone.push_back(std::move(job));
         ++n;
       }
       return absl::OkStatus();
     }));
+    if (ended != nullptr) std::move(gone.begin(), gone.end(), std::back_inserter(*ended));
     return n;
   }
 

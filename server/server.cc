@@ -21,6 +21,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "server/blob_service.h"
+#include "server/bricked_jobs.h"
 #include "server/job_service.h"
 #include "server/retention.h"
 #include "server/volume_service.h"
@@ -90,7 +91,9 @@ struct Server::Impl {
       const absl::Time now = absl::Now();
       if (now >= next_lease) {
         next_lease = now + options.lease / 3;
-        absl::StatusOr<int> n = jobs->RequeueExpired(options.max_attempts, false);
+        std::vector<v1::Job> ended;
+        absl::StatusOr<int> n = jobs->RequeueExpired(options.max_attempts, false, false, &ended);
+        LostJobsEnded(*jobs, events, ended);
         if (n.ok() && *n > 0) host->WakeWorkers();
       }
       CheckHealth();
@@ -220,11 +223,14 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   // PostgreSQL other servers' workers may be running theirs: only expired leases go back.
   // Isolated jobs cannot take the server down: its death was not theirs, and their lost run
   // does not count against max_attempts.
+  std::vector<v1::Job> ended;
   SM_RETURN_IF_ERROR(s.jobs
                          ->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty(),
                                           /*not_the_jobs_fault=*/o.postgres.empty() &&
-                                              o.isolate_jobs)
+                                              o.isolate_jobs,
+                                          &ended)
                          .status());
+  LostJobsEnded(*s.jobs, s.events, ended);
   s.blobs->SetUploadLimits(o.limits.max_unfinished_upload_bytes_per_tenant,
                            o.min_free_disk_bytes);
 

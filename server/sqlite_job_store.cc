@@ -341,7 +341,8 @@ class SqliteJobStore : public JobStore {
     return Exec("COMMIT");
   }
 
-  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault) override {
+  absl::StatusOr<int> RequeueExpired(int max_attempts, bool all, bool not_the_jobs_fault,
+                                     std::vector<v1::Job>* ended) override {
     std::lock_guard<std::mutex> lock(mu_);
     std::vector<std::pair<std::string, v1::Job>> expired;
     {
@@ -364,6 +365,7 @@ class SqliteJobStore : public JobStore {
       }
       ApplyLostWorker(&job, cancel, max_attempts, not_the_jobs_fault);
       SM_RETURN_IF_ERROR(SetStateLocked(id, job));
+      if (ended != nullptr && job.state() != v1::QUEUED) ended->push_back(job);
     }
     return static_cast<int>(expired.size());
   }

@@ -289,5 +289,34 @@ TEST_F(BrickProtocolTest, ALostBrickRunsAgainAndCancelReachesEveryBrick) {
   EXPECT_EQ(client_->GetJob(job2)->state(), v1::CANCELLED);
 }
 
+TEST_F(BrickProtocolTest, ABrickLostTooOftenStopsItsSiblingsAndFailsTheJobNamingIt) {
+  options_.max_attempts = 1;
+  Start();
+  const std::string job = Bricked("lost for good");
+  ASSERT_EQ(Lease("planner").name(), job);
+  v1::Job split;
+  ASSERT_TRUE(Split(job, "planner", 3, &split).ok());
+  const std::string t0 = Lease("a").name(), t1 = Lease("b").name();
+  // Worker a is killed; b renews its lease. With max_attempts 1 a's brick fails for good
+  // when its lease runs out, and the server tells b's brick to stop, and the queued one.
+  v1::RenewLeaseResponse renewed;
+  for (int i = 0; i < 100 && !renewed.stop(); ++i) {
+    absl::SleepFor(absl::Milliseconds(100));
+    renewed = Renew(t1, "b");
+  }
+  EXPECT_TRUE(renewed.stop() && renewed.cancelled()) << "the running sibling is stopped";
+  const auto lost = client_->GetJob(t0);
+  ASSERT_TRUE(lost.ok());
+  EXPECT_EQ(lost->state(), v1::FAILED);
+  EXPECT_THAT(lost->error().message(), HasSubstr("max_attempts = 1"));
+  EXPECT_EQ(client_->GetJob(split.bricks().tasks(2))->state(), v1::CANCELLED) << "queued";
+  ASSERT_TRUE(End(t1, "b", v1::CANCELLED).ok());
+  EXPECT_TRUE(Lease("merger").name().empty()) << "no merge";
+  auto end = client_->GetJob(job);
+  ASSERT_TRUE(end.ok());
+  EXPECT_EQ(end->state(), v1::FAILED);
+  EXPECT_THAT(end->error().message(), HasSubstr("brick 0 of 3 (" + t0 + ") failed: its worker"));
+}
+
 }  // namespace
 }  // namespace sheetmesh::testing

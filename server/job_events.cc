@@ -17,37 +17,58 @@ void JobEvents::SetListener(std::function<void()> listener) {
   listener_ = std::move(listener);
 }
 
-void JobEvents::Notify(const std::string& job) {
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    ++jobs_[job].version;
-  }
-  Changed();
+void JobEvents::SetRelay(std::function<void(const JobEvent&)> relay) {
+  std::lock_guard<std::mutex> lock(mu_);
+  relay_ = std::move(relay);
 }
 
-void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progress) {
+void JobEvents::Record(const JobEvent& event) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    Entry& e = jobs_[job];
+    Entry& e = jobs_[event.job];
     ++e.version;
-    e.stages.emplace_back(e.version, progress);
-    if (e.stages.size() > kStagesKept) e.stages.pop_front();
-  }
-  Changed();
-}
-
-void JobEvents::NotifyFinished(const std::string& job) {
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    ++jobs_[job].version;
-    finished_.push_back(job);
-    if (finished_.size() > kFinishedKept) {
-      // A watcher of a job this old finds it finished and ends: its entry can go.
-      jobs_.erase(finished_.front());
-      finished_.pop_front();
+    if (event.kind == JobEvent::Kind::kStage) {
+      e.stages.emplace_back(e.version, event.progress);
+      if (e.stages.size() > kStagesKept) e.stages.pop_front();
+    } else if (event.kind == JobEvent::Kind::kFinished) {
+      finished_.push_back(event.job);
+      if (finished_.size() > kFinishedKept) {
+        // A watcher of a job this old finds it finished and ends: its entry can go.
+        jobs_.erase(finished_.front());
+        finished_.pop_front();
+      }
     }
   }
   Changed();
+}
+
+void JobEvents::Relay(const JobEvent& event) {
+  std::function<void(const JobEvent&)> relay;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    relay = relay_;
+  }
+  if (relay) relay(event);
+}
+
+void JobEvents::Apply(const JobEvent& event) { Record(event); }
+
+void JobEvents::Notify(const std::string& job) {
+  const JobEvent event{JobEvent::Kind::kChanged, job, {}};
+  Record(event);
+  Relay(event);
+}
+
+void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progress) {
+  const JobEvent event{JobEvent::Kind::kStage, job, progress};
+  Record(event);
+  Relay(event);
+}
+
+void JobEvents::NotifyFinished(const std::string& job) {
+  const JobEvent event{JobEvent::Kind::kFinished, job, {}};
+  Record(event);
+  Relay(event);
 }
 
 uint64_t JobEvents::Version(const std::string& job) {

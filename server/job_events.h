@@ -20,6 +20,14 @@
 
 namespace sheetmesh::server {
 
+// One change, as handed to a relay (another server's events, over PostgreSQL).
+struct JobEvent {
+  enum class Kind { kChanged, kStage, kFinished };
+  Kind kind = Kind::kChanged;
+  std::string job;
+  v1::JobProgress progress;  // kStage: the stage that started
+};
+
 // Thread-safe.
 class JobEvents {
  public:
@@ -41,6 +49,11 @@ class JobEvents {
   bool closed();
   // Called (outside the lock) after every change and at Close; one listener, or none.
   void SetListener(std::function<void()> listener);
+  // Called (outside the lock) with every change made here (the Notify calls above), not
+  // with those Apply brings in from elsewhere; one relay, or none.
+  void SetRelay(std::function<void(const JobEvent&)> relay);
+  // A change made elsewhere (another server's): as its Notify call, not relayed.
+  void Apply(const JobEvent& event);
 
   static constexpr size_t kFinishedKept = 256;
   static constexpr size_t kStagesKept = 64;
@@ -56,8 +69,11 @@ class JobEvents {
   std::deque<std::string> finished_;
   bool closed_ = false;
   std::function<void()> listener_;
+  std::function<void(const JobEvent&)> relay_;
 
+  void Record(const JobEvent& event);
   void Changed();
+  void Relay(const JobEvent& event);
 };
 
 }  // namespace sheetmesh::server

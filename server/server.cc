@@ -23,6 +23,7 @@
 #include "server/blob_service.h"
 #include "server/bricked_jobs.h"
 #include "server/job_service.h"
+#include "server/postgres_events.h"
 #include "server/retention.h"
 #include "server/volume_service.h"
 #include "server/worker_service.h"
@@ -65,6 +66,7 @@ struct Server::Impl {
   std::unique_ptr<JobStore> jobs;
   std::unique_ptr<BlobStore> blobs;
   JobEvents events;
+  std::unique_ptr<PgEventRelay> relay;  // over PostgreSQL: the other servers' events too
   std::unique_ptr<LocalJobHost> host;
   std::unique_ptr<StreamLimits> upload_streams, watch_streams;
   ServiceContext ctx;
@@ -218,6 +220,9 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   std::filesystem::remove_all(scratch, ec);
   SM_RETURN_IF_ERROR(MakeDirs(scratch));
   SM_ASSIGN_OR_RETURN(s.jobs, OpenJobStore(o));
+  if (!o.postgres.empty()) {
+    SM_ASSIGN_OR_RETURN(s.relay, PgEventRelay::Start(o.postgres, &s.events));
+  }
   SM_ASSIGN_OR_RETURN(s.blobs, BlobStore::Open(o.data_dir + "/blobs"));
   // Jobs that were running when the previous process ended have no worker any more. Over
   // PostgreSQL other servers' workers may be running theirs: only expired leases go back.
@@ -319,6 +324,7 @@ void Server::Shutdown(absl::Duration drain) {
   // Drain: no new leases; running jobs finish or go back to the queue.
   if (s.pool) s.pool->Drain(drain);
   if (s.housekeeping.joinable()) s.housekeeping.join();
+  s.relay.reset();
   s.events.Close();
   if (s.job_service) s.job_service->StopWatches();  // watch streams end, UNAVAILABLE
   if (s.grpc_server) {

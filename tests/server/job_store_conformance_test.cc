@@ -16,38 +16,16 @@
 #include "server/job_store.h"
 #include "server/job_store_rows.h"
 #include "server/memory_job_store.h"
+#include "tests/testing/postgres_cluster.h"
 #include "tests/testing/temp_dir.h"
 
 namespace sheetmesh::server {
 namespace {
 
+using sheetmesh::testing::Admin;
+using sheetmesh::testing::ClusterConninfo;
 using sheetmesh::testing::TempDir;
 using ::testing::HasSubstr;
-
-// The test cluster's connection string: $SHEETMESH_TEST_POSTGRES, or the file named by
-// $SHEETMESH_TEST_POSTGRES_FILE; empty when neither is there.
-std::string ClusterConninfo() {
-  if (const char* c = std::getenv("SHEETMESH_TEST_POSTGRES"); c != nullptr && *c) return c;
-  if (const char* f = std::getenv("SHEETMESH_TEST_POSTGRES_FILE"); f != nullptr && *f) {
-    std::ifstream in(f);
-    std::string line;
-    if (std::getline(in, line)) return line;
-  }
-  return "";
-}
-
-bool Admin(const std::string& conninfo, const std::string& sql, std::string* error) {
-  PGconn* c = PQconnectdb(conninfo.c_str());
-  bool ok = PQstatus(c) == CONNECTION_OK;
-  if (ok) {
-    PGresult* r = PQexec(c, sql.c_str());
-    ok = PQresultStatus(r) == PGRES_COMMAND_OK;
-    PQclear(r);
-  }
-  if (!ok) *error = PQerrorMessage(c);
-  PQfinish(c);
-  return ok;
-}
 
 class JobStoreConformanceTest : public ::testing::TestWithParam<std::string> {
  protected:
@@ -55,9 +33,7 @@ class JobStoreConformanceTest : public ::testing::TestWithParam<std::string> {
     if (GetParam() == "postgres") {
       cluster_ = ClusterConninfo();
       if (cluster_.empty()) {
-        GTEST_SKIP() << "no PostgreSQL test cluster (SHEETMESH_TEST_POSTGRES or "
-                        "SHEETMESH_TEST_POSTGRES_FILE; ctest starts one with "
-                        "tools/pg_cluster.sh where PostgreSQL is installed)";
+        GTEST_SKIP() << sheetmesh::testing::kNoClusterMessage;
       }
       static std::atomic<int> n{0};
       db_ = absl::StrCat("conformance_", getpid(), "_", n++);

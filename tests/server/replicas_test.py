@@ -26,6 +26,7 @@ sys.path.insert(0, str(HERE.parent / "testing"))
 from ports import wait_port_file  # noqa: E402
 
 SERVER_BIN = PIPELINE_BIN = None
+HEARTBEAT = 30  # seconds, ReplicasTest's servers'
 CONNINFO = None
 
 
@@ -39,14 +40,14 @@ def cluster_conninfo():
 
 
 class Replica:
-    def __init__(self, tmp, name, conninfo, root):
+    def __init__(self, tmp, name, conninfo, root, heartbeat=1):
         self.port_file = tmp / ("%s.port" % name)
         self.log = open(tmp / ("%s.log" % name), "w")
         self.proc = subprocess.Popen(
             [SERVER_BIN, "--address=127.0.0.1:0", "--data_dir=%s" % (tmp / "shared"),
              "--scratch_dir=%s" % (tmp / ("scratch-" + name)), "--postgres=%s" % conninfo,
              "--port_file=%s" % self.port_file, "--allowed_root=%s" % root, "--workers=1",
-             "--lease_seconds=3", "--heartbeat_seconds=1"],
+             "--lease_seconds=3", "--heartbeat_seconds=%d" % heartbeat],
             stdout=subprocess.DEVNULL, stderr=self.log)
         wait_port_file(self.port_file, self.proc, "replica " + name, log=tmp / ("%s.log" % name))
         from sheetmesh_client import SheetmeshClient
@@ -77,8 +78,10 @@ class ReplicasTest(unittest.TestCase):
         cls.slow = cls.root / "slow_384x384x384_u8.raw"
         subprocess.run([PIPELINE_BIN, "phantom", "--dims=384x384x384", "--seed=14", "-o", str(cls.slow)],
                        check=True, stdout=subprocess.DEVNULL)
-        cls.a = Replica(cls.tmp, "a", cls.conninfo, cls.root)
-        cls.b = Replica(cls.tmp, "b", cls.conninfo, cls.root)
+        # A long heartbeat: a watch through the replica a job's worker does not report to
+        # hears of it from the other's events (NOTIFY), not from its heartbeat.
+        cls.a = Replica(cls.tmp, "a", cls.conninfo, cls.root, heartbeat=HEARTBEAT)
+        cls.b = Replica(cls.tmp, "b", cls.conninfo, cls.root, heartbeat=HEARTBEAT)
 
     @classmethod
     def tearDownClass(cls):
@@ -139,6 +142,35 @@ class ReplicasTest(unittest.TestCase):
         self.b.client.cancel_job(busy.name)
         self.wait_state(self.b.client, busy.name, {self.pb.CANCELLED, self.pb.SUCCEEDED}, 60)
 
+    def test_b2_watches_on_both_replicas_hear_every_stage_and_the_end_of_a_job_run_by_either(self):
+        job = self.a.client.create_job(volume_path=str(self.sample), parameters={"r": 6, "labels": [255]},
+                                       no_cache=True)
+
+        def follow(replica):
+            told = []  # stages told by a message that is not a heartbeat
+
+            def on(j, heartbeat):
+                if not heartbeat and j.state == self.pb.RUNNING and j.progress.stage:
+                    told.append((j.progress.stage_index, j.progress.stage))
+            end = replica.client.watch(job.name, on_update=on)
+            return end, time.time(), told
+
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            fa, fb = pool.submit(follow, self.a), pool.submit(follow, self.b)
+            (end_a, t_a, told_a), (end_b, t_b, told_b) = fa.result(), fb.result()
+        for end in (end_a, end_b):
+            self.assertEqual(end.state, self.pb.SUCCEEDED, end.error.message)
+        # Both watches ended when the job did, not one of them a heartbeat later.
+        self.assertLess(abs(t_a - t_b), HEARTBEAT / 2, "a watch waited for its heartbeat")
+        # Both were told the stages as they came, not at a heartbeat (without the other
+        # server's events a watch there hears nothing but heartbeats until the end). The
+        # replica that was not told by the worker reads the job from the database, which can
+        # be a stage ahead of the events it has applied: a stage that starts and ends
+        # between two of its looks may go untold there.
+        print("told through a: %s\ntold through b: %s" % (told_a, told_b))
+        for told in (told_a, told_b):
+            self.assertGreaterEqual(len({i for i, _ in told}), 3, told)
+
     def test_c_a_job_whose_server_is_killed_runs_on_the_other(self):
         # Only replica a's worker is idle when the job comes: make b busy first.
         busy = self.b.client.create_job(volume_path=str(self.slow), parameters={"extract": True, "r": 6}, no_cache=True)
@@ -152,7 +184,7 @@ class ReplicasTest(unittest.TestCase):
         self.assertEqual(end.attempts, 2, "run again once after its server died")
         print("the killed server's job ended SUCCEEDED on the other %.1f s after the kill" % (time.time() - t))
         self.assertEqual(self.wait_state(self.b.client, busy.name, {self.pb.SUCCEEDED}, 240).attempts, 1)
-        type(self).a = Replica(self.tmp, "a2", self.conninfo, self.root)  # for tearDown
+        type(self).a = Replica(self.tmp, "a2", self.conninfo, self.root, heartbeat=HEARTBEAT)  # for tearDown
 
 
 class PostgresOutageTest(unittest.TestCase):

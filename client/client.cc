@@ -355,25 +355,30 @@ absl::StatusOr<v1::Job> SheetmeshClient::Watch(
   }
 }
 
-absl::Status SheetmeshClient::Download(const v1::Digest& digest, const std::string& path) {
-  SM_ASSIGN_OR_RETURN(AtomicFileWriter out, AtomicFileWriter::Create(path));
-  int64_t offset = 0;
+absl::Status SheetmeshClient::ReadRange(
+    const v1::Digest& digest, int64_t offset, int64_t length,
+    const std::function<absl::Status(absl::string_view)>& sink) {
+  const int64_t end = std::min(digest.size_bytes(), offset + std::max<int64_t>(0, length));
   // Ranged reads of 64 MiB, each resumable where the last stopped.
   constexpr int64_t kRange = int64_t{64} << 20;
-  Sha256 sha;
   int failures = 0;
-  while (offset < digest.size_bytes()) {
+  while (offset < end) {
     v1::ReadRequest req;
     *req.mutable_digest() = digest;
     req.set_read_offset(offset);
-    req.set_read_limit(std::min(kRange, digest.size_bytes() - offset));
+    req.set_read_limit(std::min(kRange, end - offset));
     auto ctx = Context();
     std::unique_ptr<grpc::ClientReader<v1::ReadResponse>> reader = blobs_->Read(ctx.get(), req);
     v1::ReadResponse resp;
-    while (reader->Read(&resp)) {
-      SM_RETURN_IF_ERROR(out.Append(resp.data()));
-      sha.Update(resp.data().data(), resp.data().size());
-      offset += resp.data().size();
+    absl::Status taken;
+    while (taken.ok() && reader->Read(&resp)) {
+      taken = sink(resp.data());
+      offset += static_cast<int64_t>(resp.data().size());
+    }
+    if (!taken.ok()) {
+      ctx->TryCancel();
+      reader->Finish().IgnoreError();
+      return taken;
     }
     const grpc::Status st = reader->Finish();
     if (!st.ok()) {
@@ -381,6 +386,16 @@ absl::Status SheetmeshClient::Download(const v1::Digest& digest, const std::stri
       std::this_thread::sleep_for(std::chrono::milliseconds(500));
     }
   }
+  return absl::OkStatus();
+}
+
+absl::Status SheetmeshClient::Download(const v1::Digest& digest, const std::string& path) {
+  SM_ASSIGN_OR_RETURN(AtomicFileWriter out, AtomicFileWriter::Create(path));
+  Sha256 sha;
+  SM_RETURN_IF_ERROR(ReadRange(digest, 0, digest.size_bytes(), [&](absl::string_view data) {
+    sha.Update(data.data(), data.size());
+    return out.Append(data);
+  }));
   if (sha.Hex() != digest.hash()) {
     return absl::DataLossError(
         absl::StrCat(path, ": the downloaded bytes do not match digest ", digest.hash()));

@@ -87,6 +87,11 @@ class SheetmeshClient {
                                 const std::function<void(const v1::WatchJobResponse&)>& on_update);
   // Downloads a blob to `path` (atomically), by ranged reads.
   absl::Status Download(const v1::Digest& digest, const std::string& path);
+  // Reads bytes [offset, offset + length) of a blob (clipped to its end), handing them to
+  // `sink` in order; a broken stream is resumed where it stopped. No digest is checked: the
+  // server's blobs were when they were stored.
+  absl::Status ReadRange(const v1::Digest& digest, int64_t offset, int64_t length,
+                         const std::function<absl::Status(absl::string_view)>& sink);
   // grpc.health.v1 status of the server ("SERVING").
   absl::StatusOr<std::string> Health();
 

@@ -131,7 +131,8 @@ std::optional<v1::JobProgress> LocalJobHost::Progress(const std::string& job) {
   return it->second.progress;
 }
 
-absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(const v1::Job& job) {
+absl::StatusOr<runtime::LocalVolume> LocalJobHost::ResolveInput(
+    const v1::Job& job, const std::vector<runtime::ByteRange>* /*only*/) {
   const v1::JobInput& in = job.input();
   runtime::LocalVolume v;
   if (in.has_volume_digest()) {

@@ -40,7 +40,9 @@ class LocalJobHost : public runtime::JobHost {
   absl::Status Renew(const std::string& job, const std::string& worker) override;
   bool ReportProgress(const std::string& job, const std::string& worker,
                       const runtime::ProgressUpdate& update) override;
-  absl::StatusOr<runtime::LocalVolume> ResolveInput(const v1::Job& job) override;
+  // The volume lies here whole: `only` changes nothing.
+  absl::StatusOr<runtime::LocalVolume> ResolveInput(
+      const v1::Job& job, const std::vector<runtime::ByteRange>* only) override;
   absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& worker,
                                            const std::string& path,
                                            const std::string& media_type) override;

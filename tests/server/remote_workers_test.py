@@ -120,30 +120,39 @@ class RemoteWorkersTest(unittest.TestCase):
                 self.client.download(a.digest, str(out))
                 self.assertEqual(hashlib.sha256(out.read_bytes()).hexdigest(), a.digest.hash, a.name)
 
-    def test_a_bricked_job_on_an_upload_reads_one_copy_per_worker(self):
+    def test_a_bricked_job_on_an_upload_fetches_only_each_bricks_bytes(self):
         digest = self.client.upload(str(self.sample))
         params = {"r": 5, "labels": [255]}
-        one = self.client.create_job(volume_digest=digest, file_name=self.sample.name, parameters=params,
-                                     no_cache=True)
+        # The one-process job reads the file by its path, so that no worker holds the upload
+        # whole: the bricked job's plan and bricks fetch what they read.
+        one = self.client.create_job(volume_path=str(self.sample), parameters=params, no_cache=True)
         bricked = self.client.create_job(volume_digest=digest, file_name=self.sample.name, parameters=params,
-                                         no_cache=True, bricks="64x56x48")
+                                         no_cache=True, bricks="128x112x12")
         done = self.client.watch(bricked.name)
         first = self.client.watch(one.name)
         self.assertEqual(done.state, self.pb.SUCCEEDED, done.error.message)
         self.assertEqual(done.bricks.count, 8)
         same = {a.name: a.digest.hash for a in done.artifacts}["surface.ply"]
         self.assertEqual(same, {a.name: a.digest.hash for a in first.artifacts}["surface.ply"])
-        # Each worker kept one copy of the upload, under its digest, for all the bricks it ran;
-        # no job's input folder is left behind.
-        kept = 0
+        # Each worker kept the bytes of the slabs it ran, in a file as large as the upload,
+        # with their list, for its next brick; no worker fetched the upload whole, no byte was
+        # fetched twice; no job's input folder is left behind.
+        fetched = 0
         for name in ("w1", "w2"):
             scratch = self.tmp / ("scratch-" + name)
-            cached = sorted(p.name for p in (scratch / "cache").iterdir()) if (scratch / "cache").exists() else []
-            self.assertIn(cached, ([], [digest.hash]))
-            kept += len(cached)
+            cache = scratch / "cache"
+            cached = sorted(p.name for p in cache.iterdir()) if cache.exists() else []
+            self.assertIn(cached, ([], [digest.hash + ".part", digest.hash + ".ranges"]), name)
+            if cached:
+                self.assertEqual((cache / (digest.hash + ".part")).stat().st_size, digest.size_bytes)
+                ranges = [tuple(map(int, l.split())) for l in
+                          (cache / (digest.hash + ".ranges")).read_text().splitlines()]
+                fetched += sum(n for _, n in ranges)
             inputs = scratch / "inputs"
             self.assertEqual(list(inputs.iterdir()) if inputs.exists() else [], [])
-        self.assertGreaterEqual(kept, 1, "no worker kept the upload for its next brick")
+        print("the workers fetched %d of the upload's %d bytes" % (fetched, digest.size_bytes))
+        self.assertGreater(fetched, 0)
+        self.assertLessEqual(fetched, digest.size_bytes)
 
     def test_a_files_of_one_volume_are_laid_out_on_the_worker(self):
         # A folder of TIFF slices and a detached NRRD header with its data file, uploaded

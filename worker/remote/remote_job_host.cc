@@ -23,6 +23,18 @@ absl::StatusOr<std::unique_ptr<RemoteJobHost>> RemoteJobHost::Connect(RemoteJobH
   SM_ASSIGN_OR_RETURN(h->client_, client::SheetmeshClient::Connect(h->options_.server));
   h->workers_ = v1::WorkerService::NewStub(h->client_->channel());
   SM_RETURN_IF_ERROR(MakeDirs(h->options_.scratch_dir));
+  const client::ClientOptions server = h->options_.server;
+  h->cache_ = std::make_unique<BlobCache>(
+      h->options_.scratch_dir + "/cache",
+      [server](const v1::Digest& d, const std::string& path) -> absl::Status {
+        SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(server));
+        return c->Download(d, path);
+      },
+      [server](const v1::Digest& d, int64_t offset, int64_t length,
+               const std::function<absl::Status(absl::string_view)>& sink) -> absl::Status {
+        SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(server));
+        return c->ReadRange(d, offset, length, sink);
+      });
   // One call that changes nothing, to find a wrong address or token now, not in a loop.
   v1::RenewLeaseRequest probe;
   probe.set_name("jobs/none");
@@ -120,54 +132,15 @@ void RemoteJobHost::Forget(const std::string& job) {
   }
   std::error_code ec;
   std::filesystem::remove_all(InputDir(job), ec);
-  ReleaseBlob(job);
-}
-
-absl::StatusOr<std::string> RemoteJobHost::CachedBlob(const std::string& job,
-                                                      const v1::Digest& digest) {
-  const std::string dir = options_.scratch_dir + "/cache";
-  SM_RETURN_IF_ERROR(MakeDirs(dir));
-  const std::string path = dir + "/" + digest.hash();
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    ++blob_users_[digest.hash()];
-    job_blob_[job] = digest.hash();
-    if (idle_blob_ == digest.hash()) idle_blob_.clear();
-  }
-  std::error_code ec;
-  if (std::filesystem::file_size(path, ec) == static_cast<uintmax_t>(digest.size_bytes()) && !ec) {
-    return path;
-  }
-  // Two jobs of one volume at once may both download it: each writes its own temporary
-  // file and the second rename leaves the same bytes.
-  SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(options_.server));
-  SM_RETURN_IF_ERROR(c->Download(digest, path));
-  return path;
-}
-
-void RemoteJobHost::ReleaseBlob(const std::string& job) {
-  std::string drop;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    auto it = job_blob_.find(job);
-    if (it == job_blob_.end()) return;
-    const std::string hash = it->second;
-    job_blob_.erase(it);
-    if (--blob_users_[hash] > 0) return;
-    blob_users_.erase(hash);
-    // The last volume stays for the next task of its job; the one before goes.
-    if (!idle_blob_.empty() && idle_blob_ != hash) drop = idle_blob_;
-    idle_blob_ = hash;
-  }
-  std::error_code ec;
-  if (!drop.empty()) std::filesystem::remove(options_.scratch_dir + "/cache/" + drop, ec);
+  cache_->Release(job);
 }
 
 std::string RemoteJobHost::InputDir(const std::string& job) const {
   return absl::StrCat(options_.scratch_dir, "/inputs/", absl::StrReplaceAll(job, {{"/", "-"}}));
 }
 
-absl::StatusOr<runtime::LocalVolume> RemoteJobHost::ResolveInput(const v1::Job& job) {
+absl::StatusOr<runtime::LocalVolume> RemoteJobHost::ResolveInput(
+    const v1::Job& job, const std::vector<runtime::ByteRange>* only) {
   const v1::JobInput& in = job.input();
   runtime::LocalVolume v;
   if (in.has_volume_digest()) {
@@ -176,7 +149,8 @@ absl::StatusOr<runtime::LocalVolume> RemoteJobHost::ResolveInput(const v1::Job& 
     SM_RETURN_IF_ERROR(MakeDirs(dir));
     v.path = dir + "/" + name;
     // Readers tell formats by name: the cached copy under the client's file name.
-    SM_ASSIGN_OR_RETURN(const std::string cached, CachedBlob(job.name(), in.volume_digest()));
+    SM_ASSIGN_OR_RETURN(const std::string cached,
+                        cache_->Get(job.name(), in.volume_digest(), only));
     ::unlink(v.path.c_str());
     if (::symlink(cached.c_str(), v.path.c_str()) != 0) return ErrnoStatus(errno, v.path);
     v.display_name = in.file_name().empty() ? in.volume_digest().hash() : in.file_name();

@@ -13,6 +13,7 @@
 
 #include "client/client.h"
 #include "sheetmesh/v1/workers.grpc.pb.h"
+#include "worker/remote/blob_cache.h"
 #include "worker/runtime/job_host.h"
 
 namespace sheetmesh::remote {
@@ -34,7 +35,11 @@ class RemoteJobHost : public runtime::JobHost {
   absl::Status Renew(const std::string& job, const std::string& worker) override;
   bool ReportProgress(const std::string& job, const std::string& worker,
                       const runtime::ProgressUpdate& update) override;
-  absl::StatusOr<runtime::LocalVolume> ResolveInput(const v1::Job& job) override;
+  // An uploaded volume is kept in SCRATCH/cache under its digest for the next task of it;
+  // with `only`, those bytes of it are fetched into a file as large as the volume, and
+  // kept with the list of what it holds, for the next brick.
+  absl::StatusOr<runtime::LocalVolume> ResolveInput(
+      const v1::Job& job, const std::vector<runtime::ByteRange>* only) override;
   absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& worker,
                                            const std::string& path,
                                            const std::string& media_type) override;
@@ -67,14 +72,9 @@ class RemoteJobHost : public runtime::JobHost {
   };
   std::map<std::string, Live> live_;
 
-  // Uploaded volumes, downloaded once into scratch_dir/cache/<hash> (the download checks the
-  // digest) and linked into each job's input folder: the brick tasks of one job, run one
-  // after another here, read one copy. A volume no job uses stays until another replaces it.
-  absl::StatusOr<std::string> CachedBlob(const std::string& job, const v1::Digest& digest);
-  void ReleaseBlob(const std::string& job);
-  std::map<std::string, int> blob_users_;        // hash -> jobs using it
-  std::map<std::string, std::string> job_blob_;  // job -> the hash it uses
-  std::string idle_blob_;                        // the hash kept with no job using it
+  // Uploaded volumes, fetched once (whole, or a brick's bytes) into scratch_dir/cache and
+  // linked into each job's input folder.
+  std::unique_ptr<BlobCache> cache_;
 };
 
 }  // namespace sheetmesh::remote

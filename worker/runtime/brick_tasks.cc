@@ -5,6 +5,7 @@
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/brick/bricks.h"
+#include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::runtime {
 
@@ -46,9 +47,11 @@ absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
   return absl::InvalidArgumentError(absl::StrCat("'", spec.task, "' is not a brick task"));
 }
 
-absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
-  // The plan was written by the job's child, which read the volume: read back in this
-  // process, it may hold at most what `max` bricks take.
+namespace {
+
+// The plan in dir/plan, read back in this process: the job's child wrote it, having read the
+// volume, so it may hold at most what `max` bricks take.
+absl::StatusOr<BrickPlan> ReadTaskPlan(const std::string& dir, int max) {
   std::error_code ec;
   const uintmax_t bytes = std::filesystem::file_size(TaskPlanFile(dir), ec);
   const uintmax_t most = 4096 + uintmax_t{1024} * static_cast<uintmax_t>(max);
@@ -58,7 +61,13 @@ absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
         ec ? ec.message()
            : absl::StrCat("holds ", bytes, " bytes, more than ", most, " for ", max, " bricks")));
   }
-  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadBrickPlan(TaskPlanDir(dir)));
+  return ReadBrickPlan(TaskPlanDir(dir));
+}
+
+}  // namespace
+
+absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
+  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadTaskPlan(dir, max));
   const int64_t n = static_cast<int64_t>(plan.bricks.size());
   if (n > max) {
     return absl::InvalidArgumentError(
@@ -66,6 +75,30 @@ absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
                      " bricks, more than the ", max, " one job may have: ask for larger bricks"));
   }
   return static_cast<int>(n);
+}
+
+absl::StatusOr<std::optional<std::vector<ByteRange>>> PlanInputBytes(const v1::Job& job,
+                                                                     const std::string& name) {
+  SM_ASSIGN_OR_RETURN(const PipelineOptions options, JobPipelineOptions(job, name));
+  const std::optional<std::vector<FileRange>> reads = PlanReads(options);
+  if (!reads) return std::optional<std::vector<ByteRange>>();
+  std::vector<ByteRange> out;
+  for (const FileRange& r : *reads) out.push_back({r.offset, r.length});
+  return std::optional<std::vector<ByteRange>>(std::move(out));
+}
+
+absl::StatusOr<std::optional<std::vector<ByteRange>>> BrickInputBytes(const std::string& dir,
+                                                                      int index) {
+  SM_ASSIGN_OR_RETURN(const BrickPlan plan, ReadTaskPlan(dir, kMaxJobBricks));
+  if (index < 0 || index >= static_cast<int>(plan.bricks.size())) {
+    return absl::InvalidArgumentError(absl::StrCat("brick index ", index, " is outside the plan's ",
+                                                   plan.bricks.size(), " bricks"));
+  }
+  const Brick& b = plan.bricks[static_cast<size_t>(index)];
+  if (b.fetch.empty()) return std::optional<std::vector<ByteRange>>();
+  std::vector<ByteRange> out;
+  for (const FileRange& r : b.fetch) out.push_back({r.offset, r.length});
+  return std::optional<std::vector<ByteRange>>(std::move(out));
 }
 
 }  // namespace sheetmesh::runtime

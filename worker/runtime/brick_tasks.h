@@ -4,12 +4,14 @@
 #ifndef SHEETMESH_WORKER_RUNTIME_BRICK_TASKS_H_
 #define SHEETMESH_WORKER_RUNTIME_BRICK_TASKS_H_
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
 #include "common/progress.h"
 #include "worker/pipeline/run/pipeline.h"
+#include "worker/runtime/job_host.h"
 
 namespace sheetmesh::runtime {
 
@@ -34,6 +36,17 @@ absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
                                                       PipelineOptions options,
                                                       const std::string& display,
                                                       const Progress& progress);
+
+// The bytes of the volume's file brick `index` of the plan in dir/plan reads (Brick::fetch),
+// for a host that fetches the volume from elsewhere; nullopt when the plan names none (the
+// reader may read any of the file: fetch it whole). The plan's errors as PlannedBricks's.
+absl::StatusOr<std::optional<std::vector<ByteRange>>> BrickInputBytes(const std::string& dir,
+                                                                      int index);
+
+// The bytes of the job's volume (under its file name `name`) its plan task reads
+// (PlanReads); nullopt: any of it.
+absl::StatusOr<std::optional<std::vector<ByteRange>>> PlanInputBytes(const v1::Job& job,
+                                                                     const std::string& name);
 
 // The number of bricks of the plan in dir/plan. kInvalidArgument when it has more than
 // `max` (the message says to ask for larger bricks).

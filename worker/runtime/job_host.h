@@ -24,6 +24,13 @@ struct ProgressUpdate {
 };
 
 // A volume readable on this machine.
+// A span of a file's bytes.
+struct ByteRange {
+  int64_t offset = 0;
+  int64_t length = 0;
+  friend bool operator==(const ByteRange&, const ByteRange&) = default;
+};
+
 struct LocalVolume {
   std::string path;
   std::string display_name;  // for messages: the name the client gave
@@ -90,8 +97,11 @@ class JobHost {
   // lost).
   virtual bool ReportProgress(const std::string& job, const std::string& worker,
                               const ProgressUpdate& update) = 0;
-  // Makes the job's input readable locally.
-  virtual absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) = 0;
+  // Makes the job's input readable locally. With `only` (a brick's bytes of its volume,
+  // BrickInputBytes), a host that copies an uploaded volume from elsewhere may copy those
+  // bytes only: the local file is as large as the volume, its other bytes absent.
+  virtual absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job,
+                                                   const std::vector<ByteRange>* only) = 0;
   // Stores an output file of `job`, run by `worker`, as a blob.
   virtual absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job,
                                                    const std::string& worker,

@@ -90,8 +90,14 @@ absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const st
   LocalVolume volume;
   if (task.task == "merge") {
     volume.path = volume.display_name = InputName(job.input());
+  } else if (task.task == "brick" || task.task == "plan") {
+    // The bytes of the volume the task reads, where the plan or the format names them.
+    SM_ASSIGN_OR_RETURN(const std::optional<std::vector<ByteRange>> only,
+                        task.task == "brick" ? BrickInputBytes(dir, task.index)
+                                             : PlanInputBytes(job, InputFileName(job.input())));
+    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job, only ? &*only : nullptr));
   } else {
-    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job));
+    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job, nullptr));
   }
   SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
   options.output.dir = dir;

@@ -39,8 +39,9 @@ class PoolObserverHost : public JobHost {
     }
     return pool_->host_->ReportProgress(job, worker, u);
   }
-  absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) override {
-    return pool_->host_->ResolveInput(job);
+  absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job,
+                                           const std::vector<ByteRange>* only) override {
+    return pool_->host_->ResolveInput(job, only);
   }
   absl::StatusOr<v1::Artifact> PutArtifact(const std::string& job, const std::string& worker,
                                            const std::string& path,

@@ -41,7 +41,8 @@ class CancelledAtRenewalHost : public JobHost {
   bool ReportProgress(const std::string&, const std::string&, const ProgressUpdate&) override {
     return true;
   }
-  absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job) override {
+  absl::StatusOr<LocalVolume> ResolveInput(const v1::Job& job,
+                                           const std::vector<ByteRange>* /*only*/) override {
     return LocalVolume{job.input().volume_path(), "rock", false, {}};
   }
   absl::StatusOr<v1::Artifact> PutArtifact(const std::string&, const std::string&,

@@ -1,5 +1,6 @@
 #include "worker/pipeline/brick/bricks.h"
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 #include "common/file_util.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/run/parameters.h"
+#include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/voxel/threshold.h"
 
 namespace sheetmesh {
@@ -24,6 +26,22 @@ uint64_t Fnv1a(const void* data, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
   return h;
+}
+
+// Sorted, with ranges that touch or overlap joined.
+std::vector<FileRange> Joined(std::vector<FileRange> ranges) {
+  std::sort(ranges.begin(), ranges.end(),
+            [](const FileRange& a, const FileRange& b) { return a.offset < b.offset; });
+  std::vector<FileRange> out;
+  for (const FileRange& r : ranges) {
+    if (r.length <= 0) continue;
+    if (!out.empty() && r.offset <= out.back().offset + out.back().length) {
+      out.back().length = std::max(out.back().length, r.offset + r.length - out.back().offset);
+    } else {
+      out.push_back(r);
+    }
+  }
+  return out;
 }
 
 nlohmann::json RegionJson(const VoxelRegion& r) {
@@ -104,8 +122,14 @@ std::string BrickPlan::ToJson() const {
   j["in_bricks"] = in_bricks;
   nlohmann::json list = nlohmann::json::array();
   for (const Brick& b : bricks) {
-    list.push_back(
-        {{"index", b.index}, {"core", RegionJson(b.core)}, {"read", RegionJson(b.read)}});
+    nlohmann::json brick = {
+        {"index", b.index}, {"core", RegionJson(b.core)}, {"read", RegionJson(b.read)}};
+    if (!b.fetch.empty()) {
+      nlohmann::json fetch = nlohmann::json::array();
+      for (const FileRange& r : b.fetch) fetch.push_back({r.offset, r.length});
+      brick["fetch"] = std::move(fetch);
+    }
+    list.push_back(std::move(brick));
   }
   j["bricks"] = std::move(list);
   return j.dump(1) + "\n";
@@ -125,6 +149,15 @@ absl::StatusOr<Index3> ParseBrickSize(const std::string& text, const std::string
   return size;
 }
 
+std::optional<std::vector<FileRange>> PlanReads(const PipelineOptions& options) {
+  if (options.input.threshold == "otsu" || options.input.open.region) return std::nullopt;
+  const absl::StatusOr<std::string> format = InputFormatOf(options.input.path, options.input.open);
+  if (!format.ok()) return std::nullopt;
+  if (*format == "raw") return std::vector<FileRange>{};
+  if (*format == "nrrd") return std::vector<FileRange>{{0, kNrrdMaxHeaderBytes}};
+  return std::nullopt;
+}
+
 absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
                                         const BrickGrid& requested) {
   BrickGrid grid = requested;
@@ -140,11 +173,9 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
   std::error_code ec;
   const std::string volume =
       std::filesystem::absolute(options.input.path, ec).lexically_normal().string();
-  VolumeInfo info;
-  {
-    SM_ASSIGN_OR_RETURN(auto source, OpenVolume(volume, options.input.open));
-    info = source->info();
-  }
+  SM_ASSIGN_OR_RETURN(const std::unique_ptr<VolumeSource> opened,
+                      OpenVolume(volume, options.input.open));
+  const VolumeInfo info = opened->info();
   const Dims& d = info.dims;
   const auto clamp32 = [](int64_t v) {
     return static_cast<int32_t>(std::clamp<int64_t>(v, 1, INT32_MAX));
@@ -212,6 +243,9 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
         };
         b.read = {{clip(x0 - h, d.nx), clip(y0 - h, d.ny), clip(z0 - h, d.nz)},
                   {clip(x1 + h, d.nx), clip(y1 + h, d.ny), clip(z1 + h, d.nz)}};
+        if (auto bytes = opened->BytesRead(b.read.lo.z, b.read.hi.z - b.read.lo.z)) {
+          b.fetch = Joined(*std::move(bytes));
+        }
         plan.bricks.push_back(b);
       }
     }
@@ -274,7 +308,19 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
                          {r.at(3).get<int32_t>(), r.at(4).get<int32_t>(), r.at(5).get<int32_t>()}};
     };
     for (const auto& b : j.at("bricks")) {
-      plan.bricks.push_back({b.at("index").get<int>(), region(b.at("core")), region(b.at("read"))});
+      Brick brick{b.at("index").get<int>(), region(b.at("core")), region(b.at("read")), {}};
+      if (b.contains("fetch")) {
+        for (const auto& r : b.at("fetch")) {
+          const FileRange range{r.at(0).get<int64_t>(), r.at(1).get<int64_t>()};
+          if (range.offset < 0 || range.length <= 0) {
+            return absl::InvalidArgumentError(absl::StrCat(
+                path, ": bricks[", plan.bricks.size(), "].fetch holds the range ", range.offset,
+                " + ", range.length, " (an offset of 0 or more and a positive length)"));
+          }
+          brick.fetch.push_back(range);
+        }
+      }
+      plan.bricks.push_back(std::move(brick));
     }
   } catch (const nlohmann::json::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(path,

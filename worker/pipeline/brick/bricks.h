@@ -48,6 +48,10 @@ struct Brick {
   int index = 0;
   VoxelRegion core;  // the voxels this brick owns (and writes)
   VoxelRegion read;  // what it reads: the core and its halo, clipped to the volume
+  // The bytes of the volume's file it reads, sorted and apart (VolumeSource::BytesRead),
+  // where the reader tells them; empty: any of it. A worker that fetches the volume from
+  // elsewhere fetches these only.
+  std::vector<FileRange> fetch;
 };
 
 struct BrickPlan {
@@ -71,6 +75,12 @@ struct BrickPlan {
 // outside [0, size), options the bricks cannot run (input.grey, input.region), and the
 // reader's errors. A threshold of "otsu" is found here, reading the whole volume once.
 absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options, const BrickGrid& grid);
+
+// The bytes of options.input.path's file that MakeBrickPlan reads, where its format tells
+// them before the file is opened: none of a raw file (its size is all), the head of an NRRD
+// file (kNrrdMaxHeaderBytes); nullopt: any (other formats, and a threshold of "otsu", which
+// reads every voxel). What a worker fetches of a volume it plans but does not hold.
+std::optional<std::vector<FileRange>> PlanReads(const PipelineOptions& options);
 
 // The plan folder's files: plan.json, and bricks/brick_<index>.bin.
 std::string PlanFile(const std::string& plan_dir);

@@ -21,7 +21,8 @@
 namespace sheetmesh {
 namespace {
 
-constexpr int64_t kMaxHeaderBytes = 1 << 20;
+constexpr int64_t kMaxHeaderBytes = kNrrdMaxHeaderBytes;
+constexpr int64_t kFirstHeaderRead = 1 << 16;
 
 absl::Status FieldError(absl::string_view path, absl::string_view field, absl::string_view value,
                         absl::string_view why) {
@@ -317,12 +318,24 @@ class GzipStream {
 
 class NrrdSource : public VolumeSource {
  public:
-  NrrdSource(ScopedFd fd, NrrdHeader header, int64_t data_start, VolumeInfo info)
-      : fd_(std::move(fd)), header_(std::move(header)), data_start_(data_start) {
+  NrrdSource(ScopedFd fd, NrrdHeader header, int64_t data_start, int64_t head_read, VolumeInfo info)
+      : fd_(std::move(fd)),
+        header_(std::move(header)),
+        data_start_(data_start),
+        head_read_(head_read) {
     info_ = std::move(info);
     if (header_.encoding == NrrdEncoding::kGzip) {
       gzip_ = std::make_unique<GzipStream>(fd_.get(), data_start_, info_.path);
     }
+  }
+
+  // Raw data attached: opening reads the header (what it read to parse it, and the lines it
+  // skips), then the slices lie where they are.
+  std::optional<std::vector<FileRange>> BytesRead(int64_t z0, int64_t count) const override {
+    if (gzip_ != nullptr || !header_.data_file.empty()) return std::nullopt;
+    const int64_t slice = info_.dims.nx * info_.dims.ny * BytesPerVoxel(info_.dtype);
+    return std::vector<FileRange>{{0, std::max(data_start_, head_read_)},
+                                  {data_start_ + z0 * slice, count * slice}};
   }
 
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
@@ -347,6 +360,7 @@ class NrrdSource : public VolumeSource {
   ScopedFd fd_;
   NrrdHeader header_;
   int64_t data_start_;
+  int64_t head_read_;  // bytes of the file read to parse the header
   std::unique_ptr<GzipStream> gzip_;
 };
 
@@ -445,12 +459,20 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
                                                              const VolumeLimits& limits) {
   SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
   SM_ASSIGN_OR_RETURN(const int64_t file_size, FileSizeOf(fd.get(), path));
-  std::string head(static_cast<size_t>(std::min<int64_t>(file_size, kMaxHeaderBytes)), '\0');
-  SM_RETURN_IF_ERROR(
-      AsInputError(ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
-  SM_ASSIGN_OR_RETURN(NrrdHeader h, ParseNrrdHeader(head, path, limits,
-                                                    /*text_is_whole_file=*/file_size <=
-                                                        static_cast<int64_t>(head.size())));
+  // The first 64 KiB hold any header but a freak's; then up to kMaxHeaderBytes. (What is read
+  // is what a worker fetches of the file for a brick: BytesRead.)
+  std::string head;
+  absl::StatusOr<NrrdHeader> parsed;
+  for (const int64_t want : {kFirstHeaderRead, kMaxHeaderBytes}) {
+    head.assign(static_cast<size_t>(std::min(file_size, want)), '\0');
+    SM_RETURN_IF_ERROR(AsInputError(
+        ReadFullyAt(fd.get(), 0, std::as_writable_bytes(std::span<char>(head)), path)));
+    const bool whole = file_size <= static_cast<int64_t>(head.size());
+    parsed = ParseNrrdHeader(head, path, limits, /*text_is_whole_file=*/whole);
+    if (!absl::IsOutOfRange(parsed.status()) || whole) break;
+  }
+  SM_ASSIGN_OR_RETURN(NrrdHeader h, std::move(parsed));
+  const int64_t head_read = static_cast<int64_t>(head.size());
 
   ScopedFd data_fd;
   std::string data_path = path;
@@ -497,7 +519,8 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenNrrdVolume(const std::string& 
   info.dims = h.dims;
   info.dtype = h.dtype;
   info.placement = h.placement;
-  return std::make_unique<NrrdSource>(std::move(data_fd), std::move(h), start, std::move(info));
+  return std::make_unique<NrrdSource>(std::move(data_fd), std::move(h), start, head_read,
+                                      std::move(info));
 }
 
 absl::StatusOr<std::unique_ptr<VolumeSink>> CreateNrrdWriter(const std::string& path,

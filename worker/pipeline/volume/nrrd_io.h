@@ -15,6 +15,9 @@ namespace sheetmesh {
 
 enum class NrrdEncoding { kRaw, kGzip };
 
+// A header longer than this is refused.
+inline constexpr int64_t kNrrdMaxHeaderBytes = int64_t{1} << 20;
+
 // The fields of a NRRD header that sheetmesh uses.
 struct NrrdHeader {
   Dims dims;

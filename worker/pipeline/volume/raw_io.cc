@@ -24,6 +24,12 @@ class RawSource : public VolumeSource {
   // No MapSlices: a mapped file that shrinks while it is read kills the process with SIGBUS;
   // read() says "the file ends at byte N" instead.
 
+  // Opening reads nothing (it checks the file's size).
+  std::optional<std::vector<FileRange>> BytesRead(int64_t z0, int64_t count) const override {
+    const int64_t slice = info_.dims.nx * info_.dims.ny * BytesPerVoxel(info_.dtype);
+    return std::vector<FileRange>{{options_.header_bytes + z0 * slice, count * slice}};
+  }
+
   absl::Status ReadSlices(int64_t z0, int64_t count, std::span<std::byte> out) override {
     const Dims& d = info_.dims;
     const int bpv = BytesPerVoxel(info_.dtype);

@@ -36,6 +36,9 @@ class PlacedSource : public VolumeSource {
   absl::StatusOr<MappedSlices> MapSlices(int64_t z0, int64_t count) override {
     return inner_->MapSlices(z0, count);
   }
+  std::optional<std::vector<FileRange>> BytesRead(int64_t z0, int64_t count) const override {
+    return inner_->BytesRead(z0, count);
+  }
 
  private:
   std::unique_ptr<VolumeSource> inner_;
@@ -79,6 +82,10 @@ class RegionSource : public VolumeSource {
       }
     }
     return absl::OkStatus();
+  }
+  // The inner slices its rows are cut from.
+  std::optional<std::vector<FileRange>> BytesRead(int64_t z0, int64_t count) const override {
+    return inner_->BytesRead(region_.lo.z + z0, count);
   }
 
  private:
@@ -153,17 +160,15 @@ absl::StatusOr<std::optional<std::pair<Dims, DType>>> DimsFromFileName(const std
   return std::make_pair(named->dims, t);
 }
 
-absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
-                                                         const OpenOptions& options) {
+absl::StatusOr<std::string> InputFormatOf(const std::string& path, const OpenOptions& options) {
+  std::string format = absl::AsciiStrToLower(options.format);
+  if (!format.empty()) return format;
   std::error_code ec;
   const bool is_dir = std::filesystem::is_directory(path, ec);
-  std::string format = absl::AsciiStrToLower(options.format);
-  // "scan.h5:/entry/data": a dataset inside an HDF5 file.
-  const auto hdf5 = SplitHdf5Path(path);
-  if (format.empty()) {
+  {  // by name
     const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
     const std::string name = absl::AsciiStrToLower(std::filesystem::path(path).filename().string());
-    if (hdf5 || HasHdf5Extension(path)) {
+    if (SplitHdf5Path(path) || HasHdf5Extension(path)) {
       format = "hdf5";
     } else if (ext == ".npy") {
       format = "npy";
@@ -197,6 +202,16 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
                        "(raw needs dims)"));
     }
   }
+  return format;
+}
+
+absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path,
+                                                         const OpenOptions& options) {
+  std::error_code ec;
+  const bool is_dir = std::filesystem::is_directory(path, ec);
+  // "scan.h5:/entry/data": a dataset inside an HDF5 file.
+  const auto hdf5 = SplitHdf5Path(path);
+  SM_ASSIGN_OR_RETURN(const std::string format, InputFormatOf(path, options));
   std::unique_ptr<VolumeSource> source;
   if (format == "raw") {
     RawOptions raw;

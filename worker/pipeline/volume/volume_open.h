@@ -41,6 +41,11 @@ struct OpenOptions {
   VolumeLimits limits;
 };
 
+// The reader OpenVolume takes for `path`: options.format, or the one its name (or being a
+// folder) tells ("raw", "tiff", "nrrd", "hdf5", "folder", ...). kInvalidArgument naming the
+// extension when neither tells.
+absl::StatusOr<std::string> InputFormatOf(const std::string& path, const OpenOptions& options);
+
 // Opens `path`: a folder reads as TIFF slices; otherwise the extension decides (.raw .bin
 // .dat .img: raw; .tif .tiff: TIFF; .nrrd .nhdr: NRRD; .vdb: OpenVDB) unless
 // options.format says. kInvalidArgument for an unknown extension or a raw file without dims

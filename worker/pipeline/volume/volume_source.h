@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -98,10 +99,25 @@ class MappedSlices {
   std::span<const std::byte> data_;
 };
 
+// A span of a file's bytes.
+struct FileRange {
+  int64_t offset = 0;
+  int64_t length = 0;
+  friend bool operator==(const FileRange&, const FileRange&) = default;
+};
+
 // A volume readable slice by slice. Not thread-safe; one reader per thread.
 class VolumeSource {
  public:
   virtual ~VolumeSource() = default;
+
+  // The bytes of the file info().path names that opening it again and reading slices
+  // [z0, z0 + count) read, when the reader reads no others (one file whose slices lie in it
+  // as they are: raw, NRRD with raw data attached); nullopt when it may read any. What a
+  // worker fetches of a volume for one brick (worker/pipeline/brick/bricks.h).
+  virtual std::optional<std::vector<FileRange>> BytesRead(int64_t z0, int64_t count) const {
+    return std::nullopt;
+  }
 
   // Whether MapSlices() works: files whose voxels lie on disk as they are in memory.
   virtual bool CanMap() const { return false; }

@@ -11,6 +11,7 @@
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/phantom/phantom.h"
 #include "worker/pipeline/phantom/phantom_presets.h"
+#include "worker/pipeline/volume/nrrd_io.h"
 #include "worker/pipeline/volume/raw_io.h"
 #include "worker/pipeline/volume/tiff_io.h"
 #include "worker/pipeline/volume/volume_open.h"
@@ -33,6 +34,19 @@ std::string Phantom(const TempDir& tmp, const std::string& preset, const Dims& d
   auto sink = *CreateRawWriter(path, info);
   EXPECT_TRUE(GeneratePhantom(&truth, *sink).ok());
   return path;
+}
+
+// A preset's phantom at `dims` written by `make_sink` (a reader's format).
+template <class MakeSink>
+void WritePhantom(const std::string& preset, const Dims& dims, MakeSink make_sink) {
+  PhantomOptions o = *PhantomPreset(preset);
+  o.dims = dims;
+  PhantomTruth truth = *PlanPhantom(o);
+  VolumeInfo info;
+  info.dims = dims;
+  auto sink = make_sink(info);
+  ASSERT_TRUE(sink.ok()) << sink.status();
+  ASSERT_TRUE(GeneratePhantom(&truth, **sink).ok());
 }
 
 // Plans `options` on `grid` in `dir`, runs every brick (in reverse order: any order will
@@ -316,6 +330,79 @@ TEST(BricksTest, AStackWithAMissingSliceIsRefusedNamingIt) {
               StatusIs(absl::StatusCode::kInvalidArgument,
                        ::testing::AllOf(HasSubstr("slice number 1006 is missing"),
                                         HasSubstr("scan_1005.tif"), HasSubstr("scan_1007.tif"))));
+}
+
+}  // namespace
+}  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// A copy of `path` at `copy` as large, holding only `ranges` (clipped to the file) and
+// zeros elsewhere: what a worker that fetched those bytes only has.
+void CopyRangesOnly(const std::string& path, const std::vector<FileRange>& ranges,
+                    const std::string& copy) {
+  const std::string whole = *ReadFileToString(path);
+  std::string only(whole.size(), '\0');
+  for (const FileRange& r : ranges) {
+    const int64_t end = std::min<int64_t>(r.offset + r.length, whole.size());
+    if (r.offset < end) only.replace(r.offset, end - r.offset, whole, r.offset, end - r.offset);
+  }
+  ASSERT_TRUE(MakeDirs(std::filesystem::path(copy).parent_path().string()).ok());
+  ASSERT_TRUE(WriteFileAtomically(copy, only).ok());
+}
+
+TEST(BricksTest, ABrickOfARawOrNrrdFileReadsOnlyTheBytesItsPlanNames) {
+  TempDir tmp;
+  const Dims dims{128, 112, 96};
+  const std::string raw = tmp.File("v/sample_128x112x96_u8.raw");
+  const std::string nrrd = tmp.File("v/sample.nrrd");
+  ASSERT_TRUE(MakeDirs(tmp.File("v")).ok());
+  WritePhantom("sample", dims, [&](const VolumeInfo& i) { return CreateRawWriter(raw, i); });
+  WritePhantom("sample", dims, [&](const VolumeInfo& i) { return CreateNrrdWriter(nrrd, i); });
+  for (const std::string& volume : {raw, nrrd}) {
+    for (const BrickGrid& grid :
+         {BrickGrid{{0, 0, 20}, {0, 0, 0}}, BrickGrid{{48, 40, 32}, {7, 0, 5}}}) {
+      SCOPED_TRACE(volume + " in bricks of " + std::to_string(grid.size.z) + " slices");
+      PipelineOptions o;
+      o.input.path = volume;
+      const std::string dir = tmp.File("plan");
+      std::filesystem::remove_all(dir);
+      const BrickPlan plan = PlanAndRun(o, grid, dir);
+      const int64_t size = static_cast<int64_t>(std::filesystem::file_size(volume));
+      for (const Brick& b : plan.bricks) {
+        ASSERT_FALSE(b.fetch.empty()) << "brick " << b.index;
+        int64_t fetched = 0;
+        for (const FileRange& r : b.fetch) fetched += std::min(r.length, size - r.offset);
+        EXPECT_LT(fetched, size) << "brick " << b.index << " fetches the whole file";
+        const std::string full = *ReadFileToString(BrickFile(dir, b.index));
+        // The same brick on a file holding only those bytes.
+        const std::string only =
+            tmp.File("only/" + std::filesystem::path(volume).filename().string());
+        CopyRangesOnly(volume, b.fetch, only);
+        BrickSite site;
+        site.volume = only;
+        ASSERT_TRUE(RunBrick(dir, b.index, {}, site).ok()) << "brick " << b.index;
+        EXPECT_EQ(*ReadFileToString(BrickFile(dir, b.index)), full) << "brick " << b.index;
+      }
+    }
+  }
+  // A reader that may read any of its file names no bytes: the worker fetches it whole.
+  const std::string tif = tmp.File("sample.tif");
+  WritePhantom("sample", dims, [&](const VolumeInfo& i) { return CreateTiffWriter(tif, i); });
+  PipelineOptions o;
+  o.input.path = tif;
+  const absl::StatusOr<BrickPlan> plan = MakeBrickPlan(o, {{0, 0, 32}, {0, 0, 0}});
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  for (const Brick& b : plan->bricks) EXPECT_TRUE(b.fetch.empty());
+  // And the plan says it in plan.json, and reads it back.
+  const std::string dir = tmp.File("plan2");
+  o.input.path = raw;
+  ASSERT_TRUE(WriteBrickPlan(*MakeBrickPlan(o, {{0, 0, 32}, {0, 0, 0}}), dir).ok());
+  const absl::StatusOr<BrickPlan> back = ReadBrickPlan(dir);
+  ASSERT_TRUE(back.ok()) << back.status();
+  ASSERT_EQ(back->bricks.size(), 3u);
+  EXPECT_EQ(back->bricks[1].fetch, (std::vector<FileRange>{{32 * 128 * 112, 32 * 128 * 112}}));
 }
 
 }  // namespace

@@ -9,8 +9,10 @@ surface.ply are the same bytes. `cat` of the file in the same run gives the scal
 
 Usage: /usr/bin/python3 bench/service_bricks_bench.py BUILD VOLUME... [--bricks=auto]
        [--workers=1,2,3] [--upload] [--json=FILE] [-- parameters as JSON]
-With --upload the volume is uploaded and the workers read it from the server (each keeps
-one copy for the bricks it runs) instead of naming it on the shared root.
+With --upload the volume is uploaded and the workers read the bricked job's input from the
+server instead of the shared root (a raw or NRRD volume: the bytes of the bricks each runs;
+other formats: one whole copy each), and the bytes each fetched are reported; the
+one-process job still names the file, so that no worker holds the upload whole before.
 Default parameters: {"labels": [255], "r": 15, "output_previews": false,
                      "similarity_hausdorff": false}
 """
@@ -72,6 +74,17 @@ def bricks_json(client, job, tmp):
     return json.load(open(tmp / "bricks.json"))
 
 
+def fetched_bytes(scratch, digest):
+    """What a worker holds of the upload: the whole file, or the ranges its listing names."""
+    cache = scratch / "cache"
+    if (cache / digest.hash).exists():
+        return digest.size_bytes
+    listing = cache / (digest.hash + ".ranges")
+    if not listing.exists():
+        return 0
+    return sum(int(line.split()[1]) for line in listing.read_text().splitlines() if line.strip())
+
+
 def run_job(client, jobs_pb2, vol, params, bricks="", digest=None):
     t = time.monotonic()
     if digest is not None:
@@ -116,7 +129,7 @@ def main(argv):
                 client = SheetmeshClient(stack.address)
                 # --upload: the volume uploaded, each worker reading it from the server.
                 digest = client.upload(str(vol)) if "--upload" in opts else None
-                one, one_s = run_job(client, jobs_pb2, vol, params, digest=digest)
+                one, one_s = run_job(client, jobs_pb2, vol, params)
                 split, split_s = run_job(client, jobs_pb2, vol, params, bricks, digest)
                 tasks = [client.get_job(t) for t in split.bricks.tasks]
                 starts = [t.start_time for t in tasks]
@@ -141,6 +154,9 @@ def main(argv):
                     "same_surface": {a.name: a.digest.hash for a in one.artifacts}["surface.ply"]
                     == {a.name: a.digest.hash for a in split.artifacts}["surface.ply"],
                 }
+                if digest is not None:
+                    r["fetched_bytes_per_worker"] = [fetched_bytes(tmp / ("w%d" % i), digest) for i in range(n)]
+                    r["upload_bytes"] = digest.size_bytes
                 print(json.dumps(r), flush=True)
                 results.append(r)
                 client.close()

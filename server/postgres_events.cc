@@ -18,6 +18,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "server/postgres_util.h"
 
 namespace sheetmesh::server {
 namespace {
@@ -64,7 +65,7 @@ class PgEventRelay::Impl {
   // (Re)connects and listens.
   absl::Status Connect() {
     if (conn_ != nullptr) PQfinish(conn_);
-    conn_ = PQconnectdb(conninfo_.c_str());
+    conn_ = PgConnect(conninfo_);
     if (PQstatus(conn_) != CONNECTION_OK) {
       return absl::UnavailableError(
           absl::StrCat("job events: PostgreSQL is unreachable: ",
@@ -137,7 +138,7 @@ class PgEventRelay::Impl {
       std::optional<std::pair<std::string, JobEvent>> e = Decode(n->extra);
       PQfreemem(n);
       if (!e || e->first == origin_) continue;  // ours came back
-      ++applied_;  // before its watchers wake
+      ++applied_;                               // before its watchers wake
       events_->Apply(e->second);
     }
     return true;

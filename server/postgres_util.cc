@@ -106,8 +106,16 @@ absl::StatusOr<std::unique_ptr<PgPool>> PgPool::Open(const std::string& conninfo
   return pool;
 }
 
+PGconn* PgConnect(const std::string& conninfo) {
+  // The expanded string's own connect_timeout, where it has one, overrides the one before it.
+  const std::string timeout = std::to_string(kDefaultConnectTimeoutSeconds);
+  const char* keys[] = {"connect_timeout", "dbname", nullptr};
+  const char* values[] = {timeout.c_str(), conninfo.c_str(), nullptr};
+  return PQconnectdbParams(keys, values, /*expand_dbname=*/1);
+}
+
 absl::StatusOr<std::unique_ptr<PgConnection>> PgPool::Connect() {
-  PGconn* c = PQconnectdb(conninfo_.c_str());
+  PGconn* c = PgConnect(conninfo_);
   if (c == nullptr) return absl::ResourceExhaustedError("libpq: out of memory");
   if (PQstatus(c) != CONNECTION_OK) {
     std::string msg(absl::StripAsciiWhitespace(PQerrorMessage(c)));

@@ -47,6 +47,13 @@ PgParam P(const std::string& s);
 PgParam P(const char* s);
 PgParam P(int64_t v);
 
+// Connects to `conninfo` (key=value pairs or a URI). A connection string without
+// connect_timeout waits kDefaultConnectTimeoutSeconds for a database that does not answer,
+// not the system's TCP timeout (minutes): the server's start, its requeueing and its
+// shutdown do not hang on a host gone from the network. Never null but out of memory.
+inline constexpr int kDefaultConnectTimeoutSeconds = 10;
+PGconn* PgConnect(const std::string& conninfo);
+
 class PgConnection {
  public:
   explicit PgConnection(PGconn* c) : c_(c) {}

@@ -5,12 +5,14 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <libpq-fe.h>
 #include <unistd.h>
 
 #include <atomic>
 
 #include "absl/strings/str_cat.h"
 #include "absl/time/clock.h"
+#include "server/postgres_util.h"
 #include "tests/testing/postgres_cluster.h"
 
 namespace sheetmesh::server {
@@ -51,6 +53,27 @@ TEST(PgEventRelayTest, AChangeIsOneNotifysPayloadAndBack) {
        {"", "o", "o\nc", "o\nq\njobs/1\n", "o\ns\njobs/1\n%%%", "\nc\njobs/1\n", "o\nc\n\n"}) {
     EXPECT_FALSE(PgEventRelay::Decode(bad).has_value()) << bad;
   }
+}
+
+// The relay's and the stores' connections: a default connect timeout unless given.
+TEST(PgConnectTest, ADefaultConnectTimeoutUnlessTheConnectionStringGivesOne) {
+  const auto timeout_of = [](const std::string& conninfo) {
+    PGconn* c = PgConnect(conninfo);  // nothing listens on port 1: refused at once
+    std::string value;
+    PQconninfoOption* options = PQconninfo(c);
+    for (PQconninfoOption* o = options; o != nullptr && o->keyword != nullptr; ++o) {
+      if (std::string(o->keyword) == "connect_timeout" && o->val != nullptr) value = o->val;
+    }
+    PQconninfoFree(options);
+    PQfinish(c);
+    return value;
+  };
+  EXPECT_EQ(timeout_of("host=127.0.0.1 port=1 dbname=x"),
+            std::to_string(kDefaultConnectTimeoutSeconds));
+  EXPECT_EQ(timeout_of("host=127.0.0.1 port=1 dbname=x connect_timeout=3"), "3");
+  EXPECT_EQ(timeout_of("postgresql://u@127.0.0.1:1/x"),
+            std::to_string(kDefaultConnectTimeoutSeconds));
+  EXPECT_EQ(timeout_of("postgresql://u@127.0.0.1:1/x?connect_timeout=7"), "7");
 }
 
 TEST(PgEventRelayTest, AnUnreachableDatabaseIsAClearError) {

@@ -194,6 +194,7 @@ def main():
     sys.path.insert(0, str(build / "python"))
     from sheetmesh_client import SheetmeshClient
     from sheetmesh.v1 import jobs_pb2
+    (ROOT / "bench/out").mkdir(exist_ok=True)
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="sheetmesh_gwbench_", dir=str(ROOT / "bench/out")))
     root = tmp / "root"
     root.mkdir()

@@ -181,8 +181,10 @@ def main():
     parts = set(a.only.split(",")) if a.only else {"throughput", "failover", "cancel", "leasing"}
     build = pathlib.Path(a.build).resolve()
     sys.path.insert(0, str(build / "python"))
+    os.environ.setdefault("SHEETMESH_PYTHON_STUBS", str(build / "python"))
     from sheetmesh_client import SheetmeshClient
     from sheetmesh.v1 import jobs_pb2
+    (ROOT / "bench/out").mkdir(exist_ok=True)
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="sheetmesh_scaleout_", dir=str(ROOT / "bench/out")))
     tmp.chmod(0o755)
     root = tmp / "root"

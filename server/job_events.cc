@@ -22,7 +22,8 @@ void JobEvents::SetRelay(std::function<void(const JobEvent&)> relay) {
   relay_ = std::move(relay);
 }
 
-void JobEvents::Record(const JobEvent& event) {
+void JobEvents::Record(const JobEvent& event, bool relay) {
+  std::function<void(const JobEvent&)> relay_to;
   {
     std::lock_guard<std::mutex> lock(mu_);
     Entry& e = jobs_[event.job];
@@ -38,37 +39,24 @@ void JobEvents::Record(const JobEvent& event) {
         finished_.pop_front();
       }
     }
+    if (relay) relay_to = relay_;
   }
   Changed();
+  if (relay_to) relay_to(event);
 }
 
-void JobEvents::Relay(const JobEvent& event) {
-  std::function<void(const JobEvent&)> relay;
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    relay = relay_;
-  }
-  if (relay) relay(event);
-}
-
-void JobEvents::Apply(const JobEvent& event) { Record(event); }
+void JobEvents::Apply(const JobEvent& event) { Record(event, /*relay=*/false); }
 
 void JobEvents::Notify(const std::string& job) {
-  const JobEvent event{JobEvent::Kind::kChanged, job, {}};
-  Record(event);
-  Relay(event);
+  Record({JobEvent::Kind::kChanged, job, {}}, /*relay=*/true);
 }
 
 void JobEvents::NotifyStage(const std::string& job, const v1::JobProgress& progress) {
-  const JobEvent event{JobEvent::Kind::kStage, job, progress};
-  Record(event);
-  Relay(event);
+  Record({JobEvent::Kind::kStage, job, progress}, /*relay=*/true);
 }
 
 void JobEvents::NotifyFinished(const std::string& job) {
-  const JobEvent event{JobEvent::Kind::kFinished, job, {}};
-  Record(event);
-  Relay(event);
+  Record({JobEvent::Kind::kFinished, job, {}}, /*relay=*/true);
 }
 
 uint64_t JobEvents::Version(const std::string& job) {

@@ -71,9 +71,9 @@ class JobEvents {
   std::function<void()> listener_;
   std::function<void(const JobEvent&)> relay_;
 
-  void Record(const JobEvent& event);
+  // Marks the change; with `relay`, hands it to the relay too.
+  void Record(const JobEvent& event, bool relay);
   void Changed();
-  void Relay(const JobEvent& event);
 };
 
 }  // namespace sheetmesh::server

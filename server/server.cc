@@ -229,15 +229,13 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   // Isolated jobs cannot take the server down: its death was not theirs, and their lost run
   // does not count against max_attempts.
   std::vector<v1::Job> ended;
-  SM_RETURN_IF_ERROR(s.jobs
-                         ->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty(),
-                                          /*not_the_jobs_fault=*/o.postgres.empty() &&
-                                              o.isolate_jobs,
-                                          &ended)
-                         .status());
+  SM_RETURN_IF_ERROR(
+      s.jobs
+          ->RequeueExpired(o.max_attempts, /*all=*/o.postgres.empty(),
+                           /*not_the_jobs_fault=*/o.postgres.empty() && o.isolate_jobs, &ended)
+          .status());
   LostJobsEnded(*s.jobs, s.events, ended);
-  s.blobs->SetUploadLimits(o.limits.max_unfinished_upload_bytes_per_tenant,
-                           o.min_free_disk_bytes);
+  s.blobs->SetUploadLimits(o.limits.max_unfinished_upload_bytes_per_tenant, o.min_free_disk_bytes);
 
   LocalJobHostOptions ho;
   ho.allowed_roots = o.allowed_roots;

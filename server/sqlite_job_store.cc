@@ -54,20 +54,7 @@ class SqliteJobStore : public JobStore {
     }
     const int64_t seq = NextSeqLocked();
     const std::string id = NameNewJob(&job, seq, rng_.Next());
-    Stmt ins(db_,
-             "INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant) "
-             "VALUES (?, ?, ?, ?, ?, ?, ?)");
-    SM_RETURN_IF_ERROR(ins.ok());
-    ins.Bind(1, id)
-        .Bind(2, seq)
-        .Bind(3, scoped)
-        .Bind(4, int64_t{job.state()})
-        .Bind(5, cache_key)
-        .BindBlob(6, job.SerializeAsString())
-        .Bind(7, job.tenant());
-    absl::Status st = ins.Run();
-    if (st.ok()) st = AddJobBlobsLocked(id, job);
-    if (!st.ok()) {
+    if (absl::Status st = InsertJobLocked(id, seq, job, cache_key, ""); !st.ok()) {
       Exec("ROLLBACK").IgnoreError();
       return st;
     }
@@ -246,19 +233,7 @@ class SqliteJobStore : public JobStore {
       std::vector<std::string> names;
       for (v1::Job& task : tasks) {
         const std::string task_id = NameNewJob(&task, seq, rng_.Next());
-        Stmt ins(db_,
-                 "INSERT INTO jobs (id, seq, request_id, state, job, tenant, parent) "
-                 "VALUES (?, ?, ?, ?, ?, ?, ?)");
-        SM_RETURN_IF_ERROR(ins.ok());
-        ins.Bind(1, task_id)
-            .Bind(2, seq++)
-            .Bind(3, ScopedRequestId(task.tenant(), task.request_id()))
-            .Bind(4, int64_t{v1::QUEUED})
-            .BindBlob(5, task.SerializeAsString())
-            .Bind(6, task.tenant())
-            .Bind(7, id);
-        SM_RETURN_IF_ERROR(ins.Run());
-        SM_RETURN_IF_ERROR(AddJobBlobsLocked(task_id, task));
+        SM_RETURN_IF_ERROR(InsertJobLocked(task_id, seq++, task, "", id));
         names.push_back(task.name());
       }
       ApplySplit(&row.job, plan, names);
@@ -436,6 +411,26 @@ class SqliteJobStore : public JobStore {
   int64_t NextSeqLocked() {
     Stmt q(db_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM jobs");
     return q.Step() == SQLITE_ROW ? q.Int(0) : 1;
+  }
+
+  // Inserts `job` as row `id`, with the blobs it names; a brick task names its job's row
+  // in `parent` (empty: none, the column stays NULL, as `cache_key` without a key).
+  absl::Status InsertJobLocked(const std::string& id, int64_t seq, const v1::Job& job,
+                               const std::string& cache_key, const std::string& parent) {
+    Stmt ins(db_,
+             "INSERT INTO jobs (id, seq, request_id, state, cache_key, job, tenant, parent) "
+             "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+    SM_RETURN_IF_ERROR(ins.ok());
+    ins.Bind(1, id)
+        .Bind(2, seq)
+        .Bind(3, ScopedRequestId(job.tenant(), job.request_id()))
+        .Bind(4, int64_t{job.state()})
+        .BindBlob(6, job.SerializeAsString())
+        .Bind(7, job.tenant());
+    if (!cache_key.empty()) ins.Bind(5, cache_key);  // unbound parameters are NULL
+    if (!parent.empty()) ins.Bind(8, parent);
+    SM_RETURN_IF_ERROR(ins.Run());
+    return AddJobBlobsLocked(id, job);
   }
 
   absl::Status AddJobBlobsLocked(const std::string& id, const v1::Job& job) {

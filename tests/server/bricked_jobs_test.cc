@@ -193,6 +193,15 @@ class BrickProtocolTest : public ServiceTest {
     grpc::ClientContext ctx;
     return workers_->FinishJob(&ctx, req, &done);
   }
+  // A bricked job leased by a planner and split into `count` bricks: the split job.
+  v1::Job Planned(const std::string& request_id, int count) {
+    const std::string job = Bricked(request_id);
+    EXPECT_EQ(Lease("planner").name(), job);
+    v1::Job split;
+    EXPECT_TRUE(Split(job, "planner", count, &split).ok());
+    EXPECT_EQ(split.bricks().tasks_size(), count);
+    return split;
+  }
   v1::RenewLeaseResponse Renew(const std::string& job, const std::string& worker) {
     v1::RenewLeaseRequest req;
     req.set_name(job);
@@ -248,10 +257,9 @@ TEST_F(BrickProtocolTest, AFailedBrickStopsItsSiblingsAndFailsTheJobNamingIt) {
 
 TEST_F(BrickProtocolTest, ALostBrickRunsAgainAndCancelReachesEveryBrick) {
   Start();
-  const std::string job = Bricked("lost");
-  ASSERT_EQ(Lease("planner").name(), job);
-  v1::Job split;
-  ASSERT_TRUE(Split(job, "planner", 2, &split).ok());
+  v1::Job split = Planned("lost", 2);
+  const std::string job = split.name();
+  ASSERT_FALSE(HasFailure());
   const std::string t0 = Lease("a").name(), t1 = Lease("b").name();
   ASSERT_TRUE(End(t0, "a", v1::SUCCEEDED).ok());
   // Worker b is killed: its lease runs out, the brick is queued again and runs once more.
@@ -272,9 +280,9 @@ TEST_F(BrickProtocolTest, ALostBrickRunsAgainAndCancelReachesEveryBrick) {
   ASSERT_TRUE(End(job, "merger", v1::SUCCEEDED).ok());
 
   // A second job, cancelled while one brick runs and one waits.
-  const std::string job2 = Bricked("cancelled");
-  ASSERT_EQ(Lease("planner").name(), job2);
-  ASSERT_TRUE(Split(job2, "planner", 2, &split).ok());
+  split = Planned("cancelled", 2);
+  const std::string job2 = split.name();
+  ASSERT_FALSE(HasFailure());
   const std::string running = Lease("a").name();
   v1::CancelJobRequest cr;
   cr.set_name(job2);
@@ -292,10 +300,9 @@ TEST_F(BrickProtocolTest, ALostBrickRunsAgainAndCancelReachesEveryBrick) {
 TEST_F(BrickProtocolTest, ABrickLostTooOftenStopsItsSiblingsAndFailsTheJobNamingIt) {
   options_.max_attempts = 1;
   Start();
-  const std::string job = Bricked("lost for good");
-  ASSERT_EQ(Lease("planner").name(), job);
-  v1::Job split;
-  ASSERT_TRUE(Split(job, "planner", 3, &split).ok());
+  const v1::Job split = Planned("lost for good", 3);
+  const std::string job = split.name();
+  ASSERT_FALSE(HasFailure());
   const std::string t0 = Lease("a").name(), t1 = Lease("b").name();
   // Worker a is killed; b renews its lease. With max_attempts 1 a's brick fails for good
   // when its lease runs out, and the server tells b's brick to stop, and the queued one.

@@ -149,13 +149,8 @@ absl::StatusOr<std::string> BlobCache::GetPart(const v1::Digest& digest,
     }
     fetched += r.length;
     // Listed once its bytes are in: a fetch that breaks off lists what came before.
-    have = JoinRanges(
-        [&] {
-          std::vector<ByteRange> all = have;
-          all.push_back(r);
-          return all;
-        }(),
-        size);
+    have.push_back(r);
+    have = JoinRanges(std::move(have), size);
     std::string text;
     for (const ByteRange& h : have) absl::StrAppend(&text, h.offset, " ", h.length, "\n");
     SM_RETURN_IF_ERROR(WriteFileAtomically(listing, text));

@@ -23,16 +23,14 @@ absl::StatusOr<std::unique_ptr<RemoteJobHost>> RemoteJobHost::Connect(RemoteJobH
   SM_ASSIGN_OR_RETURN(h->client_, client::SheetmeshClient::Connect(h->options_.server));
   h->workers_ = v1::WorkerService::NewStub(h->client_->channel());
   SM_RETURN_IF_ERROR(MakeDirs(h->options_.scratch_dir));
-  const client::ClientOptions server = h->options_.server;
+  // Through the host's one channel (the client's calls are thread-safe); the cache goes
+  // before the client.
+  client::SheetmeshClient* c = h->client_.get();
   h->cache_ = std::make_unique<BlobCache>(
       h->options_.scratch_dir + "/cache",
-      [server](const v1::Digest& d, const std::string& path) -> absl::Status {
-        SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(server));
-        return c->Download(d, path);
-      },
-      [server](const v1::Digest& d, int64_t offset, int64_t length,
-               const std::function<absl::Status(absl::string_view)>& sink) -> absl::Status {
-        SM_ASSIGN_OR_RETURN(auto c, client::SheetmeshClient::Connect(server));
+      [c](const v1::Digest& d, const std::string& path) { return c->Download(d, path); },
+      [c](const v1::Digest& d, int64_t offset, int64_t length,
+          const std::function<absl::Status(absl::string_view)>& sink) {
         return c->ReadRange(d, offset, length, sink);
       });
   // One call that changes nothing, to find a wrong address or token now, not in a loop.

@@ -5,7 +5,6 @@
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/brick/bricks.h"
-#include "worker/runtime/job_parameters.h"
 
 namespace sheetmesh::runtime {
 
@@ -64,6 +63,12 @@ absl::StatusOr<BrickPlan> ReadTaskPlan(const std::string& dir, int max) {
   return ReadBrickPlan(TaskPlanDir(dir));
 }
 
+std::vector<ByteRange> ByteRangesOf(const std::vector<FileRange>& ranges) {
+  std::vector<ByteRange> out;
+  for (const FileRange& r : ranges) out.push_back({r.offset, r.length});
+  return out;
+}
+
 }  // namespace
 
 absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
@@ -77,14 +82,10 @@ absl::StatusOr<int> PlannedBricks(const std::string& dir, int max) {
   return static_cast<int>(n);
 }
 
-absl::StatusOr<std::optional<std::vector<ByteRange>>> PlanInputBytes(const v1::Job& job,
-                                                                     const std::string& name) {
-  SM_ASSIGN_OR_RETURN(const PipelineOptions options, JobPipelineOptions(job, name));
+std::optional<std::vector<ByteRange>> PlanInputBytes(const PipelineOptions& options) {
   const std::optional<std::vector<FileRange>> reads = PlanReads(options);
-  if (!reads) return std::optional<std::vector<ByteRange>>();
-  std::vector<ByteRange> out;
-  for (const FileRange& r : *reads) out.push_back({r.offset, r.length});
-  return std::optional<std::vector<ByteRange>>(std::move(out));
+  if (!reads) return std::nullopt;
+  return ByteRangesOf(*reads);
 }
 
 absl::StatusOr<std::optional<std::vector<ByteRange>>> BrickInputBytes(const std::string& dir,
@@ -96,9 +97,7 @@ absl::StatusOr<std::optional<std::vector<ByteRange>>> BrickInputBytes(const std:
   }
   const Brick& b = plan.bricks[static_cast<size_t>(index)];
   if (b.fetch.empty()) return std::optional<std::vector<ByteRange>>();
-  std::vector<ByteRange> out;
-  for (const FileRange& r : b.fetch) out.push_back({r.offset, r.length});
-  return std::optional<std::vector<ByteRange>>(std::move(out));
+  return std::optional<std::vector<ByteRange>>(ByteRangesOf(b.fetch));
 }
 
 }  // namespace sheetmesh::runtime

@@ -43,10 +43,9 @@ absl::StatusOr<std::vector<std::string>> RunBrickTask(const BrickTaskSpec& spec,
 absl::StatusOr<std::optional<std::vector<ByteRange>>> BrickInputBytes(const std::string& dir,
                                                                       int index);
 
-// The bytes of the job's volume (under its file name `name`) its plan task reads
-// (PlanReads); nullopt: any of it.
-absl::StatusOr<std::optional<std::vector<ByteRange>>> PlanInputBytes(const v1::Job& job,
-                                                                     const std::string& name);
+// The bytes of the volume a plan task with the job's `options` reads (PlanReads); nullopt:
+// any of it.
+std::optional<std::vector<ByteRange>> PlanInputBytes(const PipelineOptions& options);
 
 // The number of bricks of the plan in dir/plan. kInvalidArgument when it has more than
 // `max` (the message says to ask for larger bricks).

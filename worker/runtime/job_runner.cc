@@ -87,19 +87,24 @@ absl::StatusOr<std::vector<std::string>> RunOutputs(const v1::Job& job, const st
                                                     JobHost& host, const JobRunOptions& run,
                                                     const std::string& dir,
                                                     const BrickTaskSpec& task) {
+  // The job's options first (a bad parameter fails before any download), on the volume's
+  // file name until the volume lies here.
+  SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, InputFileName(job.input())));
   LocalVolume volume;
   if (task.task == "merge") {
     volume.path = volume.display_name = InputName(job.input());
-  } else if (task.task == "brick" || task.task == "plan") {
-    // The bytes of the volume the task reads, where the plan or the format names them.
-    SM_ASSIGN_OR_RETURN(const std::optional<std::vector<ByteRange>> only,
-                        task.task == "brick" ? BrickInputBytes(dir, task.index)
-                                             : PlanInputBytes(job, InputFileName(job.input())));
-    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job, only ? &*only : nullptr));
   } else {
-    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job, nullptr));
+    // The bytes of the volume a brick or the plan reads, where the plan or the format names
+    // them; the whole volume otherwise.
+    std::optional<std::vector<ByteRange>> only;
+    if (task.task == "brick") {
+      SM_ASSIGN_OR_RETURN(only, BrickInputBytes(dir, task.index));
+    } else if (task.task == "plan") {
+      only = PlanInputBytes(options);
+    }
+    SM_ASSIGN_OR_RETURN(volume, host.ResolveInput(job, only ? &*only : nullptr));
   }
-  SM_ASSIGN_OR_RETURN(PipelineOptions options, JobPipelineOptions(job, volume.path));
+  options.input.path = volume.path;
   options.output.dir = dir;
   HostObserver observer(host, job.name(), worker,
                         task.task == "merge" || task.task.empty()

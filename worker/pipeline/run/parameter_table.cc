@@ -367,6 +367,10 @@ std::vector<ParamRow> SurfaceRows() {
   }
   rows.push_back(Integer("surface.seed", SM_MEMBER(surface.scvd.seed), "[0, 9007199254740992]", "",
                          "seed of the generators' random choice"));
+  rows.push_back(Bool("surface.local_seeding", SM_MEMBER(surface.scvd.local),
+                      "generators drawn by a hash of their position, ids in position order and "
+                      "exactly lloyd_max_iter Lloyd steps, so a brick with a halo builds its "
+                      "core's cells as the whole volume does"));
   rows.push_back(Integer("surface.generators", SM_MEMBER(surface.scvd.generator_count), "[0, 1e12]",
                          "", "total generators instead of formula 3 (0: formula 3)"));
   rows.push_back(Number("surface.thickness", SM_MEMBER(surface.scvd.mean_thickness_voxels),

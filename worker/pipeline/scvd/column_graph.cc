@@ -22,7 +22,8 @@ void RunAlong(const NeighborTable& nt, uint32_t start, int axis, std::vector<uin
 }  // namespace
 
 absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const NeighborTable& nt,
-                                             uint32_t max_column_voxels, uint32_t vote_block) {
+                                             uint32_t max_column_voxels, uint32_t vote_block,
+                                             const Index3& origin) {
   const uint32_t n = static_cast<uint32_t>(set.size());
   // Run lengths along each axis, saturated at 65535.
   std::vector<std::array<uint16_t, 3>> len(n);
@@ -53,13 +54,17 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
   // and a column is a run its neighbourhood agrees is the thickness.
   if (vote_block > 1) {
     const Dims& d = set.dims();
-    const int64_t nbx = d.nx / vote_block + 3, nby = d.ny / vote_block + 3;
+    // Blocks on the global grid: block b of the set is global block b + first.
+    const int64_t first_x = origin.x / vote_block, first_y = origin.y / vote_block,
+                  first_z = origin.z / vote_block;
+    const int64_t nbx = d.nx / vote_block + 4, nby = d.ny / vote_block + 4;
     // Blocks are numbered with a margin of one, so the 27 around any block exist.
     auto block_of = [&](int64_t bx, int64_t by, int64_t bz) {
       return static_cast<uint64_t>(((bz + 1) * nby + by + 1) * nbx + bx + 1);
     };
     auto block_of_voxel = [&](int32_t x, int32_t y, int32_t z) {
-      return block_of(x / vote_block, y / vote_block, z / vote_block);
+      return block_of((x + origin.x) / vote_block - first_x, (y + origin.y) / vote_block - first_y,
+                      (z + origin.z) / vote_block - first_z);
     };
     absl::flat_hash_map<uint64_t, std::array<uint32_t, 3>> own, votes;
     set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {

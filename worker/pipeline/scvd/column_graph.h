@@ -44,9 +44,13 @@ struct ColumnGraph {
 // of at most `max_column_voxels` voxels become columns; with `vote_block` > 1 the axis is
 // the majority of the thinnest axes in the voxel's block of vote_block^3 (about a thickness
 // wide), so runs cut short along the sheet near a rim do not cross the columns.
-// kResourceExhausted beyond 2^32 nodes.
+// The blocks lie on a grid whose lines pass through multiples of vote_block in the whole
+// volume's coordinates, `origin` being the global position of the set's voxel (0, 0, 0), so
+// a brick's columns agree with the whole's away from its faces. kResourceExhausted beyond
+// 2^32 nodes.
 absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const NeighborTable& neighbors,
-                                             uint32_t max_column_voxels, uint32_t vote_block = 0);
+                                             uint32_t max_column_voxels, uint32_t vote_block = 0,
+                                             const Index3& origin = {});
 
 }  // namespace sheetmesh
 

@@ -28,6 +28,15 @@ struct DualTriangleOptions {
   // voxels is closed by that triangle; real holes (over empty space) stay open.
   bool close_cracks = true;
   double crack_angle_degrees = 60.0;
+  // The longest closing edge of a crack, voxels; 0: 1.5 times the mesh's mean edge. A brick
+  // gives one that does not depend on its mesh (bricked_surface.h).
+  double crack_max_edge_voxels = 0.0;
+  // For a brick of a larger image: the global position of the set's voxel (0, 0, 0), in
+  // which frame the positions given are and the rim vertices come, so every brick computes
+  // them as the whole image would, to the last bit; and the image's size, to which rim
+  // vertices are kept (empty: the set's box).
+  Index3 origin;
+  Dims image;
   double rim_normal_cos = 0.4;   // a step d along the sheet has |d . n| / |d| below this
                                  // (n: the vertex normal); a voxel from which such a step
                                  // leaves the sheet is a rim voxel

@@ -11,7 +11,7 @@ namespace {
 
 // The fraction of the triangle's area whose nearest voxel is a sheet voxel, sampled on a
 // grid of about half a voxel.
-double SheetCoverage(const VoxelSet& set, const Triangle& t) {
+double SheetCoverage(const VoxelSet& set, const Index3& origin, const Triangle& t) {
   const double longest = std::max({Norm(t[1] - t[0]), Norm(t[2] - t[1]), Norm(t[0] - t[2])});
   const int n = std::max(2, static_cast<int>(std::ceil(longest * 2)));
   int inside = 0, total = 0;
@@ -20,7 +20,8 @@ double SheetCoverage(const VoxelSet& set, const Triangle& t) {
       const double u = double(i) / n, v = double(j) / n;
       const Vec3 p = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
       ++total;
-      inside += set.Contains(std::llround(p.x), std::llround(p.y), std::llround(p.z));
+      inside += set.Contains(std::llround(p.x) - origin.x, std::llround(p.y) - origin.y,
+                             std::llround(p.z) - origin.z);
     }
   }
   return total > 0 ? double(inside) / total : 0.0;
@@ -55,10 +56,11 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
   std::vector<Vec3> sum(num_gen);
   std::vector<double> tau(num_gen, 0.0);
   std::vector<uint32_t> count(num_gen, 0);
+  const Vec3 origin = Vec3::Of(options.origin);
   set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
     const uint32_t c = scvd.cell[v];
     if (c == kNoCell || !on_boundary[c] || !is_rim(x, y, z, c)) return;
-    sum[c] += Vec3(x, y, z);
+    sum[c] += Vec3(x, y, z) + origin;
     tau[c] += thickness[v];
     ++count[c];
   });
@@ -81,7 +83,7 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
       if (c == kNoCell || !on_boundary[c] || count[c] == 0 || !is_rim(x, y, z, c)) {
         return;
       }
-      f(c, Vec3(x, y, z));
+      f(c, Vec3(x, y, z) + origin);
     });
   };
   for_each_rim([&](uint32_t c, const Vec3& p) {
@@ -109,8 +111,8 @@ void AddRim(const VoxelSet& set, const NeighborTable& neighbors,
     // Not past the image's outermost voxel centres: where a sheet runs out of the image
     // its outline is the image's edge, and the volume mesh's box face lies there.
     const Vec3 pushed = q + outward[g] * options.rim_push_voxels;
-    const double extent[3] = {double(set.dims().nx - 1), double(set.dims().ny - 1),
-                              double(set.dims().nz - 1)};
+    const Dims image = options.image.num_voxels() > 0 ? options.image : set.dims();
+    const double extent[3] = {double(image.nx - 1), double(image.ny - 1), double(image.nz - 1)};
     for (int k = 0; k < 3; ++k) {
       const bool leaves = pushed[k] < 0 || pushed[k] > extent[k];
       q[k] = leaves ? std::clamp(q[k], 0.0, extent[k]) : pushed[k];
@@ -156,7 +158,8 @@ void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
     }
   }
   if (edges == 0) return;
-  const double max_edge = 1.5 * edge_sum / edges;
+  const double max_edge = options.crack_max_edge_voxels > 0 ? options.crack_max_edge_voxels
+                                                            : 1.5 * edge_sum / edges;
   for (int pass = 0; pass < 4; ++pass) {
     // Boundary edges, directed as their one face walks them; the loop continues at the
     // edge leaving the end vertex.
@@ -183,7 +186,7 @@ void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
       if (angle >= options.crack_angle_degrees || Norm(pos[w] - pos[u]) > max_edge) continue;
       // The boundary runs u -> v -> w inside faces; the ear walks the edges the other way.
       const Face ear = {w, v, u};
-      if (SheetCoverage(set, {pos[u], pos[v], pos[w]}) < 0.5) continue;
+      if (SheetCoverage(set, options.origin, {pos[u], pos[v], pos[w]}) < 0.5) continue;
       if (selector->TryAdd(ear) == FaceSelector::Verdict::kKept) {
         ++closed;
         ++out->stats.crack_faces;

@@ -14,6 +14,7 @@
 #include "common/random.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/scvd/column_graph.h"
+#include "worker/pipeline/scvd/local_seeds.h"
 
 namespace sheetmesh {
 
@@ -168,6 +169,14 @@ absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& 
                                                    " and lloyd_tol ", o.lloyd_tol,
                                                    " must not be negative"));
   }
+  if (o.origin.x < 0 || o.origin.y < 0 || o.origin.z < 0) {
+    return absl::InvalidArgumentError(absl::StrCat("SCVD origin (", o.origin.x, ", ", o.origin.y,
+                                                   ", ", o.origin.z, ") must not be negative"));
+  }
+  if ((o.local || !o.generators.empty()) && !o.density.empty()) {
+    return absl::InvalidArgumentError(
+        "SCVD local seeding with a density is not supported (a density's scale is global)");
+  }
   const Dims& d = set.dims();
   const double box = static_cast<double>(std::max({d.nx, d.ny, d.nz}));
   if (o.radius_voxels > 2 * box) {
@@ -183,8 +192,9 @@ absl::Status Validate(const VoxelSet& set, double thickness, const ScvdOptions& 
 // array of coordinates: at 2048³ that would be 1 GB), or the columns' voxels.
 class NodeCoordinates {
  public:
-  NodeCoordinates(const VoxelSet& set, const ColumnGraph* columns)
-      : set_(set), columns_(columns != nullptr) {
+  // Coordinates are the set's plus `origin`.
+  NodeCoordinates(const VoxelSet& set, const ColumnGraph* columns, const Index3& origin)
+      : set_(set), columns_(columns != nullptr), o_(origin) {
     if (!columns_) return;
     xyz_.resize(columns->num_nodes());
     for (uint32_t n = 0; n < xyz_.size(); ++n) xyz_[n] = set.CoordOf(columns->node_voxel[n]);
@@ -193,16 +203,19 @@ class NodeCoordinates {
   void ForEach(F&& f) const {
     if (!columns_) {
       set_.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
-        f(static_cast<uint32_t>(v), x, y, z);
+        f(static_cast<uint32_t>(v), x + o_.x, y + o_.y, z + o_.z);
       });
       return;
     }
-    for (uint32_t n = 0; n < xyz_.size(); ++n) f(n, xyz_[n].x, xyz_[n].y, xyz_[n].z);
+    for (uint32_t n = 0; n < xyz_.size(); ++n) {
+      f(n, xyz_[n].x + o_.x, xyz_[n].y + o_.y, xyz_[n].z + o_.z);
+    }
   }
 
  private:
   const VoxelSet& set_;
   const bool columns_;
+  const Index3 o_;
   std::vector<Index3> xyz_;  // with columns: each node's voxel
 };
 
@@ -217,7 +230,9 @@ struct CellStats {
   Vec3 Centroid(uint32_t c) const { return sum[c] / weight[c]; }
 };
 
-CellStats Accumulate(const VoxelSet& set, const std::vector<uint32_t>& cell,
+// Sums in global coordinates (the set's plus `origin`), so a brick's cells sum as the
+// whole's do, to the last bit.
+CellStats Accumulate(const VoxelSet& set, const Index3& origin, const std::vector<uint32_t>& cell,
                      const std::vector<Index3>& generators, std::span<const float> density) {
   CellStats s;
   s.sum.assign(generators.size(), Vec3());
@@ -226,11 +241,13 @@ CellStats Accumulate(const VoxelSet& set, const std::vector<uint32_t>& cell,
   set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
     const uint32_t c = cell[v];
     if (c == kNoCell) return;
+    x += origin.x, y += origin.y, z += origin.z;
     const double rho = density.empty() ? 1.0 : density[v];
     s.sum[c] += Vec3(x, y, z) * rho;
     s.weight[c] += rho;
     ++s.count[c];
-    const double dx = x - generators[c].x, dy = y - generators[c].y, dz = z - generators[c].z;
+    const double dx = x - origin.x - generators[c].x, dy = y - origin.y - generators[c].y,
+                 dz = z - origin.z - generators[c].z;
     s.energy += rho * (dx * dx + dy * dy + dz * dz);
   });
   return s;
@@ -301,6 +318,67 @@ absl::StatusOr<std::vector<uint32_t>> SeedGenerators(const VoxelSet& set,
   return seeds;
 }
 
+// Local seeds (local_seeds.h) over the voxels or the columns; records each generator's
+// component in scvd.
+absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set,
+                                                  const Components& components,
+                                                  uint32_t num_nodes, const ColumnGraph* columns,
+                                                  const ScvdOptions& options, Scvd* scvd) {
+  const std::vector<uint32_t> label = components.VoxelLabels(set);
+  std::vector<uint32_t> node_label, node_voxels;
+  if (columns != nullptr) {
+    node_label.resize(num_nodes);
+    node_voxels.assign(num_nodes, 0);
+    for (uint32_t n = 0; n < num_nodes; ++n) node_label[n] = label[columns->node_voxel[n]];
+    for (uint32_t node : columns->node_of_voxel) ++node_voxels[node];
+  }
+  const double per_voxel = options.generator_count > 0
+                               ? double(options.generator_count) / double(set.size())
+                               : 1.0 / scvd->cell_volume;
+  const Index3 o = options.origin;
+  auto for_each_node = [&](auto&& f) {
+    set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+      const auto n = static_cast<uint32_t>(columns != nullptr ? columns->node_of_voxel[v] : v);
+      if (columns == nullptr || columns->node_voxel[n] == v) f(n, Index3{x + o.x, y + o.y, z + o.z});
+    });
+  };
+  LocalSeeds chosen =
+      ChooseLocalSeeds(node_voxels, columns != nullptr ? node_label : label, components.count(),
+                       per_voxel, options.seed, for_each_node);
+  if (chosen.nodes.size() >= kNoCell) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat(chosen.nodes.size(), " generators are too many"));
+  }
+  scvd->generator_component = std::move(chosen.component);
+  return std::move(chosen.nodes);
+}
+
+// The nodes of the given generators (options.generators), ascending, each once; records
+// each generator's component in scvd.
+std::vector<uint32_t> GivenSeeds(const VoxelSet& set, const Components& components,
+                                 const ColumnGraph* columns, const ScvdOptions& options,
+                                 Scvd* scvd) {
+  const Index3 o = options.origin;
+  std::vector<std::pair<uint32_t, uint32_t>> node_voxel;  // (node, voxel)
+  for (const Index3& p : options.generators) {
+    const int64_t v = set.Find(p.x - o.x, p.y - o.y, p.z - o.z);
+    if (v < 0) continue;
+    const auto voxel = static_cast<uint32_t>(v);
+    node_voxel.emplace_back(columns != nullptr ? columns->node_of_voxel[voxel] : voxel, voxel);
+  }
+  std::sort(node_voxel.begin(), node_voxel.end());
+  node_voxel.erase(std::unique(node_voxel.begin(), node_voxel.end(),
+                               [](const auto& a, const auto& b) { return a.first == b.first; }),
+                   node_voxel.end());
+  const std::vector<uint32_t> label = components.VoxelLabels(set);
+  std::vector<uint32_t> seeds;
+  for (const auto& [node, voxel] : node_voxel) {
+    seeds.push_back(node);
+    scvd->generator_component.push_back(label[voxel]);
+  }
+  return seeds;
+}
+
 // Each cell's node nearest to its centroid (ties to the lower node, so the result does not
 // depend on visiting order); `seeds` where a cell is empty.
 template <class VoxelOf>
@@ -350,19 +428,32 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
     const uint32_t cap =
         static_cast<uint32_t>(std::max(1.0, std::floor(options.max_column_thickness * t)));
     const auto block = static_cast<uint32_t>(std::clamp(std::round(t), 1.0, 64.0));
-    SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap, block));
+    SM_ASSIGN_OR_RETURN(cg, BuildColumnGraph(set, neighbors, cap, block, options.origin));
   }
   const uint32_t num_nodes = columns ? cg.num_nodes() : static_cast<uint32_t>(set.size());
   auto voxel_of = [&](uint32_t n) { return columns ? cg.node_voxel[n] : n; };
 
-  SM_ASSIGN_OR_RETURN(std::vector<uint32_t> seeds,
-                      SeedGenerators(set, components, num_nodes, voxel_of, options, &scvd));
+  std::vector<uint32_t> seeds;
+  if (!options.generators.empty()) {
+    seeds = GivenSeeds(set, components, columns ? &cg : nullptr, options, &scvd);
+    if (seeds.empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "SCVD: none of the ", options.generators.size(), " given generators is on the sheet"));
+    }
+  } else if (options.local) {
+    SM_ASSIGN_OR_RETURN(seeds, SeedLocally(set, components, num_nodes, columns ? &cg : nullptr,
+                                           options, &scvd));
+  } else {
+    SM_ASSIGN_OR_RETURN(seeds,
+                        SeedGenerators(set, components, num_nodes, voxel_of, options, &scvd));
+  }
 
-  const NodeCoordinates nodes(set, columns ? &cg : nullptr);
+  const NodeCoordinates nodes(set, columns ? &cg : nullptr, options.origin);
   std::vector<Index3> gen(seeds.size());
   for (size_t i = 0; i < seeds.size(); ++i) gen[i] = set.CoordOf(voxel_of(seeds[i]));
 
-  const int max_growths = std::max(1, options.lloyd_max_iter + 1);
+  const bool given = !options.generators.empty();
+  const int max_growths = given ? 1 : std::max(1, options.lloyd_max_iter + 1);
   std::vector<uint32_t> cell(set.size());
   CellStats stats;
   for (int it = 0; it < max_growths; ++it) {
@@ -375,10 +466,10 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
       std::vector<uint32_t>().swap(cell);  // not needed while the cells grow again
       SM_ASSIGN_OR_RETURN(cell, GrowCells(neighbors, seeds, step));
     }
-    stats = Accumulate(set, cell, gen, options.density);
+    stats = Accumulate(set, options.origin, cell, gen, options.density);
     scvd.energy.push_back(stats.energy);
     scvd.iterations = it + 1;
-    if (it > 0) {
+    if (it > 0 && !options.local && !given) {
       const double prev = scvd.energy[it - 1];
       if (prev <= 0 || std::abs(prev - stats.energy) / prev < options.lloyd_tol) {
         scvd.converged = true;
@@ -402,7 +493,8 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
   scvd.cell_size = std::move(stats.count);
   scvd.centroid.resize(scvd.generators.size());
   for (size_t c = 0; c < scvd.centroid.size(); ++c) {
-    scvd.centroid[c] = scvd.cell_size[c] > 0 ? stats.Centroid(c) : Vec3::Of(scvd.generators[c]);
+    scvd.centroid[c] = scvd.cell_size[c] > 0 ? stats.Centroid(c) - Vec3::Of(options.origin)
+                                             : Vec3::Of(scvd.generators[c]);
   }
   scvd.adjacency = CellAdjacency(neighbors, cell);
   scvd.cell = std::move(cell);

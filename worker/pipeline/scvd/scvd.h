@@ -41,6 +41,21 @@ struct ScvdOptions {
   double auto_column_ratio = 1.2;     // kAuto: the r / t̄ below which columns are used
   double max_column_thickness = 3.0;  // kColumns: runs longer than this many t̄ are extent,
                                       // not thickness, and are not merged into columns
+  // Local: every choice depends only on the sheet near it, so a brick of the volume with a
+  // halo builds the cells of its core as the whole volume does (issue 47). Generators are
+  // drawn by a hash of each node's global position (origin + its coordinates; see
+  // local_seeds.h: formula 3 in expectation, or generator_count / the set's voxels per
+  // voxel), their ids follow the nodes' (z, y, x) order so ties go the same way in any box
+  // that holds them, centroids are taken in global coordinates, and exactly lloyd_max_iter
+  // Lloyd steps run (lloyd_tol is not used: the energy is the whole diagram's); a fixed
+  // point still ends them. Not with a density (its normalisation is global).
+  bool local = false;
+  Index3 origin;  // the global position of the set's voxel (0, 0, 0); non-negative
+  // Given: these generators (global positions; those off the set's nodes are passed by,
+  // two on one node count once) and one growth, no Lloyd step — a brick's second pass,
+  // after the generators of all bricks are gathered. Implies local's ids and coordinates.
+  // The caller keeps it alive.
+  std::span<const Index3> generators;
   // ρ of formula 2, one per voxel of the set, all positive; empty: ρ = 1. Centroids and the
   // energy weigh each voxel by it, and seeds are drawn as sqrt ρ, so cells are smaller
   // where it is larger. The caller keeps it alive.

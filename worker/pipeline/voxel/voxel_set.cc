@@ -103,6 +103,22 @@ VoxelSet VoxelSet::Filter(std::span<const uint8_t> keep) const {
   return std::move(builder).Build();
 }
 
+VoxelSet VoxelSet::Crop(const Index3& lo, const Dims& dims) const {
+  Builder builder(dims);
+  const int64_t z0 = std::max<int64_t>(lo.z, 0), z1 = std::min<int64_t>(lo.z + dims.nz, dims_.nz);
+  const int64_t y0 = std::max<int64_t>(lo.y, 0), y1 = std::min<int64_t>(lo.y + dims.ny, dims_.ny);
+  for (int64_t z = z0; z < z1; ++z) {
+    for (int64_t y = y0; y < y1; ++y) {
+      for (const Run& run : RowRuns(y, z)) {
+        const int64_t x0 = std::max<int64_t>(run.x0, lo.x);
+        const int64_t x1 = std::min<int64_t>(run.x1, lo.x + dims.nx);
+        if (x0 < x1) builder.AddRun(y - lo.y, z - lo.z, x0 - lo.x, x1 - lo.x);
+      }
+    }
+  }
+  return std::move(builder).Build();
+}
+
 uint64_t VoxelSet::MemoryBytes() const {
   return row_begin_.capacity() * sizeof(int64_t) + runs_.capacity() * sizeof(Run) +
          run_first_.capacity() * sizeof(uint64_t);

@@ -85,6 +85,10 @@ class VoxelSet {
   // The voxels whose flag is set; `keep` is aligned with this set's voxel order.
   VoxelSet Filter(std::span<const uint8_t> keep) const;
 
+  // The voxels in the box of `dims` whose corner is `lo`, as a set of that box (voxel lo is
+  // its (0, 0, 0)); the box may reach outside this one.
+  VoxelSet Crop(const Index3& lo, const Dims& dims) const;
+
   // Approximate heap bytes held.
   uint64_t MemoryBytes() const;
 

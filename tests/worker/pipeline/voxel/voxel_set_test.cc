@@ -3,9 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 #include <tuple>
+#include <vector>
 
 namespace sheetmesh {
 namespace {
@@ -107,6 +109,30 @@ TEST(VoxelSetTest, BoundsOfEmptyAndNonEmptySets) {
   s.Bounds(&lo, &hi);
   EXPECT_EQ(lo, (Index3{2, 1, 4}));
   EXPECT_EQ(hi, (Index3{7, 3, 5}));
+}
+
+TEST(VoxelSetTest, CropKeepsTheBoxsVoxelsInItsOwnFrame) {
+  std::vector<Index3> all;
+  for (int z = 0; z < 9; ++z)
+    for (int y = 0; y < 7; ++y)
+      for (int x = 0; x < 11; ++x)
+        if ((x * 7 + y * 3 + z * 5) % 4 != 0) all.push_back({x, y, z});
+  const VoxelSet set = VoxelSet::FromIndices({11, 7, 9}, all);
+  // A box reaching past the set's on two sides.
+  const Index3 lo{-2, 3, 4};
+  const Dims box{6, 6, 8};
+  const VoxelSet crop = set.Crop(lo, box);
+  EXPECT_EQ(crop.dims(), box);
+  std::vector<Index3> want;
+  for (const Index3& p : all) {
+    const Index3 q{p.x - lo.x, p.y - lo.y, p.z - lo.z};
+    if (box.Contains(q.x, q.y, q.z)) want.push_back(q);
+  }
+  std::sort(want.begin(), want.end(), [](const Index3& a, const Index3& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  EXPECT_EQ(crop.ToIndices(), want);
+  EXPECT_TRUE(set.Crop({20, 0, 0}, {4, 4, 4}).empty());
 }
 
 }  // namespace

@@ -1,0 +1,213 @@
+// The local SCVD (ScvdOptions::local): a brick of the volume with a halo builds, in its
+// core, the cells the whole volume builds — the property bricked sheet stages rest on.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "tests/testing/status_matchers.h"
+#include "worker/pipeline/phantom/phantom.h"
+#include "worker/pipeline/phantom/phantom_presets.h"
+#include "worker/pipeline/scvd/scvd.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::StatusIs;
+using ::testing::HasSubstr;
+
+// The sheet voxels (no specks) of a preset.
+VoxelSet PresetSheets(const std::string& name, const Dims& dims) {
+  absl::StatusOr<PhantomOptions> o = PhantomPreset(name);
+  EXPECT_TRUE(o.ok()) << o.status();
+  o->num_specks = 0;
+  o->dims = dims;
+  absl::StatusOr<PhantomTruth> t = PlanPhantom(*o);
+  EXPECT_TRUE(t.ok()) << t.status();
+  absl::StatusOr<DenseVolume> v = GeneratePhantomDense(&*t);
+  EXPECT_TRUE(v.ok()) << v.status();
+  VoxelSet::Builder b(o->dims);
+  for (int z = 0; z < o->dims.nz; ++z)
+    for (int y = 0; y < o->dims.ny; ++y)
+      for (int x = 0; x < o->dims.nx; ++x)
+        if (v->At(x, y, z) != 0) b.AddVoxel(x, y, z);
+  return std::move(b).Build();
+}
+
+struct Diagram {
+  SheetAnalysis sheet;
+  Scvd scvd;
+};
+
+Diagram Local(VoxelSet set, const Index3& origin, double r, double thickness, int steps) {
+  Diagram d;
+  absl::StatusOr<SheetAnalysis> a = AnalyzeSheet(std::move(set));
+  EXPECT_TRUE(a.ok()) << a.status();
+  d.sheet = std::move(a).value();
+  ScvdOptions o;
+  o.local = true;
+  o.origin = origin;
+  o.radius_voxels = r;
+  o.mean_thickness_voxels = thickness;
+  o.lloyd_max_iter = steps;
+  absl::StatusOr<Scvd> s = BuildScvd(d.sheet.set, d.sheet.neighbors, d.sheet.components,
+                                     d.sheet.thickness_stats.mean, o);
+  EXPECT_TRUE(s.ok()) << s.status();
+  d.scvd = std::move(s).value();
+  return d;
+}
+
+// The voxels of the core box [lo, lo + size) whose cell's generator (by its global
+// position) differs between the whole and a brick of core and halo.
+struct Mismatch {
+  uint64_t core_voxels = 0;
+  uint64_t differ = 0;
+};
+
+Mismatch CompareCore(const Diagram& whole, const Index3& lo, const Dims& size, int halo,
+                     double r, int steps) {
+  const Dims& d = whole.sheet.set.dims();
+  const Index3 blo{std::max(0, lo.x - halo), std::max(0, lo.y - halo), std::max(0, lo.z - halo)};
+  const Index3 bhi{std::min<int>(d.nx, lo.x + size.nx + halo),
+                   std::min<int>(d.ny, lo.y + size.ny + halo),
+                   std::min<int>(d.nz, lo.z + size.nz + halo)};
+  const Dims bdims{bhi.x - blo.x, bhi.y - blo.y, bhi.z - blo.z};
+  if (whole.sheet.set.Crop(lo, size).empty()) return {};
+  const Diagram brick = Local(whole.sheet.set.Crop(blo, bdims), blo, r,
+                              whole.sheet.thickness_stats.mean, steps);
+  Mismatch m;
+  whole.sheet.set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
+    if (x < lo.x || y < lo.y || z < lo.z || x >= lo.x + size.nx || y >= lo.y + size.ny ||
+        z >= lo.z + size.nz) {
+      return;
+    }
+    ++m.core_voxels;
+    const Index3 g = whole.scvd.generators[whole.scvd.cell[v]];
+    const int64_t bv = brick.sheet.set.Find(x - blo.x, y - blo.y, z - blo.z);
+    const Index3 b = brick.scvd.generators[brick.scvd.cell[bv]];
+    if (b.x + blo.x != g.x || b.y + blo.y != g.y || b.z + blo.z != g.z) ++m.differ;
+  });
+  return m;
+}
+
+// Measured over r = 3, 7, 12 and 3 to 20 Lloyd steps on three presets (bench/RESULTS.md):
+// the core's cells equal the whole's once the halo is about 7 r; a thick slab grown over
+// columns reaches further with every step.
+TEST(ScvdLocalTest, ABrickWithAHaloBuildsTheWholeVolumesCellsInItsCore) {
+  const VoxelSet sheets = PresetSheets("rough_network", {200, 200, 160});
+  const Dims core{40, 40, 40};
+  const Index3 lo{80, 80, 60};
+  for (double r : {3.0, 7.0}) {
+    const Diagram whole = Local(sheets, {}, r, 0, 8);
+    const Mismatch m = CompareCore(whole, lo, core, static_cast<int>(9 * r) + 8, r, 8);
+    ASSERT_GT(m.core_voxels, 1000u) << "the core must hold sheet";
+    EXPECT_EQ(m.differ, 0u) << "r = " << r;
+    // A halo too short for the Lloyd steps' reach gives other cells near the seams: the
+    // comparison can fail.
+    const Mismatch short_halo = CompareCore(whole, lo, core, 4, r, 8);
+    EXPECT_GT(short_halo.differ, 0u) << "r = " << r;
+  }
+}
+
+TEST(ScvdLocalTest, TheSameVoxelsInAnotherBoxGiveTheSameGlobalDiagram) {
+  const VoxelSet sheets = PresetSheets("grazing_sheet", {140, 120, 80});
+  // The same voxels 7, 5 and 3 further on in a larger box, read with origin 0, against the
+  // original box read with origin (7, 5, 3): the same global voxels, the same generators.
+  const Index3 shift{7, 5, 3};
+  VoxelSet::Builder b({150, 130, 90});
+  sheets.ForEachRun([&](int32_t y, int32_t z, const sheetmesh::Run& run, uint64_t) {
+    b.AddRun(y + shift.y, z + shift.z, run.x0 + shift.x, run.x1 + shift.x);
+  });
+  const Diagram big = Local(std::move(b).Build(), {}, 5, 5.0, 8);
+  const Diagram small = Local(sheets, shift, 5, 5.0, 8);
+  ASSERT_EQ(big.scvd.num_generators(), small.scvd.num_generators());
+  for (uint32_t g = 0; g < big.scvd.num_generators(); ++g) {
+    const Index3 p = small.scvd.generators[g];
+    EXPECT_EQ(big.scvd.generators[g], (Index3{p.x + shift.x, p.y + shift.y, p.z + shift.z}));
+    EXPECT_EQ(big.scvd.centroid[g] - small.scvd.centroid[g], Vec3::Of(shift));
+  }
+  // Seen from another origin, the same set draws other generators (the hash is of the
+  // global position), about as many.
+  const Diagram elsewhere = Local(sheets, {3, 0, 0}, 5, 5.0, 8);
+  EXPECT_NE(elsewhere.scvd.generators, small.scvd.generators);
+  EXPECT_NEAR(double(elsewhere.scvd.num_generators()), double(small.scvd.num_generators()),
+              0.15 * small.scvd.num_generators());
+}
+
+TEST(ScvdLocalTest, GeneratorsFollowFormula3InExpectation) {
+  const VoxelSet sheets = PresetSheets("shallow_network", {160, 160, 120});
+  for (double r : {2.0, 4.0, 8.0}) {
+    const Diagram d = Local(sheets, {}, r, 0, 0);
+    const double expected = double(sheets.size()) / d.scvd.cell_volume;
+    // Poisson: within four standard deviations, plus the components no hash chose.
+    EXPECT_NEAR(d.scvd.num_generators(), expected,
+                4 * std::sqrt(expected) + d.sheet.components.count())
+        << "r = " << r;
+    std::vector<int> per_component(d.sheet.components.count(), 0);
+    for (uint32_t c : d.scvd.generator_component) ++per_component[c];
+    for (int n : per_component) EXPECT_GE(n, 1) << "every component gets a generator";
+    EXPECT_TRUE(std::is_sorted(d.scvd.generator_voxel.begin(), d.scvd.generator_voxel.end()))
+        << "ids follow the voxels' order";
+  }
+}
+
+TEST(ScvdLocalTest, GivenGeneratorsGrowOnceInPositionOrder) {
+  const VoxelSet sheets = PresetSheets("grazing_sheet", {140, 120, 80});
+  const Diagram whole = Local(sheets, {}, 6, 0, 8);
+  auto grow = [&](std::vector<Index3> given) {
+    ScvdOptions o;
+    o.radius_voxels = 6;
+    o.generators = given;
+    absl::StatusOr<Scvd> s = BuildScvd(whole.sheet.set, whole.sheet.neighbors,
+                                       whole.sheet.components, whole.sheet.thickness_stats.mean, o);
+    EXPECT_TRUE(s.ok()) << s.status();
+    return std::move(s).value();
+  };
+  std::vector<Index3> given = whole.scvd.generators;
+  const Scvd once = grow(given);
+  EXPECT_EQ(once.iterations, 1);
+  std::vector<Index3> sorted = whole.scvd.generators;
+  std::sort(sorted.begin(), sorted.end(), [](const Index3& a, const Index3& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  EXPECT_EQ(once.generators, sorted) << "ids in (z, y, x) order";
+  // Any order, one twice, one off the sheet: the same diagram.
+  std::reverse(given.begin(), given.end());
+  given.push_back(given.front());
+  given.push_back({0, 0, 0});
+  ASSERT_FALSE(whole.sheet.set.Contains(0, 0, 0));
+  const Scvd again = grow(given);
+  EXPECT_EQ(again.generators, once.generators);
+  EXPECT_EQ(again.cell, once.cell);
+  for (uint32_t c : once.cell) ASSERT_NE(c, kNoCell) << "every component has a generator";
+
+  ScvdOptions o;
+  o.generators = std::vector<Index3>{{0, 0, 0}};
+  EXPECT_THAT(BuildScvd(whole.sheet.set, whole.sheet.neighbors, whole.sheet.components,
+                        whole.sheet.thickness_stats.mean, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("given generators")));
+}
+
+TEST(ScvdLocalTest, BadLocalParametersAreInvalidArgument) {
+  const VoxelSet sheets = PresetSheets("grazing_sheet", {140, 120, 80});
+  absl::StatusOr<SheetAnalysis> a = AnalyzeSheet(sheets);
+  ASSERT_TRUE(a.ok()) << a.status();
+  ScvdOptions o;
+  o.local = true;
+  o.origin = {0, -4, 0};
+  EXPECT_THAT(BuildScvd(a->set, a->neighbors, a->components, a->thickness_stats.mean, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("origin (0, -4, 0)")));
+  o.origin = {};
+  const std::vector<float> rho(a->set.size(), 1.0f);
+  o.density = rho;
+  EXPECT_THAT(BuildScvd(a->set, a->neighbors, a->components, a->thickness_stats.mean, o),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("density")));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -1,0 +1,222 @@
+#include "worker/pipeline/surface/bricked_surface.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/container/flat_hash_map.h"
+#include "absl/strings/str_cat.h"
+#include "common/status_macros.h"
+#include "worker/pipeline/scvd/dual_triangles.h"
+#include "worker/pipeline/voxel/sheet_analysis.h"
+
+namespace sheetmesh {
+namespace {
+
+// The cores along one axis of n voxels: [start, end) pairs of a grid of side `b` whose
+// lines pass through `origin`.
+std::vector<std::pair<int32_t, int32_t>> AxisCores(int64_t n, int32_t b, int32_t origin) {
+  int64_t s = ((origin % b) + b) % b;
+  if (s > 0) s -= b;
+  std::vector<std::pair<int32_t, int32_t>> out;
+  for (int64_t a = s; a < n; a += b) {
+    out.emplace_back(static_cast<int32_t>(std::max<int64_t>(a, 0)),
+                     static_cast<int32_t>(std::min<int64_t>(a + b, n)));
+  }
+  return out;
+}
+
+Vec3 Global(const Vec3& local, const Index3& lo) { return local + Vec3::Of(lo); }
+Index3 Global(const Index3& local, const Index3& lo) {
+  return {local.x + lo.x, local.y + lo.y, local.z + lo.z};
+}
+
+absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) {
+  return AnalyzeSheet(crop);
+}
+
+}  // namespace
+
+int SurfaceHalo(double r, double t_max) {
+  return static_cast<int>(std::ceil(std::max(6 * r + 8, t_max + 2 * r)));
+}
+
+absl::StatusOr<std::vector<BrickBox>> SurfaceBrickGrid(const Dims& volume,
+                                                       const BrickedSurfaceOptions& options) {
+  const Dims& b = options.brick;
+  if (b.nx < 1 || b.ny < 1 || b.nz < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("bricks.brick (", b.nx, ", ", b.ny, ", ", b.nz,
+                                                   ") must be at least one voxel a side"));
+  }
+  if (options.halo < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("bricks.halo ", options.halo, " voxels must not be negative"));
+  }
+  const int h = options.halo;
+  std::vector<BrickBox> out;
+  for (const auto& [z0, z1] : AxisCores(volume.nz, b.nz, options.grid_origin.z)) {
+    for (const auto& [y0, y1] : AxisCores(volume.ny, b.ny, options.grid_origin.y)) {
+      for (const auto& [x0, x1] : AxisCores(volume.nx, b.nx, options.grid_origin.x)) {
+        BrickBox box;
+        box.core_lo = {x0, y0, z0};
+        box.core = {x1 - x0, y1 - y0, z1 - z0};
+        box.lo = {std::max(0, x0 - h), std::max(0, y0 - h), std::max(0, z0 - h)};
+        const Index3 hi{static_cast<int32_t>(std::min<int64_t>(volume.nx, x1 + h)),
+                        static_cast<int32_t>(std::min<int64_t>(volume.ny, y1 + h)),
+                        static_cast<int32_t>(std::min<int64_t>(volume.nz, z1 + h))};
+        box.dims = {hi.x - box.lo.x, hi.y - box.lo.y, hi.z - box.lo.z};
+        box.image = volume;
+        out.push_back(box);
+      }
+    }
+  }
+  return out;
+}
+
+absl::StatusOr<std::vector<Index3>> BrickGenerators(const VoxelSet& crop, const BrickBox& brick,
+                                                    double mean_thickness,
+                                                    const ScvdOptions& options) {
+  std::vector<Index3> out;
+  if (crop.empty()) return out;
+  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeCrop(crop));
+  ScvdOptions o = options;
+  o.local = true;
+  o.origin = brick.lo;
+  o.mean_thickness_voxels = mean_thickness;
+  o.generators = {};
+  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                           mean_thickness, o));
+  for (const Index3& g : scvd.generators) {
+    const Index3 p = Global(g, brick.lo);
+    if (brick.InCore(p)) out.push_back(p);
+  }
+  return out;
+}
+
+absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
+                                          std::span<const Index3> generators,
+                                          double mean_thickness, const SurfaceOptions& options) {
+  BrickFaces out;
+  out.crop_voxels = crop.size();
+  std::vector<Index3> mine;
+  for (const Index3& g : generators) {
+    if (brick.InBox(g) && crop.Contains(g.x - brick.lo.x, g.y - brick.lo.y, g.z - brick.lo.z)) {
+      mine.push_back(g);
+    }
+  }
+  if (mine.empty()) return out;
+  SM_ASSIGN_OR_RETURN(SheetAnalysis sheet, AnalyzeCrop(crop));
+  ScvdOptions o = options.scvd;
+  o.local = true;
+  o.origin = brick.lo;
+  o.mean_thickness_voxels = mean_thickness;
+  o.generators = mine;
+  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                                           mean_thickness, o));
+  const uint32_t num_gen = scvd.num_generators();
+  std::vector<Vec3> positions(num_gen);
+  for (uint32_t g = 0; g < num_gen; ++g) {
+    positions[g] = Global(options.placement == VertexPlacement::kCentroid
+                              ? scvd.centroid[g]
+                              : Vec3::Of(scvd.generators[g]),
+                          brick.lo);
+  }
+  DualTriangleOptions dual = options.dual;
+  dual.origin = brick.lo;
+  dual.image = brick.image;
+  if (dual.crack_max_edge_voxels <= 0) {
+    // A regular mesh whose vertices each stand for one cell's layer of 1 + 2 r (r - 1)
+    // voxels (formula 3) has edges of sqrt(2 A / sqrt 3).
+    const double r = options.scvd.radius_voxels;
+    dual.crack_max_edge_voxels = 1.5 * std::sqrt(2 * (1 + 2 * r * (r - 1)) / std::sqrt(3.0));
+  }
+  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
+                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd,
+                                      positions, dual));
+  // Mean τ per cell, for the generators' vertices.
+  std::vector<double> tau(num_gen, 0.0);
+  for (size_t v = 0; v < scvd.cell.size(); ++v) {
+    if (scvd.cell[v] != kNoCell) tau[scvd.cell[v]] += sheet.thickness[v];
+  }
+  auto generator_of = [&](uint32_t id) { return id < num_gen ? id : tri.rim_cell[id - num_gen]; };
+  absl::flat_hash_map<uint32_t, uint32_t> vertex_of;
+  for (const Face& f : tri.faces) {
+    Index3 least = Global(scvd.generators[generator_of(f[0])], brick.lo);
+    for (int k = 1; k < 3; ++k) {
+      const Index3 p = Global(scvd.generators[generator_of(f[k])], brick.lo);
+      if (PositionLess(p, least)) least = p;
+    }
+    if (!brick.InCore(least)) continue;
+    Face kept;
+    for (int k = 0; k < 3; ++k) {
+      const auto [it, added] = vertex_of.try_emplace(f[k], static_cast<uint32_t>(out.keys.size()));
+      kept[k] = it->second;
+      if (!added) continue;
+      const uint32_t g = generator_of(f[k]);
+      const bool rim = f[k] >= num_gen;
+      out.keys.push_back({Global(scvd.generators[g], brick.lo), rim});
+      out.positions.push_back(rim ? tri.rim_positions[f[k] - num_gen] : positions[g]);
+      out.thickness.push_back(rim ? tri.rim_thickness[f[k] - num_gen]
+                                  : static_cast<float>(scvd.cell_size[g] > 0
+                                                           ? tau[g] / scvd.cell_size[g]
+                                                           : 0.0));
+    }
+    out.faces.push_back(kept);
+  }
+  return out;
+}
+
+absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double mean_thickness,
+                                                   const SurfaceOptions& options,
+                                                   const BrickedSurfaceOptions& bricks,
+                                                   std::span<const Index3> generators,
+                                                   const Progress& progress) {
+  SM_ASSIGN_OR_RETURN(std::vector<BrickBox> grid, SurfaceBrickGrid(set.dims(), bricks));
+  BrickedSurface out;
+  const double pass1 = generators.empty() ? 0.5 : 0.0;
+  if (generators.empty()) {
+    for (size_t i = 0; i < grid.size(); ++i) {
+      SM_RETURN_IF_ERROR(progress.Update(pass1 * i / grid.size()));
+      const VoxelSet crop = set.Crop(grid[i].lo, grid[i].dims);
+      SM_ASSIGN_OR_RETURN(std::vector<Index3> mine,
+                          BrickGenerators(crop, grid[i], mean_thickness, options.scvd));
+      out.generators.insert(out.generators.end(), mine.begin(), mine.end());
+    }
+  } else {
+    out.generators.assign(generators.begin(), generators.end());
+  }
+  std::sort(out.generators.begin(), out.generators.end(), PositionLess);
+
+  absl::flat_hash_map<SurfaceVertexKey, uint32_t> vertex_of;
+  TriangleMesh& mesh = out.mesh;
+  for (size_t i = 0; i < grid.size(); ++i) {
+    SM_RETURN_IF_ERROR(progress.Update(pass1 + (1 - pass1) * i / grid.size()));
+    const VoxelSet crop = set.Crop(grid[i].lo, grid[i].dims);
+    if (crop.empty()) continue;
+    ++out.bricks;
+    out.largest_crop_voxels = std::max(out.largest_crop_voxels, crop.size());
+    SM_ASSIGN_OR_RETURN(BrickFaces piece, BrickTriangles(crop, grid[i], out.generators,
+                                                         mean_thickness, options));
+    std::vector<uint32_t> id(piece.keys.size());
+    for (size_t v = 0; v < piece.keys.size(); ++v) {
+      const auto [it, added] =
+          vertex_of.try_emplace(piece.keys[v], static_cast<uint32_t>(mesh.vertices.size()));
+      id[v] = it->second;
+      if (added) {
+        mesh.vertices.push_back(piece.positions[v]);
+        mesh.vertex_thickness_voxels.push_back(piece.thickness[v]);
+        out.vertex_key.push_back(piece.keys[v]);
+      } else if (Norm2(mesh.vertices[it->second] - piece.positions[v]) > 0 ||
+                 mesh.vertex_thickness_voxels[it->second] != piece.thickness[v]) {
+        ++out.disagreeing_vertices;
+      }
+    }
+    for (const Face& f : piece.faces) {
+      const Face g{id[f[0]], id[f[1]], id[f[2]]};
+      mesh.faces.push_back(g);
+    }
+  }
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
+}
+
+}  // namespace sheetmesh

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/container/flat_hash_map.h"
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/scvd/dual_triangles.h"
@@ -30,6 +31,15 @@ Index3 Global(const Index3& local, const Index3& lo) {
   return {local.x + lo.x, local.y + lo.y, local.z + lo.z};
 }
 
+// Chebyshev distance from `p` to the brick's core, voxels (0 inside).
+int64_t CoreDistance(const BrickBox& b, const Index3& p) {
+  auto axis = [](int64_t v, int64_t lo, int64_t n) {
+    return v < lo ? lo - v : (v >= lo + n ? v - (lo + n) + 1 : 0);
+  };
+  return std::max({axis(p.x, b.core_lo.x, b.core.nx), axis(p.y, b.core_lo.y, b.core.ny),
+                   axis(p.z, b.core_lo.z, b.core.nz)});
+}
+
 absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) {
   return AnalyzeSheet(crop);
 }
@@ -37,7 +47,7 @@ absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) {
 }  // namespace
 
 int SurfaceHalo(double r, double t_max) {
-  return static_cast<int>(std::ceil(std::max(6 * r + 8, t_max + 2 * r)));
+  return static_cast<int>(std::ceil(std::max(6 * r + 8, t_max + 4 * r)));
 }
 
 absl::StatusOr<std::vector<BrickBox>> SurfaceBrickGrid(const Dims& volume,
@@ -94,7 +104,8 @@ absl::StatusOr<std::vector<Index3>> BrickGenerators(const VoxelSet& crop, const 
 
 absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
                                           std::span<const Index3> generators,
-                                          double mean_thickness, const SurfaceOptions& options) {
+                                          double mean_thickness, const SurfaceOptions& options,
+                                          int seam_band) {
   BrickFaces out;
   out.crop_voxels = crop.size();
   std::vector<Index3> mine;
@@ -145,7 +156,17 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
       const Index3 p = Global(scvd.generators[generator_of(f[k])], brick.lo);
       if (PositionLess(p, least)) least = p;
     }
-    if (!brick.InCore(least)) continue;
+    if (!brick.InCore(least)) {
+      if (seam_band > 0 && CoreDistance(brick, least) <= seam_band) {
+        SurfaceFaceKey key;
+        for (int k = 0; k < 3; ++k) {
+          key[k] = {Global(scvd.generators[generator_of(f[k])], brick.lo), f[k] >= num_gen};
+        }
+        std::sort(key.begin(), key.end());
+        out.band.push_back(key);
+      }
+      continue;
+    }
     Face kept;
     for (int k = 0; k < 3; ++k) {
       const auto [it, added] = vertex_of.try_emplace(f[k], static_cast<uint32_t>(out.keys.size()));
@@ -165,6 +186,77 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
   return out;
 }
 
+namespace {
+
+// Pass 2 over `grid` and the join into `out` (mesh, keys, counts); returns the seam band's
+// mismatches.
+absl::StatusOr<uint64_t> TriangulateBricks(const VoxelSet& set, double mean_thickness,
+                                           const SurfaceOptions& options,
+                                           const std::vector<BrickBox>& grid, int band,
+                                           const Progress& progress, BrickedSurface* out) {
+  absl::flat_hash_map<SurfaceVertexKey, uint32_t> vertex_of;
+  absl::flat_hash_map<SurfaceFaceKey, uint32_t> owner;  // each kept face's brick
+  std::vector<absl::flat_hash_set<SurfaceFaceKey>> band_faces(grid.size());
+  TriangleMesh& mesh = out->mesh;
+  mesh = {};
+  out->vertex_key.clear();
+  out->bricks = 0;
+  out->largest_crop_voxels = 0;
+  out->disagreeing_vertices = 0;
+  for (size_t i = 0; i < grid.size(); ++i) {
+    SM_RETURN_IF_ERROR(progress.Update(double(i) / grid.size()));
+    const VoxelSet crop = set.Crop(grid[i].lo, grid[i].dims);
+    if (crop.empty()) continue;
+    ++out->bricks;
+    out->largest_crop_voxels = std::max(out->largest_crop_voxels, crop.size());
+    SM_ASSIGN_OR_RETURN(BrickFaces piece, BrickTriangles(crop, grid[i], out->generators,
+                                                         mean_thickness, options, band));
+    band_faces[i].insert(piece.band.begin(), piece.band.end());
+    std::vector<uint32_t> id(piece.keys.size());
+    for (size_t v = 0; v < piece.keys.size(); ++v) {
+      const auto [it, added] =
+          vertex_of.try_emplace(piece.keys[v], static_cast<uint32_t>(mesh.vertices.size()));
+      id[v] = it->second;
+      if (added) {
+        mesh.vertices.push_back(piece.positions[v]);
+        mesh.vertex_thickness_voxels.push_back(piece.thickness[v]);
+        out->vertex_key.push_back(piece.keys[v]);
+      } else if (Norm2(mesh.vertices[it->second] - piece.positions[v]) > 0 ||
+                 mesh.vertex_thickness_voxels[it->second] != piece.thickness[v]) {
+        ++out->disagreeing_vertices;
+      }
+    }
+    for (const Face& f : piece.faces) {
+      SurfaceFaceKey key{piece.keys[f[0]], piece.keys[f[1]], piece.keys[f[2]]};
+      std::sort(key.begin(), key.end());
+      owner.emplace(key, static_cast<uint32_t>(i));
+      mesh.faces.push_back({id[f[0]], id[f[1]], id[f[2]]});
+    }
+  }
+  // Every band face a brick built is one its owner kept; every kept face near another core
+  // is one that brick built.
+  uint64_t mismatches = 0;
+  for (const auto& faces : band_faces) {
+    for (const SurfaceFaceKey& key : faces) mismatches += !owner.contains(key);
+  }
+  for (const auto& [key, i] : owner) {
+    const Index3& least = key[0].generator;
+    const BrickBox& own = grid[i];
+    const int64_t inside = std::min<int64_t>(
+        {least.x - own.core_lo.x, own.core_lo.x + own.core.nx - 1 - least.x,
+         least.y - own.core_lo.y, own.core_lo.y + own.core.ny - 1 - least.y,
+         least.z - own.core_lo.z, own.core_lo.z + own.core.nz - 1 - least.z});
+    if (inside >= band) continue;  // no other core within the band
+    for (size_t j = 0; j < grid.size(); ++j) {
+      if (j == i || CoreDistance(grid[j], least) > band) continue;
+      mismatches += !band_faces[j].contains(key);
+    }
+  }
+  return mismatches;
+}
+
+}  // namespace
+
 absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double mean_thickness,
                                                    const SurfaceOptions& options,
                                                    const BrickedSurfaceOptions& bricks,
@@ -172,7 +264,7 @@ absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double m
                                                    const Progress& progress) {
   SM_ASSIGN_OR_RETURN(std::vector<BrickBox> grid, SurfaceBrickGrid(set.dims(), bricks));
   BrickedSurface out;
-  const double pass1 = generators.empty() ? 0.5 : 0.0;
+  const double pass1 = generators.empty() ? 0.4 : 0.0;
   if (generators.empty()) {
     for (size_t i = 0; i < grid.size(); ++i) {
       SM_RETURN_IF_ERROR(progress.Update(pass1 * i / grid.size()));
@@ -186,34 +278,22 @@ absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double m
   }
   std::sort(out.generators.begin(), out.generators.end(), PositionLess);
 
-  absl::flat_hash_map<SurfaceVertexKey, uint32_t> vertex_of;
-  TriangleMesh& mesh = out.mesh;
-  for (size_t i = 0; i < grid.size(); ++i) {
-    SM_RETURN_IF_ERROR(progress.Update(pass1 + (1 - pass1) * i / grid.size()));
-    const VoxelSet crop = set.Crop(grid[i].lo, grid[i].dims);
-    if (crop.empty()) continue;
-    ++out.bricks;
-    out.largest_crop_voxels = std::max(out.largest_crop_voxels, crop.size());
-    SM_ASSIGN_OR_RETURN(BrickFaces piece, BrickTriangles(crop, grid[i], out.generators,
-                                                         mean_thickness, options));
-    std::vector<uint32_t> id(piece.keys.size());
-    for (size_t v = 0; v < piece.keys.size(); ++v) {
-      const auto [it, added] =
-          vertex_of.try_emplace(piece.keys[v], static_cast<uint32_t>(mesh.vertices.size()));
-      id[v] = it->second;
-      if (added) {
-        mesh.vertices.push_back(piece.positions[v]);
-        mesh.vertex_thickness_voxels.push_back(piece.thickness[v]);
-        out.vertex_key.push_back(piece.keys[v]);
-      } else if (Norm2(mesh.vertices[it->second] - piece.positions[v]) > 0 ||
-                 mesh.vertex_thickness_voxels[it->second] != piece.thickness[v]) {
-        ++out.disagreeing_vertices;
-      }
-    }
-    for (const Face& f : piece.faces) {
-      const Face g{id[f[0]], id[f[1]], id[f[2]]};
-      mesh.faces.push_back(g);
-    }
+  BrickedSurfaceOptions o = bricks;
+  const double r = options.scvd.radius_voxels;
+  for (int attempt = 0;; ++attempt) {
+    const int band = std::min(o.halo, o.seam_band > 0 ? o.seam_band
+                                                      : static_cast<int>(std::ceil(2 * r + 4)));
+    const double lo = pass1 + (1 - pass1) * (1 - std::pow(0.5, attempt));
+    const Progress step = progress.Sub(lo, pass1 + (1 - pass1) * (1 - std::pow(0.5, attempt + 1)));
+    SM_ASSIGN_OR_RETURN(out.seam_mismatches,
+                        TriangulateBricks(set, mean_thickness, options, grid, band, step, &out));
+    out.halo = o.halo;
+    out.retries = attempt;
+    // A vertex two bricks computed apart is a seam's disagreement too.
+    out.seam_mismatches += out.disagreeing_vertices;
+    if (out.seam_mismatches == 0 || attempt >= o.retries) break;
+    o.halo = std::max(1, 2 * o.halo);
+    SM_ASSIGN_OR_RETURN(grid, SurfaceBrickGrid(set.dims(), o));
   }
   SM_RETURN_IF_ERROR(progress.Update(1.0));
   return out;

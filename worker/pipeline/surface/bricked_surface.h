@@ -51,13 +51,21 @@ struct BrickedSurfaceOptions {
   Dims brick{256, 256, 256};  // the grid's cell, voxels
   int halo = 64;              // voxels read around each core
   Index3 grid_origin;         // a corner of the grid (the lines pass through it)
+  // The seam check: each brick also gives the faces it built whose least generator lies
+  // outside its core but within this many voxels of it (0: 2 r + 4), and the join checks
+  // them against the faces their owners kept, both ways. Where they differ, pass 2 runs
+  // again with twice the halo, up to `retries` times.
+  int seam_band = 0;
+  int retries = 2;
 };
 
 // The halo pass 2 needs for cells of radius r on a sheet whose longest thickness run is
-// t_max voxels: max(6 r + 8, t_max + 2 r). Measured, not proven (bench/RESULTS.md, "The
-// SCVD and its triangles in bricks"): on six presets at r = 2 to 15 the faces were exact
-// with halos up to 80 voxels, each at or below this; a cell stretched along a narrow strip
-// can reach further, which BrickedSurface::disagreeing_vertices then shows.
+// t_max voxels: max(6 r + 8, t_max + 4 r) — a face's far corner is about 2 r from its
+// owner's core, its cell r further, and the thickness there reads runs of up to t_max.
+// Measured, not proven (bench/RESULTS.md, "The SCVD and its triangles in bricks"): on six
+// presets at r = 2 to 15 the faces were exact from halos of 16 to 80 voxels, each at or
+// below this; a cell stretched along a narrow strip can reach further, which the seam check
+// (BrickedSurfaceOptions::seam_band) finds and mends.
 int SurfaceHalo(double r, double t_max);
 
 // The bricks covering `volume`, in (z, y, x) order. kInvalidArgument for a brick side below
@@ -84,11 +92,18 @@ struct SurfaceVertexKey {
   Index3 generator;
   bool rim = false;
   friend bool operator==(const SurfaceVertexKey&, const SurfaceVertexKey&) = default;
+  friend bool operator<(const SurfaceVertexKey& a, const SurfaceVertexKey& b) {
+    return PositionLess(a.generator, b.generator) ||
+           (a.generator == b.generator && a.rim < b.rim);
+  }
   template <typename H>
   friend H AbslHashValue(H h, const SurfaceVertexKey& k) {
     return H::combine(std::move(h), k.generator.x, k.generator.y, k.generator.z, k.rim);
   }
 };
+
+// A face by its corners' keys, sorted: the same in every brick that builds it.
+using SurfaceFaceKey = std::array<SurfaceVertexKey, 3>;
 
 // What pass 2 of one brick keeps: its faces and their vertices (global positions, the mean
 // τ along the axis runs over the vertex's cell or rim).
@@ -97,6 +112,8 @@ struct BrickFaces {
   std::vector<SurfaceVertexKey> keys;
   std::vector<Vec3> positions;
   std::vector<float> thickness;
+  // The seam band's faces (least generator outside the core, within `seam_band` of it).
+  std::vector<SurfaceFaceKey> band;
   uint64_t crop_voxels = 0;
 };
 
@@ -107,7 +124,8 @@ struct BrickFaces {
 // up to 1.5 times the edge of a regular mesh of cells of radius r (not the brick's mean).
 absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
                                           std::span<const Index3> generators,
-                                          double mean_thickness, const SurfaceOptions& options);
+                                          double mean_thickness, const SurfaceOptions& options,
+                                          int seam_band = 0);
 
 struct BrickedSurface {
   TriangleMesh mesh;  // vertices, faces, vertex_thickness_voxels (axis runs)
@@ -119,10 +137,16 @@ struct BrickedSurface {
   // pass 2's reach: each face is kept by the one brick owning its least generator, so the
   // join cannot hold a face twice, but only a halo wide enough makes the bricks agree).
   uint64_t disagreeing_vertices = 0;
+  // Faces of a seam band that the owner or a neighbour did not build alike, and vertices
+  // placed apart, at the halo finally used (0 unless the retries ran out), and that halo.
+  uint64_t seam_mismatches = 0;
+  int halo = 0;
+  int retries = 0;  // pass 2 runs beyond the first
 };
 
-// Both passes over the bricks of `set` and the join. With `generators` given, pass 1 is
-// skipped and those are used (global positions). kInvalidArgument as SurfaceBrickGrid and
+// Both passes over the bricks of `set` and the join, checked at the seams (see
+// BrickedSurfaceOptions::seam_band). With `generators` given, pass 1 is skipped and those
+// are used (global positions). kInvalidArgument as SurfaceBrickGrid and
 // BuildScvd; kCancelled if asked.
 absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double mean_thickness,
                                                    const SurfaceOptions& options,

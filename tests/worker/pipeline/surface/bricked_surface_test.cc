@@ -113,13 +113,25 @@ TEST(BrickedSurfaceTest, TheBricksGiveTheWholeVolumesFacesFromTheSameGenerators)
                             BuildBrickedSurface(sheets, t, so, bo, whole.generators));
     EXPECT_GT(bricked.bricks, 8u);
     EXPECT_EQ(bricked.disagreeing_vertices, 0u);
+    EXPECT_EQ(bricked.seam_mismatches, 0u);
+    EXPECT_EQ(bricked.retries, 0) << "the halo rule needs no second run here";
     EXPECT_EQ(FaceKeys(bricked), FaceKeys(whole));
     EXPECT_EQ(bricked.mesh.faces.size(), whole.mesh.faces.size()) << "no face twice";
-    // A halo far too short: the bricks disagree near their seams (so the check can fail).
-    bo.halo = 2;
+    // A halo far too short, no retry: the bricks disagree at their seams and the check
+    // says so.
+    bo.halo = 3;
+    bo.retries = 0;
     SM_ASSERT_OK_AND_ASSIGN(BrickedSurface short_halo,
                             BuildBrickedSurface(sheets, t, so, bo, whole.generators));
     EXPECT_NE(FaceKeys(short_halo), FaceKeys(whole));
+    EXPECT_GT(short_halo.seam_mismatches, 0u);
+    // With retries, pass 2 runs again with twice the halo until the seams agree.
+    bo.retries = 6;
+    SM_ASSERT_OK_AND_ASSIGN(BrickedSurface healed,
+                            BuildBrickedSurface(sheets, t, so, bo, whole.generators));
+    EXPECT_EQ(healed.seam_mismatches, 0u);
+    EXPECT_GT(healed.retries, 0);
+    EXPECT_EQ(FaceKeys(healed), FaceKeys(whole)) << "halo " << healed.halo;
   }
 }
 
@@ -143,6 +155,7 @@ TEST(BrickedSurfaceTest, BothPassesInBricksStayCloseToTheWholeVolume) {
     bo.halo = SurfaceHalo(4, t_max);
     SM_ASSERT_OK_AND_ASSIGN(BrickedSurface bricked, BuildBrickedSurface(sheets, t, so, bo));
     EXPECT_EQ(bricked.disagreeing_vertices, 0u);
+    EXPECT_EQ(bricked.seam_mismatches, 0u);
     const double faces = double(whole.mesh.faces.size());
     EXPECT_NEAR(double(bricked.mesh.faces.size()), faces, 0.03 * faces);
     EXPECT_NEAR(Similarity(bricked, sheets), Similarity(whole, sheets), 0.01);

@@ -6,6 +6,9 @@
 //   --mode=bricked  both passes in bricks of --brick voxels with --halo (0: SurfaceHalo)
 //   --mode=check    the whole volume's generators, then pass 2 in bricks: are the faces
 //                   the whole volume's?
+//   --mode=stream   today's one-process surface (BuildSurface: generators from one random
+//                   stream, Lloyd until the energy settles) with the same dual options and
+//                   no fitting, smoothing or orientation, for the same figures
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -22,6 +25,7 @@
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
 #include "worker/pipeline/surface/bricked_surface.h"
+#include "worker/pipeline/surface/surface_builder.h"
 #include "worker/pipeline/volume/volume_open.h"
 #include "worker/pipeline/voxel/phase_selection.h"
 #include "worker/pipeline/voxel/sheet_analysis.h"
@@ -129,8 +133,31 @@ int Measure(const std::string& path) {
       // The same, with no second pass allowed: does the halo rule alone suffice?
       s = std::move(b);
     }
+  } else if (mode == "stream") {
+    auto a = AnalyzeSheet(*set);
+    if (!a.ok()) {
+      std::cerr << a.status() << "\n";
+      return 1;
+    }
+    SurfaceOptions plain = so;
+    plain.scvd.lloyd_max_iter = 20;  // the default: up to 20, stopped by lloyd_tol
+    plain.thickness = ThicknessMeasure::kAxisRuns;
+    plain.orient = false;
+    plain.fit_walls = false;
+    plain.smooth_iterations = 0;
+    auto built = BuildSurface(*a, plain);
+    if (!built.ok()) {
+      std::cerr << built.status() << "\n";
+      return 1;
+    }
+    BrickedSurface b;
+    b.mesh = std::move(built->mesh);
+    b.generators = built->scvd.generators;
+    b.bricks = 1;
+    b.largest_crop_voxels = set->size();
+    s = std::move(b);
   } else {
-    std::cerr << "--mode=" << mode << ": give whole, bricked or check\n";
+    std::cerr << "--mode=" << mode << ": give whole, bricked, check or stream\n";
     return 2;
   }
   if (!s.ok()) {

@@ -4,8 +4,9 @@
 Runs build/bench/sheetmesh-bricked-surface-bench, each run a process of its own:
   exact  - per preset and r: the whole volume's generators, then pass 2 in bricks of 64
            with the halo SurfaceHalo(r, t_max): the same faces?
-  close  - per preset and r: both passes whole, both in bricks, and the whole volume with
-           another seed: faces and the vertex-prism similarity, to see the bricks' change
+  close  - per preset and r: both passes whole, both in bricks, the whole volume with
+           another seed, and today's one-process surface (random stream, Lloyd until the
+           energy settles): faces and the vertex-prism similarity, to see the bricks' change
            against a seed's.
   scale  - one large phantom (--scale PRESET:N), whole and in bricks of --scale_brick:
            seconds and peak memory.
@@ -73,8 +74,8 @@ def main():
             results["exact"] = rows
         if "close" in parts:
             rows = []
-            print("\n| preset | r | faces whole / bricks / seed 2 | similarity whole / bricks / "
-                  "seed 2 | bricks' change | seed's change |")
+            print("\n| preset | r | faces whole / bricks / seed 2 / stream | similarity whole / "
+                  "bricks / seed 2 / stream | bricks' change | seed's change |")
             print("|---|---|---|---|---|---|")
             for preset in PRESETS:
                 path = phantom(args.build, preset, args.dims, folder)
@@ -83,10 +84,13 @@ def main():
                     t = dict(t=whole["t"], t_max=whole["t_max"])
                     bricked = measure(args.build, path, mode="bricked", r=r, brick=64, **t)
                     other = measure(args.build, path, mode="whole", r=r, seed=2, **t)
-                    rows.append(dict(preset=preset, r=r, whole=whole, bricked=bricked, seed2=other))
+                    stream = measure(args.build, path, mode="stream", r=r, **t)
+                    rows.append(dict(preset=preset, r=r, whole=whole, bricked=bricked, seed2=other,
+                                     stream=stream))
                     print(f"| {preset} | {r} | {whole['faces']} / {bricked['faces']} / "
-                          f"{other['faces']} | {whole['similarity']:.4f} / "
-                          f"{bricked['similarity']:.4f} / {other['similarity']:.4f} | "
+                          f"{other['faces']} / {stream['faces']} | {whole['similarity']:.4f} / "
+                          f"{bricked['similarity']:.4f} / {other['similarity']:.4f} / "
+                          f"{stream['similarity']:.4f} | "
                           f"{bricked['similarity'] - whole['similarity']:+.4f}, "
                           f"{100 * (bricked['faces'] / whole['faces'] - 1):+.1f}% | "
                           f"{other['similarity'] - whole['similarity']:+.4f}, "

@@ -371,6 +371,13 @@ std::vector<ParamRow> SurfaceRows() {
                       "generators drawn by a hash of their position, ids in position order and "
                       "exactly lloyd_max_iter Lloyd steps, so a brick with a halo builds its "
                       "core's cells as the whole volume does"));
+  rows.push_back(Integer("surface.bricks", SM_MEMBER(surface.bricks.brick), "[0, 1e6]", "voxels",
+                         "build the SCVD and its triangles in bricks of this side with halos, "
+                         "checked and joined at their seams (0: the whole sheet at once)"));
+  rows.push_back(Integer("surface.bricks_halo", SM_MEMBER(surface.bricks.halo), "[0, 1e6]",
+                         "voxels",
+                         "with surface.bricks: voxels read around each brick (0: from r and the "
+                         "longest thickness run, doubled where the seams disagree)"));
   rows.push_back(Integer("surface.generators", SM_MEMBER(surface.scvd.generator_count), "[0, 1e12]",
                          "", "total generators instead of formula 3 (0: formula 3)"));
   rows.push_back(Number("surface.thickness", SM_MEMBER(surface.scvd.mean_thickness_voxels),

@@ -24,7 +24,7 @@
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
-#include "worker/pipeline/surface/surface_builder.h"
+#include "worker/pipeline/surface/surface_options.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/similarity/mesh_model.h"
 #include "worker/pipeline/similarity/similarity.h"
@@ -66,6 +67,11 @@ absl::StatusOr<SurfaceResult> BuildRequestedSurface(const SheetAnalysis& sheet,
                                                     std::span<const int32_t> piece_of_voxel,
                                                     const Progress& progress) {
   if (options.error_density > 0) {
+    if (options.bricks.brick > 0) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "surface.bricks = ", options.bricks.brick, " cannot take surface.error_density = ",
+          options.error_density, ": the error's density is scaled over the whole sheet"));
+    }
     return BuildErrorDrivenSurface(sheet, options, piece_of_voxel, progress);
   }
   return BuildSurface(sheet, options, piece_of_voxel, progress);

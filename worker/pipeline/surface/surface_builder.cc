@@ -1,6 +1,8 @@
 #include "worker/pipeline/surface/surface_builder.h"
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
@@ -10,34 +12,28 @@
 #include "worker/pipeline/mesh/smooth.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/similarity/face_attributes.h"
+#include "worker/pipeline/surface/bricked_surface.h"
 #include "worker/pipeline/surface/face_apertures.h"
 #include "worker/pipeline/surface/wall_fit.h"
 
 namespace sheetmesh {
 
-SurfaceOptions SurfaceOptions::Paper() {
-  SurfaceOptions o;
-  o.placement = VertexPlacement::kGenerator;
-  o.thickness = ThicknessMeasure::kAxisRuns;
-  o.dual.rim = false;
-  o.dual.close_cracks = false;
-  o.scvd.domain = ScvdDomain::kVoxels;
-  o.fit_walls = false;
-  o.smooth_iterations = 0;
-  return o;
-}
+namespace {
 
-absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
-                                           const SurfaceOptions& options,
-                                           std::span<const int32_t> piece_of_voxel,
-                                           const Progress& progress) {
-  SurfaceResult out;
+// The dual mesh before any fitting: vertices, faces, each vertex's generator (an index into
+// out->scvd) and its mean τ along the axis runs.
+struct DualMesh {
+  std::vector<float> vertex_tau;
+};
+
+absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const SurfaceOptions& options,
+                                       const Progress& progress, SurfaceResult* out) {
   absl::Time t0 = absl::Now();
   SM_ASSIGN_OR_RETURN(
-      out.scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components, sheet.thickness_stats.mean,
-                          options.scvd, progress.Sub(0, 0.7)));
-  out.scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
-  const Scvd& scvd = out.scvd;
+      out->scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
+                           sheet.thickness_stats.mean, options.scvd, progress.Sub(0, 0.7)));
+  out->scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  const Scvd& scvd = out->scvd;
 
   t0 = absl::Now();
   std::vector<Vec3> positions(scvd.num_generators());
@@ -51,14 +47,18 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
   // Rim vertices follow the generators in the vertex numbering of `tri`.
   const uint32_t num_gen = scvd.num_generators();
   for (size_t k = 0; k < tri.rim_positions.size(); ++k) positions.push_back(tri.rim_positions[k]);
-  out.triangle_stats = tri.stats;
-  out.triangles_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  out->triangle_stats = tri.stats;
+  out->triangles_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
 
+  // Per-vertex thickness: the mean τ over the generator's cell, or over a rim's voxels.
+  std::vector<double> cell_tau(scvd.num_generators(), 0.0);
+  for (size_t v = 0; v < scvd.cell.size(); ++v) {
+    if (scvd.cell[v] != kNoCell) cell_tau[scvd.cell[v]] += sheet.thickness[v];
+  }
   // Compact: only generators used by a face become vertices.
-  t0 = absl::Now();
+  DualMesh dual;
   std::vector<uint32_t> vertex_of(positions.size(), UINT32_MAX);
-  std::vector<uint32_t> source_of_vertex;  // id in `tri` numbering
-  TriangleMesh& mesh = out.mesh;
+  TriangleMesh& mesh = out->mesh;
   for (const Face& f : tri.faces) {
     Face g;
     for (int k = 0; k < 3; ++k) {
@@ -66,13 +66,88 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
       if (v == UINT32_MAX) {
         v = static_cast<uint32_t>(mesh.vertices.size());
         mesh.vertices.push_back(positions[f[k]]);
-        source_of_vertex.push_back(f[k]);
-        out.vertex_generator.push_back(f[k] < num_gen ? f[k] : tri.rim_cell[f[k] - num_gen]);
+        const uint32_t gen = f[k] < num_gen ? f[k] : tri.rim_cell[f[k] - num_gen];
+        out->vertex_generator.push_back(gen);
+        dual.vertex_tau.push_back(static_cast<float>(
+            f[k] >= num_gen ? tri.rim_thickness[f[k] - num_gen]
+                            : (scvd.cell_size[gen] > 0 ? cell_tau[gen] / scvd.cell_size[gen] : 0.0)));
       }
       g[k] = v;
     }
     mesh.faces.push_back(g);
   }
+  return dual;
+}
+
+absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet,
+                                         const SurfaceOptions& options, const Progress& progress,
+                                         SurfaceResult* out) {
+  if (!options.scvd.density.empty()) {
+    return absl::InvalidArgumentError(
+        "surface.bricks cannot take an error-driven density (surface.error_density): its scale "
+        "is the whole sheet's");
+  }
+  absl::Time t0 = absl::Now();
+  SurfaceOptions local = options;
+  if (local.scvd.generator_count > 0) {
+    // A count over the whole sheet: the r whose cells (formula 3) give it, so that every
+    // brick draws at the same rate: t (1 + 2 r (r - 1)) = voxels / count.
+    const double layer = double(sheet.set.size()) /
+                         (double(local.scvd.generator_count) * sheet.thickness_stats.mean);
+    local.scvd.radius_voxels = 0.5 * (1 + std::sqrt(std::max(0.0, 2 * layer - 1)));
+    local.scvd.generator_count = 0;
+  }
+  BrickedSurfaceOptions bo;
+  bo.brick = {options.bricks.brick, options.bricks.brick, options.bricks.brick};
+  const uint16_t t_max = sheet.thickness.empty()
+                             ? 0
+                             : *std::max_element(sheet.thickness.begin(), sheet.thickness.end());
+  bo.halo = options.bricks.halo > 0 ? options.bricks.halo
+                                    : SurfaceHalo(local.scvd.radius_voxels, t_max);
+  SM_ASSIGN_OR_RETURN(BrickedSurface b, BuildBrickedSurface(sheet.set, sheet.thickness_stats.mean,
+                                                            local, bo, {}, progress.Sub(0, 0.9)));
+  out->bricks = b.bricks;
+  out->brick_halo = b.halo;
+  out->seam_mismatches = b.seam_mismatches;
+  // The diagram's figures: its generators, where they lie and in which component.
+  Scvd& scvd = out->scvd;
+  scvd.generators = std::move(b.generators);
+  scvd.mean_thickness = sheet.thickness_stats.mean;
+  scvd.cell_volume = CellVolume(scvd.mean_thickness, local.scvd.radius_voxels);
+  scvd.iterations = local.scvd.lloyd_max_iter + 1;
+  const std::vector<uint32_t> label = sheet.components.VoxelLabels(sheet.set);
+  for (const Index3& g : scvd.generators) {
+    const int64_t v = sheet.set.Find(g.x, g.y, g.z);
+    scvd.generator_voxel.push_back(static_cast<uint32_t>(v));
+    scvd.generator_component.push_back(label[v]);
+  }
+  for (const SurfaceVertexKey& k : b.vertex_key) {
+    const auto it = std::lower_bound(scvd.generators.begin(), scvd.generators.end(), k.generator,
+                                     PositionLess);
+    out->vertex_generator.push_back(static_cast<uint32_t>(it - scvd.generators.begin()));
+  }
+  out->mesh = std::move(b.mesh);
+  DualMesh dual;
+  dual.vertex_tau = std::move(out->mesh.vertex_thickness_voxels);
+  out->mesh.vertex_thickness_voxels.clear();
+  out->scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  return dual;
+}
+
+}  // namespace
+
+absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
+                                           const SurfaceOptions& options,
+                                           std::span<const int32_t> piece_of_voxel,
+                                           const Progress& progress) {
+  SurfaceResult out;
+  SM_ASSIGN_OR_RETURN(DualMesh dual,
+                      options.bricks.brick > 0
+                          ? BrickedDualMesh(sheet, options, progress.Sub(0, 0.9), &out)
+                          : WholeDualMesh(sheet, options, progress.Sub(0, 0.9), &out));
+  const Scvd& scvd = out.scvd;
+  TriangleMesh& mesh = out.mesh;
+  absl::Time t0 = absl::Now();
   if (options.orient) OrientConsistently(&mesh);
   // Vertex normals (faces are oriented now, or flipped to agree) for the per-vertex measure.
   std::vector<Vec3> vnormal(mesh.vertices.size());
@@ -80,18 +155,11 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     const Vec3 n = AreaVector(Corners(mesh, f));
     for (uint32_t v : mesh.faces[f]) vnormal[v] += Dot(vnormal[v], n) < 0 ? -n : n;
   }
-  // Per-vertex thickness: the mean τ over the generator's cell.
-  std::vector<double> cell_tau(scvd.num_generators(), 0.0);
-  for (size_t v = 0; v < scvd.cell.size(); ++v) {
-    if (scvd.cell[v] != kNoCell) cell_tau[scvd.cell[v]] += sheet.thickness[v];
-  }
   mesh.vertex_thickness_voxels.resize(mesh.vertices.size());
   std::vector<int32_t> vertex_piece(mesh.vertices.size());
   for (uint32_t v = 0; v < mesh.vertices.size(); ++v) {
     const uint32_t g = out.vertex_generator[v];
-    const uint32_t src = source_of_vertex[v];
-    double tau = src >= num_gen ? tri.rim_thickness[src - num_gen]
-                                : (scvd.cell_size[g] > 0 ? cell_tau[g] / scvd.cell_size[g] : 0.0);
+    double tau = dual.vertex_tau[v];
     if (options.thickness == ThicknessMeasure::kNormal) {
       tau *= AxisRunToNormalFactor(Normalized(vnormal[v]));
     }
@@ -187,6 +255,9 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   s.topology.nonmanifold_edge_list.clear();
   s.skipped_components = result.skipped_components;
   s.skipped_voxels = result.skipped_voxels;
+  s.bricks = result.bricks;
+  s.brick_halo = result.brick_halo;
+  s.seam_mismatches = result.seam_mismatches;
   return s;
 }
 

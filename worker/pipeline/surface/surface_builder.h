@@ -18,50 +18,11 @@
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/similarity/face_attributes.h"
 #include "worker/pipeline/surface/face_apertures.h"
+#include "worker/pipeline/surface/surface_options.h"
 #include "worker/pipeline/surface/vertex_fit.h"
 #include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
-
-enum class VertexPlacement {
-  kGenerator,  // the generator's voxel centre (the paper)
-  kCentroid,   // the centroid of the generator's cell (off-voxel, on the mid-surface of flat
-               // sheets)
-};
-
-// How far a surface's triangle count may land from a count asked for (`--triangles`,
-// SurfaceOptions::triangles), as a fraction of it: the radius search's aim and the
-// pipeline's check of the count it got.
-inline constexpr double kTriangleTolerance = 0.05;
-
-// Which vertices the fit to formula 5 moves (vertex_fit.h).
-enum class VertexFit {
-  kAuto,  // kRim where the surface is the result, kNone where a volume mesh follows (the
-          // pipeline decides; BuildSurface takes it as kRim)
-  kNone,
-  kRim,  // rims across themselves and onto the box's faces
-  kAll,  // and every vertex along its normal
-};
-
-struct SurfaceOptions {
-  ScvdOptions scvd;          // r, seed, Lloyd settings
-  DualTriangleOptions dual;  // which dual triangles are kept (rim strip, cracks, folds)
-  VertexPlacement placement = VertexPlacement::kCentroid;
-  ThicknessMeasure thickness = ThicknessMeasure::kNormal;
-  bool orient = true;      // orient faces consistently per manifold piece
-  uint64_t triangles = 0;  // > 0: the dual mesh is decimated to this many faces (decimate.h)
-  bool fit_walls = true;   // each face's thickness fitted to the prisms' best formula-5 score
-                           // (wall_fit.h; beyond the paper; false: the mean τ)
-  VertexFit fit_vertices = VertexFit::kAuto;  // with fit_walls: vertices moved where
-                                              // formula 5 rises (vertex_fit.h; beyond the paper)
-  double error_density = 0;    // > 0: a second SCVD with ρ from the first surface's local fit
-                               // error, this strong (error_density.h; beyond the paper)
-  int smooth_iterations = 30;  // λ|μ smoothing pairs where the sheet is thicker than the
-                               // triangles are wide (smooth.h; beyond the paper; 0: none)
-
-  // The paper's plain reading: generators as vertices, no rim strip, axis-run thickness.
-  static SurfaceOptions Paper();
-};
 
 // What error-driven sizing did: both surfaces' formula-5 scores and which was kept.
 struct ErrorDensityStats {
@@ -87,6 +48,11 @@ struct SurfaceResult {
   std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
   Scvd scvd;
   DualTriangleStats triangle_stats;
+  // With bricks: how many held sheet, the halo used, seam faces or vertices the bricks
+  // did not build alike (0 unless the halo's retries ran out).
+  uint64_t bricks = 0;
+  int brick_halo = 0;
+  uint64_t seam_mismatches = 0;
   uint32_t components = 0;          // 6-connected components of the sheet
   uint32_t skipped_components = 0;  // of those, components with no triangle
   uint64_t skipped_voxels = 0;
@@ -112,6 +78,9 @@ struct SurfaceStats {
   TopologyReport topology;          // without the edge list
   uint32_t skipped_components = 0;  // components too small for a triangle
   uint64_t skipped_voxels = 0;
+  uint64_t bricks = 0;  // with surface.bricks: bricks that held sheet, their halo, and
+  int brick_halo = 0;   // seam faces or vertices they did not build alike
+  uint64_t seam_mismatches = 0;
   std::optional<DecimateStats> decimation;
   std::optional<VertexFitStats> vertex_fit;
   std::optional<FaceApertureStats> apertures;

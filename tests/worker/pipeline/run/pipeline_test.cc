@@ -85,6 +85,41 @@ TEST(PipelineTest, RunWritesMeshesAndAReport) {
   EXPECT_EQ(back.faces.size(), r.surface->triangles);
 }
 
+// surface.bricks: the SCVD and its triangles built brick by brick, then every later stage
+// (fits, similarity, the volume mesh) on the joined surface; against one brick holding the
+// whole sheet (the halos here cover the small volume, so both passes are exact).
+TEST(PipelineTest, SurfaceInBricksMeshesLikeTheWholeSheetAndFeedsTheVolumeMesh) {
+  TempDir tmp;
+  PipelineOptions whole = VolumeRun(tmp, 5);
+  whole.surface.scvd.lloyd_max_iter = 8;
+  whole.surface.bricks.brick = 64;  // one brick
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport w, RunPipeline(whole));
+  EXPECT_EQ(w.surface->bricks, 1u);
+  PipelineOptions bricked = whole;
+  bricked.output.dir = tmp.File("bricked");
+  bricked.surface.bricks.brick = 20;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport b, RunPipeline(bricked));
+  EXPECT_GT(b.surface->bricks, 8u);
+  EXPECT_EQ(b.surface->seam_mismatches, 0u);
+  EXPECT_GT(b.surface->brick_halo, 0);
+  EXPECT_EQ(b.surface->triangles, w.surface->triangles);
+  // The joined mesh lists its vertices brick by brick: the fits' sums run in another order.
+  EXPECT_NEAR(b.similarity->score.similarity, w.similarity->score.similarity, 1e-3);
+  EXPECT_EQ(b.surface->topology.boundary_loops, w.surface->topology.boundary_loops);
+  ASSERT_TRUE(b.volume_mesh.has_value());
+  EXPECT_GT(b.volume_mesh->tetrahedra, 100u);
+  SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("bricked/report.json")));
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j["surface"]["bricks"]["bricks"].get<uint64_t>(), b.surface->bricks);
+  EXPECT_EQ(j["parameters"]["surface"]["bricks"].get<int64_t>(), 20);
+
+  // An error-driven density has the whole sheet's scale: refused, named.
+  bricked.surface.error_density = 1;
+  bricked.output.dir = tmp.File("refused");
+  EXPECT_THAT(RunPipeline(bricked),
+              StatusIs(absl::StatusCode::kInvalidArgument, ::testing::HasSubstr("surface.bricks")));
+}
+
 TEST(PipelineTest, AVolumePathThatIsNotUtf8GivesAReportWithTheNameEscaped) {
   // The same writer makes a job's report in a worker thread of the server: it must never
   // throw (nlohmann::json does on bytes that are not UTF-8, and that ended the process).

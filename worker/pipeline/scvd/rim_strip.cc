@@ -158,8 +158,8 @@ void CloseCracks(const VoxelSet& set, const DualTriangleOptions& options,
     }
   }
   if (edges == 0) return;
-  const double max_edge = options.crack_max_edge_voxels > 0 ? options.crack_max_edge_voxels
-                                                            : 1.5 * edge_sum / edges;
+  const double max_edge =
+      options.crack_max_edge_voxels > 0 ? options.crack_max_edge_voxels : 1.5 * edge_sum / edges;
   for (int pass = 0; pass < 4; ++pass) {
     // Boundary edges, directed as their one face walks them; the loop continues at the
     // edge leaving the end vertex.

@@ -320,8 +320,7 @@ absl::StatusOr<std::vector<uint32_t>> SeedGenerators(const VoxelSet& set,
 
 // Local seeds (local_seeds.h) over the voxels or the columns; records each generator's
 // component in scvd.
-absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set,
-                                                  const Components& components,
+absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set, const Components& components,
                                                   uint32_t num_nodes, const ColumnGraph* columns,
                                                   const ScvdOptions& options, Scvd* scvd) {
   const std::vector<uint32_t> label = components.VoxelLabels(set);
@@ -339,12 +338,12 @@ absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set,
   auto for_each_node = [&](auto&& f) {
     set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
       const auto n = static_cast<uint32_t>(columns != nullptr ? columns->node_of_voxel[v] : v);
-      if (columns == nullptr || columns->node_voxel[n] == v) f(n, Index3{x + o.x, y + o.y, z + o.z});
+      if (columns == nullptr || columns->node_voxel[n] == v)
+        f(n, Index3{x + o.x, y + o.y, z + o.z});
     });
   };
-  LocalSeeds chosen =
-      ChooseLocalSeeds(node_voxels, columns != nullptr ? node_label : label, components.count(),
-                       per_voxel, options.seed, for_each_node);
+  LocalSeeds chosen = ChooseLocalSeeds(node_voxels, columns != nullptr ? node_label : label,
+                                       components.count(), per_voxel, options.seed, for_each_node);
   if (chosen.nodes.size() >= kNoCell) {
     return absl::ResourceExhaustedError(
         absl::StrCat(chosen.nodes.size(), " generators are too many"));
@@ -441,8 +440,8 @@ absl::StatusOr<Scvd> BuildScvd(const VoxelSet& set, const NeighborTable& neighbo
           "SCVD: none of the ", options.generators.size(), " given generators is on the sheet"));
     }
   } else if (options.local) {
-    SM_ASSIGN_OR_RETURN(seeds, SeedLocally(set, components, num_nodes, columns ? &cg : nullptr,
-                                           options, &scvd));
+    SM_ASSIGN_OR_RETURN(
+        seeds, SeedLocally(set, components, num_nodes, columns ? &cg : nullptr, options, &scvd));
   } else {
     SM_ASSIGN_OR_RETURN(seeds,
                         SeedGenerators(set, components, num_nodes, voxel_of, options, &scvd));

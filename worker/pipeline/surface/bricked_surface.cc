@@ -40,9 +40,7 @@ int64_t CoreDistance(const BrickBox& b, const Index3& p) {
                    axis(p.z, b.core_lo.z, b.core.nz)});
 }
 
-absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) {
-  return AnalyzeSheet(crop);
-}
+absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) { return AnalyzeSheet(crop); }
 
 }  // namespace
 
@@ -93,8 +91,8 @@ absl::StatusOr<std::vector<Index3>> BrickGenerators(const VoxelSet& crop, const 
   o.origin = brick.lo;
   o.mean_thickness_voxels = mean_thickness;
   o.generators = {};
-  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                           mean_thickness, o));
+  SM_ASSIGN_OR_RETURN(Scvd scvd,
+                      BuildScvd(sheet.set, sheet.neighbors, sheet.components, mean_thickness, o));
   for (const Index3& g : scvd.generators) {
     const Index3 p = Global(g, brick.lo);
     if (brick.InCore(p)) out.push_back(p);
@@ -103,9 +101,8 @@ absl::StatusOr<std::vector<Index3>> BrickGenerators(const VoxelSet& crop, const 
 }
 
 absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
-                                          std::span<const Index3> generators,
-                                          double mean_thickness, const SurfaceOptions& options,
-                                          int seam_band) {
+                                          std::span<const Index3> generators, double mean_thickness,
+                                          const SurfaceOptions& options, int seam_band) {
   BrickFaces out;
   out.crop_voxels = crop.size();
   std::vector<Index3> mine;
@@ -121,15 +118,15 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
   o.origin = brick.lo;
   o.mean_thickness_voxels = mean_thickness;
   o.generators = mine;
-  SM_ASSIGN_OR_RETURN(Scvd scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                                           mean_thickness, o));
+  SM_ASSIGN_OR_RETURN(Scvd scvd,
+                      BuildScvd(sheet.set, sheet.neighbors, sheet.components, mean_thickness, o));
   const uint32_t num_gen = scvd.num_generators();
   std::vector<Vec3> positions(num_gen);
   for (uint32_t g = 0; g < num_gen; ++g) {
-    positions[g] = Global(options.placement == VertexPlacement::kCentroid
-                              ? scvd.centroid[g]
-                              : Vec3::Of(scvd.generators[g]),
-                          brick.lo);
+    positions[g] =
+        Global(options.placement == VertexPlacement::kCentroid ? scvd.centroid[g]
+                                                               : Vec3::Of(scvd.generators[g]),
+               brick.lo);
   }
   DualTriangleOptions dual = options.dual;
   dual.origin = brick.lo;
@@ -140,9 +137,9 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
     const double r = options.scvd.radius_voxels;
     dual.crack_max_edge_voxels = 1.5 * std::sqrt(2 * (1 + 2 * r * (r - 1)) / std::sqrt(3.0));
   }
-  SM_ASSIGN_OR_RETURN(DualTriangulation tri,
-                      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd,
-                                      positions, dual));
+  SM_ASSIGN_OR_RETURN(
+      DualTriangulation tri,
+      TriangulateScvd(sheet.set, sheet.neighbors, sheet.thickness, scvd, positions, dual));
   // Mean τ per cell, for the generators' vertices.
   std::vector<double> tau(num_gen, 0.0);
   for (size_t v = 0; v < scvd.cell.size(); ++v) {
@@ -176,10 +173,9 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
       const bool rim = f[k] >= num_gen;
       out.keys.push_back({Global(scvd.generators[g], brick.lo), rim});
       out.positions.push_back(rim ? tri.rim_positions[f[k] - num_gen] : positions[g]);
-      out.thickness.push_back(rim ? tri.rim_thickness[f[k] - num_gen]
-                                  : static_cast<float>(scvd.cell_size[g] > 0
-                                                           ? tau[g] / scvd.cell_size[g]
-                                                           : 0.0));
+      out.thickness.push_back(
+          rim ? tri.rim_thickness[f[k] - num_gen]
+              : static_cast<float>(scvd.cell_size[g] > 0 ? tau[g] / scvd.cell_size[g] : 0.0));
     }
     out.faces.push_back(kept);
   }
@@ -242,10 +238,10 @@ absl::StatusOr<uint64_t> TriangulateBricks(const VoxelSet& set, double mean_thic
   for (const auto& [key, i] : owner) {
     const Index3& least = key[0].generator;
     const BrickBox& own = grid[i];
-    const int64_t inside = std::min<int64_t>(
-        {least.x - own.core_lo.x, own.core_lo.x + own.core.nx - 1 - least.x,
-         least.y - own.core_lo.y, own.core_lo.y + own.core.ny - 1 - least.y,
-         least.z - own.core_lo.z, own.core_lo.z + own.core.nz - 1 - least.z});
+    const int64_t inside =
+        std::min<int64_t>({least.x - own.core_lo.x, own.core_lo.x + own.core.nx - 1 - least.x,
+                           least.y - own.core_lo.y, own.core_lo.y + own.core.ny - 1 - least.y,
+                           least.z - own.core_lo.z, own.core_lo.z + own.core.nz - 1 - least.z});
     if (inside >= band) continue;  // no other core within the band
     for (size_t j = 0; j < grid.size(); ++j) {
       if (j == i || CoreDistance(grid[j], least) > band) continue;
@@ -281,8 +277,8 @@ absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double m
   BrickedSurfaceOptions o = bricks;
   const double r = options.scvd.radius_voxels;
   for (int attempt = 0;; ++attempt) {
-    const int band = std::min(o.halo, o.seam_band > 0 ? o.seam_band
-                                                      : static_cast<int>(std::ceil(2 * r + 4)));
+    const int band =
+        std::min(o.halo, o.seam_band > 0 ? o.seam_band : static_cast<int>(std::ceil(2 * r + 4)));
     const double lo = pass1 + (1 - pass1) * (1 - std::pow(0.5, attempt));
     const Progress step = progress.Sub(lo, pass1 + (1 - pass1) * (1 - std::pow(0.5, attempt + 1)));
     SM_ASSIGN_OR_RETURN(out.seam_mismatches,

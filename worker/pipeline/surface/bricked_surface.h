@@ -38,8 +38,8 @@ struct BrickBox {
   Dims image;  // the whole image's size
 
   bool InCore(const Index3& p) const {
-    return p.x >= core_lo.x && p.y >= core_lo.y && p.z >= core_lo.z &&
-           p.x < core_lo.x + core.nx && p.y < core_lo.y + core.ny && p.z < core_lo.z + core.nz;
+    return p.x >= core_lo.x && p.y >= core_lo.y && p.z >= core_lo.z && p.x < core_lo.x + core.nx &&
+           p.y < core_lo.y + core.ny && p.z < core_lo.z + core.nz;
   }
   bool InBox(const Index3& p) const {
     return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x < lo.x + dims.nx &&
@@ -93,8 +93,7 @@ struct SurfaceVertexKey {
   bool rim = false;
   friend bool operator==(const SurfaceVertexKey&, const SurfaceVertexKey&) = default;
   friend bool operator<(const SurfaceVertexKey& a, const SurfaceVertexKey& b) {
-    return PositionLess(a.generator, b.generator) ||
-           (a.generator == b.generator && a.rim < b.rim);
+    return PositionLess(a.generator, b.generator) || (a.generator == b.generator && a.rim < b.rim);
   }
   template <typename H>
   friend H AbslHashValue(H h, const SurfaceVertexKey& k) {
@@ -123,9 +122,8 @@ struct BrickFaces {
 // image's frame, so a vertex two bricks both give is the same to the last bit; cracks close
 // up to 1.5 times the edge of a regular mesh of cells of radius r (not the brick's mean).
 absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
-                                          std::span<const Index3> generators,
-                                          double mean_thickness, const SurfaceOptions& options,
-                                          int seam_band = 0);
+                                          std::span<const Index3> generators, double mean_thickness,
+                                          const SurfaceOptions& options, int seam_band = 0);
 
 struct BrickedSurface {
   TriangleMesh mesh;  // vertices, faces, vertex_thickness_voxels (axis runs)

@@ -30,8 +30,8 @@ absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const Surface
                                        const Progress& progress, SurfaceResult* out) {
   absl::Time t0 = absl::Now();
   SM_ASSIGN_OR_RETURN(
-      out->scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components,
-                           sheet.thickness_stats.mean, options.scvd, progress.Sub(0, 0.7)));
+      out->scvd, BuildScvd(sheet.set, sheet.neighbors, sheet.components, sheet.thickness_stats.mean,
+                           options.scvd, progress.Sub(0, 0.7)));
   out->scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   const Scvd& scvd = out->scvd;
 
@@ -69,8 +69,9 @@ absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const Surface
         const uint32_t gen = f[k] < num_gen ? f[k] : tri.rim_cell[f[k] - num_gen];
         out->vertex_generator.push_back(gen);
         dual.vertex_tau.push_back(static_cast<float>(
-            f[k] >= num_gen ? tri.rim_thickness[f[k] - num_gen]
-                            : (scvd.cell_size[gen] > 0 ? cell_tau[gen] / scvd.cell_size[gen] : 0.0)));
+            f[k] >= num_gen
+                ? tri.rim_thickness[f[k] - num_gen]
+                : (scvd.cell_size[gen] > 0 ? cell_tau[gen] / scvd.cell_size[gen] : 0.0)));
       }
       g[k] = v;
     }
@@ -79,9 +80,8 @@ absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const Surface
   return dual;
 }
 
-absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet,
-                                         const SurfaceOptions& options, const Progress& progress,
-                                         SurfaceResult* out) {
+absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet, const SurfaceOptions& options,
+                                         const Progress& progress, SurfaceResult* out) {
   if (!options.scvd.density.empty()) {
     return absl::InvalidArgumentError(
         "surface.bricks cannot take an error-driven density (surface.error_density): its scale "
@@ -102,8 +102,8 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet,
   const uint16_t t_max = sheet.thickness.empty()
                              ? 0
                              : *std::max_element(sheet.thickness.begin(), sheet.thickness.end());
-  bo.halo = options.bricks.halo > 0 ? options.bricks.halo
-                                    : SurfaceHalo(local.scvd.radius_voxels, t_max);
+  bo.halo =
+      options.bricks.halo > 0 ? options.bricks.halo : SurfaceHalo(local.scvd.radius_voxels, t_max);
   SM_ASSIGN_OR_RETURN(BrickedSurface b, BuildBrickedSurface(sheet.set, sheet.thickness_stats.mean,
                                                             local, bo, {}, progress.Sub(0, 0.9)));
   out->bricks = b.bricks;
@@ -122,8 +122,8 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet,
     scvd.generator_component.push_back(label[v]);
   }
   for (const SurfaceVertexKey& k : b.vertex_key) {
-    const auto it = std::lower_bound(scvd.generators.begin(), scvd.generators.end(), k.generator,
-                                     PositionLess);
+    const auto it =
+        std::lower_bound(scvd.generators.begin(), scvd.generators.end(), k.generator, PositionLess);
     out->vertex_generator.push_back(static_cast<uint32_t>(it - scvd.generators.begin()));
   }
   out->mesh = std::move(b.mesh);

@@ -48,8 +48,8 @@ nlohmann::json SurfaceStats::Fields() const {
                {"lloyd_converged", lloyd_converged},
                {"energy", energy}};
   if (bricks > 0) {
-    j["bricks"] = {{"bricks", bricks}, {"halo_voxels", brick_halo},
-                   {"seam_mismatches", seam_mismatches}};
+    j["bricks"] = {
+        {"bricks", bricks}, {"halo_voxels", brick_halo}, {"seam_mismatches", seam_mismatches}};
   }
   return j;
 }

@@ -69,8 +69,8 @@ struct Mismatch {
   uint64_t differ = 0;
 };
 
-Mismatch CompareCore(const Diagram& whole, const Index3& lo, const Dims& size, int halo,
-                     double r, int steps) {
+Mismatch CompareCore(const Diagram& whole, const Index3& lo, const Dims& size, int halo, double r,
+                     int steps) {
   const Dims& d = whole.sheet.set.dims();
   const Index3 blo{std::max(0, lo.x - halo), std::max(0, lo.y - halo), std::max(0, lo.z - halo)};
   const Index3 bhi{std::min<int>(d.nx, lo.x + size.nx + halo),
@@ -78,8 +78,8 @@ Mismatch CompareCore(const Diagram& whole, const Index3& lo, const Dims& size, i
                    std::min<int>(d.nz, lo.z + size.nz + halo)};
   const Dims bdims{bhi.x - blo.x, bhi.y - blo.y, bhi.z - blo.z};
   if (whole.sheet.set.Crop(lo, size).empty()) return {};
-  const Diagram brick = Local(whole.sheet.set.Crop(blo, bdims), blo, r,
-                              whole.sheet.thickness_stats.mean, steps);
+  const Diagram brick =
+      Local(whole.sheet.set.Crop(blo, bdims), blo, r, whole.sheet.thickness_stats.mean, steps);
   Mismatch m;
   whole.sheet.set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
     if (x < lo.x || y < lo.y || z < lo.z || x >= lo.x + size.nx || y >= lo.y + size.ny ||

@@ -14,9 +14,8 @@
 #include <algorithm>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <set>
 #include <string>
-#include <tuple>
+#include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -45,21 +44,6 @@ double PeakMiB() {
   struct rusage u;
   getrusage(RUSAGE_SELF, &u);
   return u.ru_maxrss / 1024.0;
-}
-
-using FaceKey = std::array<std::tuple<int, int, int, bool>, 3>;
-std::set<FaceKey> FaceKeys(const BrickedSurface& s) {
-  std::set<FaceKey> out;
-  for (const Face& f : s.mesh.faces) {
-    FaceKey k;
-    for (int i = 0; i < 3; ++i) {
-      const SurfaceVertexKey& v = s.vertex_key[f[i]];
-      k[i] = {v.generator.z, v.generator.y, v.generator.x, v.rim};
-    }
-    std::sort(k.begin(), k.end());
-    out.insert(k);
-  }
-  return out;
 }
 
 int Measure(const std::string& path) {
@@ -120,8 +104,8 @@ int Measure(const std::string& path) {
         std::cerr << b.status() << "\n";
         return 1;
       }
-      const std::set<FaceKey> want = FaceKeys(*s), got = FaceKeys(*b);
-      std::vector<FaceKey> missing, extra;
+      const std::vector<SurfaceFaceKey> want = FaceKeys(*s), got = FaceKeys(*b);
+      std::vector<SurfaceFaceKey> missing, extra;
       std::set_difference(want.begin(), want.end(), got.begin(), got.end(),
                           std::back_inserter(missing));
       std::set_difference(got.begin(), got.end(), want.begin(), want.end(),

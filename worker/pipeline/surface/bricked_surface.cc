@@ -44,8 +44,10 @@ absl::StatusOr<SheetAnalysis> AnalyzeCrop(const VoxelSet& crop) { return Analyze
 
 }  // namespace
 
+int SeamBand(double r) { return static_cast<int>(std::ceil(2 * r + 4)); }
+
 int SurfaceHalo(double r, double t_max) {
-  return static_cast<int>(std::ceil(std::max(6 * r + 8, t_max + 4 * r)));
+  return static_cast<int>(std::ceil(std::max(6 * r + 8, t_max + 4 * r) + SeamBand(r)));
 }
 
 absl::StatusOr<std::vector<BrickBox>> SurfaceBrickGrid(const Dims& volume,
@@ -252,6 +254,18 @@ absl::StatusOr<uint64_t> TriangulateBricks(const VoxelSet& set, double mean_thic
 }
 
 }  // namespace
+
+std::vector<SurfaceFaceKey> FaceKeys(const BrickedSurface& s) {
+  std::vector<SurfaceFaceKey> out;
+  out.reserve(s.mesh.faces.size());
+  for (const Face& f : s.mesh.faces) {
+    SurfaceFaceKey key{s.vertex_key[f[0]], s.vertex_key[f[1]], s.vertex_key[f[2]]};
+    std::sort(key.begin(), key.end());
+    out.push_back(key);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
 
 absl::StatusOr<BrickedSurface> BuildBrickedSurface(const VoxelSet& set, double mean_thickness,
                                                    const SurfaceOptions& options,

@@ -52,20 +52,23 @@ struct BrickedSurfaceOptions {
   int halo = 64;              // voxels read around each core
   Index3 grid_origin;         // a corner of the grid (the lines pass through it)
   // The seam check: each brick also gives the faces it built whose least generator lies
-  // outside its core but within this many voxels of it (0: 2 r + 4), and the join checks
+  // outside its core but within this many voxels of it (0: SeamBand(r)), and the join checks
   // them against the faces their owners kept, both ways. Where they differ, pass 2 runs
   // again with twice the halo, up to `retries` times.
   int seam_band = 0;
   int retries = 2;
 };
 
-// The halo pass 2 needs for cells of radius r on a sheet whose longest thickness run is
-// t_max voxels: max(6 r + 8, t_max + 4 r) — a face's far corner is about 2 r from its
-// owner's core, its cell r further, and the thickness there reads runs of up to t_max.
+// The halo pass 2 and its seam check need for cells of radius r on a sheet whose longest
+// thickness run is t_max voxels: max(6 r + 8, t_max + 4 r) for the faces of a core — a
+// face's far corner is about 2 r from its owner's core, its cell r further, and the
+// thickness there reads runs of up to t_max — and the seam band (SeamBand) more, so that the
+// faces a brick builds just outside its core, which the check compares, are exact too.
 // Measured, not proven (bench/RESULTS.md, "The SCVD and its triangles in bricks"): on six
-// presets at r = 2 to 15 the faces were exact from halos of 16 to 80 voxels, each at or
-// below this; a cell stretched along a narrow strip can reach further, which the seam check
-// (BrickedSurfaceOptions::seam_band) finds and mends.
+// presets at r = 2 to 15 the cores' faces were exact from halos of 16 to 80 voxels, each at
+// or below the first part; a cell stretched along a narrow strip can reach further, which
+// the seam check (BrickedSurfaceOptions::seam_band) finds and mends.
+int SeamBand(double r);  // 2 r + 4, voxels
 int SurfaceHalo(double r, double t_max);
 
 // The bricks covering `volume`, in (z, y, x) order. kInvalidArgument for a brick side below
@@ -141,6 +144,10 @@ struct BrickedSurface {
   int halo = 0;
   int retries = 0;  // pass 2 runs beyond the first
 };
+
+// Each face of `s` by its corners' keys, sorted: what two surfaces built from the same
+// generators compare by, whatever their vertex numbering.
+std::vector<SurfaceFaceKey> FaceKeys(const BrickedSurface& s);
 
 // Both passes over the bricks of `set` and the join, checked at the seams (see
 // BrickedSurfaceOptions::seam_band). With `generators` given, pass 1 is skipped and those

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -43,22 +42,6 @@ double MeanThickness(const VoxelSet& set) {
   absl::StatusOr<SheetAnalysis> a = AnalyzeSheet(set);
   EXPECT_TRUE(a.ok()) << a.status();
   return a->thickness_stats.mean;
-}
-
-// Each face as its sorted corner keys.
-using FaceKey = std::array<std::tuple<int, int, int, bool>, 3>;
-std::set<FaceKey> FaceKeys(const BrickedSurface& s) {
-  std::set<FaceKey> out;
-  for (const Face& f : s.mesh.faces) {
-    FaceKey k;
-    for (int i = 0; i < 3; ++i) {
-      const SurfaceVertexKey& v = s.vertex_key[f[i]];
-      k[i] = {v.generator.z, v.generator.y, v.generator.x, v.rim};
-    }
-    std::sort(k.begin(), k.end());
-    out.insert(k);
-  }
-  return out;
 }
 
 BrickedSurfaceOptions Whole(const Dims& d) {

@@ -1,6 +1,7 @@
 #include "worker/pipeline/surface/bricked_surface.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 
 #include "absl/container/flat_hash_map.h"
@@ -107,8 +108,12 @@ absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& 
                                           const SurfaceOptions& options, int seam_band) {
   BrickFaces out;
   out.crop_voxels = crop.size();
+  // `generators` are in (z, y, x) order: only the run of the box's slices is looked at.
   std::vector<Index3> mine;
-  for (const Index3& g : generators) {
+  const auto first = std::lower_bound(generators.begin(), generators.end(),
+                                      Index3{INT32_MIN, INT32_MIN, brick.lo.z}, PositionLess);
+  for (auto it = first; it != generators.end() && it->z < brick.lo.z + brick.dims.nz; ++it) {
+    const Index3& g = *it;
     if (brick.InBox(g) && crop.Contains(g.x - brick.lo.x, g.y - brick.lo.y, g.z - brick.lo.z)) {
       mine.push_back(g);
     }

@@ -119,10 +119,10 @@ struct BrickFaces {
   uint64_t crop_voxels = 0;
 };
 
-// Pass 2 for one brick: one growth from `generators` (all bricks', global positions; those
-// outside the brick's box are passed by), the dual triangles (options.dual,
-// options.placement), the faces owned by the core. Every position is computed in the whole
-// image's frame, so a vertex two bricks both give is the same to the last bit; cracks close
+// Pass 2 for one brick: one growth from `generators` (all bricks', global positions in
+// PositionLess order; those outside the brick's box are passed by), the dual triangles
+// (options.dual, options.placement), the faces owned by the core. Every position is computed in the
+// whole image's frame, so a vertex two bricks both give is the same to the last bit; cracks close
 // up to 1.5 times the edge of a regular mesh of cells of radius r (not the brick's mean).
 absl::StatusOr<BrickFaces> BrickTriangles(const VoxelSet& crop, const BrickBox& brick,
                                           std::span<const Index3> generators, double mean_thickness,

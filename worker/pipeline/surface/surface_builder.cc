@@ -20,8 +20,9 @@ namespace sheetmesh {
 
 namespace {
 
-// The dual mesh before any fitting: vertices, faces, each vertex's generator (an index into
-// out->scvd) and its mean τ along the axis runs.
+// The dual mesh before any fitting goes into out->mesh (vertices, faces) and
+// out->vertex_generator (an index into out->scvd); beside them, each vertex's mean τ along
+// the axis runs.
 struct DualMesh {
   std::vector<float> vertex_tau;
 };

@@ -55,6 +55,12 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
                   "needs inp or exo among output.volume_formats (the split mesh is written "
                   "only for mechanics)"};
   }
+  if (o.surface.bricks.brick > 0 && o.surface.error_density > 0) {
+    return Broken{
+        "surface.bricks", absl::StrCat(o.surface.bricks.brick),
+        absl::StrCat("cannot be combined with surface.error_density = ", o.surface.error_density,
+                     " (the error's density is scaled over the whole sheet)")};
+  }
   const RadiusSearchOptions& rs = o.radius_search;
   if (rs.max_radius_voxels != 0 && rs.max_radius_voxels < rs.min_radius_voxels) {
     return Broken{

@@ -275,6 +275,8 @@ TEST(ParametersTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"output": {"split": true, "volume_formats": ["vtu"]}})",
        "'output.split' = true needs inp or exo among output.volume_formats"},
       {R"({"permeability": {"image_reference": 2}})", "'permeability.image_reference' = 2"},
+      {R"({"surface": {"bricks": 128, "error_density": 1}})",
+       "'surface.bricks' = 128 cannot be combined with surface.error_density = 1"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

@@ -9,35 +9,17 @@
 #include <tuple>
 #include <vector>
 
+#include "tests/testing/preset_sheets.h"
 #include "tests/testing/status_matchers.h"
-#include "worker/pipeline/phantom/phantom.h"
-#include "worker/pipeline/phantom/phantom_presets.h"
 #include "worker/pipeline/scvd/scvd.h"
 #include "worker/pipeline/voxel/sheet_analysis.h"
 
 namespace sheetmesh {
 namespace {
 
+using ::sheetmesh::testing::PresetSheets;
 using ::sheetmesh::testing::StatusIs;
 using ::testing::HasSubstr;
-
-// The sheet voxels (no specks) of a preset.
-VoxelSet PresetSheets(const std::string& name, const Dims& dims) {
-  absl::StatusOr<PhantomOptions> o = PhantomPreset(name);
-  EXPECT_TRUE(o.ok()) << o.status();
-  o->num_specks = 0;
-  o->dims = dims;
-  absl::StatusOr<PhantomTruth> t = PlanPhantom(*o);
-  EXPECT_TRUE(t.ok()) << t.status();
-  absl::StatusOr<DenseVolume> v = GeneratePhantomDense(&*t);
-  EXPECT_TRUE(v.ok()) << v.status();
-  VoxelSet::Builder b(o->dims);
-  for (int z = 0; z < o->dims.nz; ++z)
-    for (int y = 0; y < o->dims.ny; ++y)
-      for (int x = 0; x < o->dims.nx; ++x)
-        if (v->At(x, y, z) != 0) b.AddVoxel(x, y, z);
-  return std::move(b).Build();
-}
 
 struct Diagram {
   SheetAnalysis sheet;

@@ -1,0 +1,36 @@
+// The sheets of a phantom preset (phantom_presets.h) as a voxel set, for tests that need
+// realistic sheets: rough walls, crossings, holes, vugs, grazing contacts with the box.
+#ifndef SHEETMESH_TESTS_TESTING_PRESET_SHEETS_H_
+#define SHEETMESH_TESTS_TESTING_PRESET_SHEETS_H_
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "worker/pipeline/phantom/phantom.h"
+#include "worker/pipeline/phantom/phantom_presets.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh::testing {
+
+// The sheet voxels (no specks) of preset `name` drawn in a box of `dims`.
+inline VoxelSet PresetSheets(const std::string& name, const Dims& dims) {
+  absl::StatusOr<PhantomOptions> o = PhantomPreset(name);
+  EXPECT_TRUE(o.ok()) << o.status();
+  o->num_specks = 0;
+  o->dims = dims;
+  absl::StatusOr<PhantomTruth> t = PlanPhantom(*o);
+  EXPECT_TRUE(t.ok()) << t.status();
+  absl::StatusOr<DenseVolume> v = GeneratePhantomDense(&*t);
+  EXPECT_TRUE(v.ok()) << v.status();
+  VoxelSet::Builder b(o->dims);
+  for (int z = 0; z < o->dims.nz; ++z)
+    for (int y = 0; y < o->dims.ny; ++y)
+      for (int x = 0; x < o->dims.nx; ++x)
+        if (v->At(x, y, z) != 0) b.AddVoxel(x, y, z);
+  return std::move(b).Build();
+}
+
+}  // namespace sheetmesh::testing
+
+#endif  // SHEETMESH_TESTS_TESTING_PRESET_SHEETS_H_

@@ -24,7 +24,7 @@ namespace {
 // out->vertex_generator (an index into out->scvd); beside them, each vertex's mean τ along
 // the axis runs.
 struct DualMesh {
-  std::vector<float> vertex_tau;
+  std::vector<double> vertex_tau;  // double: rounded to float once, after the normal's factor
 };
 
 absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const SurfaceOptions& options,
@@ -69,10 +69,10 @@ absl::StatusOr<DualMesh> WholeDualMesh(const SheetAnalysis& sheet, const Surface
         mesh.vertices.push_back(positions[f[k]]);
         const uint32_t gen = f[k] < num_gen ? f[k] : tri.rim_cell[f[k] - num_gen];
         out->vertex_generator.push_back(gen);
-        dual.vertex_tau.push_back(static_cast<float>(
+        dual.vertex_tau.push_back(
             f[k] >= num_gen
                 ? tri.rim_thickness[f[k] - num_gen]
-                : (scvd.cell_size[gen] > 0 ? cell_tau[gen] / scvd.cell_size[gen] : 0.0)));
+                : (scvd.cell_size[gen] > 0 ? cell_tau[gen] / scvd.cell_size[gen] : 0.0));
       }
       g[k] = v;
     }
@@ -129,7 +129,8 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet, const Surfa
   }
   out->mesh = std::move(b.mesh);
   DualMesh dual;
-  dual.vertex_tau = std::move(out->mesh.vertex_thickness_voxels);
+  dual.vertex_tau.assign(out->mesh.vertex_thickness_voxels.begin(),
+                         out->mesh.vertex_thickness_voxels.end());
   out->mesh.vertex_thickness_voxels.clear();
   out->scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   return dual;

@@ -32,6 +32,8 @@ ABSL_FLAG(std::string, mode, "whole", "whole, bricked or check");
 ABSL_FLAG(double, r, 7.0, "the SCVD's cell radius, voxels");
 ABSL_FLAG(int, lloyd, 8, "Lloyd steps");
 ABSL_FLAG(uint64_t, seed, 1, "seed of the generators' hash");
+ABSL_FLAG(std::string, draw, "spaced",
+          "the local draw: spaced (blue noise, the default) or bernoulli (one by one)");
 ABSL_FLAG(int, brick, 128, "brick side, voxels");
 ABSL_FLAG(int, halo, 0, "halo, voxels (0: SurfaceHalo(r, t_max))");
 ABSL_FLAG(double, t, 0, "the sheet's mean thickness t (0: measured on the whole volume)");
@@ -80,6 +82,8 @@ int Measure(const std::string& path) {
   so.scvd.radius_voxels = absl::GetFlag(FLAGS_r);
   so.scvd.lloyd_max_iter = absl::GetFlag(FLAGS_lloyd);
   so.scvd.seed = absl::GetFlag(FLAGS_seed);
+  so.scvd.local_spacing = absl::GetFlag(FLAGS_draw) != "bernoulli";
+  j["draw"] = so.scvd.local_spacing ? "spaced" : "bernoulli";
   BrickedSurfaceOptions whole;
   whole.brick = set->dims();
   whole.halo = 0;

@@ -8,14 +8,18 @@ Runs build/bench/sheetmesh-bricked-surface-bench, each run a process of its own:
            another seed, and today's one-process surface (random stream, Lloyd until the
            energy settles): faces and the vertex-prism similarity, to see the bricks' change
            against a seed's.
+  draw   - per preset and r, seeds 1-3: the local draw spaced (the default), drawn node by
+           node (Bernoulli) and today's stream, whole volume: generators and similarity.
   scale  - one large phantom (--scale PRESET:N), whole and in bricks of --scale_brick:
            seconds and peak memory.
 
-Usage: bench/bricked_surface_bench.py BUILD_DIR [--parts exact,close,scale]
+Usage: bench/bricked_surface_bench.py BUILD_DIR [--parts exact,close,draw,scale]
            [--dims 256] [--scale paper:1024] [--scale_brick 256]
 Writes bench/out/bricked_surface.json and prints markdown tables.
 """
 import argparse
+import concurrent.futures
+import statistics
 import json
 import os
 import subprocess
@@ -96,6 +100,40 @@ def main():
                           f"{other['similarity'] - whole['similarity']:+.4f}, "
                           f"{100 * (other['faces'] / whole['faces'] - 1):+.1f}% |", flush=True)
             results["close"] = rows
+        if "draw" in parts:
+            rows = []
+            print("\n| preset | r | generators spaced / Bernoulli / stream (mean ± sd) | "
+                  "similarity spaced / Bernoulli / stream (mean) | spaced − stream | "
+                  "Bernoulli − stream |")
+            print("|---|---|---|---|---|---|")
+            draws = [("spaced", dict(mode="whole", draw="spaced")),
+                     ("bernoulli", dict(mode="whole", draw="bernoulli")),
+                     ("stream", dict(mode="stream"))]
+            with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+                for preset in PRESETS:
+                    path = phantom(args.build, preset, args.dims, folder)
+                    for r in [4, 7, 12]:
+                        first = measure(args.build, path, mode="whole", r=r)
+                        t = dict(t=first["t"], t_max=first["t_max"])
+                        jobs = {(name, seed): pool.submit(measure, args.build, path, r=r, seed=seed,
+                                                          **flags, **t)
+                                for name, flags in draws for seed in (1, 2, 3)}
+                        row = dict(preset=preset, r=r)
+                        for name, _ in draws:
+                            runs = [jobs[(name, seed)].result() for seed in (1, 2, 3)]
+                            row[name] = dict(
+                                generators=[x["generators"] for x in runs],
+                                similarity=[x["similarity"] for x in runs])
+                        rows.append(row)
+                        g = {n: row[n]["generators"] for n, _ in draws}
+                        m = {n: statistics.mean(row[n]["similarity"]) for n, _ in draws}
+                        print(f"| {preset} | {r} | " + " / ".join(
+                            f"{statistics.mean(g[n]):.0f} ± {statistics.stdev(g[n]):.1f}"
+                            for n, _ in draws) + " | " +
+                              " / ".join(f"{m[n]:.4f}" for n, _ in draws) +
+                              f" | {m['spaced'] - m['stream']:+.4f} | "
+                              f"{m['bernoulli'] - m['stream']:+.4f} |", flush=True)
+            results["draw"] = rows
         if "scale" in parts:
             preset, n = args.scale.split(":")
             path = phantom(args.build, preset, int(n), folder)

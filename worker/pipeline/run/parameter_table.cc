@@ -368,9 +368,10 @@ std::vector<ParamRow> SurfaceRows() {
   rows.push_back(Integer("surface.seed", SM_MEMBER(surface.scvd.seed), "[0, 9007199254740992]", "",
                          "seed of the generators' random choice"));
   rows.push_back(Bool("surface.local_seeding", SM_MEMBER(surface.scvd.local),
-                      "generators drawn by a hash of their position, ids in position order and "
-                      "exactly lloyd_max_iter Lloyd steps, so a brick with a halo builds its "
-                      "core's cells as the whole volume does"));
+                      "generators drawn on a grid fixed in the volume (each cube's count "
+                      "rounded by a hash of it, placed by a hash of position, a cell's radius "
+                      "apart), ids in position order and exactly lloyd_max_iter Lloyd steps, so "
+                      "a brick with a halo builds its core's cells as the whole volume does"));
   rows.push_back(Integer("surface.bricks", SM_MEMBER(surface.bricks.brick), "[0, 1e6]", "voxels",
                          "build the SCVD and its triangles in bricks of this side with halos, "
                          "checked and joined at their seams (0: the whole sheet at once)"));

@@ -331,9 +331,14 @@ absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set, const Com
     for (uint32_t n = 0; n < num_nodes; ++n) node_label[n] = label[columns->node_voxel[n]];
     for (uint32_t node : columns->node_of_voxel) ++node_voxels[node];
   }
-  const double per_voxel = options.generator_count > 0
-                               ? double(options.generator_count) / double(set.size())
-                               : 1.0 / scvd->cell_volume;
+  LocalDraw draw;
+  draw.per_voxel = options.generator_count > 0
+                       ? double(options.generator_count) / double(set.size())
+                       : 1.0 / scvd->cell_volume;
+  draw.seed = options.seed;
+  if (options.local_spacing) {
+    draw.spacing = ExclusionRadius(1.0 / draw.per_voxel, scvd->mean_thickness, columns != nullptr);
+  }
   const Index3 o = options.origin;
   auto for_each_node = [&](auto&& f) {
     set.ForEachVoxel([&](uint64_t v, int32_t x, int32_t y, int32_t z) {
@@ -343,7 +348,7 @@ absl::StatusOr<std::vector<uint32_t>> SeedLocally(const VoxelSet& set, const Com
     });
   };
   LocalSeeds chosen = ChooseLocalSeeds(node_voxels, columns != nullptr ? node_label : label,
-                                       components.count(), per_voxel, options.seed, for_each_node);
+                                       components.count(), draw, for_each_node);
   if (chosen.nodes.size() >= kNoCell) {
     return absl::ResourceExhaustedError(
         absl::StrCat(chosen.nodes.size(), " generators are too many"));

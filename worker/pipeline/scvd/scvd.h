@@ -50,6 +50,9 @@ struct ScvdOptions {
   // Lloyd steps run (lloyd_tol is not used: the energy is the whole diagram's); a fixed
   // point still ends them. Not with a density (its normalisation is global).
   bool local = false;
+  // With local: generators spaced like blue noise (LocalDraw::spacing), not drawn one by
+  // one; measured in bench/RESULTS.md ("the local draw spaced").
+  bool local_spacing = true;
   Index3 origin;  // the global position of the set's voxel (0, 0, 0); non-negative
   // Given: these generators (global positions; those off the set's nodes are passed by,
   // two on one node count once) and one growth, no Lloyd step — a brick's second pass,

@@ -14,8 +14,9 @@ Runs build/bench/sheetmesh-bricked-surface-bench, each run a process of its own:
            seconds and peak memory.
 
 Usage: bench/bricked_surface_bench.py BUILD_DIR [--parts exact,close,draw,scale]
-           [--dims 256] [--scale paper:1024] [--scale_brick 256]
-Writes bench/out/bricked_surface.json and prints markdown tables.
+           [--dims 256] [--presets P,...] [--rs 4,7,12] [--brick 64]
+           [--scale paper:1024] [--scale_brick 256]
+Writes --json (bench/out/bricked_surface.json) and prints markdown tables.
 """
 import argparse
 import concurrent.futures
@@ -57,18 +58,24 @@ def main():
     ap.add_argument("--dims", type=int, default=256)
     ap.add_argument("--scale", default="paper:1024")
     ap.add_argument("--scale_brick", type=int, default=256)
+    ap.add_argument("--presets", default=",".join(PRESETS), help="exact, close, draw: these presets")
+    ap.add_argument("--rs", default="", help="close, draw: these r (default 4,7,12)")
+    ap.add_argument("--brick", type=int, default=64, help="exact, close: the bricks' side")
+    ap.add_argument("--json", default="bench/out/bricked_surface.json")
     args = ap.parse_args()
     parts = args.parts.split(",")
+    presets = args.presets.split(",")
+    rs = [float(r) for r in args.rs.split(",")] if args.rs else [4, 7, 12]
     results = {}
     with tempfile.TemporaryDirectory(prefix="bricked_surface_") as folder:
         if "exact" in parts:
             rows = []
             print("| preset | r | t̄ | t_max | halo | faces | bricks | same faces |")
             print("|---|---|---|---|---|---|---|---|")
-            for preset in PRESETS:
+            for preset in presets:
                 path = phantom(args.build, preset, args.dims, folder)
                 for r in [2, 4, 7, 10, 15]:
-                    row = measure(args.build, path, mode="check", r=r, brick=64)
+                    row = measure(args.build, path, mode="check", r=r, brick=args.brick)
                     row["preset"] = preset
                     rows.append(row)
                     print(f"| {preset} | {r} | {row['t']:.1f} | {row['t_max']:.0f} | "
@@ -81,12 +88,12 @@ def main():
             print("\n| preset | r | faces whole / bricks / seed 2 / stream | similarity whole / "
                   "bricks / seed 2 / stream | bricks' change | seed's change |")
             print("|---|---|---|---|---|---|")
-            for preset in PRESETS:
+            for preset in presets:
                 path = phantom(args.build, preset, args.dims, folder)
-                for r in [4, 7, 12]:
+                for r in rs:
                     whole = measure(args.build, path, mode="whole", r=r)
                     t = dict(t=whole["t"], t_max=whole["t_max"])
-                    bricked = measure(args.build, path, mode="bricked", r=r, brick=64, **t)
+                    bricked = measure(args.build, path, mode="bricked", r=r, brick=args.brick, **t)
                     other = measure(args.build, path, mode="whole", r=r, seed=2, **t)
                     stream = measure(args.build, path, mode="stream", r=r, **t)
                     rows.append(dict(preset=preset, r=r, whole=whole, bricked=bricked, seed2=other,
@@ -110,9 +117,9 @@ def main():
                      ("bernoulli", dict(mode="whole", draw="bernoulli")),
                      ("stream", dict(mode="stream"))]
             with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-                for preset in PRESETS:
+                for preset in presets:
                     path = phantom(args.build, preset, args.dims, folder)
-                    for r in [4, 7, 12]:
+                    for r in rs:
                         first = measure(args.build, path, mode="whole", r=r)
                         t = dict(t=first["t"], t_max=first["t_max"])
                         jobs = {(name, seed): pool.submit(measure, args.build, path, r=r, seed=seed,
@@ -153,8 +160,8 @@ def main():
                 print(f"| {name} | {row['bricks']} | {row['halo']} | {row['build_seconds']:.1f} | "
                       f"{row['peak_mib_after_build']:.0f} | {row['largest_crop_voxels']} | "
                       f"{row['faces']} | {row['similarity']:.4f} |")
-    os.makedirs("bench/out", exist_ok=True)
-    with open("bench/out/bricked_surface.json", "w") as f:
+    os.makedirs(os.path.dirname(args.json) or ".", exist_ok=True)
+    with open(args.json, "w") as f:
         json.dump(results, f, indent=1)
 
 

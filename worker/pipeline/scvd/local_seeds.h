@@ -53,7 +53,7 @@ std::vector<uint32_t> StratifiedDraw(
     const std::function<void(const std::function<void(uint32_t, const Index3&, double)>&)>&
         for_each_node);
 
-// Chooses generators among `num_nodes` nodes as `draw` says (node_voxels[n]: the voxels
+// Chooses generators among the nodes as `draw` says (node_voxels[n]: the voxels
 // node n stands for; empty: one each), and a component (`node_component`, labels below
 // `num_components`) left with none gets its node of least hash. `for_each_node(f)` calls
 // f(n, global position of node n) for every node in ascending n. Deterministic; a node's

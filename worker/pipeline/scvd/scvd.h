@@ -43,9 +43,9 @@ struct ScvdOptions {
                                       // not thickness, and are not merged into columns
   // Local: every choice depends only on the sheet near it, so a brick of the volume with a
   // halo builds the cells of its core as the whole volume does (issue 47). Generators are
-  // drawn by a hash of each node's global position (origin + its coordinates; see
-  // local_seeds.h: formula 3 in expectation, or generator_count / the set's voxels per
-  // voxel), their ids follow the nodes' (z, y, x) order so ties go the same way in any box
+  // drawn by hashes of global positions (origin + coordinates) on a grid fixed in the
+  // volume (local_seeds.h: formula 3 in expectation, or generator_count / the set's voxels
+  // per voxel), their ids follow the nodes' (z, y, x) order so ties go the same way in any box
   // that holds them, centroids are taken in global coordinates, and exactly lloyd_max_iter
   // Lloyd steps run (lloyd_tol is not used: the energy is the whole diagram's); a fixed
   // point still ends them. Not with a density (its normalisation is global).

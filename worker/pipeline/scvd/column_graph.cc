@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
@@ -25,27 +26,26 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
                                              uint32_t max_column_voxels, uint32_t vote_block,
                                              const Index3& origin) {
   const uint32_t n = static_cast<uint32_t>(set.size());
-  // Run lengths along each axis, saturated at 65535.
-  std::vector<std::array<uint16_t, 3>> len(n);
-  std::vector<uint32_t> run;
-  for (int axis = 0; axis < 3; ++axis) {
-    for (uint32_t v = 0; v < n; ++v) {
-      if (nt.at(v, 2 * axis) != kNoNeighbor) continue;  // not a run start
-      RunAlong(nt, v, axis, &run);
-      const uint16_t l = static_cast<uint16_t>(std::min<size_t>(run.size(), 65535));
-      for (uint32_t w : run) len[w][axis] = l;
+  // Thin axis per voxel: its shortest run (lengths saturated at 65535); z first, then y,
+  // then x on ties. One axis at a time, so only the shortest length so far is held.
+  std::vector<uint8_t> thin(n, 2);
+  {
+    std::vector<uint16_t> shortest(n, 0);
+    std::vector<uint32_t> run;
+    for (int axis : {2, 1, 0}) {
+      for (uint32_t v = 0; v < n; ++v) {
+        if (nt.at(v, 2 * axis) != kNoNeighbor) continue;  // not a run start
+        RunAlong(nt, v, axis, &run);
+        const uint16_t l = static_cast<uint16_t>(std::min<size_t>(run.size(), 65535));
+        for (uint32_t w : run) {
+          if (axis == 2 || l < shortest[w]) {
+            shortest[w] = l;
+            thin[w] = static_cast<uint8_t>(axis);
+          }
+        }
+      }
     }
   }
-  // Thin axis per voxel; z first, then y, then x on ties.
-  std::vector<uint8_t> thin(n);
-  for (uint32_t v = 0; v < n; ++v) {
-    int best = 2;
-    for (int axis : {1, 0}) {
-      if (len[v][axis] < len[v][best]) best = axis;
-    }
-    thin[v] = static_cast<uint8_t>(best);
-  }
-  len = {};
   // The shortest run is not always across the sheet: where a thick tilted sheet meets its
   // own rim, runs along the sheet are cut short in a wedge and would cross the columns of
   // their neighbours (stacked cells, folded triangles). So the axis is voted for in blocks
@@ -96,6 +96,7 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
   }
   // Each voxel's column: the middle voxel of its run along its thin axis.
   std::vector<uint32_t> rep(n, kUnset);
+  std::vector<uint32_t> run;
   for (int axis = 0; axis < 3; ++axis) {
     for (uint32_t v = 0; v < n; ++v) {
       if (nt.at(v, 2 * axis) != kNoNeighbor) continue;
@@ -108,23 +109,38 @@ absl::StatusOr<ColumnGraph> BuildColumnGraph(const VoxelSet& set, const Neighbor
     }
   }
   thin = {};
+  // Nodes are the representatives in ascending order: a node's number is how many
+  // representatives come before it (a bit per voxel and a count per 64 of them), written
+  // over `rep` in place, which becomes node_of_voxel.
   ColumnGraph g;
-  std::vector<uint32_t> node_of_rep(n, kUnset);
+  std::vector<uint64_t> is_rep((n + 63) / 64, 0);
   for (uint32_t v = 0; v < n; ++v) {
     if (rep[v] == kUnset) rep[v] = v;  // too long to be a column: a node of its own
-    node_of_rep[rep[v]] = 0;
+    is_rep[rep[v] / 64] |= uint64_t{1} << (rep[v] % 64);
+  }
+  std::vector<uint32_t> before(is_rep.size());
+  uint64_t nodes = 0;
+  for (size_t w = 0; w < is_rep.size(); ++w) {
+    before[w] = static_cast<uint32_t>(std::min<uint64_t>(nodes, kUnset));
+    nodes += static_cast<uint64_t>(std::popcount(is_rep[w]));
+  }
+  if (nodes >= kUnset) {
+    return absl::ResourceExhaustedError(absl::StrCat(nodes, " columns are too many"));
+  }
+  g.node_voxel.reserve(nodes);
+  for (size_t w = 0; w < is_rep.size(); ++w) {
+    for (uint64_t bits = is_rep[w]; bits != 0; bits &= bits - 1) {
+      g.node_voxel.push_back(static_cast<uint32_t>(w * 64 + std::countr_zero(bits)));
+    }
   }
   for (uint32_t v = 0; v < n; ++v) {
-    if (node_of_rep[v] == kUnset) continue;
-    node_of_rep[v] = static_cast<uint32_t>(g.node_voxel.size());
-    g.node_voxel.push_back(v);
+    const uint32_t r = rep[v];
+    const uint64_t below = is_rep[r / 64] & ((uint64_t{1} << (r % 64)) - 1);
+    rep[v] = before[r / 64] + static_cast<uint32_t>(std::popcount(below));
   }
-  g.node_of_voxel.resize(n);
-  for (uint32_t v = 0; v < n; ++v) g.node_of_voxel[v] = node_of_rep[rep[v]];
-  rep = {};
-  if (g.node_voxel.size() >= kUnset) {
-    return absl::ResourceExhaustedError(absl::StrCat(g.node_voxel.size(), " columns are too many"));
-  }
+  is_rep = {};
+  before = {};
+  g.node_of_voxel = std::move(rep);
   // Edges: columns whose voxels touch across a face, each once as (lower, higher). A
   // column's voxels name the same neighbours over and over, so the edges are gathered in
   // chunks, each reduced and merged as it fills: what is held follows the columns' edges,

@@ -27,7 +27,8 @@ struct Diagram {
   Scvd scvd;
 };
 
-Diagram Local(VoxelSet set, const Index3& origin, double r, double thickness, int steps) {
+Diagram Local(VoxelSet set, const Index3& origin, double r, double thickness, int steps,
+              uint64_t seed = 1, bool spaced = true) {
   Diagram d;
   absl::StatusOr<SheetAnalysis> a = AnalyzeSheet(std::move(set));
   EXPECT_TRUE(a.ok()) << a.status();
@@ -38,6 +39,8 @@ Diagram Local(VoxelSet set, const Index3& origin, double r, double thickness, in
   o.radius_voxels = r;
   o.mean_thickness_voxels = thickness;
   o.lloyd_max_iter = steps;
+  o.seed = seed;
+  o.local_spacing = spaced;
   absl::StatusOr<Scvd> s = BuildScvd(d.sheet.set, d.sheet.neighbors, d.sheet.components,
                                      d.sheet.thickness_stats.mean, o);
   EXPECT_TRUE(s.ok()) << s.status();
@@ -122,26 +125,11 @@ TEST(ScvdLocalTest, TheSameVoxelsInAnotherBoxGiveTheSameGlobalDiagram) {
               0.15 * small.scvd.num_generators());
 }
 
-Diagram Drawn(const VoxelSet& sheets, double r, uint64_t seed, bool spaced) {
-  Diagram d;
-  d.sheet = AnalyzeSheet(sheets).value();
-  ScvdOptions o;
-  o.local = true;
-  o.local_spacing = spaced;
-  o.radius_voxels = r;
-  o.seed = seed;
-  o.lloyd_max_iter = 0;
-  d.scvd =
-      BuildScvd(d.sheet.set, d.sheet.neighbors, d.sheet.components, d.sheet.thickness_stats.mean, o)
-          .value();
-  return d;
-}
-
 TEST(ScvdLocalTest, GeneratorsFollowFormula3InExpectation) {
   const VoxelSet sheets = PresetSheets("shallow_network", {160, 160, 120});
   for (bool spaced : {true, false}) {
     for (double r : {2.0, 4.0, 8.0}) {
-      const Diagram d = Drawn(sheets, r, 1, spaced);
+      const Diagram d = Local(sheets, {}, r, 0, 0, 1, spaced);
       const double expected = double(sheets.size()) / d.scvd.cell_volume;
       // Bernoulli: Poisson, within four standard deviations; spaced: each cube of the
       // grid is off by less than one (well under that in all), plus the components no
@@ -166,7 +154,7 @@ TEST(ScvdLocalTest, TheSpacedDrawSpreadsFarLessThanPoisson) {
   double spread[2] = {0, 0};
   for (bool spaced : {true, false}) {
     for (uint64_t seed = 1; seed <= 4; ++seed) {
-      const Diagram d = Drawn(sheets, 6, seed, spaced);
+      const Diagram d = Local(sheets, {}, 6, 0, 0, seed, spaced);
       std::vector<double> n(d.sheet.components.count(), 0);
       for (uint32_t c : d.scvd.generator_component) n[c] += 1;
       for (uint32_t c = 0; c < n.size(); ++c) {

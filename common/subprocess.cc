@@ -66,9 +66,14 @@ absl::StatusOr<Subprocess> Subprocess::Start(const SubprocessOptions& o) {
   const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (out < 0) return ErrnoStatus(errno, out_path);
   int pipe_fds[2] = {-1, -1};
-  if (o.report_pipe && ::pipe2(pipe_fds, O_CLOEXEC) != 0) {
+  int request_fds[2] = {-1, -1};
+  if ((o.report_pipe && ::pipe2(pipe_fds, O_CLOEXEC) != 0) ||
+      (o.request_pipe && ::pipe2(request_fds, O_CLOEXEC) != 0)) {
     const int err = errno;
     ::close(out);
+    for (int fd : {pipe_fds[0], pipe_fds[1], request_fds[0], request_fds[1]}) {
+      if (fd >= 0) ::close(fd);
+    }
     return ErrnoStatus(err, "pipe for a subprocess");
   }
   std::vector<std::string> args = o.argv;
@@ -96,7 +101,9 @@ absl::StatusOr<Subprocess> Subprocess::Start(const SubprocessOptions& o) {
   if (pid < 0) {
     const int err = errno;
     ::close(out);
-    if (pipe_fds[0] >= 0) ::close(pipe_fds[0]), ::close(pipe_fds[1]);
+    for (int fd : {pipe_fds[0], pipe_fds[1], request_fds[0], request_fds[1]}) {
+      if (fd >= 0) ::close(fd);
+    }
     return ErrnoStatus(err, "fork");
   }
   if (pid == 0) {
@@ -106,6 +113,7 @@ absl::StatusOr<Subprocess> Subprocess::Start(const SubprocessOptions& o) {
     ::dup2(out, 1);
     ::dup2(out, 2);
     if (pipe_fds[1] >= 0) ::dup2(pipe_fds[1], 3);  // dup2 clears FD_CLOEXEC
+    if (request_fds[0] >= 0) ::dup2(request_fds[0], 4);
     if (o.memory_limit_bytes > 0) ::setrlimit(RLIMIT_AS, &mem);
     if (o.cpu_limit_seconds > 0) ::setrlimit(RLIMIT_CPU, &cpu);
     ::execve(argv[0], argv.data(), envp.data());
@@ -118,13 +126,18 @@ absl::StatusOr<Subprocess> Subprocess::Start(const SubprocessOptions& o) {
     ::close(pipe_fds[1]);
     s.report_fd_ = pipe_fds[0];
   }
+  if (request_fds[1] >= 0) {
+    ::close(request_fds[0]);
+    s.request_fd_ = request_fds[1];
+  }
   return s;
 }
 
 Subprocess::Subprocess(Subprocess&& o) noexcept
-    : pid_(o.pid_), report_fd_(o.report_fd_), exit_(o.exit_) {
+    : pid_(o.pid_), report_fd_(o.report_fd_), request_fd_(o.request_fd_), exit_(o.exit_) {
   o.pid_ = -1;
   o.report_fd_ = -1;
+  o.request_fd_ = -1;
 }
 
 Subprocess& Subprocess::operator=(Subprocess&& o) noexcept {
@@ -132,9 +145,11 @@ Subprocess& Subprocess::operator=(Subprocess&& o) noexcept {
     Release();
     pid_ = o.pid_;
     report_fd_ = o.report_fd_;
+    request_fd_ = o.request_fd_;
     exit_ = o.exit_;
     o.pid_ = -1;
     o.report_fd_ = -1;
+    o.request_fd_ = -1;
   }
   return *this;
 }
@@ -147,8 +162,10 @@ void Subprocess::Release() {
     Wait();
   }
   if (report_fd_ >= 0) ::close(report_fd_);
+  if (request_fd_ >= 0) ::close(request_fd_);
   pid_ = -1;
   report_fd_ = -1;
+  request_fd_ = -1;
 }
 
 std::optional<ChildExit> Subprocess::Poll() {

@@ -1,6 +1,6 @@
 // Subprocess: a child program run with limits — its own process group, killed with its
 // parent, an address-space and a CPU limit, its output to a file, and optionally a pipe back
-// to the parent on fd 3. TetGen and the isolated job runner are started this way.
+// to the parent on fd 3 and one from it on fd 4. TetGen and the isolated job runner are started this way.
 #ifndef SHEETMESH_COMMON_SUBPROCESS_H_
 #define SHEETMESH_COMMON_SUBPROCESS_H_
 
@@ -21,6 +21,7 @@ struct SubprocessOptions {
   uint64_t memory_limit_bytes = 0;  // RLIMIT_AS; 0 = none
   uint64_t cpu_limit_seconds = 0;   // RLIMIT_CPU (SIGXCPU, then SIGKILL); 0 = none
   bool report_pipe = false;         // a pipe the child writes on fd 3 (report_fd())
+  bool request_pipe = false;        // a pipe the child reads on fd 4 (request_fd())
   std::vector<std::pair<std::string, std::string>> env;  // set in the child's environment
   // With clean_env the child sees only `env` and the variables named in keep_env, not this
   // process's environment (which may hold secrets: a database password, tokens).
@@ -53,6 +54,8 @@ class Subprocess {
   pid_t pid() const { return pid_; }
   // The read end of the report pipe (-1 without one); closed with this object.
   int report_fd() const { return report_fd_; }
+  // The write end of the request pipe (-1 without one); closed with this object.
+  int request_fd() const { return request_fd_; }
   // The exit once the child has ended, nullopt while it runs. Never blocks.
   std::optional<ChildExit> Poll();
   // Waits for the end.
@@ -66,6 +69,7 @@ class Subprocess {
 
   pid_t pid_ = -1;
   int report_fd_ = -1;
+  int request_fd_ = -1;
   std::optional<ChildExit> exit_;
 };
 

@@ -349,6 +349,7 @@ absl::StatusOr<BrickResult> RunBrick(const std::string& plan_dir, int index,
   const Brick& brick = plan.bricks[index];
   SM_ASSIGN_OR_RETURN(PipelineOptions o, PlanOptions(plan, PlanFile(plan_dir)));
   if (site.limits) o.input.open.limits = *site.limits;
+  o.input.open.child_reader = site.child_reader;
   const SheetInput& in = o.input;
   // The volume must still be the one planned: a file replaced since would mix two volumes.
   // Opened once, checked, then seen through the brick's box.

@@ -108,6 +108,7 @@ struct BrickSite {
   std::string volume;                  // the volume's path here ("": the plan's)
   std::optional<VolumeLimits> limits;  // what its reader may do (unset: the defaults)
   std::string plan_name;               // the plan in bricks.json ("": its absolute path)
+  ChildReaderOptions child_reader;     // how its reader runs (default: in this process)
 };
 
 // Runs brick `index` of the plan in `plan_dir` and writes its file atomically (a brick killed

@@ -32,6 +32,7 @@
 #include "worker/pipeline/cli/phantom_command.h"
 #include "worker/pipeline/cli/surface_command.h"
 #include "worker/pipeline/phantom/phantom_presets.h"
+#include "worker/pipeline/volume/child_reader.h"
 
 ABSL_FLAG(double, memory_limit_gb, -1,
           "the address space this program may use, in GiB (default: three quarters of the "
@@ -40,6 +41,10 @@ ABSL_FLAG(double, memory_limit_gb, -1,
 ABSL_FLAG(std::string, o, "", "output path (a folder; phantom and convert: the volume file)");
 ABSL_FLAG(std::string, config, "",
           "surface/run/volume: a JSON file of parameters (flags given override it)");
+ABSL_FLAG(bool, isolate_readers, true,
+          "read a file whose format a third-party library parses (vdb, hdf5, dicom, png, jpeg, "
+          "tiff, folders of slices) in a child process with a memory limit, so that a damaged "
+          "file costs that child");
 ABSL_FLAG(bool, json, false, "info, score, params: print JSON");
 ABSL_FLAG(int, connectivity, 6, "info: component connectivity, 6, 18 or 26");
 ABSL_FLAG(int, largest, 10, "info: component sizes to list");
@@ -135,6 +140,17 @@ absl::StatusOr<Dims> ParseDims(const std::string& flag, const std::string& text)
 // Defaults, then --config, then the parameter flags given.
 // The surface command is run without the extraction; every other command takes the table's
 // defaults, as the service does.
+// The child readers' program: this one (its `_serve-volume` command), unless
+// --isolate_readers=false or the system does not say where it is.
+ChildReaderOptions ChildReaders() {
+  ChildReaderOptions o;
+  if (!absl::GetFlag(FLAGS_isolate_readers)) return o;
+  char path[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", path, sizeof(path) - 1);
+  if (n > 0) o.program.assign(path, static_cast<size_t>(n));
+  return o;
+}
+
 absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool surface_command) {
   ParameterBuilder builder;
   PipelineOptions base;
@@ -144,7 +160,9 @@ absl::StatusOr<PipelineOptions> Options(const ParameterFlags& flags, bool surfac
     SM_RETURN_IF_ERROR(builder.AddJson(text, absl::GetFlag(FLAGS_config)));
   }
   SM_ASSIGN_OR_RETURN(PipelineOptions o, builder.Build(base));
-  return flags.given.Build(o);
+  SM_ASSIGN_OR_RETURN(o, flags.given.Build(o));
+  o.input.open.child_reader = ChildReaders();
+  return o;
 }
 
 absl::Status Usage(absl::string_view what) {
@@ -252,7 +270,7 @@ absl::Status BrickCommand(const std::vector<std::string>& args) {
   if (args.size() != 1) return Usage("brick PLAN_DIR --index=I");
   SM_ASSIGN_OR_RETURN(const int index, BrickIndex());
   const absl::Time start = absl::Now();
-  SM_ASSIGN_OR_RETURN(const BrickResult r, RunBrick(args[0], index));
+  SM_ASSIGN_OR_RETURN(const BrickResult r, RunBrick(args[0], index, {}, {.child_reader = ChildReaders()}));
   std::cout << absl::StrFormat("brick       %d (%s): %d sheet voxels, %d bytes in %s, %.2f s\n",
                                index, r.core.ToString(), r.sheet.size(), r.file_bytes,
                                BrickFile(args[0], index),
@@ -371,6 +389,10 @@ absl::Status LimitMemory(double gib) {
 
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
+  // A child reader (child_reader.h), started by this program itself: not a user's command.
+  if (argc == 3 && std::string(argv[1]) == "_serve-volume") {
+    return sheetmesh::ServeVolume(argv[2]).ok() ? 0 : 1;
+  }
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
   if (WantsVersion(argc, argv)) {
     PrintVersion("sheetmesh-pipeline", std::cout);

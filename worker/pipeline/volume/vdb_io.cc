@@ -10,9 +10,11 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "common/excerpt.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/volume/vdb_check.h"
 
 namespace sheetmesh {
 namespace {
@@ -97,105 +99,31 @@ absl::Status WriteGridsAtomically(const std::string& path, const openvdb::GridPt
   return absl::OkStatus();
 }
 
-// Walks the layout of a .vdb file (header, file metadata, grid descriptors) against its size
-// before OpenVDB reads it: OpenVDB takes string lengths and offsets as they come, so a cut
-// file made it allocate gigabytes from the bytes past the cut. Every length and offset must
-// lie within the file. REQUIRES: nothing; reads at most the header and the descriptors.
-class VdbLayout {
- public:
-  VdbLayout(int fd, int64_t size, const std::string& path) : fd_(fd), size_(size), path_(path) {}
-
-  absl::Status Check() {
-    int64_t magic = 0;
-    SM_RETURN_IF_ERROR(Read(&magic, "the magic number"));
-    if (magic != openvdb::OPENVDB_MAGIC) return Bad("does not start with OpenVDB's magic number");
-    uint32_t version = 0;
-    SM_RETURN_IF_ERROR(Read(&version, "the file format version"));
-    if (version < openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP ||
-        version > openvdb::OPENVDB_FILE_VERSION) {
-      return Bad(absl::StrCat("file format version ", version, " is not one OpenVDB ",
-                              OPENVDB_LIBRARY_VERSION_STRING, " reads (",
-                              openvdb::OPENVDB_FILE_VERSION_ROOTNODE_MAP, "-",
-                              openvdb::OPENVDB_FILE_VERSION, ")"));
+// The descriptor `grid_name` names (a grid's name, or its unique name "name[N]"), or the
+// first scalar grid when it is empty. kNotFound naming the grids there are otherwise.
+absl::StatusOr<size_t> ChooseGrid(const VdbFileLayout& layout, const std::string& grid_name,
+                                  const std::string& path) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < layout.grids.size(); ++i) {
+    const VdbGridEntry& g = layout.grids[i];
+    const std::string shown = openvdb::io::GridDescriptor::nameAsString(g.name);
+    names.push_back(absl::StrCat("'", Excerpt(shown, 64), "' (", Excerpt(g.type, 64), ")"));
+    if (grid_name.empty()) {
+      if (IsScalarVdbGridType(g.type)) return i;
+      continue;
     }
-    SM_RETURN_IF_ERROR(Skip(8, "the library version"));
-    char offsets = 0;
-    SM_RETURN_IF_ERROR(Read(&offsets, "the grid-offsets flag"));
-    if (offsets == 0) {
-      return Bad("was written as a stream without grid offsets; save it with openvdb.write");
+    if (g.name == openvdb::io::GridDescriptor::stringAsUniqueName(grid_name) ||
+        openvdb::io::GridDescriptor::stripSuffix(g.name) == grid_name) {
+      return i;
     }
-    if (version >= openvdb::OPENVDB_FILE_VERSION_SELECTIVE_COMPRESSION &&
-        version < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) {
-      SM_RETURN_IF_ERROR(Skip(1, "the compression flag"));
-    }
-    SM_RETURN_IF_ERROR(
-        Skip(version >= openvdb::OPENVDB_FILE_VERSION_BOOST_UUID ? 36 : 16, "the file's UUID"));
-    int32_t entries = 0;
-    SM_RETURN_IF_ERROR(Read(&entries, "the file metadata count"));
-    if (entries < 0 || entries > (size_ - at_) / 12) return Bad("its metadata count is corrupt");
-    for (int32_t i = 0; i < entries; ++i) {
-      SM_RETURN_IF_ERROR(String("a metadata name"));
-      SM_RETURN_IF_ERROR(String("a metadata type"));
-      SM_RETURN_IF_ERROR(String("a metadata value"));
-    }
-    int32_t grids = 0;
-    SM_RETURN_IF_ERROR(Read(&grids, "the grid count"));
-    if (grids < 0 || grids > (size_ - at_) / 36) return Bad("its grid count is corrupt");
-    for (int32_t i = 0; i < grids; ++i) {
-      const std::string what = absl::StrCat("grid descriptor ", i);
-      SM_RETURN_IF_ERROR(String(what + "'s name"));
-      SM_RETURN_IF_ERROR(String(what + "'s type"));
-      if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) {
-        SM_RETURN_IF_ERROR(String(what + "'s instance parent"));
-      }
-      int64_t grid = 0, block = 0, end = 0;
-      SM_RETURN_IF_ERROR(Read(&grid, what));
-      SM_RETURN_IF_ERROR(Read(&block, what));
-      SM_RETURN_IF_ERROR(Read(&end, what));
-      if (!(at_ <= grid && grid <= block && block <= end && end <= size_)) {
-        return Bad(absl::StrCat(what, " places its grid at bytes ", grid, "-", end,
-                                ", not within the file's ", size_, " (cut short?)"));
-      }
-      at_ = end;  // the next descriptor follows this grid's data
-    }
-    return absl::OkStatus();
   }
-
- private:
-  absl::Status Bad(absl::string_view what) const {
-    return absl::InvalidArgumentError(absl::StrCat(path_, ": not a readable .vdb: ", what));
+  const std::string listed = names.empty() ? "no grid" : absl::StrJoin(names, ", ");
+  if (grid_name.empty()) {
+    return absl::NotFoundError(absl::StrCat(path, ": holds no scalar grid (it has ", listed, ")"));
   }
-  absl::Status Skip(int64_t n, absl::string_view what) {
-    if (n < 0 || n > size_ - at_) {
-      return Bad(
-          absl::StrCat("the file ends (at byte ", size_, ") within ", what, " (cut short?)"));
-    }
-    at_ += n;
-    return absl::OkStatus();
-  }
-  template <class T>
-  absl::Status Read(T* value, absl::string_view what) {
-    const int64_t from = at_;
-    SM_RETURN_IF_ERROR(Skip(sizeof(T), what));
-    return ReadFullyAt(fd_, from, std::as_writable_bytes(std::span<T>(value, 1)), path_);
-  }
-  // A length-prefixed string, skipped.
-  absl::Status String(absl::string_view what) {
-    uint32_t length = 0;
-    SM_RETURN_IF_ERROR(Read(&length, what));
-    return Skip(length, what);
-  }
-
-  int fd_;
-  int64_t size_;
-  const std::string& path_;
-  int64_t at_ = 0;
-};
-
-absl::Status CheckVdbLayout(const std::string& path) {
-  SM_ASSIGN_OR_RETURN(ScopedFd fd, OpenForRead(path));
-  SM_ASSIGN_OR_RETURN(const int64_t size, FileSizeOf(fd.get(), path));
-  return AsInputError(VdbLayout(fd.get(), size, path).Check());
+  return absl::NotFoundError(
+      absl::StrCat(path, ": has no grid named '", Excerpt(grid_name, 64), "' (it has ", listed,
+                   "); input.vdb_grid names one"));
 }
 
 template <class GridT>
@@ -329,30 +257,16 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
                                                             const std::string& grid_name,
                                                             const VolumeLimits& limits) {
   InitializeOpenVdb();
-  SM_RETURN_IF_ERROR(CheckVdbLayout(path));
+  // OpenVDB believes every size it reads: the whole structure of the grid it will read is
+  // checked first, against the file and the memory budget.
+  SM_ASSIGN_OR_RETURN(const VdbFileLayout layout, ReadVdbLayout(path));
+  SM_ASSIGN_OR_RETURN(const size_t chosen, ChooseGrid(layout, grid_name, path));
+  SM_RETURN_IF_ERROR(CheckVdbGrid(path, layout, chosen, MemoryBudget(limits)));
   openvdb::GridBase::Ptr base;
   try {
     openvdb::io::File file(path);
     file.open(/*delayLoad=*/false);
-    if (grid_name.empty()) {
-      openvdb::GridPtrVecPtr grids = file.getGrids();
-      for (const auto& g : *grids) {
-        if (g->isType<openvdb::FloatGrid>() || g->isType<openvdb::DoubleGrid>() ||
-            g->isType<openvdb::Int32Grid>() || g->isType<openvdb::Int64Grid>() ||
-            g->isType<openvdb::BoolGrid>() || g->isType<openvdb::MaskGrid>()) {
-          base = g;
-          break;
-        }
-      }
-      if (base == nullptr) {
-        return absl::NotFoundError(absl::StrCat(path, ": holds no scalar grid"));
-      }
-    } else {
-      if (!file.hasGrid(grid_name)) {
-        return absl::NotFoundError(absl::StrCat(path, ": has no grid named '", grid_name, "'"));
-      }
-      base = file.readGrid(grid_name);
-    }
+    base = file.readGrid(layout.grids[chosen].name);
     file.close();
   } catch (const openvdb::Exception& e) {
     return absl::InvalidArgumentError(

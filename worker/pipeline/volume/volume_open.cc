@@ -213,7 +213,10 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolume(const std::string& path
   const auto hdf5 = SplitHdf5Path(path);
   SM_ASSIGN_OR_RETURN(const std::string format, InputFormatOf(path, options));
   std::unique_ptr<VolumeSource> source;
-  if (format == "raw") {
+  if (!options.child_reader.program.empty() && ReadByLibrary(format)) {
+    SM_ASSIGN_OR_RETURN(source, OpenVolumeInChild(path, format, options.vdb_grid, options.limits,
+                                                  options.child_reader));
+  } else if (format == "raw") {
     RawOptions raw;
     const std::optional<NamedDims> named = ParseNamedDims(path);
     if (options.raw_dims) {

@@ -10,6 +10,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "worker/pipeline/volume/child_reader.h"
 #include "worker/pipeline/volume/raw_io.h"
 #include "worker/pipeline/volume/volume_sink.h"
 #include "worker/pipeline/volume/volume_source.h"
@@ -39,6 +40,9 @@ struct OpenOptions {
   // the region's and its origin the region's first voxel's; only its slices are read.
   std::optional<VoxelRegion> region;
   VolumeLimits limits;
+  // With a program, formats a third-party library parses (ReadByLibrary) are read by a
+  // child process of it, within limits (child_reader.h).
+  ChildReaderOptions child_reader;
 };
 
 // The reader OpenVolume takes for `path`: options.format, or the one its name (or being a

@@ -387,12 +387,21 @@ absl::Status LimitMemory(double gib) {
   return absl::OkStatus();
 }
 
+// `_serve-volume SPEC`: opens the spec's volume here and serves it to the parent.
+int ServeVolumeCommand(const std::string& text) {
+  absl::StatusOr<ChildReaderSpec> spec = ParseChildReaderSpec(text);
+  if (!spec.ok()) return ServeVolume(spec.status()).ok() ? 0 : 1;
+  OpenOptions open;
+  open.format = spec->format;
+  open.vdb_grid = spec->vdb_grid;
+  open.limits = spec->limits;
+  return ServeVolume(OpenVolume(spec->path, open)).ok() ? 0 : 1;
+}
+
 int Main(int argc, char** argv) {
   absl::SetProgramUsageMessage(kUsage);
   // A child reader (child_reader.h), started by this program itself: not a user's command.
-  if (argc == 3 && std::string(argv[1]) == "_serve-volume") {
-    return sheetmesh::ServeVolume(argv[2]).ok() ? 0 : 1;
-  }
+  if (argc == 3 && std::string(argv[1]) == "_serve-volume") return ServeVolumeCommand(argv[2]);
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
   if (WantsVersion(argc, argv)) {
     PrintVersion("sheetmesh-pipeline", std::cout);

@@ -17,7 +17,6 @@
 #include "common/excerpt.h"
 #include "common/status_macros.h"
 #include "common/subprocess.h"
-#include "worker/pipeline/volume/volume_open.h"
 
 namespace sheetmesh {
 namespace {
@@ -262,34 +261,35 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolumeInChild(const std::strin
   return source;
 }
 
-absl::Status ServeVolume(const std::string& spec_text) {
+absl::StatusOr<ChildReaderSpec> ParseChildReaderSpec(const std::string& text) {
+  const nlohmann::json spec = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  ChildReaderSpec out;
+  try {
+    out.path = spec.at("path").get<std::string>();
+    out.format = spec.at("format").get<std::string>();
+    out.vdb_grid = spec.at("vdb_grid").get<std::string>();
+    out.limits.max_voxels = spec.at("max_voxels").get<int64_t>();
+    out.limits.max_extent = spec.at("max_extent").get<int64_t>();
+    out.limits.memory_bytes = spec.at("memory_bytes").get<int64_t>();
+    out.limits.confine_named_files = spec.at("confine_named_files").get<bool>();
+    out.limits.named_file_roots = spec.at("named_file_roots").get<std::vector<std::string>>();
+  } catch (const nlohmann::json::exception& e) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("not a child reader's spec: ", Excerpt(e.what())));
+  }
+  return out;
+}
+
+absl::Status ServeVolume(absl::StatusOr<std::unique_ptr<VolumeSource>> source) {
   // A parent that has gone leaves writes failing, not this process killed.
   ::signal(SIGPIPE, SIG_IGN);
-  const nlohmann::json spec = nlohmann::json::parse(spec_text, nullptr, false);
-  OpenOptions open;
-  std::string path;
-  try {
-    path = spec.at("path").get<std::string>();
-    open.format = spec.at("format").get<std::string>();
-    open.vdb_grid = spec.at("vdb_grid").get<std::string>();
-    open.limits.max_voxels = spec.at("max_voxels").get<int64_t>();
-    open.limits.max_extent = spec.at("max_extent").get<int64_t>();
-    open.limits.memory_bytes = spec.at("memory_bytes").get<int64_t>();
-    open.limits.confine_named_files = spec.at("confine_named_files").get<bool>();
-    open.limits.named_file_roots = spec.at("named_file_roots").get<std::vector<std::string>>();
-  } catch (const nlohmann::json::exception& e) {
-    const absl::Status bad =
-        absl::InvalidArgumentError(absl::StrCat("_serve-volume: a bad spec: ", Excerpt(e.what())));
-    WriteStatus(kAnswerFd, bad);
-    return bad;
-  }
-  absl::StatusOr<std::unique_ptr<VolumeSource>> source = OpenVolume(path, open);
-  if (!WriteStatus(kAnswerFd, source.status())) return absl::AbortedError("the parent has gone");
+  const absl::Status gone = absl::AbortedError("the parent has gone");
+  if (!WriteStatus(kAnswerFd, source.status())) return gone;
   if (!source.ok()) return source.status();
   const std::string info = InfoToJson((*source)->info()).dump();
   const uint32_t length = static_cast<uint32_t>(info.size());
   if (!WriteAll(kAnswerFd, &length, 4) || !WriteAll(kAnswerFd, info.data(), info.size())) {
-    return absl::AbortedError("the parent has gone");
+    return gone;
   }
   const VolumeInfo& v = (*source)->info();
   const int64_t slice = v.dims.nx * v.dims.ny * BytesPerVoxel(v.dtype);
@@ -304,10 +304,8 @@ absl::Status ServeVolume(const std::string& spec_text) {
       buffer.resize(static_cast<size_t>(count * slice));
       status = (*source)->ReadSlices(z0, count, buffer);
     }
-    if (!WriteStatus(kAnswerFd, status)) return absl::AbortedError("the parent has gone");
-    if (status.ok() && !WriteAll(kAnswerFd, buffer.data(), buffer.size())) {
-      return absl::AbortedError("the parent has gone");
-    }
+    if (!WriteStatus(kAnswerFd, status)) return gone;
+    if (status.ok() && !WriteAll(kAnswerFd, buffer.data(), buffer.size())) return gone;
   }
   return absl::OkStatus();
 }

@@ -43,10 +43,21 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVolumeInChild(const std::strin
                                                                 const VolumeLimits& limits,
                                                                 const ChildReaderOptions& options);
 
-// The child's side: `spec` is what OpenVolumeInChild passed; opens the volume in this
-// process, answers on fd 3 (the opening, then each slab) what is asked on fd 4, until fd 4
-// ends. Returns the status of the last answer it could not write.
-absl::Status ServeVolume(const std::string& spec);
+// What the child is asked to open.
+struct ChildReaderSpec {
+  std::string path;
+  std::string format;
+  std::string vdb_grid;
+  VolumeLimits limits;  // memory_bytes: the parent's reading budget
+};
+// The spec OpenVolumeInChild passes on the child's command line. kInvalidArgument when it
+// is not one.
+absl::StatusOr<ChildReaderSpec> ParseChildReaderSpec(const std::string& text);
+
+// The child's side: sends `opened` (the spec's volume opened in this process, or why not)
+// on fd 3, then answers each slab asked on fd 4 until fd 4 ends. kAborted when the parent
+// has gone.
+absl::Status ServeVolume(absl::StatusOr<std::unique_ptr<VolumeSource>> opened);
 
 }  // namespace sheetmesh
 

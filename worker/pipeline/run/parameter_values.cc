@@ -43,7 +43,14 @@ const char* TypeName(ParamType t) {
 }  // namespace
 
 // "5", "true", "\"paper\"", "[2,3,4]".
-std::string ShowValue(const ParamValue& v) { return JsonText(ToJson(v)); }
+std::string ShowValue(const ParamValue& v) {
+  // JSON has no text for a number beyond a double or not a number: say what it was.
+  if (const double* d = std::get_if<double>(&v); d != nullptr && !std::isfinite(*d)) {
+    return std::isnan(*d) ? "nan" : *d > 0 ? "inf (beyond a double's range)"
+                                           : "-inf (beyond a double's range)";
+  }
+  return JsonText(ToJson(v));
+}
 
 absl::Status BadValue(const std::string& display, const std::string& value, absl::string_view why) {
   return absl::InvalidArgumentError(absl::StrCat(display, " = ", value, " ", why));

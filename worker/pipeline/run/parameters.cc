@@ -13,6 +13,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "common/assert.h"
+#include "common/json_parse.h"
 #include "common/json_text.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/extract/extraction.h"
@@ -163,12 +164,7 @@ absl::Status ParameterBuilder::Add(const ParamSpec& spec, ParamValue value, std:
 }
 
 absl::Status ParameterBuilder::AddJson(absl::string_view text, absl::string_view source) {
-  Json root;
-  try {
-    root = Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
-    return absl::InvalidArgumentError(absl::StrCat(source, ": not valid JSON: ", e.what()));
-  }
+  SM_ASSIGN_OR_RETURN(const Json root, ParseJson(text, source));
   if (!root.is_object()) {
     return absl::InvalidArgumentError(
         absl::StrCat(source, ": '(top level)' = ", JsonText(root), " must be an object"));

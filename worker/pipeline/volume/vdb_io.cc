@@ -299,7 +299,12 @@ absl::StatusOr<std::unique_ptr<VolumeSource>> OpenVdbVolume(const std::string& p
   }
   const bool mask = base->isType<openvdb::BoolGrid>() || base->isType<openvdb::MaskGrid>();
   if (dtype_meta && !mask) {
-    SM_ASSIGN_OR_RETURN(info.dtype, ParseDType(dtype_meta->value()));
+    absl::StatusOr<DType> dtype = ParseDType(dtype_meta->value());
+    if (!dtype.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(path, ": metadata ", kDTypeMeta, ": ", dtype.status().message()));
+    }
+    info.dtype = *dtype;
   } else {
     info.dtype = mask ? DType::kUInt8 : DType::kFloat32;
   }

@@ -109,4 +109,17 @@ case_ spacing_1e-6_m 0 "model.vdb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "
 # A job beyond the memory it may use: an error naming the stage, exit 2, no file.
 case_ out_of_memory 2 "out of memory in stage|--memory_limit_gb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/oom" --memory_limit_gb=0.2
 [ ! -e "$tmp/oom/report.json" ] || fail "out_of_memory: a report was written"
+# Hardening, third round. The audit's changed bytes of a .vdb: SIGABRT (malloc(): corrupted
+# top size), SIGSEGV, 14.8 GB before; read in this process (--isolate_readers=false) and in
+# its child reader (the default), each a clean error naming the file and the byte.
+for change in 2167:79 78941:128 1357:127; do
+  cp "$tmp/s.vdb" "$tmp/changed.vdb"
+  printf "$(printf '\\x%02x' "${change#*:}")" |
+    dd of="$tmp/changed.vdb" bs=1 seek="${change%:*}" conv=notrunc status=none
+  case_ "vdb_byte_${change}" 2 "changed.vdb|at byte" -- "$cli" info "$tmp/changed.vdb" --isolate_readers=false --memory_limit_gb=1.5
+  case_ "vdb_byte_${change}_child" 2 "changed.vdb|at byte" -- "$cli" info "$tmp/changed.vdb"
+done
+echo '{"r": 1e999}' > "$tmp/r_1e999.json"
+case_ config_r_1e999 2 "r_1e999.json|'r' = 1e999|beyond the range" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --config="$tmp/r_1e999.json"
+case_ flag_r_1e999 2 "--r = inf" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --r=1e999
 echo "hardening CLI: $cases cases passed"

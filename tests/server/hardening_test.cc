@@ -197,6 +197,11 @@ std::vector<BadCase> Cases() {
                       r.mutable_parameters()->set_extract(true);
                       r.mutable_parameters()->set_time_limit_seconds(0.05);
                     }));
+  // Hardening, third round: this was UNKNOWN (an uncaught nlohmann::json out_of_range).
+  c.push_back(Refused("config_json_r_1e999", phantom, StatusCode::kInvalidArgument,
+                      {"'r'", "1e999", "beyond the range"}, [](v1::CreateJobRequest& r) {
+                        r.mutable_parameters()->set_config_json(R"({"r": 1e999})");
+                      }));
   c.push_back(Refused("request_id_with_a_control_character", phantom, StatusCode::kInvalidArgument,
                       {"request_id"}, [](v1::CreateJobRequest& r) { r.set_request_id("a\nb"); }));
   c.push_back(Refused("digest_not_stored", phantom, StatusCode::kFailedPrecondition,

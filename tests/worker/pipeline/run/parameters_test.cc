@@ -405,3 +405,42 @@ TEST(ParamRangeTest, AMalformedRangeIsABugTheTestsBuildCatches) {
 
 }  // namespace
 }  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+using ::sheetmesh::testing::StatusIs;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+// Hardening, third round: a number past a double's range was an uncaught out_of_range (the
+// CLI aborted; the service answered UNKNOWN).
+TEST(ParametersTest, NumbersBeyondADoubleAreInvalidArgumentNamingTheirKey) {
+  for (const auto& [json, key, text] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {R"({"r": 1e999})", "'r'", "1e999"},
+           {R"({"surface": {"r": -1e400}})", "'surface.r'", "-1e400"},
+           {R"({"grey": {"scales": [1, 2, 1e309]}})", "'grey.scales[2]'", "1e309"}}) {
+    ParameterBuilder b;
+    EXPECT_THAT(b.AddJson(json, "cfg.json"),
+                StatusIs(absl::StatusCode::kInvalidArgument,
+                         AllOf(HasSubstr("cfg.json"), HasSubstr(key), HasSubstr(text),
+                               HasSubstr("beyond the range"))))
+        << json;
+  }
+  ParameterBuilder b;
+  EXPECT_THAT(b.AddJson(R"({"r": 4,, })", "cfg.json"),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       AllOf(HasSubstr("not valid JSON at 'r'"), HasSubstr("byte 9"))));
+  const ParamSpec* r = FindParameter("r");
+  ASSERT_NE(r, nullptr);
+  absl::StatusOr<ParamValue> v = ParseParameterText(*r, "1e999", "--r");
+  if (v.ok()) {
+    ParameterBuilder flags;
+    EXPECT_THAT(flags.Add(*r, *v, "--r"),
+                StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("inf")));
+  }
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -122,4 +122,8 @@ done
 echo '{"r": 1e999}' > "$tmp/r_1e999.json"
 case_ config_r_1e999 2 "r_1e999.json|'r' = 1e999|beyond the range" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --config="$tmp/r_1e999.json"
 case_ flag_r_1e999 2 "--r = inf" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --r=1e999
+# Bricks of the surface at 1 voxel never ended; 8 with the default halo ran to the time limit.
+case_ surface_bricks_1 2 "surface_bricks = 1|at least 32" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=1
+case_ surface_bricks_8 2 "surface_bricks = 8|at least 32" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=8 --surface_bricks_halo=0
+case_ surface_bricks_below_the_halo 2 "surface.bricks = 40|give at least" -- timeout 60 "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=40
 echo "hardening CLI: $cases cases passed"

@@ -374,7 +374,8 @@ std::vector<ParamRow> SurfaceRows() {
                       "a brick with a halo builds its core's cells as the whole volume does"));
   rows.push_back(Integer("surface.bricks", SM_MEMBER(surface.bricks.brick), "[0, 1e6]", "voxels",
                          "build the SCVD and its triangles in bricks of this side with halos, "
-                         "checked and joined at their seams (0: the whole sheet at once)"));
+                         "checked and joined at their seams (0: the whole sheet at once); at "
+                         "least 32, the halo, and 4 r + the sheet's thickest run"));
   rows.push_back(Integer("surface.bricks_halo", SM_MEMBER(surface.bricks.halo), "[0, 1e6]",
                          "voxels",
                          "with surface.bricks: voxels read around each brick (0: from r and the "

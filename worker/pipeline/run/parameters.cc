@@ -62,6 +62,20 @@ std::optional<Broken> BrokenRelation(const PipelineOptions& o) {
         absl::StrCat("cannot be combined with surface.error_density = ", o.surface.error_density,
                      " (the error's density is scaled over the whole sheet)")};
   }
+  // A brick below its halo reads (1 + 2 halo / brick)^3 times its own voxels: at 1 voxel, a
+  // pass per voxel that never ends (hardening, third round). The data's own floor (4 r + the
+  // thickest run) is checked once the sheet is known (surface_builder.cc).
+  const int brick = o.surface.bricks.brick;
+  if (brick > 0 && brick < kMinSurfaceBrick) {
+    return Broken{"surface.bricks", absl::StrCat(brick),
+                  absl::StrCat("must be 0 (the surface built whole) or at least ",
+                               kMinSurfaceBrick, " voxels")};
+  }
+  if (brick > 0 && o.surface.bricks.halo > brick) {
+    return Broken{"surface.bricks", absl::StrCat(brick),
+                  absl::StrCat("must be at least surface.bricks_halo = ", o.surface.bricks.halo,
+                               " (a brick reads its halo on every side)")};
+  }
   const RadiusSearchOptions& rs = o.radius_search;
   if (rs.max_radius_voxels != 0 && rs.max_radius_voxels < rs.min_radius_voxels) {
     return Broken{

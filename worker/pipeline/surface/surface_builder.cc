@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/decimate.h"
@@ -105,6 +106,17 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet, const Surfa
                              : *std::max_element(sheet.thickness.begin(), sheet.thickness.end());
   bo.halo =
       options.bricks.halo > 0 ? options.bricks.halo : SurfaceHalo(local.scvd.radius_voxels, t_max);
+  // A brick narrower than its cells and the sheet's thickness, or than the halo it reads,
+  // does the whole sheet's work many times over (1 voxel: once a voxel, for ever).
+  const int floor = std::max(
+      static_cast<int>(std::ceil(4 * local.scvd.radius_voxels)) + int{t_max}, bo.halo);
+  if (options.bricks.brick < floor) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "surface.bricks = %d is below the smallest brick for r = %.3g on this sheet: max(4 r + "
+        "its thickest run %d, the halo %d) = %d voxels; give at least %d, or 0 to build the "
+        "surface whole",
+        options.bricks.brick, local.scvd.radius_voxels, int{t_max}, bo.halo, floor, floor));
+  }
   SM_ASSIGN_OR_RETURN(BrickedSurface b, BuildBrickedSurface(sheet.set, sheet.thickness_stats.mean,
                                                             local, bo, {}, progress.Sub(0, 0.9)));
   out->bricks = b.bricks;

@@ -31,9 +31,13 @@ enum class VertexFit {
   kAll,  // and every vertex along its normal
 };
 
+// The smallest brick side surface.bricks takes: smaller bricks read their halos many times
+// over (the sheet's own floor, 4 r + its thickest run and the halo, is checked on the sheet).
+inline constexpr int kMinSurfaceBrick = 32;
+
 // The SCVD and its triangles built brick by brick (bricked_surface.h; beyond the paper).
 struct SurfaceBrickOptions {
-  int brick = 0;  // > 0: bricks of this side, voxels (0: the whole sheet at once)
+  int brick = 0;  // > 0: bricks of this side, at least kMinSurfaceBrick, voxels (0: whole)
   int halo = 0;   // voxels read around each brick (0: SurfaceHalo of r and the longest τ)
 };
 

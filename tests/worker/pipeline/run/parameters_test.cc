@@ -277,6 +277,10 @@ TEST(ParametersTest, MistakesNameTheFileTheKeyAndTheValue) {
       {R"({"permeability": {"image_reference": 2}})", "'permeability.image_reference' = 2"},
       {R"({"surface": {"bricks": 128, "error_density": 1}})",
        "'surface.bricks' = 128 cannot be combined with surface.error_density = 1"},
+      {R"({"surface": {"bricks": 1}})",
+       "'surface.bricks' = 1 must be 0 (the surface built whole) or at least 32 voxels"},
+      {R"({"surface": {"bricks": 40, "bricks_halo": 64}})",
+       "'surface.bricks' = 40 must be at least surface.bricks_halo = 64"},
       {R"({"surface": )", "not valid JSON"},
       {R"([1, 2])", "must be an object"},
   };

@@ -97,9 +97,10 @@ TEST(PipelineTest, SurfaceInBricksMeshesLikeTheWholeSheetAndFeedsTheVolumeMesh) 
   EXPECT_EQ(w.surface->bricks, 1u);
   PipelineOptions bricked = whole;
   bricked.output.dir = tmp.File("bricked");
-  bricked.surface.bricks.brick = 20;
+  bricked.surface.bricks.brick = 32;  // the smallest brick: its halo (given) and 4 r + t_max
+  bricked.surface.bricks.halo = 32;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport b, RunPipeline(bricked));
-  EXPECT_GT(b.surface->bricks, 8u);
+  EXPECT_GE(b.surface->bricks, 8u);
   EXPECT_EQ(b.surface->seam_mismatches, 0u);
   EXPECT_GT(b.surface->brick_halo, 0);
   EXPECT_EQ(b.surface->triangles, w.surface->triangles);
@@ -111,7 +112,16 @@ TEST(PipelineTest, SurfaceInBricksMeshesLikeTheWholeSheetAndFeedsTheVolumeMesh) 
   SM_ASSERT_OK_AND_ASSIGN(std::string text, ReadFileToString(tmp.File("bricked/report.json")));
   const nlohmann::json j = nlohmann::json::parse(text);
   EXPECT_EQ(j["surface"]["bricks"]["bricks"].get<uint64_t>(), b.surface->bricks);
-  EXPECT_EQ(j["parameters"]["surface"]["bricks"].get<int64_t>(), 20);
+  EXPECT_EQ(j["parameters"]["surface"]["bricks"].get<int64_t>(), 32);
+
+  // Below the sheet's floor (hardening, third round: 1 voxel never ended): refused, naming
+  // the smallest brick.
+  PipelineOptions tiny = bricked;
+  tiny.output.dir = tmp.File("tiny");
+  tiny.surface.bricks.halo = 0;
+  EXPECT_THAT(RunPipeline(tiny), StatusIs(absl::StatusCode::kInvalidArgument,
+                                          ::testing::AllOf(::testing::HasSubstr("surface.bricks = 32"),
+                                                           ::testing::HasSubstr("give at least"))));
 
   // An error-driven density has the whole sheet's scale: refused, named.
   bricked.surface.error_density = 1;

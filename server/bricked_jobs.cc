@@ -95,12 +95,25 @@ void LostJobsEnded(JobStore& store, JobEvents& events, const std::vector<v1::Job
 }
 
 absl::Status CancelTasks(JobStore& store, const v1::Job& job) {
-  absl::Status first;
-  for (const std::string& task : job.bricks().tasks()) {
-    absl::StatusOr<v1::Job> t = store.RequestCancel(task);
-    if (!t.ok() && !absl::IsNotFound(t.status()) && first.ok()) first = t.status();
+  return store.CancelTasks(job.name()).status();
+}
+
+absl::Status CheckSplit(JobStore& store, const SplitLimits& limits, const std::string& name,
+                        int count) {
+  if (count > limits.max_brick_tasks) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": its plan has ", count, " bricks, more than the server runs for one job "
+        "(max_brick_tasks = ", limits.max_brick_tasks, "): give larger bricks (the job's bricks)"));
   }
-  return first;
+  SM_ASSIGN_OR_RETURN(const int64_t jobs, store.CountInState(v1::QUEUED));
+  SM_ASSIGN_OR_RETURN(const int64_t tasks, store.CountQueuedTasks());
+  if (jobs + tasks + count > limits.max_queued_jobs) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        name, ": its ", count, " bricks would take the queue (", jobs, " jobs and ", tasks,
+        " brick tasks) past the server's limit (max_queued_jobs = ", limits.max_queued_jobs,
+        "); retry later, or give larger bricks"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sheetmesh::server

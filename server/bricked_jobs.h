@@ -41,8 +41,20 @@ void TaskEnded(JobStore& store, JobEvents& events, const v1::Job& task);
 // handled as one that finished (TaskEnded: a failed brick cancels its siblings).
 void LostJobsEnded(JobStore& store, JobEvents& events, const std::vector<v1::Job>& ended);
 
-// Cancels the tasks of a split job (the job itself is cancelled by the caller).
+// Cancels the tasks of a split job at once (the job itself is cancelled by the caller).
 absl::Status CancelTasks(JobStore& store, const v1::Job& job);
+
+// What a job may split into.
+struct SplitLimits {
+  int max_brick_tasks = 512;       // bricks of one job
+  int64_t max_queued_jobs = 1000;  // jobs and brick tasks the queue may hold
+};
+
+// Whether the job `name` may split into `count` brick tasks: kInvalidArgument beyond
+// max_brick_tasks, kResourceExhausted when its tasks would take the queue (jobs and brick
+// tasks) past max_queued_jobs; each naming the job, the count and the limit.
+absl::Status CheckSplit(JobStore& store, const SplitLimits& limits, const std::string& name,
+                        int count);
 
 }  // namespace sheetmesh::server
 

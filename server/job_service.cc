@@ -195,12 +195,16 @@ grpc::Status JobServiceImpl::CreateJob(grpc::ServerContext* context, const v1::C
     }
   }
   if (job.state() != v1::SUCCEEDED) {
+    // Brick tasks are work the queue holds too: a job of thousands of bricks counts as such.
     absl::StatusOr<int64_t> queued = ctx_->jobs->CountInState(v1::QUEUED);
     if (!queued.ok()) return ToGrpcStatus(queued.status());
-    if (*queued >= ctx_->limits.max_queued_jobs) {
-      return ToGrpcStatus(absl::ResourceExhaustedError(
-          absl::StrCat("the queue holds ", *queued, " jobs, the server's limit (max_queued_jobs = ",
-                       ctx_->limits.max_queued_jobs, "); retry later")));
+    absl::StatusOr<int64_t> tasks = ctx_->jobs->CountQueuedTasks();
+    if (!tasks.ok()) return ToGrpcStatus(tasks.status());
+    if (*queued + *tasks >= ctx_->limits.max_queued_jobs) {
+      return ToGrpcStatus(absl::ResourceExhaustedError(absl::StrCat(
+          "the queue holds ", *queued, " jobs and ", *tasks,
+          " brick tasks, the server's limit (max_queued_jobs = ", ctx_->limits.max_queued_jobs,
+          "); retry later")));
     }
   }
   bool created = false;

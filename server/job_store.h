@@ -69,6 +69,10 @@ class JobStore {
   // QUEUED: CANCELLED now. RUNNING: marked, the worker stops it. Finished: unchanged.
   virtual absl::StatusOr<v1::Job> RequestCancel(const std::string& name) = 0;
   virtual absl::StatusOr<bool> CancelRequested(const std::string& name) = 0;
+  // Cancels the brick tasks of the split job `name` at once (one transaction, not one per
+  // task): QUEUED ones CANCELLED now, RUNNING ones marked for their workers. Returns how
+  // many it touched; 0 for a job that is not split.
+  virtual absl::StatusOr<int> CancelTasks(const std::string& name) = 0;
   // kFailedPrecondition unless the job has finished. A split job's tasks go with it.
   virtual absl::Status Delete(const std::string& name) = 0;
   // RUNNING jobs whose lease ended go back to QUEUED, or FAILED after max_attempts.
@@ -85,6 +89,8 @@ class JobStore {
   virtual absl::StatusOr<std::optional<v1::Job>> FindCached(const std::string& cache_key) = 0;
   // The jobs in `state`, brick tasks not counted (a job's bricks are one job's work).
   virtual absl::StatusOr<int64_t> CountInState(v1::JobState state) = 0;
+  // The QUEUED brick tasks of every job: the work the queue holds beside its jobs.
+  virtual absl::StatusOr<int64_t> CountQueuedTasks() = 0;
 
   // Records that `tenant` uploaded the blob `hash`.
   virtual absl::Status AddUploadedBlob(const std::string& tenant, const std::string& hash) = 0;

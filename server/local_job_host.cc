@@ -217,7 +217,9 @@ void LocalJobHost::RemoveInputs(const std::string& job) {
 
 absl::Status LocalJobHost::Split(const std::string& job, const std::string& worker,
                                  const v1::Artifact& plan, int count) {
-  absl::StatusOr<v1::Job> split = store_->Split(job, worker, plan, count);
+  const absl::Status allowed = CheckSplit(*store_, options_.split, job, count);
+  absl::StatusOr<v1::Job> split =
+      allowed.ok() ? store_->Split(job, worker, plan, count) : absl::StatusOr<v1::Job>(allowed);
   {
     std::lock_guard<std::mutex> lock(mu_);
     live_.erase(job);

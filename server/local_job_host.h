@@ -14,6 +14,7 @@
 
 #include "absl/time/time.h"
 #include "server/blob_store.h"
+#include "server/bricked_jobs.h"
 #include "server/job_events.h"
 #include "server/job_store.h"
 #include "worker/runtime/job_host.h"
@@ -28,6 +29,7 @@ struct LocalJobHostOptions {
   // Look this often whether the store says stop (a cancel asked of another server over the
   // same database, or the lease lost).
   absl::Duration cancel_poll_interval = absl::Seconds(1);
+  SplitLimits split;  // what one job's bricks may be
 };
 
 // Thread-safe.

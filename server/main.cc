@@ -59,7 +59,10 @@ ABSL_FLAG(std::string, tls_cert, "", "PEM certificate chain (with --tls_key: TLS
 ABSL_FLAG(std::string, tls_key, "", "PEM private key");
 ABSL_FLAG(int64_t, max_blob_bytes, Defaults().limits.max_blob_bytes,
           "largest upload accepted, bytes");
-ABSL_FLAG(int64_t, max_queued_jobs, Defaults().limits.max_queued_jobs, "jobs the queue may hold");
+ABSL_FLAG(int64_t, max_queued_jobs, Defaults().limits.max_queued_jobs,
+          "jobs and brick tasks the queue may hold");
+ABSL_FLAG(int, max_brick_tasks, Defaults().limits.max_brick_tasks,
+          "bricks one job may split into (a plan of more fails the job, naming this)");
 ABSL_FLAG(int64_t, max_unfinished_upload_mb,
           Defaults().limits.max_unfinished_upload_bytes_per_tenant >> 20,
           "bytes one tenant may hold in unfinished uploads, MiB");
@@ -118,6 +121,7 @@ sheetmesh::server::ServerOptions OptionsFromFlags() {
   o.tls_key = absl::GetFlag(FLAGS_tls_key);
   o.limits.max_blob_bytes = absl::GetFlag(FLAGS_max_blob_bytes);
   o.limits.max_queued_jobs = absl::GetFlag(FLAGS_max_queued_jobs);
+  o.limits.max_brick_tasks = absl::GetFlag(FLAGS_max_brick_tasks);
   o.limits.max_unfinished_upload_bytes_per_tenant =
       std::max<int64_t>(1, absl::GetFlag(FLAGS_max_unfinished_upload_mb)) << 20;
   o.limits.max_upload_streams = absl::GetFlag(FLAGS_max_upload_streams);

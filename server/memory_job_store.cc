@@ -239,6 +239,22 @@ class MemoryJobStore : public JobStore {
     return row->job;
   }
 
+  absl::StatusOr<int> CancelTasks(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(t_->mu);
+    int touched = 0;
+    for (auto& [task_name, row] : t_->jobs) {
+      if (row.job.bricks().parent() != name) continue;
+      if (row.job.state() == v1::QUEUED) {
+        ApplyCancelBeforeStart(&row.job, clock_());
+        ++touched;
+      } else if (row.job.state() == v1::RUNNING) {
+        row.cancel_requested = true;
+        ++touched;
+      }
+    }
+    return touched;
+  }
+
   absl::StatusOr<bool> CancelRequested(const std::string& name) override {
     std::lock_guard<std::mutex> lock(t_->mu);
     Row* row;
@@ -290,6 +306,13 @@ class MemoryJobStore : public JobStore {
     std::lock_guard<std::mutex> lock(t_->mu);
     return std::count_if(t_->jobs.begin(), t_->jobs.end(), [&](const auto& j) {
       return j.second.job.state() == state && j.second.job.bricks().parent().empty();
+    });
+  }
+
+  absl::StatusOr<int64_t> CountQueuedTasks() override {
+    std::lock_guard<std::mutex> lock(t_->mu);
+    return std::count_if(t_->jobs.begin(), t_->jobs.end(), [&](const auto& j) {
+      return j.second.job.state() == v1::QUEUED && !j.second.job.bricks().parent().empty();
     });
   }
 

@@ -241,6 +241,7 @@ absl::StatusOr<std::unique_ptr<Server>> Server::Start(const ServerOptions& o) {
   ho.allowed_roots = o.allowed_roots;
   ho.scratch_dir = scratch;
   ho.lease = o.lease;
+  ho.split = {o.limits.max_brick_tasks, o.limits.max_queued_jobs};
   s.host = std::make_unique<LocalJobHost>(s.jobs.get(), s.blobs.get(), &s.events, ho);
   s.upload_streams = std::make_unique<StreamLimits>("upload", "max_upload_streams",
                                                     o.limits.max_upload_streams_per_client,

@@ -21,7 +21,8 @@ struct ServiceLimits {
   // A tenant's unfinished uploads (bytes not yet stored as blobs) may not pass this: a
   // client that opens uploads and never finishes them fills no disk.
   int64_t max_unfinished_upload_bytes_per_tenant = int64_t{64} << 30;
-  int64_t max_queued_jobs = 1000;              // CreateJob beyond this is refused
+  int64_t max_queued_jobs = 1000;  // CreateJob beyond this (jobs and brick tasks) is refused
+  int max_brick_tasks = 512;       // a job's plan of more bricks fails the job
   // Open Write streams (each holds two descriptors and a thread while it lasts).
   int max_upload_streams = 256;
   int max_upload_streams_per_client = 64;

@@ -279,6 +279,39 @@ class SqliteJobStore : public JobStore {
     return job;
   }
 
+  absl::StatusOr<int> CancelTasks(const std::string& name) override {
+    std::lock_guard<std::mutex> lock(mu_);
+    const std::string id = JobIdOf(name);
+    SM_RETURN_IF_ERROR(Exec("BEGIN IMMEDIATE"));
+    absl::StatusOr<int> out = [&]() -> absl::StatusOr<int> {
+      std::vector<std::pair<std::string, v1::Job>> queued;
+      {
+        Stmt q(db_, "SELECT id, job FROM jobs WHERE parent = ? AND state = ?");
+        SM_RETURN_IF_ERROR(q.ok());
+        q.Bind(1, id).Bind(2, int64_t{v1::QUEUED});
+        while (q.Step() == SQLITE_ROW) {
+          SM_ASSIGN_OR_RETURN(v1::Job job, ParseStoredJob(q.Blob(1)));
+          queued.emplace_back(q.Text(0), std::move(job));
+        }
+      }
+      for (auto& [task_id, job] : queued) {
+        ApplyCancelBeforeStart(&job);
+        SM_RETURN_IF_ERROR(SetStateLocked(task_id, job));
+      }
+      Stmt u(db_, "UPDATE jobs SET cancel_requested = 1 WHERE parent = ? AND state = ?");
+      SM_RETURN_IF_ERROR(u.ok());
+      u.Bind(1, id).Bind(2, int64_t{v1::RUNNING});
+      SM_RETURN_IF_ERROR(u.Run());
+      return static_cast<int>(queued.size() + sqlite3_changes(db_));
+    }();
+    if (!out.ok()) {
+      Exec("ROLLBACK").IgnoreError();
+      return out;
+    }
+    SM_RETURN_IF_ERROR(Exec("COMMIT"));
+    return out;
+  }
+
   absl::StatusOr<bool> CancelRequested(const std::string& name) override {
     std::lock_guard<std::mutex> lock(mu_);
     Stmt q(db_, "SELECT cancel_requested, state FROM jobs WHERE id = ?");
@@ -360,6 +393,14 @@ class SqliteJobStore : public JobStore {
     Stmt q(db_, "SELECT COUNT(*) FROM jobs WHERE state = ? AND parent IS NULL");
     SM_RETURN_IF_ERROR(q.ok());
     q.Bind(1, int64_t{state});
+    return q.Step() == SQLITE_ROW ? q.Int(0) : 0;
+  }
+
+  absl::StatusOr<int64_t> CountQueuedTasks() override {
+    std::lock_guard<std::mutex> lock(mu_);
+    Stmt q(db_, "SELECT COUNT(*) FROM jobs WHERE state = ? AND parent IS NOT NULL");
+    SM_RETURN_IF_ERROR(q.ok());
+    q.Bind(1, int64_t{v1::QUEUED});
     return q.Step() == SQLITE_ROW ? q.Int(0) : 0;
   }
 

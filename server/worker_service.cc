@@ -207,6 +207,12 @@ grpc::Status WorkerServiceImpl::SplitJob(grpc::ServerContext* context,
   if (absl::Status st = CheckArtifact(request->plan(), request->name()); !st.ok()) {
     return ToGrpcStatus(st);
   }
+  if (absl::Status st = CheckSplit(*ctx_->jobs,
+                                  {ctx_->limits.max_brick_tasks, ctx_->limits.max_queued_jobs},
+                                  request->name(), request->count());
+      !st.ok()) {
+    return ToGrpcStatus(st);
+  }
   absl::StatusOr<v1::Job> split =
       ctx_->jobs->Split(request->name(), request->worker(), request->plan(), request->count());
   if (!split.ok()) return ToGrpcStatus(split.status());

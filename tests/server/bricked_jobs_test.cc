@@ -13,6 +13,8 @@
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
 #include "sheetmesh/v1/workers.grpc.pb.h"
+#include "server/bricked_jobs.h"
+#include "server/memory_job_store.h"
 #include "tests/server/service_fixture.h"
 
 namespace sheetmesh::testing {
@@ -125,6 +127,59 @@ TEST_F(ServiceTest, BadBrickSizesAreRefusedNamingTheFieldAndWhatBricksCannotRunF
   EXPECT_EQ(end.bricks().count(), 0) << "never split";
 }
 
+// Hardening, third round: bricks = 4x4x4 on a small volume made 21,504 brick tasks (hours of
+// work), not counted in the queue. Bricks below 16^3 voxels are refused at once; a plan of
+// more bricks than the server runs for one job, or that would overfill the queue, fails the
+// job naming the limit, and nothing of it stays queued.
+TEST_F(ServiceTest, ManyTinyBricksAreRefusedAndAJobsTasksAreBoundedAndCounted) {
+  options_.limits.max_brick_tasks = 8;
+  options_.limits.max_queued_jobs = 20;
+  StartServer();
+  const std::string vol = WritePhantom(options_.allowed_roots[0], "rock", 48, 21);
+  v1::CreateJobRequest tiny;
+  tiny.set_request_id("tiny");
+  tiny.mutable_input()->set_volume_path(vol);
+  tiny.set_bricks("4x4x4");
+  auto refused = client_->CreateJob(tiny);
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(refused.status().message(), HasSubstr("bricks '4x4x4' holds 64 voxels"));
+  // 3 x 3 x 3 bricks, over max_brick_tasks = 8.
+  v1::CreateJobRequest many = tiny;
+  many.set_request_id("many");
+  many.set_bricks("16x16x16");
+  many.set_no_cache(true);
+  auto job = client_->CreateJob(many);
+  ASSERT_TRUE(job.ok()) << job.status();
+  v1::Job end = WaitFinished(job->name());
+  EXPECT_EQ(end.state(), v1::FAILED);
+  EXPECT_EQ(end.error().code(), static_cast<int>(absl::StatusCode::kInvalidArgument));
+  EXPECT_THAT(end.error().message(), HasSubstr("27 bricks"));
+  EXPECT_THAT(end.error().message(), HasSubstr("max_brick_tasks = 8"));
+  EXPECT_EQ(end.bricks().count(), 0) << "never split";
+}
+
+TEST(CheckSplitTest, ASplitMayNotTakeTheQueueOfJobsAndTasksPastItsLimit) {
+  std::unique_ptr<server::JobStore> store =
+      server::OpenMemoryJobStore(server::NewMemoryJobTables());
+  for (int k = 0; k < 14; ++k) {
+    v1::Job job;
+    job.set_tenant("default");
+    job.set_state(v1::QUEUED);
+    job.set_request_id(absl::StrCat("waiting-", k));
+    bool created = false;
+    ASSERT_TRUE(store->Create(job, absl::StrCat("k", k), &created).ok());
+  }
+  const server::SplitLimits limits{/*max_brick_tasks=*/8, /*max_queued_jobs=*/20};
+  EXPECT_TRUE(server::CheckSplit(*store, limits, "jobs/x", 6).ok());
+  const absl::Status full = server::CheckSplit(*store, limits, "jobs/x", 7);
+  EXPECT_EQ(full.code(), absl::StatusCode::kResourceExhausted) << full;
+  EXPECT_THAT(full.message(), HasSubstr("14 jobs and 0 brick tasks"));
+  EXPECT_THAT(full.message(), HasSubstr("max_queued_jobs = 20"));
+  const absl::Status many = server::CheckSplit(*store, limits, "jobs/x", 9);
+  EXPECT_EQ(many.code(), absl::StatusCode::kInvalidArgument) << many;
+  EXPECT_THAT(many.message(), HasSubstr("max_brick_tasks = 8"));
+}
+
 // The test is the worker (the server has none), speaking WorkerService as sheetmesh-worker
 // does: the split, the leases of the bricks, their ends, the merge's lease.
 class BrickProtocolTest : public ServiceTest {
@@ -153,7 +208,7 @@ class BrickProtocolTest : public ServiceTest {
     v1::CreateJobRequest r;
     r.set_request_id(request_id);
     r.mutable_input()->set_volume_path(vol_);
-    r.set_bricks("8");
+    r.set_bricks("16");
     r.set_no_cache(true);  // the test's merge writes no real outputs
     auto job = client_->CreateJob(r);
     EXPECT_TRUE(job.ok()) << job.status();
@@ -222,7 +277,7 @@ TEST_F(BrickProtocolTest, AFailedBrickStopsItsSiblingsAndFailsTheJobNamingIt) {
   const std::string job = Bricked("fails");
   const v1::Job leased = Lease("planner");
   ASSERT_EQ(leased.name(), job);
-  EXPECT_EQ(leased.bricks().size(), "8");
+  EXPECT_EQ(leased.bricks().size(), "16");
   EXPECT_EQ(Split(job, "another", 3).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
   const grpc::Status none = Split(job, "planner", 0);
   EXPECT_EQ(none.error_code(), grpc::StatusCode::INVALID_ARGUMENT);

@@ -122,6 +122,14 @@ absl::Status CheckBrickRequest(const std::string& bricks) {
     return absl::InvalidArgumentError(
         absl::StrCat("bricks '", bricks, "' has a negative edge: each is at least 1 (0: chosen)"));
   }
+  // A brick task costs a process, a lease and a file whatever its size: 4x4x4 bricks of a
+  // small volume were 21,504 tasks, hours of work for seconds of it (hardening, third round).
+  const int64_t voxels = int64_t{size.x} * size.y * size.z;
+  if (voxels > 0 && voxels < kMinJobBrickVoxels) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "bricks '", bricks, "' holds ", voxels, " voxels a brick, below the ", kMinJobBrickVoxels,
+        " a brick task is worth (16x16x16): give larger bricks, or auto"));
+  }
   return absl::OkStatus();
 }
 

@@ -31,8 +31,13 @@ absl::StatusOr<PipelineOptions> OptionsFromResolved(const std::string& canonical
 absl::StatusOr<PipelineOptions> JobPipelineOptions(const v1::Job& job,
                                                    const std::string& volume_path);
 
+// The fewest voxels a brick a job asks for may hold (its edges all given).
+inline constexpr int64_t kMinJobBrickVoxels = 16 * 16 * 16;
+
 // kInvalidArgument naming the field `bricks` and its text unless it is a brick size a job
-// may ask for (JobBricks.size: "auto", "512", "512x512x256"; no edge below 0).
+// may ask for (JobBricks.size: "auto", "512", "512x512x256"; no edge below 0, and bricks of
+// at least kMinJobBrickVoxels). How many bricks the plan makes is bounded when the job
+// splits (the server's max_brick_tasks).
 absl::Status CheckBrickRequest(const std::string& bricks);
 
 }  // namespace sheetmesh::runtime

@@ -126,4 +126,7 @@ case_ flag_r_1e999 2 "--r = inf" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$t
 case_ surface_bricks_1 2 "surface_bricks = 1|at least 32" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=1
 case_ surface_bricks_8 2 "surface_bricks = 8|at least 32" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=8 --surface_bricks_halo=0
 case_ surface_bricks_below_the_halo 2 "surface.bricks = 40|give at least" -- timeout 60 "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_bricks=40
+# A list of 10,000 scales ran the read stage for minutes: every list has its length capped.
+scales=$(seq -s, 1 10000 | sed 's/[0-9]\+/1/g')
+case_ grey_scales_10000 2 "grey_scales|at most 8" -- timeout 30 "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --grey --grey_scales="$scales"
 echo "hardening CLI: $cases cases passed"

@@ -109,6 +109,7 @@ inline ParamRow Formats(std::string key,
   ParamRow r = Row(std::move(key), ParamType::kChoices, nullptr, "", std::move(doc));
   r.spec.allow_empty = true;
   for (const auto& [name, _] : files) r.spec.choices.push_back(name);
+  r.spec.max_count = static_cast<int>(files.size());
   r.get = [files](const PipelineOptions& o) -> std::optional<ParamValue> {
     std::vector<std::string> on;
     for (const auto& [name, member] : files) {
@@ -145,6 +146,7 @@ inline ParamRow Triple(std::string key, std::optional<Vec3> OpenOptions::*member
 // Sheet-phase values (input.labels, input.mask_labels).
 inline ParamRow Labels(std::string key, PhaseSelection SheetInput::*member, std::string doc) {
   ParamRow r = Row(std::move(key), ParamType::kNumbers, "[-1e300, 1e300]", "", std::move(doc));
+  r.spec.max_count = 256;  // the values of a label image
   r.get = [member](const PipelineOptions& o) -> std::optional<ParamValue> {
     const PhaseSelection& s = o.input.*member;
     if (s.mode != PhaseSelection::Mode::kLabels) return std::nullopt;

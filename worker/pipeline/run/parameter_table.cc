@@ -187,6 +187,7 @@ std::vector<ParamRow> GreyRows() {
   {
     ParamRow r = Row("grey.scales", ParamType::kNumbers, "(0, 16]", "voxels",
                      "Gaussian scales of the sheetness filter");
+    r.spec.max_count = 8;  // a filter pass over the volume each (10,000 ran for minutes)
     r.get = [](const PipelineOptions& o) -> std::optional<ParamValue> {
       return ParamValue(o.grey.sheetness.scales);
     };

@@ -49,7 +49,8 @@ struct ParamSpec {
   std::string key;  // "separate.r": the name, as a key path of the config JSON
   ParamType type = ParamType::kNumber;
   ParamRange range;                  // numbers and integers, and each item of a list
-  int count = 0;                     // lists: exactly this many items (0: any number)
+  int count = 0;                     // lists: exactly this many items (0: up to max_count)
+  int max_count = 16;                // lists: at most this many items (a long list runs long)
   bool allow_empty = false;          // lists: the empty list is allowed
   std::vector<std::string> choices;  // kChoice, kChoices
   std::string unit;                  // "voxels", "degrees", "" when none

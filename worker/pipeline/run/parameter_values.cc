@@ -78,7 +78,8 @@ std::string Expected(const ParamSpec& s) {
   }
   if (!list) return absl::StrCat("must be ", what[0] == 'i' ? "an " : "a ", what);
   if (s.count > 0) return absl::StrCat("must be ", s.count, " ", what);
-  return absl::StrCat("must be a ", s.allow_empty ? "" : "non-empty ", "list of ", what);
+  return absl::StrCat("must be a ", s.allow_empty ? "" : "non-empty ", "list of at most ",
+                      s.max_count, " ", what);
 }
 
 // The JSON value as the row's type, or nullopt when it is not of that type.
@@ -187,7 +188,7 @@ std::string Violation(const ParamRow& row, const ParamValue& v) {
   };
   auto list_size_ok = [&](size_t n) {
     if (s.count > 0) return n == static_cast<size_t>(s.count);
-    return n > 0 || s.allow_empty;
+    return (n > 0 || s.allow_empty) && n <= static_cast<size_t>(s.max_count);
   };
   switch (s.type) {
     case ParamType::kBool:
@@ -268,6 +269,9 @@ std::string ParamSpec::Describe() const {
     if (count > 0) d = absl::StrCat(count, " ", d);
     absl::StrAppend(&d, " in ", range.text);
   }
+  const bool list = type == ParamType::kNumbers || type == ParamType::kIntegers ||
+                    type == ParamType::kChoices;
+  if (list && count == 0) absl::StrAppend(&d, ", up to ", max_count);
   if (!unit.empty()) absl::StrAppend(&d, ", ", unit);
   return d;
 }

@@ -25,4 +25,20 @@ absl::Status Progress::Update(double fraction, absl::string_view message) const 
   return absl::OkStatus();
 }
 
+bool DeadlineObserver::OnProgress(absl::string_view stage, double fraction,
+                                  absl::string_view message) {
+  if (absl::Now() > deadline_) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!expired_) stage_ = std::string(stage);
+    expired_ = true;
+    return false;
+  }
+  return inner_ == nullptr || inner_->OnProgress(stage, fraction, message);
+}
+
+std::optional<std::string> DeadlineObserver::expired_in() {
+  std::lock_guard<std::mutex> lock(mu_);
+  return expired_ ? std::optional<std::string>(stage_) : std::nullopt;
+}
+
 }  // namespace sheetmesh

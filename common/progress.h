@@ -3,10 +3,14 @@
 #ifndef SHEETMESH_COMMON_PROGRESS_H_
 #define SHEETMESH_COMMON_PROGRESS_H_
 
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "absl/status/status.h"
 #include "absl/strings/string_view.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
 
 namespace sheetmesh {
 
@@ -34,6 +38,14 @@ class Progress {
   // A handle for a new stage of the same observer, covering [0, 1] of that stage.
   Progress Stage(std::string stage) const { return Progress(observer_, std::move(stage)); }
 
+  // This handle's stage and range, reported to `observer` instead (one that wraps this
+  // handle's observer: a deadline, a stage clock).
+  Progress WithObserver(ProgressObserver* observer) const {
+    Progress p = *this;
+    p.observer_ = observer;
+    return p;
+  }
+
   // A handle whose [0, 1] maps onto [begin, end] of this handle's range.
   // REQUIRES: 0 <= begin <= end <= 1.
   Progress Sub(double begin, double end) const;
@@ -58,6 +70,27 @@ class Progress {
   std::string stage_;
   double begin_ = 0.0;
   double end_ = 1.0;
+};
+
+// Ends work past a deadline: every report after it asks to stop (the work returns
+// kCancelled), and expired_in() says in which stage that was, so that the caller can say
+// kDeadlineExceeded rather than cancelled. Reports before it go to `inner` (may be null).
+// Thread-safe.
+class DeadlineObserver : public ProgressObserver {
+ public:
+  DeadlineObserver(ProgressObserver* inner, absl::Time deadline)
+      : inner_(inner), deadline_(deadline) {}
+  bool OnProgress(absl::string_view stage, double fraction, absl::string_view message) override;
+  // The stage the deadline passed in, or nullopt while it has not.
+  std::optional<std::string> expired_in();
+  absl::Time deadline() const { return deadline_; }
+
+ private:
+  ProgressObserver* inner_;
+  const absl::Time deadline_;
+  std::mutex mu_;
+  bool expired_ = false;
+  std::string stage_;
 };
 
 }  // namespace sheetmesh

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/file_util.h"
@@ -46,6 +47,14 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
       "radius aspect %.2f/%.2f (min/mean)\n",
       q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
       q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+  if (v.improvement.time_limited) {
+    out << absl::StrFormat(
+        "  warning   the improvement stopped at tet.time_limit_seconds after %.1f s, its mesh "
+        "kept as it was (raise the limit for better angles)\n",
+        v.improvement.seconds);
+  } else if (absl::StartsWith(v.sliver_refinement.stopped, "tet.time_limit_seconds")) {
+    out << "  warning   the sliver rounds stopped at tet.time_limit_seconds\n";
+  }
   if (v.delivered_similarity) {
     out << absl::StrFormat("  sheets    as the volume mesh has them: similarity %.4f\n",
                            *v.delivered_similarity);

@@ -23,7 +23,9 @@ std::vector<ParamRow> VolumeMeshRows() {
                       "let TetGen add points on the sheets and box (false: each sheet triangle "
                       "stays one face, the box faces are seeded)"));
   rows.push_back(Number("tet.time_limit_seconds", SM_MEMBER(volume.tetgen.time_limit_seconds),
-                        "(0, 86400]", "seconds", "TetGen is stopped beyond this"));
+                        "(0, 86400]", "seconds",
+                        "the volume stage's time: TetGen is stopped beyond it (an error: no "
+                        "mesh), the improvement and the sliver rounds keep what they reached"));
   rows.push_back(Integer("tet.memory_limit_bytes", SM_MEMBER(volume.tetgen.memory_limit_bytes),
                          "[67108864, 1099511627776]", "bytes", "TetGen's memory limit"));
   rows.push_back(Local(Text("tet.program", SM_MEMBER(volume.tetgen.program),

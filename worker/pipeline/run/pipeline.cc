@@ -206,33 +206,6 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
 
 namespace {
 
-// Ends a run past its time limit: every progress report past the deadline asks to stop.
-class DeadlineObserver : public ProgressObserver {
- public:
-  DeadlineObserver(ProgressObserver* inner, absl::Time deadline)
-      : inner_(inner), deadline_(deadline) {}
-  bool OnProgress(absl::string_view stage, double fraction, absl::string_view message) override {
-    if (absl::Now() > deadline_) {
-      std::lock_guard<std::mutex> lock(mu_);
-      if (!expired_) stage_ = std::string(stage);
-      expired_ = true;
-      return false;
-    }
-    return inner_ == nullptr || inner_->OnProgress(stage, fraction, message);
-  }
-  std::optional<std::string> expired_in() {
-    std::lock_guard<std::mutex> lock(mu_);
-    return expired_ ? std::optional<std::string>(stage_) : std::nullopt;
-  }
-
- private:
-  ProgressObserver* inner_;
-  const absl::Time deadline_;
-  std::mutex mu_;
-  bool expired_ = false;
-  std::string stage_;
-};
-
 absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const Progress& progress,
                                          std::optional<SheetPhase> given);
 

@@ -67,6 +67,7 @@ struct TetImproveReport {
   double min_dihedral_before = 0, mean_dihedral_before = 0;  // degrees
   double min_dihedral_after = 0, mean_dihedral_after = 0;
   double seconds = 0;
+  bool time_limited = false;  // stopped at tet.time_limit_seconds: its mesh as it was then
 
   // The figures by name, for the report.
   nlohmann::json Fields() const;

@@ -43,7 +43,8 @@ nlohmann::json TetImproveReport::Fields() const {
           {"mean_dihedral_before", mean_dihedral_before},
           {"min_dihedral_after", min_dihedral_after},
           {"mean_dihedral_after", mean_dihedral_after},
-          {"seconds", seconds}};
+          {"seconds", seconds},
+          {"time_limited", time_limited}};
 }
 
 nlohmann::json PlcStats::Fields() const {

@@ -416,15 +416,41 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
   plc_options.seed_box = plc_options.seed_box || !options.tetgen.steiner_on_sheets;
   r.max_tetrahedra = options.max_tetrahedra;
   r.tetgen_switches = TetgenSwitches(options.tetgen);
+  // tet.time_limit_seconds bounds the whole stage: TetGen, the improvement and the sliver
+  // rounds (the improvement alone ran 43 s past a 20 s limit). The improvement and a round
+  // stop between operations, so a mesh cut short there is whole and kept; TetGen cut short
+  // leaves none.
+  DeadlineObserver clock(progress.observer(),
+                         absl::Now() + absl::Seconds(options.tetgen.time_limit_seconds));
+  const Progress timed = progress.WithObserver(&clock);
+  const auto at_limit = [&](const absl::Status& st) {
+    return st.code() == absl::StatusCode::kCancelled && clock.expired_in().has_value();
+  };
   Plc plc;
-  SM_RETURN_IF_ERROR(
-      MeshWithinBudget(sheets, dims, placement, options, progress, &plc_options, &plc, &r));
+  if (absl::Status st =
+          MeshWithinBudget(sheets, dims, placement, options, timed, &plc_options, &plc, &r);
+      !st.ok()) {
+    if (!at_limit(st)) return st;
+    return absl::DeadlineExceededError(
+        absl::StrCat("the volume stage went past tet.time_limit_seconds = ",
+                     options.tetgen.time_limit_seconds, " s while TetGen ran"));
+  }
   r.lattice = plc_options.lattice;
   r.grading = plc_options.grading;
   r.tetgen_tetrahedra = r.mesh.tets.size();
-  SM_RETURN_IF_ERROR(
-      Finish(plc, options, progress.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets, &r.improvement));
-  SM_RETURN_IF_ERROR(RefineAtSlivers(options, progress.Sub(0.95, 0.99), &plc, &r));
+  const std::string limit_reached =
+      absl::StrCat("tet.time_limit_seconds = ", options.tetgen.time_limit_seconds, " s");
+  if (absl::Status st = Finish(plc, options, timed.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets,
+                               &r.improvement);
+      !st.ok()) {
+    if (!at_limit(st)) return st;
+    r.improvement.time_limited = true;
+    r.sliver_refinement.stopped = limit_reached;
+  } else if (absl::Status st = RefineAtSlivers(options, timed.Sub(0.95, 0.99), &plc, &r);
+             !st.ok()) {
+    if (!at_limit(st)) return st;
+    r.sliver_refinement.stopped = limit_reached;
+  }
   static_cast<PlcStats&>(r) = plc;
   r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);
   r.conformity = CheckConformity(plc, r.mesh);

@@ -142,4 +142,6 @@ case $code in
   1) echo "$out" | grep -q "tet.time_limit_seconds = 4" || fail "time limit: $out" ;;
   *) fail "time limit: exit $code: $out" ;;
 esac
+# A subnormal permeability ran as an all-zero tensor: the table's range is physical, in m².
+case_ permeability_matrix_subnormal 2 "permeability_matrix = 5e-324|[1e-25, 0.001]" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --flow --unit=um --spacing=5,5,5 --permeability_matrix=5e-324
 echo "hardening CLI: $cases cases passed"

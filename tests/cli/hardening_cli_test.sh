@@ -144,4 +144,6 @@ case $code in
 esac
 # A subnormal permeability ran as an all-zero tensor: the table's range is physical, in m².
 case_ permeability_matrix_subnormal 2 "permeability_matrix = 5e-324|[1e-25, 0.001]" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --flow --unit=um --spacing=5,5,5 --permeability_matrix=5e-324
+# A spacing of 1e-12 m made TetGen abort: the volume is meshed in voxel units and placed after.
+case_ spacing_1e-12_m_flow 0 "permeameters|volume.vtu" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/pico" --flow --unit=m --spacing=1e-12,1e-12,1e-12 --similarity_hausdorff=false
 echo "hardening CLI: $cases cases passed"

@@ -396,12 +396,11 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   return absl::OkStatus();
 }
 
-}  // namespace
-
-absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, const Dims& dims,
-                                                 const Placement& placement,
-                                                 const VolumeMeshOptions& options,
-                                                 const Progress& progress) {
+// BuildVolumeMesh in the units `placement` gives (see there).
+absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, const Dims& dims,
+                                                  const Placement& placement,
+                                                  const VolumeMeshOptions& options,
+                                                  const Progress& progress) {
   // The sheet faces carry their aperture into the volume mesh, where a flow model takes it.
   TriangleMesh with_apertures;
   if (surface.face_aperture_voxels.size() == surface.faces.size() && !surface.faces.empty()) {
@@ -498,6 +497,44 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
                                             " differs from the box's ", r.box_volume));
   }
   SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return r;
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, const Dims& dims,
+                                                 const Placement& placement,
+                                                 const VolumeMeshOptions& options,
+                                                 const Progress& progress) {
+  // Meshed in units of the smallest voxel edge, the first voxel's centre at 0, then placed:
+  // TetGen's and the improvement's tolerances are partly absolute, so a box of 1e-10 m (a
+  // spacing of 1e-12 m) made TetGen abort, and meshes of one volume differed a little from
+  // one unit to another. Angles and counts do not depend on the unit; lengths, volumes and
+  // places are scaled back.
+  const Vec3& h = placement.spacing;
+  const double s = std::min({h.x, h.y, h.z});
+  if (!(s > 0) || !std::isfinite(s) || !std::isfinite(std::max({h.x, h.y, h.z}))) {
+    return absl::InvalidArgumentError(absl::StrCat("the volume mesh needs a positive spacing, not ",
+                                                   h.x, ",", h.y, ",", h.z));
+  }
+  Placement unit = placement;
+  unit.spacing = {h.x / s, h.y / s, h.z / s};
+  unit.origin = {0, 0, 0};
+  VolumeMeshOptions o = options;
+  o.tetgen.max_volume /= s * s * s;  // unit^3 (0 stays 0: none)
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult r, BuildInPlacement(surface, dims, unit, o, progress));
+  const Vec3& origin = placement.origin;
+  auto place = [&](Vec3& p) { p = {p.x * s + origin.x, p.y * s + origin.y, p.z * s + origin.z}; };
+  for (Vec3& p : r.mesh.nodes) place(p);
+  for (Vec3& p : r.contact_places) place(p);
+  const double cube = s * s * s;
+  r.lattice_spacing *= s;
+  r.lattice_coarsest *= s;
+  r.box_volume *= cube;
+  r.quality.volume *= cube;
+  for (VolumeMeshStats::BodyRegion& b : r.bodies) b.volume *= cube;
+  r.mesh.voxel_length = PhysicalLength(1.0, placement);
+  r.mesh.unit = placement.unit;
   return r;
 }
 

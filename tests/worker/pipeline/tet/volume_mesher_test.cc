@@ -1,4 +1,5 @@
 #include "worker/pipeline/tet/volume_mesher.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -458,6 +459,45 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_EQ(r.sliver_refinement.rounds, 0u);
   EXPECT_THAT(r.sliver_refinement.stopped, HasSubstr("narrowest wedge"));
+}
+
+}  // namespace
+}  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// Hardening, third round: a spacing of 1e-12 m made TetGen abort ("terminate called after
+// throwing an instance of 'int'"), and meshes differed a little between units. The mesh is
+// made in voxel units and placed after: the same tetrahedra at any spacing and origin.
+TEST(VolumeMesherTest, TheMeshIsTheSameAtAnySpacingAndOriginScaledAndPlaced) {
+  const TriangleMesh sheet = testing::Square(10, 30, 20, 4);
+  VolumeMeshOptions o;
+  o.plc.lattice = 1;
+  Placement voxels;
+  voxels.spacing = {1, 1, 2};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult ref, BuildVolumeMesh(sheet, {40, 40, 30}, voxels, o));
+  for (const double s : {1e-12, 1e-6, 1e3}) {
+    SCOPED_TRACE(s);
+    Placement p;
+    p.spacing = {s, s, 2 * s};
+    p.origin = {5 * s, -3 * s, 1e4 * s};
+    p.unit = "m";
+    SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, {40, 40, 30}, p, o));
+    ASSERT_EQ(r.mesh.tets, ref.mesh.tets);
+    ASSERT_EQ(r.mesh.nodes.size(), ref.mesh.nodes.size());
+    for (size_t i = 0; i < r.mesh.nodes.size(); i += 7) {
+      const Vec3& a = ref.mesh.nodes[i];
+      const Vec3& b = r.mesh.nodes[i];
+      EXPECT_NEAR(b.x, a.x * s + p.origin.x, 1e-9 * s * 40);
+      EXPECT_NEAR(b.z, a.z * s + p.origin.z, 1e-9 * s * 1e4);
+    }
+    EXPECT_DOUBLE_EQ(r.quality.min_dihedral.min, ref.quality.min_dihedral.min);
+    EXPECT_NEAR(r.box_volume, ref.box_volume * s * s * s, 1e-9 * r.box_volume);
+    EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-6 * r.box_volume);
+    EXPECT_NEAR(r.lattice_spacing, ref.lattice_spacing * s, 1e-9 * r.lattice_spacing);
+    EXPECT_DOUBLE_EQ(r.mesh.voxel_length, PhysicalLength(1.0, p));
+  }
 }
 
 }  // namespace

@@ -54,6 +54,11 @@ absl::StatusOr<PipelineReport> MergeBricks(const std::string& plan_dir,
   std::map<int32_t, std::vector<const Brick*>> layers;
   for (const Brick& b : plan.bricks) layers[b.core.lo.z].push_back(&b);
   const Dims& d = plan.info.dims;
+  // The joined set's row table: a word a row of the volume, before any voxel.
+  SM_RETURN_IF_ERROR(CheckAllocation(
+      (d.num_rows() + 1) * int64_t{sizeof(int64_t)},
+      site.limits ? *site.limits : VolumeLimits{},
+      absl::StrCat(PlanFile(plan_dir), ": the row table of its ", d.ToString(), " volume")));
   VoxelSet::Builder joined(d);
   SheetPhase phase;
   phase.info = plan.info;

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -135,6 +137,28 @@ std::string BrickPlan::ToJson() const {
   return j.dump(1) + "\n";
 }
 
+absl::Status CheckBrickCount(const Dims& dims, const BrickGrid& grid, absl::string_view what) {
+  const int32_t size[3] = {grid.size.x, grid.size.y, grid.size.z};
+  const int32_t origin[3] = {grid.origin.x, grid.origin.y, grid.origin.z};
+  const int64_t n[3] = {dims.nx, dims.ny, dims.nz};
+  int64_t count = 1;
+  for (int k = 0; k < 3; ++k) {
+    if (size[k] < 1) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(what, " ", size[k], " along ", std::string(1, "xyz"[k]), " is below 1"));
+    }
+    // Cells from the one holding voxel 0 to the one holding voxel n - 1 (origin in [0, size)).
+    const int64_t along = (n[k] - 1 + (size[k] - origin[k] % size[k]) % size[k]) / size[k] + 1;
+    count = std::min<int64_t>(count * along, kMaxPlanBricks + 1);
+  }
+  if (count > kMaxPlanBricks) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        what, " ", size[0], "x", size[1], "x", size[2], " cuts the volume's ", dims.ToString(),
+        " into more than ", kMaxPlanBricks, " bricks: give larger bricks"));
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<Index3> ParseBrickSize(const std::string& text, const std::string& field) {
   if (text == "auto") return Index3{0, 0, 0};
   int32_t n = 0;
@@ -228,6 +252,7 @@ absl::StatusOr<BrickPlan> MakeBrickPlan(const PipelineOptions& options,
   plan.parameters = CanonicalParametersJson(o, /*include_local=*/true);
   plan.info = info;
   plan.grid = grid;
+  SM_RETURN_IF_ERROR(CheckBrickCount(d, grid, "brick_size"));
   const auto xs = Cuts(d.nx, size[0], origin[0]);
   const auto ys = Cuts(d.ny, size[1], origin[1]);
   const auto zs = Cuts(d.nz, size[2], origin[2]);
@@ -270,6 +295,60 @@ absl::Status WriteBrickPlan(const BrickPlan& plan, const std::string& plan_dir) 
   }
   SM_RETURN_IF_ERROR(MakeDirs(bricks));
   return WriteFileAtomically(path, text);
+}
+
+// A plan read back is checked whole before anything is sized from it: its dims within a
+// volume's limits, its grid within kMaxPlanBricks, and its bricks the grid's cells, each
+// inside the volume, tiling it once (a plan of 1048576^3 voxels in bricks of 1 made the
+// merge allocate a row table beyond any memory).
+absl::Status CheckPlanSizes(const BrickPlan& plan, const std::string& path) {
+  const Dims& d = plan.info.dims;
+  SM_RETURN_IF_ERROR(CheckDims(d, plan.info.dtype, VolumeLimits{}, path + ": dims"));
+  SM_RETURN_IF_ERROR(CheckBrickCount(d, plan.grid, path + ": brick_size"));
+  const int32_t size[3] = {plan.grid.size.x, plan.grid.size.y, plan.grid.size.z};
+  const int32_t origin[3] = {plan.grid.origin.x, plan.grid.origin.y, plan.grid.origin.z};
+  for (int k = 0; k < 3; ++k) {
+    if (origin[k] < 0 || origin[k] >= size[k]) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": grid_origin ", origin[k], " along ",
+                                                     std::string(1, "xyz"[k]), " is not in [0, ",
+                                                     size[k], ")"));
+    }
+  }
+  if (plan.halo < 0 || plan.halo > (1 << 20)) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": halo ", plan.halo));
+  }
+  const auto inside = [&](const VoxelRegion& r) {
+    return r.lo.x >= 0 && r.lo.y >= 0 && r.lo.z >= 0 && r.lo.x < r.hi.x && r.lo.y < r.hi.y &&
+           r.lo.z < r.hi.z && r.hi.x <= d.nx && r.hi.y <= d.ny && r.hi.z <= d.nz;
+  };
+  const auto on_grid = [&](int32_t v, int k, int64_t n) {
+    return v == 0 || v == n || (v - origin[k]) % size[k] == 0;
+  };
+  int64_t voxels = 0;
+  absl::flat_hash_set<std::tuple<int32_t, int32_t, int32_t>> corners;
+  for (size_t i = 0; i < plan.bricks.size(); ++i) {
+    const Brick& b = plan.bricks[i];
+    const VoxelRegion& c = b.core;
+    const bool aligned = on_grid(c.lo.x, 0, d.nx) && on_grid(c.lo.y, 1, d.ny) &&
+                         on_grid(c.lo.z, 2, d.nz) && on_grid(c.hi.x, 0, d.nx) &&
+                         on_grid(c.hi.y, 1, d.ny) && on_grid(c.hi.z, 2, d.nz);
+    const bool reads_core = b.read.lo.x <= c.lo.x && b.read.lo.y <= c.lo.y &&
+                            b.read.lo.z <= c.lo.z && b.read.hi.x >= c.hi.x &&
+                            b.read.hi.y >= c.hi.y && b.read.hi.z >= c.hi.z;
+    if (!inside(c) || !inside(b.read) || !aligned || !reads_core ||
+        !corners.insert({c.lo.x, c.lo.y, c.lo.z}).second) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          path, ": bricks[", i, "] (core ", c.ToString(), ", read ", b.read.ToString(),
+          ") is not a cell of the plan's grid inside its ", d.ToString(), " volume"));
+    }
+    voxels += c.dims().num_voxels();
+  }
+  if (voxels != d.num_voxels()) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": its ", plan.bricks.size(),
+                                                   " bricks hold ", voxels, " voxels of the ",
+                                                   d.num_voxels(), " of its volume"));
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
@@ -334,6 +413,7 @@ absl::StatusOr<BrickPlan> ReadBrickPlan(const std::string& plan_dir) {
           absl::StrCat(path, ": bricks[", i, "].index is ", plan.bricks[i].index, ", not ", i));
     }
   }
+  SM_RETURN_IF_ERROR(CheckPlanSizes(plan, path));
   return plan;
 }
 

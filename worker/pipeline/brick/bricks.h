@@ -40,6 +40,13 @@ struct BrickGrid {
 };
 inline constexpr int64_t kAutoBrickVoxels = int64_t{1} << 27;
 
+// The most bricks a plan may hold (a job's are bounded further by its server).
+inline constexpr int64_t kMaxPlanBricks = int64_t{1} << 16;
+
+// kInvalidArgument naming `what` when `grid` cuts a volume of `dims` into more than
+// kMaxPlanBricks bricks, or has an edge below 1.
+absl::Status CheckBrickCount(const Dims& dims, const BrickGrid& grid, absl::string_view what);
+
 // BrickGrid::size from "auto" (every edge chosen), "512" or "512x512x256";
 // kInvalidArgument naming `field` and the text otherwise.
 absl::StatusOr<Index3> ParseBrickSize(const std::string& text, const std::string& field);

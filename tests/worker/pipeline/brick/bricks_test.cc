@@ -407,3 +407,46 @@ TEST(BricksTest, ABrickOfARawOrNrrdFileReadsOnlyTheBytesItsPlanNames) {
 
 }  // namespace
 }  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// Hardening, third round: a plan edited to 1048576^3 voxels in bricks of 1 made the merge
+// throw std::bad_alloc (its row table). A plan is checked whole when read, and the planner
+// refuses grids of more than kMaxPlanBricks bricks.
+TEST(BricksTest, APlansSizesAreCheckedBeforeAnythingIsSizedFromThem) {
+  TempDir tmp;
+  PipelineOptions o;
+  o.input.path = Phantom(tmp, "sample", {64, 56, 48});
+  const std::string dir = tmp.File("plan");
+  ASSERT_TRUE(WriteBrickPlan(*MakeBrickPlan(o, {{32, 32, 32}, {0, 0, 0}}), dir).ok());
+  ASSERT_TRUE(ReadBrickPlan(dir).ok());
+  const std::string text = *ReadFileToString(PlanFile(dir));
+  const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json j = nlohmann::json::parse(text);
+    edit(j);
+    EXPECT_TRUE(WriteFileAtomically(PlanFile(dir), j.dump()).ok());
+    return ReadBrickPlan(dir).status();
+  };
+  EXPECT_THAT(edited([](nlohmann::json& j) {
+                j["dims"] = {1048576, 1048576, 1048576};
+                j["brick_size"] = {1, 1, 1};
+              }),
+              StatusIs(absl::StatusCode::kResourceExhausted,
+                       ::testing::AllOf(HasSubstr("plan.json: dims"), HasSubstr("1048576"))));
+  EXPECT_THAT(edited([](nlohmann::json& j) { j["brick_size"] = {1, 1, 1}; }),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("more than 65536 bricks")));
+  EXPECT_THAT(edited([](nlohmann::json& j) { j["dims"] = {64, 56, 96}; }),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("bricks[4]")));
+  EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"].erase(j["bricks"].size() - 1); }),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("7 bricks hold")));
+  EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"][1]["core"] = {0, 0, 0, 32, 32, 32}; }),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("bricks[1]")));
+  EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"][0]["core"] = {0, 0, 0, 33, 32, 32}; }),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("not a cell of the plan's grid")));
+  EXPECT_THAT(MakeBrickPlan(o, {{1, 1, 1}, {0, 0, 0}}).status(),
+              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("more than 65536 bricks")));
+}
+
+}  // namespace
+}  // namespace sheetmesh

@@ -24,6 +24,9 @@ volume=$1
 out=$2
 shift 2
 pipeline=${SHEETMESH_PIPELINE:-sheetmesh-pipeline}
+# A word for the batch script (sh): in single quotes, each ' as '\''. Paths are data: a
+# folder named out'$(touch x)' must run nothing.
+quote() { printf "'%s'" "$(printf '%s' "$1" | sed "s/'/'\\\\''/g")"; }
 plan=${PLAN_DIR:-$out.plan}
 read -r -a extra <<< "${SBATCH_ARGS:-}"
 
@@ -37,10 +40,10 @@ mkdir -p "$plan/logs"
 # resubmit the failed indices with --array=I,J.
 bricks=$(sbatch --parsable "${extra[@]}" --job-name=sheetmesh-bricks --array="$array" \
   --cpus-per-task=1 --mem="${BRICK_MEM:-2G}" --output="$plan/logs/brick_%a.log" \
-  --wrap="exec '$pipeline' brick '$plan'")
+  --wrap="exec $(quote "$pipeline") brick $(quote "$plan")")
 bricks=${bricks%%;*}
 merge=$(sbatch --parsable "${extra[@]}" --job-name=sheetmesh-merge --dependency=afterok:"$bricks" \
   --mem="${MERGE_MEM:-16G}" --output="$out.merge.log" \
-  --wrap="exec '$pipeline' merge '$plan' -o '$out'")
+  --wrap="exec $(quote "$pipeline") merge $(quote "$plan") -o $(quote "$out")")
 merge=${merge%%;*}
 echo "bricks $bricks ($count tasks), merge $merge"

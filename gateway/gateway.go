@@ -25,6 +25,7 @@ type gateway struct {
 	tokens  *tokenCheck
 	links   *linkSealer
 	watches *watchQuota
+	self    map[string]bool // the front-end's own origins (selfOrigins), set once listening
 }
 
 var (
@@ -34,7 +35,7 @@ var (
 	uploadRoute   = regexp.MustCompile(`^/v1/uploads/([A-Za-z0-9_-]+)/blobs/([0-9a-f]{64})/([0-9]+)$`)
 )
 
-func newGateway(ctx context.Context, conn *grpc.ClientConn, o options) (http.Handler, error) {
+func newGateway(ctx context.Context, conn *grpc.ClientConn, o options) (*gateway, error) {
 	api := runtime.NewServeMux(
 		runtime.WithMarshalerOption(runtime.MIMEWildcard, strictJSON{}),
 	)

@@ -2,7 +2,7 @@ package main
 
 import (
 	"math"
-	"net/http"
+	"net"
 	"strings"
 	"testing"
 	"time"
@@ -130,13 +130,26 @@ func TestLinksOpenOneArtifactUntilTheyExpire(t *testing.T) {
 }
 
 func TestOriginsAndPositions(t *testing.T) {
-	g := &gateway{o: options{corsOrigins: []string{"https://lab.example"}}}
-	r := &http.Request{Host: "gw:8080"}
-	for origin, want := range map[string]bool{"": true, "http://gw:8080": true,
-		"https://lab.example": true, "https://evil.example": false} {
-		if got := g.originAllowed(r, origin); got != want {
+	// Hardening, third round: the request's own Host header decided, so a page of
+	// evil.example:8080 resolving here (DNS rebinding) passed as the gateway's own.
+	addr := &net.TCPAddr{IP: net.ParseIP("127.0.0.1"), Port: 8080}
+	g := &gateway{o: options{corsOrigins: []string{"https://lab.example"}},
+		self: selfOrigins(addr, []string{"https://sheetmesh.lab.example"})}
+	for origin, want := range map[string]bool{"": true, "http://127.0.0.1:8080": true,
+		"http://localhost:8080": true, "http://localhost:8080/": true, "http://[::1]:8080": true,
+		"https://sheetmesh.lab.example": true, "https://lab.example": true,
+		"http://evil.example:8080": false, "https://evil.example": false,
+		"http://127.0.0.1:9090": false, "http://gw:8080": false} {
+		if got := g.originAllowed(origin); got != want {
 			t.Errorf("origin %q: %v, want %v", origin, got, want)
 		}
+	}
+	wide := selfOrigins(&net.TCPAddr{IP: net.ParseIP("10.0.0.5"), Port: 80}, nil)
+	if !wide["http://10.0.0.5:80"] || wide["http://localhost:80"] {
+		t.Errorf("a gateway on 10.0.0.5:80 takes %v", wide)
+	}
+	if _, err := parseFlags([]string{"--public_origin=sheetmesh.lab.example"}); err == nil {
+		t.Error("an origin without its scheme was taken")
 	}
 	if n, ok := position("99999999999999999999999"); !ok || n != math.MaxInt64 {
 		t.Errorf("a position past 64 bits: %d %v", n, ok)

@@ -8,7 +8,7 @@ import (
 	"mime"
 	"net"
 	"net/http"
-	"net/url"
+	"strings"
 	"sync"
 	"time"
 
@@ -36,14 +36,35 @@ func stateChanging(method string) bool {
 		method == http.MethodDelete
 }
 
-// sameOrigin is whether the Origin names this gateway itself (the front-end it serves).
-func sameOrigin(r *http.Request, origin string) bool {
-	u, err := url.Parse(origin)
-	return err == nil && u.Host == r.Host
+// selfOrigins are the origins of the front-end this gateway serves: its bound address (and,
+// on a loopback or any-address listener, the loopback names with its port) and the
+// --public_origin ones (its address behind a proxy or a DNS name). Never the request's own
+// Host header: a page of evil.example reached through a name that points here sends
+// "Origin: http://evil.example:PORT" with "Host: evil.example:PORT", which matched.
+func selfOrigins(addr net.Addr, public []string) map[string]bool {
+	out := map[string]bool{}
+	for _, p := range public {
+		out[p] = true
+	}
+	tcp, ok := addr.(*net.TCPAddr)
+	if !ok {
+		return out
+	}
+	port := fmt.Sprint(tcp.Port)
+	out["http://"+net.JoinHostPort(tcp.IP.String(), port)] = true
+	if tcp.IP.IsLoopback() || tcp.IP.IsUnspecified() {
+		for _, h := range []string{"localhost", "127.0.0.1", "::1"} {
+			out["http://"+net.JoinHostPort(h, port)] = true
+		}
+	}
+	return out
 }
 
-func (g *gateway) originAllowed(r *http.Request, origin string) bool {
-	if origin == "" || sameOrigin(r, origin) {
+// originAllowed is whether a state-changing request from `origin` may go on: no Origin (a
+// client that is no browser), the gateway's own front-end (selfOrigins), or --cors_origins.
+func (g *gateway) originAllowed(origin string) bool {
+	origin = strings.TrimRight(origin, "/")
+	if origin == "" || g.self[origin] {
 		return true
 	}
 	for _, o := range g.o.corsOrigins {
@@ -88,10 +109,11 @@ func (g *gateway) guard(w http.ResponseWriter, r *http.Request) bool {
 	if !stateChanging(r.Method) {
 		return true
 	}
-	if origin := r.Header.Get("Origin"); !g.originAllowed(r, origin) {
+	if origin := r.Header.Get("Origin"); !g.originAllowed(origin) {
 		endUnread(w, r)
 		writeErrorCode(w, codes.PermissionDenied, fmt.Sprintf(
-			"%s %s from origin %s, which is not in --cors_origins", r.Method, r.URL.Path, origin))
+			"%s %s from origin %s, which is neither this gateway's address nor in --public_origin "+
+				"or --cors_origins", r.Method, r.URL.Path, origin))
 		return false
 	}
 	upload := uploadRoute.MatchString(r.URL.Path)

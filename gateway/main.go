@@ -22,6 +22,7 @@ import (
 	"log"
 	"net"
 	"net/http"
+	"net/url"
 	"os"
 	"os/signal"
 	"strings"
@@ -41,7 +42,7 @@ var errVersion = errors.New("version")
 type options struct {
 	listen, server, serverCA, serverName, webRoot, portFile string
 	serverTLS                                               bool
-	corsOrigins                                             []string
+	corsOrigins, publicOrigins                              []string
 	maxChunkBytes                                           int64
 	maxJSONBytes                                            int64
 	bodyIdle, bodyGrace                                     time.Duration
@@ -60,6 +61,7 @@ func parseFlags(args []string) (options, error) {
 	fs.StringVar(&o.serverCA, "server_ca", "", "PEM certificates to trust for the server (default: the system's)")
 	fs.StringVar(&o.serverName, "server_name", "", "name to expect in the server's certificate (default: its host)")
 	cors := fs.String("cors_origins", "", "origins allowed to call from a browser, comma-separated ('*': any)")
+	public := fs.String("public_origin", "", "the origins users reach this gateway's own pages at when that is not its --listen address (a DNS name, a proxy), comma-separated")
 	fs.StringVar(&o.webRoot, "web_root", "", "serve the front-end from this folder instead of the built-in one")
 	fs.StringVar(&o.portFile, "port_file", "", "write the bound port here once listening (for scripts)")
 	chunkMB := fs.Int64("max_chunk_mb", 64, "largest upload chunk one request may carry, MiB")
@@ -95,6 +97,14 @@ func parseFlags(args []string) (options, error) {
 	for _, c := range strings.Split(*cors, ",") {
 		if c = strings.TrimSpace(c); c != "" {
 			o.corsOrigins = append(o.corsOrigins, strings.TrimRight(c, "/"))
+		}
+	}
+	for _, p := range strings.Split(*public, ",") {
+		if p = strings.TrimRight(strings.TrimSpace(p), "/"); p != "" {
+			if u, err := url.Parse(p); err != nil || (u.Scheme != "http" && u.Scheme != "https") || u.Host == "" || u.Path != "" {
+				return o, fmt.Errorf("--public_origin=%s: give scheme://host[:port], e.g. https://sheetmesh.lab.example", p)
+			}
+			o.publicOrigins = append(o.publicOrigins, p)
 		}
 	}
 	if (o.serverCA != "" || o.serverName != "") && !o.serverTLS {
@@ -152,6 +162,7 @@ func main() {
 		fmt.Fprintf(os.Stderr, "sheetmesh-gateway: --listen=%s: %v\n", o.listen, err)
 		os.Exit(2)
 	}
+	handler.self = selfOrigins(ln.Addr(), o.publicOrigins)
 	port := ln.Addr().(*net.TCPAddr).Port
 	if o.portFile != "" {
 		tmp := o.portFile + ".tmp"

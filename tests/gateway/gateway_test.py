@@ -435,6 +435,17 @@ class GatewayTest(unittest.TestCase):
         resp, body = self.request("POST", "/v1/jobs", {"request_id": "x"},
                                   headers={"Origin": "http://elsewhere.example"})
         self.assert_error(resp, body, 403, "PERMISSION_DENIED", "elsewhere.example")
+        # A name that points here (DNS rebinding): the page's Origin and the Host header agree,
+        # but the gateway judges the origin by its own address, not by the request's Host.
+        evil = "evil.example:%d" % self.port
+        resp, body = self.request("POST", "/v1/jobs", {"request_id": "x"},
+                                  headers={"Origin": "http://" + evil, "Host": evil})
+        self.assert_error(resp, body, 403, "PERMISSION_DENIED", "evil.example")
+        # Its own page, by its address or a loopback name, may.
+        for own in ("http://127.0.0.1:%d" % self.port, "http://localhost:%d" % self.port):
+            resp, body = self.request("POST", "/v1/jobs", {"request_id": "own"},
+                                      headers={"Origin": own})
+            self.assertNotEqual(resp.status, 403, body)
         # 256 MiB announced: refused from the headers, the gateway reads none of it.
         before = self.rss_kb()
         conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=30)

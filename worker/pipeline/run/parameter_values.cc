@@ -49,7 +49,14 @@ std::string ShowValue(const ParamValue& v) {
     return std::isnan(*d) ? "nan" : *d > 0 ? "inf (beyond a double's range)"
                                            : "-inf (beyond a double's range)";
   }
-  return JsonText(ToJson(v));
+  // A long list is shown by its head and its length, not quoted whole in a message.
+  const Json j = ToJson(v);
+  if (j.is_array() && j.size() > 12) {
+    std::vector<std::string> head;
+    for (size_t i = 0; i < 6; ++i) head.push_back(JsonText(j[i]));
+    return absl::StrCat("[", absl::StrJoin(head, ","), ", ... (", j.size(), " items)]");
+  }
+  return JsonText(j);
 }
 
 absl::Status BadValue(const std::string& display, const std::string& value, absl::string_view why) {

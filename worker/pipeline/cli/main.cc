@@ -65,6 +65,9 @@ ABSL_FLAG(std::string, dims, "", "phantom: its size NXxNYxNZ");
 ABSL_FLAG(std::string, phantom_dims, "", "phantom: its size NXxNYxNZ (as --dims)");
 ABSL_FLAG(std::string, dtype, "", "phantom: voxel type uint8, uint16 or float32");
 ABSL_FLAG(uint64_t, seed, 1, "phantom: random seed");
+ABSL_FLAG(double, junction_degrees, -1,
+          "phantom: two sheets meeting at this angle, 1-90 (default: the preset's; 0: none)");
+ABSL_FLAG(std::string, junction, "", "phantom: x (the sheets cross) or t (one ends on the other)");
 ABSL_FLAG(int, sheets, -1, "phantom: sheets (default: the preset's)");
 ABSL_FLAG(double, aperture, -1, "phantom: mean aperture in voxels (default: the preset's)");
 ABSL_FLAG(int, specks, -2, "phantom: specks (-1: one per 20^3 voxels; default: the preset's)");
@@ -207,6 +210,17 @@ absl::Status Phantom(const std::vector<std::string>& args) {
     options.phantom.aperture_voxels = absl::GetFlag(FLAGS_aperture);
   }
   if (absl::GetFlag(FLAGS_specks) >= -1) options.phantom.num_specks = absl::GetFlag(FLAGS_specks);
+  if (absl::GetFlag(FLAGS_junction_degrees) >= 0) {
+    options.phantom.junction_degrees = absl::GetFlag(FLAGS_junction_degrees);
+  }
+  const std::string junction = absl::GetFlag(FLAGS_junction);
+  if (!junction.empty()) {
+    if (junction != "x" && junction != "t") {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--junction=", junction, ": give x (the sheets cross) or t"));
+    }
+    options.phantom.junction_t = junction == "t";
+  }
   options.output = absl::GetFlag(FLAGS_o);
   if (options.output.empty()) return absl::InvalidArgumentError("phantom needs -o FILE");
   SM_ASSIGN_OR_RETURN(options.format,

@@ -122,7 +122,7 @@ bool InsideOutline(const PhantomSheet& s, double a, double b) {
       return false;
     }
   }
-  return true;
+  return !s.has_cut || a * s.cut_u + b * s.cut_v >= 0;
 }
 
 absl::Status Validate(const PhantomOptions& o) {
@@ -145,6 +145,10 @@ absl::Status Validate(const PhantomOptions& o) {
   if (!(o.extent_fraction > 0 && o.extent_fraction <= 1.5)) {
     return absl::InvalidArgumentError(
         absl::StrCat("phantom extent_fraction ", o.extent_fraction, " must be in (0, 1.5]"));
+  }
+  if (!(o.junction_degrees >= 0 && o.junction_degrees <= 90)) {
+    return absl::InvalidArgumentError(absl::StrCat("phantom junction_degrees ", o.junction_degrees,
+                                                   " must be in [0, 90] (0: none)"));
   }
   if (!(o.min_dip_degrees >= 0 && o.min_dip_degrees <= o.max_dip_degrees &&
         o.max_dip_degrees <= 90)) {
@@ -337,6 +341,53 @@ nlohmann::json VecJson(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
+// A unit vector uniform on the sphere.
+Vec3 RandomDirection(Rng& rng) {
+  const double z = rng.Uniform(-1, 1), phi = rng.Uniform(0, 2 * kPi);
+  const double r = std::sqrt(std::max(0.0, 1 - z * z));
+  return Vec3(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+// Two sheets through `centre` meeting at options.junction_degrees along a line of random
+// direction (the first sheet's normal random too): the first two of truth->sheets are
+// turned so, the rest dropped; the junction is listed in the truth.
+void PlaceJunction(Rng& rng, const Vec3& centre, PhantomTruth* truth) {
+  const PhantomOptions& o = truth->options;
+  truth->sheets.resize(2);
+  Vec3 n0 = RandomDirection(rng);
+  if (n0.z < 0) n0 = -n0;
+  const Vec3 helper = std::abs(n0.z) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
+  const Vec3 e1 = Normalized(Cross(helper, n0)), e2 = Cross(n0, e1);
+  const double az = rng.Uniform(0, 2 * kPi);
+  const Vec3 line = e1 * std::cos(az) + e2 * std::sin(az);  // in sheet 0's plane
+  const Vec3 across = Cross(line, n0);                        // in sheet 0's plane, across it
+  const double angle = o.junction_degrees * kPi / 180;
+  // Sheet 1's plane holds the line and leaves sheet 0's at `angle`.
+  Vec3 n1 = n0 * std::cos(angle) + across * std::sin(angle);
+  const Vec3 n[2] = {n0, n1.z < 0 ? -n1 : n1};
+  for (int k = 0; k < 2; ++k) {
+    PhantomSheet& s = truth->sheets[k];
+    s.center = centre;
+    s.normal = n[k];
+    s.u = line;
+    s.v = Cross(s.normal, s.u);
+    s.has_cut = false;
+  }
+  if (o.junction_t) {
+    // The stem (sheet 1) keeps the side of sheet 0 its v points to: its (a, b) with b >= 0.
+    PhantomSheet& stem = truth->sheets[1];
+    stem.has_cut = true;
+    stem.cut_u = 0;
+    stem.cut_v = 1;
+  }
+  PhantomJunction j;
+  j.point = centre;
+  j.direction = line;
+  j.degrees = o.junction_degrees;
+  j.t = o.junction_t;
+  truth->junctions.push_back(j);
+}
+
 absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
   SM_RETURN_IF_ERROR(Validate(options));
   PhantomTruth truth;
@@ -346,7 +397,9 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
   const Vec3 centre(0.5 * (d.nx - 1), 0.5 * (d.ny - 1), 0.5 * (d.nz - 1));
   const double size = (d.nx + d.ny + d.nz) / 3.0;
   const double rad = kPi / 180.0;
-  for (int k = 0; k < options.num_sheets; ++k) {
+  const int num_sheets =
+      options.junction_degrees > 0 ? std::max(2, options.num_sheets) : options.num_sheets;
+  for (int k = 0; k < num_sheets; ++k) {
     PhantomSheet s;
     const double dip = rng.Uniform(options.min_dip_degrees, options.max_dip_degrees) * rad;
     // Spread the dip directions so that sheets cross rather than stack.
@@ -383,6 +436,7 @@ absl::StatusOr<PhantomTruth> PlanPhantom(const PhantomOptions& options) {
     }
     truth.sheets.push_back(std::move(s));
   }
+  if (options.junction_degrees > 0) PlaceJunction(rng, centre, &truth);
   const int64_t specks = options.num_specks >= 0
                              ? options.num_specks
                              : std::max<int64_t>(1, d.num_voxels() / (20 * 20 * 20));
@@ -484,6 +538,15 @@ std::string PhantomTruth::ToJson() const {
                          {"radius_across", v.radius_across}});
   }
   j["vugs"] = vugs_json;
+  nlohmann::json junctions_json = nlohmann::json::array();
+  for (const PhantomJunction& jn : junctions) {
+    junctions_json.push_back({{"point", VecJson(jn.point)},
+                              {"direction", VecJson(jn.direction)},
+                              {"degrees", jn.degrees},
+                              {"sheets", {jn.sheet_a, jn.sheet_b}},
+                              {"kind", jn.t ? "t" : "x"}});
+  }
+  j["junctions"] = junctions_json;
   nlohmann::json specks_json = nlohmann::json::array();
   for (const PhantomSpeck& sp : specks) {
     specks_json.push_back({{"center", VecJson(sp.center)}, {"radius", sp.radius}});

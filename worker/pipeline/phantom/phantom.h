@@ -39,6 +39,12 @@ struct PhantomOptions {
   // half its radius along it).
   int vugs_per_sheet = 0;
   double vug_radius_voxels = 12.0;  // along the sheet (drawn within 0.8-1.2 of it)
+  // A junction of known angle: when > 0, two sheets through the box's centre (num_sheets is
+  // 2) meeting at this angle along a line of random direction, the first sheet's normal
+  // random too (any orientation); with junction_t the second ends on the first (a T), else
+  // they cross (an X). The truth lists the junction line.
+  double junction_degrees = 0;
+  bool junction_t = false;
   int num_specks = 0;               // small blobs (-1: one per 20^3 voxels of box)
   double speck_radius_voxels = 1.5;
   DType dtype = DType::kUInt8;
@@ -69,7 +75,21 @@ struct PhantomSheet {
   double wall_roughness = 0;
   std::vector<PhantomHole> holes;
   std::vector<PhantomGap> gaps;
+  // A T's stem ends on another sheet: only its side a cut_u + b cut_v >= 0 of the line
+  // through the centre is kept (has_cut).
+  bool has_cut = false;
+  double cut_u = 0, cut_v = 0;
   uint64_t voxels = 0;  // filled in by generation
+};
+
+// Where two sheets meet: the line through `point` along `direction` (unit), at `degrees`
+// between their planes (the acute one); a T's stem ends on the line ("t"), an X crosses it.
+struct PhantomJunction {
+  Vec3 point;
+  Vec3 direction;
+  double degrees = 0;
+  int sheet_a = 0, sheet_b = 1;
+  bool t = false;
 };
 
 struct PhantomSpeck {
@@ -100,6 +120,7 @@ struct PhantomTruth {
   std::vector<PhantomSheet> sheets;
   std::vector<PhantomSpeck> specks;
   std::vector<PhantomVug> vugs;
+  std::vector<PhantomJunction> junctions;
   uint64_t sheet_voxels = 0;  // voxels of the sheet phase (sheets and specks, overlaps once)
   uint64_t speck_voxels = 0;
 

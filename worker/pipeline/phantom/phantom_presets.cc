@@ -130,11 +130,57 @@ PhantomOptions VuggyNetwork() {
   return o;
 }
 
+// Two plain planar sheets, 3 voxels thick, crossing at 30 degrees through the box's centre
+// along a line of random direction: the junction's known answer (--junction_degrees sets
+// the angle, --junction=t ends one on the other).
+PhantomOptions Crossing() {
+  PhantomOptions o;
+  o.dims = {112, 112, 112};
+  o.seed = 23;
+  o.num_sheets = 2;
+  o.junction_degrees = 30;
+  o.aperture_voxels = 3.0;
+  o.aperture_variation = 0;
+  o.undulation_voxels = 0;
+  o.wall_roughness_voxels = 0;
+  o.extent_fraction = 1.0;  // across the box: the sheets end on its faces
+  o.holes_per_sheet = 0;
+  o.fragmented_sheets = 0;
+  o.num_specks = 0;
+  return o;
+}
+
+// A T: a sheet ending on another at 60 degrees.
+PhantomOptions TJunction() {
+  PhantomOptions o = Crossing();
+  o.seed = 29;
+  o.junction_degrees = 60;
+  o.junction_t = true;
+  return o;
+}
+
+// As a real scan's junction: rough walls that are not parallel, the aperture varying 2-6
+// voxels, a gentle waviness, a hole, specks, crossing at 20 degrees.
+PhantomOptions RoughCrossing() {
+  PhantomOptions o = Crossing();
+  o.dims = {128, 128, 128};
+  o.seed = 31;
+  o.junction_degrees = 20;
+  o.aperture_voxels = 4.0;
+  o.aperture_variation = 0.4;
+  o.undulation_voxels = 1.5;
+  o.wall_roughness_voxels = 1.0;
+  o.holes_per_sheet = 1;
+  o.num_specks = 20;
+  return o;
+}
+
 }  // namespace
 
 std::vector<std::string> PhantomPresetNames() {
-  return {"sample",     "paper",           "thick_slab",    "rough_network",
-          "rough_slab", "shallow_network", "grazing_sheet", "vuggy_network"};
+  return {"sample",        "paper",         "thick_slab", "rough_network",  "rough_slab",
+          "shallow_network", "grazing_sheet", "vuggy_network", "crossing", "t_junction",
+          "rough_crossing"};
 }
 
 absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
@@ -146,6 +192,9 @@ absl::StatusOr<PhantomOptions> PhantomPreset(std::string_view name) {
   if (name == "shallow_network") return ShallowNetwork();
   if (name == "grazing_sheet") return GrazingSheet();
   if (name == "vuggy_network") return VuggyNetwork();
+  if (name == "crossing") return Crossing();
+  if (name == "t_junction") return TJunction();
+  if (name == "rough_crossing") return RoughCrossing();
   return absl::InvalidArgumentError(
       absl::StrCat("--preset=", absl::string_view(name.data(), name.size()), " is not known; use ",
                    absl::StrJoin(PhantomPresetNames(), ", ")));

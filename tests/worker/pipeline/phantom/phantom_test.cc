@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/testing/status_matchers.h"
+#include "worker/pipeline/phantom/phantom_presets.h"
 #include "worker/pipeline/voxel/components.h"
 
 namespace sheetmesh {
@@ -83,6 +84,57 @@ TEST(PhantomTest, InvalidOptionsAreInvalidArgument) {
   o = Small();
   o.aperture_voxels = -1;
   EXPECT_THAT(PlanPhantom(o), StatusIs(absl::StatusCode::kInvalidArgument));
+}
+
+}  // namespace
+}  // namespace sheetmesh
+
+namespace sheetmesh {
+namespace {
+
+// The junction presets' known answer: two planes meeting at the angle asked for along the
+// line the truth names (any orientation, by the seed); a T's stem stays on one side.
+TEST(PhantomTest, JunctionsMeetAtTheirAngleAlongTheTruthsLine) {
+  for (const double degrees : {15.0, 30.0, 60.0, 90.0}) {
+    for (const bool t : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << degrees << (t ? " T" : " X"));
+      absl::StatusOr<PhantomOptions> o = PhantomPreset("crossing");
+      ASSERT_TRUE(o.ok());
+      o->junction_degrees = degrees;
+      o->junction_t = t;
+      o->dims = {64, 64, 64};
+      absl::StatusOr<PhantomTruth> truth = PlanPhantom(*o);
+      ASSERT_TRUE(truth.ok());
+      ASSERT_EQ(truth->sheets.size(), 2u);
+      ASSERT_EQ(truth->junctions.size(), 1u);
+      const PhantomJunction& j = truth->junctions[0];
+      const Vec3 n0 = truth->sheets[0].normal, n1 = truth->sheets[1].normal;
+      EXPECT_NEAR(Dot(j.direction, n0), 0, 1e-12);
+      EXPECT_NEAR(Dot(j.direction, n1), 0, 1e-12);
+      EXPECT_NEAR(std::acos(std::abs(Dot(n0, n1))) * 180 / M_PI, degrees, 1e-9);
+      absl::StatusOr<DenseVolume> v = GeneratePhantomDense(&*truth);
+      ASSERT_TRUE(v.ok());
+      EXPECT_GT(truth->sheets[0].voxels, 1000u);
+      EXPECT_GT(truth->sheets[1].voxels, 300u);
+      // The stem of a T lies on the side of sheet 0 its v points to (within sheet 0's
+      // thickness and a voxel): count its voxels far on the other side, away from sheet 0.
+      if (!t) continue;
+      const PhantomSheet& stem = truth->sheets[1];
+      int wrong = 0;
+      for (int z = 0; z < 64; ++z) {
+        for (int y = 0; y < 64; ++y) {
+          for (int x = 0; x < 64; ++x) {
+            if (v->At(x, y, z) == 0) continue;
+            const Vec3 d = Vec3(x, y, z) - stem.center;
+            if (std::abs(Dot(d, stem.normal)) > 2) continue;  // not the stem's
+            if (std::abs(Dot(d, n0)) <= 2) continue;          // sheet 0's
+            if (Dot(d, stem.v) < -4) ++wrong;
+          }
+        }
+      }
+      EXPECT_EQ(wrong, 0);
+    }
+  }
 }
 
 }  // namespace

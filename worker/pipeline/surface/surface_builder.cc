@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/aperture_decimate.h"
 #include "worker/pipeline/mesh/decimate.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
@@ -15,6 +17,7 @@
 #include "worker/pipeline/similarity/face_attributes.h"
 #include "worker/pipeline/surface/bricked_surface.h"
 #include "worker/pipeline/surface/face_apertures.h"
+#include "worker/pipeline/surface/mid_surface.h"
 #include "worker/pipeline/surface/wall_fit.h"
 
 namespace sheetmesh {
@@ -148,12 +151,95 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet, const Surfa
   return dual;
 }
 
+// With options.fit_walls: each face's height fitted to formula 5, then (fit_vertices) the
+// vertices moved where it rises and the heights fitted again; `measured` gives the faces'
+// measured thickness as they lie then, each face's aperture for a flow model.
+void FitWallsAndVertices(const SheetAnalysis& sheet, const SurfaceOptions& options,
+                         SurfaceResult* out, const std::function<std::vector<float>()>& measured) {
+  if (!options.fit_walls) return;
+  TriangleMesh& mesh = out->mesh;
+  // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
+  std::vector<float> apertures = mesh.face_thickness_voxels;
+  std::vector<float> search(mesh.face_thickness_voxels.size());
+  for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness_voxels[f] + 4;
+  mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
+  if (options.fit_vertices != VertexFit::kNone) {
+    VertexFitOptions fit;
+    fit.along_normal = options.fit_vertices == VertexFit::kAll;
+    out->vertex_fit = FitVertexPositions(&mesh, sheet.set, fit);
+    // The heights again, for the faces as they lie now.
+    if (out->vertex_fit->moves > 0) {
+      mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
+      apertures = measured();
+    }
+  }
+  // The fitted heights score best together; a flow model takes each face's aperture as its
+  // sheet's (0 only over a hole, a junction's face not the crossing sheets' sum).
+  out->apertures = SetFaceApertures(&mesh, apertures);
+}
+
+// The triangles the SCVD of radius r gives a sheet of `voxels` voxels of mean thickness t
+// (formula 3: a generator per cell of t (1 + 2 r (r - 1)) voxels, about two triangles per
+// generator): what r asks of a surface made another way.
+uint64_t TrianglesOfRadius(uint64_t voxels, double mean_thickness, double r) {
+  const double cell = CellVolume(std::max(1.0, mean_thickness), r);
+  return std::max<uint64_t>(2, static_cast<uint64_t>(std::llround(2.0 * voxels / cell)));
+}
+
+// The mid-surface of each piece with its aperture, decimated to the budget (options.triangles,
+// else what r gives the SCVD), then the fits the SCVD's surface gets.
+absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
+                                                    const SurfaceOptions& options,
+                                                    std::span<const int32_t> piece_of_voxel,
+                                                    const Progress& progress) {
+  SurfaceResult out;
+  absl::Time t0 = absl::Now();
+  SM_ASSIGN_OR_RETURN(MidSurface mid, BuildMidSurface(sheet.set, piece_of_voxel,
+                                                      progress.Sub(0, 0.3)));
+  out.mesh = std::move(mid.mesh);
+  out.scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  t0 = absl::Now();
+  const uint64_t target =
+      options.triangles > 0
+          ? options.triangles
+          : TrianglesOfRadius(sheet.set.size(), sheet.thickness_stats.mean,
+                              options.scvd.radius_voxels);
+  if (out.mesh.faces.size() > target) {
+    ApertureDecimateOptions d;
+    d.triangles = target;
+    const ApertureDecimateStats s = DecimateWithAperture(&out.mesh, d);
+    out.decimation = DecimateStats{s.faces_before, s.faces_after, s.collapses, s.largest_error};
+  }
+  out.triangles_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  SM_RETURN_IF_ERROR(progress.Update(0.8));
+  t0 = absl::Now();
+  TriangleMesh& mesh = out.mesh;
+  FitWallsAndVertices(sheet, options, &out, [&] {
+    // The thickness each face's corners carry, as measured across the sheet.
+    std::vector<float> t(mesh.faces.size());
+    for (size_t f = 0; f < t.size(); ++f) {
+      const Face& c = mesh.faces[f];
+      t[f] = (mesh.vertex_thickness_voxels[c[0]] + mesh.vertex_thickness_voxels[c[1]] +
+              mesh.vertex_thickness_voxels[c[2]]) /
+             3;
+    }
+    return t;
+  });
+  out.components = sheet.components.count();
+  out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
+  SM_RETURN_IF_ERROR(progress.Update(1.0));
+  return out;
+}
+
 }  // namespace
 
 absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                            const SurfaceOptions& options,
                                            std::span<const int32_t> piece_of_voxel,
                                            const Progress& progress) {
+  if (options.method == SurfaceMethod::kMid) {
+    return BuildMidSurfaceResult(sheet, options, piece_of_voxel, progress);
+  }
   SurfaceResult out;
   SM_ASSIGN_OR_RETURN(DualMesh dual,
                       options.bricks.brick > 0
@@ -194,26 +280,9 @@ absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
     out.decimation = Decimate(&mesh, d);
   }
   mesh.face_thickness_voxels = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
-  if (options.fit_walls) {
-    // Up to twice the mean-τ height and 4 voxels more: room for a wall the mean misses.
-    std::vector<float> measured = mesh.face_thickness_voxels;
-    std::vector<float> search(mesh.face_thickness_voxels.size());
-    for (size_t f = 0; f < search.size(); ++f) search[f] = 2 * mesh.face_thickness_voxels[f] + 4;
-    mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
-    if (options.fit_vertices != VertexFit::kNone) {
-      VertexFitOptions fit;
-      fit.along_normal = options.fit_vertices == VertexFit::kAll;
-      out.vertex_fit = FitVertexPositions(&mesh, sheet.set, fit);
-      // The heights again, for the faces as they lie now.
-      if (out.vertex_fit->moves > 0) {
-        mesh.face_thickness_voxels = FitFaceThickness(mesh, sheet.set, search);
-        measured = FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
-      }
-    }
-    // The fitted heights score best together; a flow model takes each face's aperture as its
-    // sheet's (0 only over a hole, a junction's face not the crossing sheets' sum).
-    out.apertures = SetFaceApertures(&mesh, measured);
-  }
+  FitWallsAndVertices(sheet, options, &out, [&] {
+    return FaceThickness(mesh, sheet.set, sheet.thickness, options.thickness);
+  });
   if (out.decimation) {
     // The vertices are no longer generators: each takes its faces' mean thickness.
     std::vector<double> sum(mesh.vertices.size(), 0.0), area(mesh.vertices.size(), 0.0);

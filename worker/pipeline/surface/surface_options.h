@@ -41,7 +41,15 @@ struct SurfaceBrickOptions {
   int halo = 0;   // voxels read around each brick (0: SurfaceHalo of r and the longest τ)
 };
 
+// How a sheet's one layer of triangles is made.
+enum class SurfaceMethod {
+  kScvd,  // the paper's: the dual triangles of the SCVD of radius r
+  kMid,   // the mid-surface at voxel resolution with its aperture, decimated to the budget
+          // (mid_surface.h, aperture_decimate.h; beyond the paper)
+};
+
 struct SurfaceOptions {
+  SurfaceMethod method = SurfaceMethod::kScvd;
   ScvdOptions scvd;          // r, seed, Lloyd settings
   DualTriangleOptions dual;  // which dual triangles are kept (rim strip, cracks, folds)
   // With bricks the SCVD is local (ScvdOptions::local) and the rest runs on the joined mesh.

@@ -1,0 +1,54 @@
+// The mid-surface of each sheet piece at voxel resolution, with its aperture (beyond the
+// paper, ALGORITHM "Where the paper's surface loses fidelity"): a piece is a height field
+// over the plane across its dominant axis — each column of its voxels along that axis gives
+// the mid-point of its run and the run's length — meshed with a vertex at every corner of the
+// columns' squares, so that the triangles cover each column whole (no band along the rim
+// that projects into no face), and a thickness per vertex measured across the sheet (the
+// run's length times the cosine of the surface's tilt from the axis). The formula-5 prisms
+// of this mesh hold every run's voxels; decimation (aperture_decimate.h) takes it to a
+// budget.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "common/progress.h"
+#include "common/types.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/voxel/voxel_set.h"
+
+namespace sheetmesh {
+
+// One piece's chart: the axis its height field runs along and its plane's fit.
+struct MidSurfaceChart {
+  int32_t piece = 0;
+  int axis = 2;             // 0, 1, 2: x, y, z
+  Vec3 normal;              // of the least-squares plane of its voxels (unit)
+  Vec3 centroid;            // of its voxels
+  uint64_t voxels = 0;      // of the piece
+  uint64_t columns = 0;     // columns with voxels
+  uint64_t uncovered = 0;   // voxels in second runs of a column (a fold, a touching speck)
+  double max_tilt_degrees = 0;  // the steepest local tilt from the axis, at a vertex
+};
+
+struct MidSurface {
+  // Vertices at the columns' corners (voxel coordinates), two faces per column, oriented
+  // towards +axis; vertex_thickness_voxels across the sheet, face_piece, and
+  // face_thickness_voxels the mean of each face's corners'.
+  TriangleMesh mesh;
+  std::vector<MidSurfaceChart> charts;  // one per piece, by piece id
+};
+
+// The mid-surface of every piece of `set` (`piece_of_voxel` aligned with the set's voxels;
+// empty: each 6-connected component is a piece). Pieces of fewer than 3 voxels give no
+// face. kInvalidArgument when the labels do not match the set; kCancelled if asked.
+absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
+                                           std::span<const int32_t> piece_of_voxel,
+                                           const Progress& progress = {});
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_H_

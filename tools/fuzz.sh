@@ -19,7 +19,7 @@ fi
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(tiff_file nrrd_file vdb_file raw_file nrrd_header text_parsers
-  hdf5_file npy_file jpeg_file png_file)
+  hdf5_file npy_file jpeg_file png_file dicom_file nifti_file)
 cmake --build build-fuzz -j "$(nproc)" --target "${targets[@]/%/_fuzzer}"
 run() {
   local target=$1 work=build-fuzz/corpus-$1

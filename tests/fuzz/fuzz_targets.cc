@@ -79,6 +79,10 @@ void FuzzHdf5File(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, si
 
 void FuzzNpyFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".npy", {}); }
 
+void FuzzDicomFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".dcm", {}); }
+
+void FuzzNiftiFile(const uint8_t* data, size_t size) { OpenAndRead(Bytes(data, size), ".nii", {}); }
+
 namespace {
 
 // The bytes as the one slice of a folder.

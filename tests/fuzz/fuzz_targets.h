@@ -21,6 +21,8 @@ void FuzzRawFile(const uint8_t* data, size_t size);
 // PNG, each opened as a volume sent to the server is (naming no other file).
 void FuzzHdf5File(const uint8_t* data, size_t size);
 void FuzzNpyFile(const uint8_t* data, size_t size);
+void FuzzDicomFile(const uint8_t* data, size_t size);
+void FuzzNiftiFile(const uint8_t* data, size_t size);
 void FuzzJpegFile(const uint8_t* data, size_t size);
 void FuzzPngFile(const uint8_t* data, size_t size);
 // Selection text, dims-in-file-name text and dtype names.

@@ -9,6 +9,7 @@
 #include <gdcmTrace.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <span>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_format.h"
 #include "common/file_util.h"
@@ -190,6 +192,50 @@ class DicomWalk {
     return absl::OkStatus();
   }
 
+  // The elements GDCM reads as typed attributes to make an image must carry the VR the
+  // standard gives them (GDCM asserts, aborting, on another), and a UID only digits and
+  // dots (a damaged SOP class sends GDCM down its ACR-NEMA path, which asserts too).
+  absl::Status Typed(size_t start, uint32_t tag, const std::string& vr, size_t value,
+                     size_t length) const {
+    static const absl::flat_hash_map<uint32_t, const char*> kImageVrs = {
+        {0x00280002, "US"}, {0x00280004, "CS"}, {0x00280006, "US"}, {0x00280008, "IS"},
+        {0x00280010, "US"}, {0x00280011, "US"}, {0x00280030, "DS"}, {0x00280100, "US"},
+        {0x00280101, "US"}, {0x00280102, "US"}, {0x00280103, "US"}, {0x00281050, "DS"},
+        {0x00281051, "DS"}, {0x00281052, "DS"}, {0x00281053, "DS"}, {0x00200032, "DS"},
+        {0x00200037, "DS"}, {0x00200013, "IS"}, {0x00180050, "DS"}, {0x00180088, "DS"},
+        {0x00080010, "SH"}};
+    if (!vr.empty()) {
+      const auto it = kImageVrs.find(tag);
+      if (it != kImageVrs.end() && vr != it->second) {
+        return Bad(start, absl::StrFormat("element (%04X,%04X) has value representation %s where "
+                                          "DICOM gives %s",
+                                          tag >> 16, tag & 0xFFFF, vr, it->second));
+      }
+    }
+    // A recognition code sends GDCM down its ACR-NEMA path, which asserts unless it is one.
+    if (tag == 0x00080010 && length != kUndefined) {
+      const std::string code(reinterpret_cast<const char*>(b_.data() + value), length);
+      if (!absl::StartsWith(code, "ACR-NEMA") && !absl::StartsWith(code, "ACRNEMA") &&
+          !absl::StartsWith(code, "MIPS 2.0")) {
+        return Bad(start, "its recognition code (0008,0010) names no ACR-NEMA version");
+      }
+    }
+    const bool uid = vr == "UI" || (vr.empty() && (tag == 0x00080016 || tag == 0x00080018 ||
+                                                    tag == 0x0020000D || tag == 0x0020000E));
+    if (uid && length != kUndefined) {
+      for (size_t k = 0; k < length; ++k) {
+        const unsigned char c = b_[value + k];
+        const bool pad = c == 0 || c == ' ';
+        if (!(std::isdigit(c) || c == '.' || (pad && k + 1 == length))) {
+          return Bad(start, absl::StrFormat("element (%04X,%04X), a UID, holds a character other "
+                                            "than digits and dots",
+                                            tag >> 16, tag & 0xFFFF));
+        }
+      }
+    }
+    return absl::OkStatus();
+  }
+
   // Elements from *at to `end`, or (until_item_end) to an item delimiter.
   absl::Status DataSet(size_t* at, size_t end, bool explicit_vr, int depth, bool until_item_end) {
     if (depth > kMaxDepth) return Bad(*at, "sequences nested too deep");
@@ -206,6 +252,7 @@ class DicomWalk {
       size_t length = 0;
       SM_RETURN_IF_ERROR(Element(at, end, explicit_vr, &vr, &length));
       if (tag >> 16 == 0xFFFE) return Bad(start, "an item or sequence mark among elements");
+      if (depth == 0) SM_RETURN_IF_ERROR(Typed(start, tag, vr, *at, length));
       const bool sequence = vr == "SQ" || (length == kUndefined && vr != "OB" && vr != "OW" &&
                                            tag != 0x7FE00010);
       if (sequence) {

@@ -1,0 +1,10 @@
+// libFuzzer entry for sheetmesh::fuzz::FuzzNiftiFile.
+#include <cstddef>
+#include <cstdint>
+
+#include "tests/fuzz/fuzz_targets.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  sheetmesh::fuzz::FuzzNiftiFile(data, size);
+  return 0;
+}

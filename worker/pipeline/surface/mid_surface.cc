@@ -4,10 +4,18 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <memory>
+#include <cstdio>
+#include <cstdlib>
 #include <tuple>
 
+#include "absl/container/flat_hash_map.h"
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/surface/mid_surface_chart.h"
+#include "worker/pipeline/surface/mid_surface_junctions.h"
 #include "worker/pipeline/voxel/components.h"
 
 namespace sheetmesh {
@@ -21,16 +29,6 @@ struct ChartVoxel {
   bool operator<(const ChartVoxel& o) const {
     return std::tie(i, j, h) < std::tie(o.i, o.j, o.h);
   }
-};
-
-// A column's kept run: the voxel centres it spans along the axis, and its two walls, each
-// somewhere within the voxel beyond its last centre.
-struct Column {
-  bool present = false;
-  int32_t lo = 0, hi = 0;  // first and last voxel centre of the run
-  double wall_lo = 0, wall_hi = 0;
-  double mid() const { return 0.5 * (wall_lo + wall_hi); }
-  double length() const { return wall_hi - wall_lo; }
 };
 
 uint64_t Key(int32_t i, int32_t j) {
@@ -68,212 +66,134 @@ void FitPlane(const std::vector<Index3>& voxels, Vec3* centroid, Vec3* normal) {
   *normal = Normalized(Vec3(n.x(), n.y(), n.z()));
 }
 
-// One piece's height field and its mesh.
-class Chart {
- public:
-  Chart(std::vector<Index3> voxels, int32_t piece) : voxels_(std::move(voxels)) {
-    info_.piece = piece;
-    info_.voxels = voxels_.size();
-    FitPlane(voxels_, &info_.centroid, &info_.normal);
-    const double n[3] = {std::abs(info_.normal.x), std::abs(info_.normal.y),
-                         std::abs(info_.normal.z)};
-    info_.axis = static_cast<int>(std::max_element(n, n + 3) - n);
+// Sheets stacked in one piece — two that cross at a shallow angle (the separation's folds
+// do not see 15 degrees), or a sheet and one running along it — are layers of its columns:
+// along the piece's axis a column holds one run of each. Runs of neighbouring columns that
+// touch are one layer; a run that touches two runs of one neighbouring column, or is much
+// longer than the piece's runs are (where two layers merge), joins layers and is left out:
+// the layers apart are the pieces. Returns the layers of at least `min_voxels` (the piece
+// itself when it has one), and in *junction the voxels left out.
+std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_t min_voxels,
+                                             std::vector<Index3>* junction) {
+  Vec3 centroid, normal;
+  FitPlane(voxels, &centroid, &normal);
+  const double n[3] = {std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)};
+  const int axis = static_cast<int>(std::max_element(n, n + 3) - n);
+  std::vector<ChartVoxel> v(voxels.size());
+  for (size_t k = 0; k < voxels.size(); ++k) v[k] = InFrame(voxels[k], axis);
+  std::sort(v.begin(), v.end());
+  struct Run {
+    int32_t i, j, lo, hi;
+    size_t first;  // in v
+  };
+  std::vector<Run> runs;
+  absl::flat_hash_map<uint64_t, std::pair<uint32_t, uint32_t>> column;  // -> runs [a, b)
+  for (size_t s = 0; s < v.size();) {
+    size_t q = s + 1;
+    while (q < v.size() && v[q].i == v[s].i && v[q].j == v[s].j && v[q].h == v[q - 1].h + 1) ++q;
+    const uint64_t key = Key(v[s].i, v[s].j);
+    auto [it, fresh] = column.try_emplace(key, static_cast<uint32_t>(runs.size()),
+                                          static_cast<uint32_t>(runs.size()));
+    it->second.second = static_cast<uint32_t>(runs.size() + 1);
+    runs.push_back({v[s].i, v[s].j, v[s].h, v[q - 1].h, s});
+    s = q;
   }
-
-  // Appends the chart's vertices and faces to `mesh`.
-  void Mesh(TriangleMesh* mesh) {
-    Columns();
-    SmoothWalls();
-    const int axis = info_.axis;
-    // Corner (i, j) is the lower corner of column (i, j); corners span one more than columns.
-    std::vector<uint32_t> corner(static_cast<size_t>((ni_ + 1) * (nj_ + 1)), UINT32_MAX);
-    auto vertex = [&](int32_t i, int32_t j) {
-      uint32_t& id = corner[static_cast<size_t>(i * (nj_ + 1) + j)];
-      if (id == UINT32_MAX) {
-        id = static_cast<uint32_t>(mesh->vertices.size());
-        double h = 0, length = 0, gi = 0, gj = 0;
-        Corner(i, j, &h, &length, &gi, &gj);
-        mesh->vertices.push_back(FromFrame(i0_ + i - 0.5, j0_ + j - 0.5, h, axis));
-        // Across the sheet: the walls' distance along the axis times the cosine of the tilt.
-        const double cosine = 1 / std::sqrt(1 + gi * gi + gj * gj);
-        info_.max_tilt_degrees = std::max(info_.max_tilt_degrees, std::acos(cosine) * 180 / kPi);
-        mesh->vertex_thickness_voxels.push_back(static_cast<float>(length * cosine));
+  // A single layer: nothing to split (most pieces).
+  uint64_t stacked = 0;
+  for (const auto& [key, range] : column) stacked += range.second - range.first > 1;
+  if (stacked * 10 < column.size()) return {std::move(voxels)};
+  std::vector<int32_t> lengths;
+  for (const Run& r : runs) lengths.push_back(r.hi - r.lo + 1);
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  const double median = lengths[lengths.size() / 2];
+  std::vector<uint8_t> joins(runs.size(), 0);
+  std::vector<std::pair<uint32_t, uint32_t>> touching;
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    const Run& a = runs[r];
+    if (a.hi - a.lo + 1 > 1.6 * median + 1) joins[r] = 1;
+    for (const auto& [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+      const auto it = column.find(Key(a.i + di, a.j + dj));
+      if (it == column.end()) continue;
+      int touches = 0;
+      for (uint32_t o = it->second.first; o < it->second.second; ++o) {
+        const Run& b = runs[o];
+        if (b.lo > a.hi + 1 || b.hi < a.lo - 1) continue;
+        ++touches;
+        if (r < o) touching.push_back({r, o});
       }
-      return id;
-    };
-    for (int32_t i = 0; i < ni_; ++i) {
-      for (int32_t j = 0; j < nj_; ++j) {
-        if (!At(i, j)) continue;
-        const uint32_t a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1),
-                       d = vertex(i, j + 1);
-        // The shorter diagonal.
-        if (Norm2(mesh->vertices[a] - mesh->vertices[c]) <=
-            Norm2(mesh->vertices[b] - mesh->vertices[d])) {
-          mesh->faces.push_back({a, b, c});
-          mesh->faces.push_back({a, c, d});
-        } else {
-          mesh->faces.push_back({a, b, d});
-          mesh->faces.push_back({b, c, d});
-        }
-        mesh->face_piece.push_back(info_.piece);
-        mesh->face_piece.push_back(info_.piece);
-      }
+      if (touches > 1) joins[r] = 1;
     }
   }
-
-  const MidSurfaceChart& info() const { return info_; }
-
- private:
-  // Each column's runs; the longest kept (ties: the one nearest the piece's plane), on a
-  // grid over the chart's bounding rectangle.
-  void Columns() {
-    const int axis = info_.axis;
-    std::vector<ChartVoxel> v(voxels_.size());
-    for (size_t k = 0; k < voxels_.size(); ++k) v[k] = InFrame(voxels_[k], axis);
-    voxels_ = {};
-    std::sort(v.begin(), v.end());
-    i0_ = v.front().i;
-    j0_ = v.front().j;
-    int32_t i1 = v.back().i, j1 = v.front().j;
-    for (const ChartVoxel& p : v) {
-      j0_ = std::min(j0_, p.j);
-      j1 = std::max(j1, p.j);
-    }
-    ni_ = i1 - i0_ + 1;
-    nj_ = j1 - j0_ + 1;
-    grid_.assign(static_cast<size_t>(ni_) * nj_, Column{});
-    const double c[3] = {info_.centroid.x, info_.centroid.y, info_.centroid.z};
-    const double nn[3] = {info_.normal.x, info_.normal.y, info_.normal.z};
-    const double ci = c[(axis + 1) % 3], cj = c[(axis + 2) % 3], ch = c[axis];
-    const double ni = nn[(axis + 1) % 3], nj = nn[(axis + 2) % 3], nh = nn[axis];
-    for (size_t s = 0; s < v.size();) {
-      size_t e = s;
-      while (e < v.size() && v[e].i == v[s].i && v[e].j == v[s].j) ++e;
-      // The plane's height at this column, to break ties between runs.
-      const double plane = ch - (ni * (v[s].i - ci) + nj * (v[s].j - cj)) / nh;
-      Column best;
-      double best_distance = 0;
-      for (size_t r = s; r < e;) {
-        size_t q = r + 1;
-        while (q < e && v[q].h == v[q - 1].h + 1) ++q;
-        Column run;
-        run.present = true;
-        run.lo = v[r].h;
-        run.hi = v[q - 1].h;
-        const double distance = std::abs(0.5 * (run.lo + run.hi) - plane);
-        if (!best.present || run.hi - run.lo > best.hi - best.lo ||
-            (run.hi - run.lo == best.hi - best.lo && distance < best_distance)) {
-          best = run;
-          best_distance = distance;
-        }
-        r = q;
-      }
-      info_.uncovered += (e - s) - static_cast<uint64_t>(best.hi - best.lo + 1);
-      Cell(v[s].i - i0_, v[s].j - j0_) = best;
-      ++info_.columns;
-      s = e;
-    }
+  std::vector<uint32_t> parent(runs.size());
+  for (uint32_t r = 0; r < runs.size(); ++r) parent[r] = r;
+  const std::function<uint32_t(uint32_t)> find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& [a, b] : touching) {
+    if (!joins[a] && !joins[b]) parent[find(a)] = find(b);
   }
-
-  // The walls: each lies somewhere in the voxel beyond its run's last centre (the image says
-  // no more of where); of those places, the smoothest are taken — each wall averaged with
-  // its neighbours' and put back into its voxel, repeatedly (a projection onto the
-  // constraints). A plane comes out as the plane, not as the staircase of its voxels; a wall
-  // as rough as its voxels stays so.
-  void SmoothWalls() {
-    constexpr int kRounds = 40;
-    constexpr double kMargin = 0.05;  // a wall never quite at a voxel centre
-    for (Column& col : grid_) {
-      if (!col.present) continue;
-      col.wall_lo = col.lo - 0.5;
-      col.wall_hi = col.hi + 0.5;
-    }
-    std::vector<double> lo(grid_.size()), hi(grid_.size());
-    for (int round = 0; round < kRounds; ++round) {
-      for (int32_t i = 0; i < ni_; ++i) {
-        for (int32_t j = 0; j < nj_; ++j) {
-          const size_t k = static_cast<size_t>(i) * nj_ + j;
-          const Column& col = grid_[k];
-          if (!col.present) continue;
-          double sl = col.wall_lo, sh = col.wall_hi;
-          int n = 1;
-          for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
-            if (const Column* o = At(i + di, j + dj)) {
-              sl += o->wall_lo;
-              sh += o->wall_hi;
-              ++n;
-            }
-          }
-          lo[k] = std::clamp(sl / n, col.lo - 1 + kMargin, col.lo - kMargin);
-          hi[k] = std::clamp(sh / n, col.hi + kMargin, col.hi + 1 - kMargin);
-        }
-      }
-      for (size_t k = 0; k < grid_.size(); ++k) {
-        if (!grid_[k].present) continue;
-        grid_[k].wall_lo = lo[k];
-        grid_[k].wall_hi = hi[k];
-      }
-    }
+  // Where two layers merge over many columns (two sheets crossing at 15 degrees run together
+  // for a dozen voxels), the merged runs make a layer of their own between the runs that
+  // join: a layer that joins three others or more through them is the junction too.
+  absl::flat_hash_map<uint32_t, uint64_t> layer_voxels;
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    if (!joins[r]) layer_voxels[find(r)] += runs[r].hi - runs[r].lo + 1;
   }
-
-  Column& Cell(int32_t i, int32_t j) { return grid_[static_cast<size_t>(i) * nj_ + j]; }
-  const Column* At(int32_t i, int32_t j) const {
-    if (i < 0 || j < 0 || i >= ni_ || j >= nj_) return nullptr;
-    const Column& c = grid_[static_cast<size_t>(i) * nj_ + j];
-    return c.present ? &c : nullptr;
-  }
-
-  // The height, wall distance and slope at corner (i, j) — the lower corner of column
-  // (i, j), in grid coordinates. The four columns around it give the height and distance
-  // where all are there (the mean of a plane's four values is its value at the corner); the
-  // slope, and the height at a rim, come from the plane of least squares through the
-  // columns within two of it.
-  void Corner(int32_t i, int32_t j, double* h, double* length, double* gi, double* gj) const {
-    double sum = 0, len = 0;
-    int n = 0;
-    for (int di = -1; di <= 0; ++di) {
-      for (int dj = -1; dj <= 0; ++dj) {
-        if (const Column* col = At(i + di, j + dj)) {
-          sum += col->mid();
-          len += col->length();
-          ++n;
+  absl::flat_hash_map<uint32_t, absl::flat_hash_set<uint32_t>> joined_to;
+  {
+    absl::flat_hash_map<uint32_t, std::vector<uint32_t>> layers_at_join;  // join run -> layers
+    for (const auto& [a, b] : touching) {
+      if (joins[a] == joins[b]) continue;
+      const uint32_t join = joins[a] ? a : b, other = joins[a] ? b : a;
+      if (layer_voxels[find(other)] >= min_voxels) layers_at_join[join].push_back(find(other));
+    }
+    for (const auto& [join, ls] : layers_at_join) {
+      for (uint32_t x : ls) {
+        for (uint32_t y : ls) {
+          if (x != y) joined_to[x].insert(y);
         }
       }
     }
-    *length = n > 0 ? len / n : 0;
-    // h = a + b di + c dj over the window, at corner offsets (di, dj) = column centre - corner.
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (int di = -2; di <= 1; ++di) {
-      for (int dj = -2; dj <= 1; ++dj) {
-        const Column* col = At(i + di, j + dj);
-        if (col == nullptr) continue;
-        const Eigen::Vector3d x(1, di + 0.5, dj + 0.5);
-        A += x * x.transpose();
-        b += x * col->mid();
-        ++count;
-      }
-    }
-    *gi = *gj = 0;
-    double plane = n > 0 ? sum / n : 0;
-    if (count >= 3) {
-      Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
-      if (lu.rank() == 3) {
-        const Eigen::Vector3d x = lu.solve(b);
-        plane = x(0);
-        *gi = x(1);
-        *gj = x(2);
-      }
-    }
-    *h = n == 4 ? sum / 4 : plane;
   }
-
-  std::vector<Index3> voxels_;
-  MidSurfaceChart info_;
-  int32_t i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;
-  std::vector<Column> grid_;
-};
+  absl::flat_hash_map<uint32_t, std::vector<Index3>> layers;
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    const Run& run = runs[r];
+    const auto j = joins[r] ? joined_to.end() : joined_to.find(find(r));
+    const bool merged = j != joined_to.end() && j->second.size() >= 3;
+    std::vector<Index3>& out = joins[r] || merged ? *junction : layers[find(r)];
+    for (int32_t h = run.lo; h <= run.hi; ++h) {
+      const Vec3 p = FromFrame(run.i, run.j, h, axis);
+      out.push_back({static_cast<int32_t>(p.x), static_cast<int32_t>(p.y),
+                     static_cast<int32_t>(p.z)});
+    }
+  }
+  if (getenv("SM_DEBUG_JUNCTIONS")) {
+    for (auto& [root, layer] : layers) {
+      std::vector<int32_t> l;
+      for (uint32_t r = 0; r < runs.size(); ++r) if (!joins[r] && find(r) == root) l.push_back(runs[r].hi - runs[r].lo + 1);
+      std::sort(l.begin(), l.end());
+      double mean = 0; for (int32_t x : l) mean += x; mean /= std::max<size_t>(1, l.size());
+      fprintf(stderr, "layer %u: %zu voxels, joined to %zu, median %d mean %.2f\n", root, layer.size(), joined_to.count(root) ? joined_to[root].size() : 0, l.empty() ? 0 : l[l.size()/2], mean);
+    }
+    fprintf(stderr, "junction voxels %zu\n", junction->size());
+  }
+  std::vector<std::vector<Index3>> kept;
+  for (auto& [root, layer] : layers) {
+    if (layer.size() >= min_voxels) {
+      kept.push_back(std::move(layer));
+    } else {
+      junction->insert(junction->end(), layer.begin(), layer.end());
+    }
+  }
+  if (kept.size() <= 1) return {std::move(voxels)};  // no two layers worth a chart each
+  // Largest first, ties by the first voxel: the same order every run.
+  std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() > b.size();
+    return std::tie(a[0].z, a[0].y, a[0].x) < std::tie(b[0].z, b[0].y, b[0].x);
+  });
+  return kept;
+}
 
 }  // namespace
 
@@ -294,17 +214,33 @@ absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
   int32_t pieces = 0;
   for (int32_t p : piece_of_voxel) pieces = std::max(pieces, p + 1);
   std::vector<std::vector<Index3>> voxels(pieces);
+  std::vector<Index3> unlabelled;
   set.ForEachVoxel([&](uint64_t index, int32_t x, int32_t y, int32_t z) {
     const int32_t p = piece_of_voxel[index];
-    if (p >= 0) voxels[p].push_back({x, y, z});
+    (p >= 0 ? voxels[p] : unlabelled).push_back({x, y, z});
   });
   MidSurface out;
+  int32_t next_piece = pieces;
+  std::vector<std::unique_ptr<Chart>> charts;
   for (int32_t p = 0; p < pieces; ++p) {
-    SM_RETURN_IF_ERROR(progress.Update(double(p) / std::max(1, pieces)));
+    SM_RETURN_IF_ERROR(progress.Update(0.5 * p / std::max(1, pieces)));
     if (voxels[p].size() < 3) continue;
-    Chart chart(std::move(voxels[p]), p);
-    chart.Mesh(&out.mesh);
-    out.charts.push_back(chart.info());
+    const uint64_t min_layer = std::max<uint64_t>(64, voxels[p].size() / 50);
+    std::vector<std::vector<Index3>> layers =
+        SplitLayers(std::move(voxels[p]), min_layer, &out.junction_voxels);
+    for (size_t k = 0; k < layers.size(); ++k) {
+      // The first layer keeps the piece's id; the others are new pieces.
+      charts.push_back(std::make_unique<Chart>(std::move(layers[k]), k == 0 ? p : next_piece++));
+    }
+  }
+  // Voxels in no chart: labelled none, and the runs the charts did not keep.
+  for (const Index3& v : unlabelled) out.junction_voxels.push_back(v);
+  out.junctions = JoinCharts(&charts, out.junction_voxels, set.dims(), JunctionOptions{},
+                             &next_piece);
+  SM_RETURN_IF_ERROR(progress.Update(0.7));
+  for (const std::unique_ptr<Chart>& chart : charts) {
+    chart->Mesh(&out.junctions, &out.mesh);
+    out.charts.push_back(chart->info());
   }
   TriangleMesh& m = out.mesh;
   m.face_thickness_voxels.resize(m.faces.size());

@@ -18,6 +18,7 @@
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/surface/mid_surface_junction_line.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {
@@ -40,6 +41,12 @@ struct MidSurface {
   // face_thickness_voxels the mean of each face's corners'.
   TriangleMesh mesh;
   std::vector<MidSurfaceChart> charts;  // one per piece, by piece id
+  // Voxels where two layers of a piece merge (a shallow crossing), in no chart: the
+  // junction between the pieces its layers became.
+  std::vector<Index3> junction_voxels;
+  // Where the charts meet: straight lines whose samples are vertices of the mesh, shared by
+  // every chart that ends there (mid_surface_junctions.h).
+  std::vector<JunctionLine> junctions;
 };
 
 // The mid-surface of every piece of `set` (`piece_of_voxel` aligned with the set's voxels;

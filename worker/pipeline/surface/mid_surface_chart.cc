@@ -1,0 +1,524 @@
+#include "worker/pipeline/surface/mid_surface_chart.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <tuple>
+
+namespace sheetmesh {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A voxel in a chart's frame: (i, j) across the axis, h along it.
+struct ChartVoxel {
+  int32_t i, j, h;
+  bool operator<(const ChartVoxel& o) const {
+    return std::tie(i, j, h) < std::tie(o.i, o.j, o.h);
+  }
+};
+
+double Coord(const Vec3& p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
+
+}  // namespace
+
+void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
+  mean /= static_cast<double>(std::max<size_t>(1, points.size()));
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Vector3d n = eig.eigenvectors().col(0);  // the least spread
+  *centroid = Vec3(mean.x(), mean.y(), mean.z());
+  *normal = Normalized(Vec3(n.x(), n.y(), n.z()));
+}
+
+Chart::Chart(std::vector<Index3> voxels, int32_t piece) {
+  info_.piece = piece;
+  info_.voxels = voxels.size();
+  if (voxels.empty()) return;
+  std::vector<Vec3> points(voxels.size());
+  for (size_t k = 0; k < voxels.size(); ++k) points[k] = Vec3(voxels[k].x, voxels[k].y, voxels[k].z);
+  FitPlanePoints(points, &info_.centroid, &info_.normal);
+  const double n[3] = {std::abs(info_.normal.x), std::abs(info_.normal.y), std::abs(info_.normal.z)};
+  info_.axis = static_cast<int>(std::max_element(n, n + 3) - n);
+  Columns(std::move(voxels));
+  SmoothWalls();
+}
+
+Vec3 Chart::Point(double i, double j, double h) const {
+  double c[3];
+  const int a = info_.axis;
+  c[(a + 1) % 3] = i0_ + i;
+  c[(a + 2) % 3] = j0_ + j;
+  c[a] = h;
+  return Vec3(c[0], c[1], c[2]);
+}
+
+void Chart::ToGrid(const Vec3& p, double* i, double* j, double* h) const {
+  const int a = info_.axis;
+  *i = Coord(p, (a + 1) % 3) - i0_;
+  *j = Coord(p, (a + 2) % 3) - j0_;
+  *h = Coord(p, a);
+}
+
+const ChartColumn* Chart::At(int32_t i, int32_t j) const {
+  if (i < 0 || j < 0 || i >= ni_ || j >= nj_) return nullptr;
+  const ChartColumn& c = grid_[static_cast<size_t>(i) * nj_ + j];
+  return c.present ? &c : nullptr;
+}
+
+bool Chart::HasAll4(int32_t i, int32_t j) const {
+  return At(i - 1, j) && At(i + 1, j) && At(i, j - 1) && At(i, j + 1);
+}
+
+// Each column's runs; the longest kept (ties: the one nearest the piece's plane), on a grid
+// over the chart's bounding rectangle.
+void Chart::Columns(std::vector<Index3> voxels) {
+  const int axis = info_.axis;
+  std::vector<ChartVoxel> v(voxels.size());
+  for (size_t k = 0; k < voxels.size(); ++k) {
+    const int32_t c[3] = {voxels[k].x, voxels[k].y, voxels[k].z};
+    v[k] = {c[(axis + 1) % 3], c[(axis + 2) % 3], c[axis]};
+  }
+  voxels = {};
+  std::sort(v.begin(), v.end());
+  i0_ = v.front().i;
+  j0_ = v.front().j;
+  int32_t i1 = v.back().i, j1 = v.front().j;
+  for (const ChartVoxel& p : v) {
+    j0_ = std::min(j0_, p.j);
+    j1 = std::max(j1, p.j);
+  }
+  ni_ = i1 - i0_ + 1;
+  nj_ = j1 - j0_ + 1;
+  grid_.assign(static_cast<size_t>(ni_) * nj_, ChartColumn{});
+  const Vec3& c = info_.centroid;
+  const Vec3& n = info_.normal;
+  for (size_t s = 0; s < v.size();) {
+    size_t e = s;
+    while (e < v.size() && v[e].i == v[s].i && v[e].j == v[s].j) ++e;
+    // The plane's height at this column, to break ties between runs.
+    const Vec3 q = Point(v[s].i - i0_, v[s].j - j0_, 0);
+    const double plane = Dot(n, c - q) / Coord(n, axis);
+    ChartColumn best;
+    double best_distance = 0;
+    for (size_t r = s; r < e;) {
+      size_t t = r + 1;
+      while (t < e && v[t].h == v[t - 1].h + 1) ++t;
+      ChartColumn run;
+      run.present = true;
+      run.lo = v[r].h;
+      run.hi = v[t - 1].h;
+      const double distance = std::abs(0.5 * (run.lo + run.hi) - plane);
+      if (!best.present || run.hi - run.lo > best.hi - best.lo ||
+          (run.hi - run.lo == best.hi - best.lo && distance < best_distance)) {
+        best = run;
+        best_distance = distance;
+      }
+      r = t;
+    }
+    info_.uncovered += (e - s) - static_cast<uint64_t>(best.hi - best.lo + 1);
+    Cell(v[s].i - i0_, v[s].j - j0_) = best;
+    ++info_.columns;
+    s = e;
+  }
+}
+
+// The walls: each lies somewhere in the voxel beyond its run's last centre (the image says no
+// more of where); of those places, the smoothest are taken — each wall averaged with its
+// neighbours' and put back into its voxel, repeatedly (a projection onto the constraints). A
+// plane comes out as the plane, not as the staircase of its voxels; a wall as rough as its
+// voxels stays so.
+void Chart::SmoothWalls() {
+  constexpr int kRounds = 40;
+  constexpr double kMargin = 0.05;  // a wall never quite at a voxel centre
+  for (ChartColumn& col : grid_) {
+    if (!col.present) continue;
+    col.wall_lo = col.lo - 0.5;
+    col.wall_hi = col.hi + 0.5;
+  }
+  std::vector<double> lo(grid_.size()), hi(grid_.size());
+  for (int round = 0; round < kRounds; ++round) {
+    for (int32_t i = 0; i < ni_; ++i) {
+      for (int32_t j = 0; j < nj_; ++j) {
+        const size_t k = static_cast<size_t>(i) * nj_ + j;
+        const ChartColumn& col = grid_[k];
+        if (!col.present) continue;
+        double sl = col.wall_lo, sh = col.wall_hi;
+        int n = 1;
+        for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+          if (const ChartColumn* o = At(i + di, j + dj)) {
+            sl += o->wall_lo;
+            sh += o->wall_hi;
+            ++n;
+          }
+        }
+        lo[k] = std::clamp(sl / n, col.lo - 1 + kMargin, col.lo - kMargin);
+        hi[k] = std::clamp(sh / n, col.hi + kMargin, col.hi + 1 - kMargin);
+      }
+    }
+    for (size_t k = 0; k < grid_.size(); ++k) {
+      if (!grid_[k].present) continue;
+      grid_[k].wall_lo = lo[k];
+      grid_[k].wall_hi = hi[k];
+    }
+  }
+}
+
+bool Chart::LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double radius,
+                       Vec3* centroid, Vec3* normal, double* thickness) const {
+  // Near the contact, and over the whole chart: a chart that is a plane (its mid-points
+  // within a voxel of it) takes the whole plane, which the voxels near a shallow junction
+  // (where two sheets' runs merge for many voxels) cannot bias; a curved one the local fit.
+  std::vector<Vec3> near, all;
+  double near_length = 0, all_length = 0;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      const ChartColumn* c = At(i, j);
+      if (c == nullptr || c->filled) continue;
+      const Vec3 p = Point(i, j, c->mid());
+      all.push_back(p);
+      all_length += c->length();
+      const double t = std::clamp(Dot(p - a, d), ta, tb);
+      if (Norm2(p - (a + d * t)) > radius * radius) continue;
+      near.push_back(p);
+      near_length += c->length();
+    }
+  }
+  if (near.size() < 6) return false;
+  Vec3 gc, gn;
+  FitPlanePoints(all, &gc, &gn);
+  double rms = 0;
+  for (const Vec3& p : all) rms += Dot(p - gc, gn) * Dot(p - gc, gn);
+  rms = std::sqrt(rms / all.size());
+  if (rms < 1.0) {
+    *centroid = gc;
+    *normal = gn;
+  } else {
+    FitPlanePoints(near, centroid, normal);
+  }
+  const double tilt = std::abs(Coord(*normal, info_.axis));
+  *thickness = near_length / near.size() * tilt;
+  return true;
+}
+
+ChartCut Chart::Trace(const JunctionLine& line, int index, const Vec3& towards) const {
+  ChartCut cut;
+  cut.junction = index;
+  double h = 0, i1 = 0, j1 = 0;
+  ToGrid(line.point, &cut.ci, &cut.cj, &h);
+  ToGrid(line.point + line.direction, &i1, &j1, &h);
+  double di = i1 - cut.ci, dj = j1 - cut.cj;
+  const double len = std::hypot(di, dj);
+  // A line along the axis has no trace in the grid: every column is on it (not expected: the
+  // chart's plane leaves it).
+  if (len < 1e-9) di = 1, dj = 0;
+  cut.di = di / std::max(len, 1e-9);
+  cut.dj = dj / std::max(len, 1e-9);
+  cut.ni = -cut.dj;
+  cut.nj = cut.di;
+  double ti = 0, tj = 0;
+  ToGrid(towards, &ti, &tj, &h);
+  if (cut.Side(ti, tj) < 0) {
+    cut.ni = -cut.ni;
+    cut.nj = -cut.nj;
+  }
+  return cut;
+}
+
+void Chart::Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const {
+  *kept = *beyond = 0;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      const ChartColumn* c = At(i, j);
+      if (c == nullptr || c->filled) continue;
+      (cut.Side(i, j) >= 0 ? *kept : *beyond) += 1;
+    }
+  }
+}
+
+std::vector<Index3> Chart::TakeBeyond(const ChartCut& cut) {
+  std::vector<Index3> out;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      ChartColumn& c = Cell(i, j);
+      if (!c.present || cut.Side(i, j) >= 0) continue;
+      if (!c.filled) {
+        for (int32_t h = c.lo; h <= c.hi; ++h) {
+          const Vec3 p = Point(i, j, h);
+          out.push_back({static_cast<int32_t>(std::lround(p.x)),
+                         static_cast<int32_t>(std::lround(p.y)),
+                         static_cast<int32_t>(std::lround(p.z))});
+        }
+      }
+      c = ChartColumn{};
+    }
+  }
+  return out;
+}
+
+void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band,
+                const Vec3& plane_point, const Vec3& plane_normal, double thickness) {
+  cuts_.push_back(cut);
+  const int axis = info_.axis;
+  const double tilt = std::max(0.3, std::abs(Coord(plane_normal, axis)));
+  auto plane_height = [&](int32_t i, int32_t j) {
+    const Vec3 q = Point(i, j, 0);
+    return Dot(plane_normal, plane_point - q) / (Coord(plane_normal, axis) >= 0 ? tilt : -tilt);
+  };
+  // The grid grows to take the band along the junction's extent.
+  double lo_i = 0, hi_i = ni_ - 1, lo_j = 0, hi_j = nj_ - 1;
+  for (const double t : {line.t0, line.t1}) {
+    for (const double s : {0.0, band}) {
+      double i = 0, j = 0, h = 0;
+      ToGrid(line.point + line.direction * t, &i, &j, &h);
+      i += s * cut.ni;
+      j += s * cut.nj;
+      lo_i = std::min(lo_i, std::floor(i));
+      hi_i = std::max(hi_i, std::ceil(i));
+      lo_j = std::min(lo_j, std::floor(j));
+      hi_j = std::max(hi_j, std::ceil(j));
+    }
+  }
+  const int32_t gi0 = static_cast<int32_t>(lo_i), gj0 = static_cast<int32_t>(lo_j);
+  const int32_t gni = static_cast<int32_t>(hi_i) - gi0 + 1, gnj = static_cast<int32_t>(hi_j) - gj0 + 1;
+  if (gi0 < 0 || gj0 < 0 || gni > ni_ || gnj > nj_) {
+    std::vector<ChartColumn> grown(static_cast<size_t>(gni) * gnj);
+    for (int32_t i = 0; i < ni_; ++i) {
+      for (int32_t j = 0; j < nj_; ++j) {
+        grown[static_cast<size_t>(i - gi0) * gnj + (j - gj0)] = grid_[static_cast<size_t>(i) * nj_ + j];
+      }
+    }
+    for (ChartCut& c : cuts_) {
+      c.ci -= gi0;
+      c.cj -= gj0;
+    }
+    grid_ = std::move(grown);
+    i0_ += gi0;
+    j0_ += gj0;
+    ni_ = gni;
+    nj_ = gnj;
+  }
+  const ChartCut& here = cuts_.back();
+  // Beyond the line: the other charts' side.
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      if (here.Side(i, j) < 0) Cell(i, j) = ChartColumn{};
+    }
+  }
+  // Up to the line: the band's columns between the chart and the line, grown from the
+  // chart's own towards the line, within the junction's extent and the line's own grid box.
+  auto in_extent = [&](int32_t i, int32_t j) {
+    const double s = here.Side(i, j);
+    if (s < 0 || s > band) return false;
+    const Vec3 p = Point(i, j, plane_height(i, j));
+    const double t = Dot(p - line.point, line.direction);
+    return t >= line.t0 - 0.5 && t <= line.t1 + 0.5;
+  };
+  std::vector<std::pair<int32_t, int32_t>> front;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      if (At(i, j) && here.Side(i, j) <= band) front.push_back({i, j});
+    }
+  }
+  const double half = 0.5 * thickness / tilt;
+  while (!front.empty()) {
+    std::vector<std::pair<int32_t, int32_t>> next;
+    for (const auto& [i, j] : front) {
+      for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+        const int32_t a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= ni_ || b >= nj_ || At(a, b) || !in_extent(a, b)) continue;
+        // Only towards the line: a filled column is nearer to it than the one it grew from.
+        if (here.Side(a, b) > here.Side(i, j) + 1e-9) continue;
+        ChartColumn& c = Cell(a, b);
+        c.present = c.filled = true;
+        const double h = plane_height(a, b);
+        c.lo = c.hi = static_cast<int32_t>(std::lround(h));
+        c.wall_lo = h - half;
+        c.wall_hi = h + half;
+        next.push_back({a, b});
+      }
+    }
+    front = std::move(next);
+  }
+  // Within the band the sheet lies on its plane there: the junction meets it at its angle.
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      ChartColumn& c = Cell(i, j);
+      if (!c.present || c.filled || here.Side(i, j) > band) continue;
+      const double h = plane_height(i, j);
+      const double length = std::max(c.length(), 2 * half);
+      c.wall_lo = h - 0.5 * length;
+      c.wall_hi = h + 0.5 * length;
+    }
+  }
+}
+
+// The height, wall distance and slope at corner (i, j) — the lower corner of column (i, j),
+// in grid coordinates. The four columns around it give the height and distance where all
+// are there (the mean of a plane's four values is its value at the corner); the slope, and
+// the height at a rim, come from the plane of least squares through the columns within two
+// of it.
+void Chart::Corner(int32_t i, int32_t j, double* h, double* length, double* gi,
+                   double* gj) const {
+  double sum = 0, len = 0;
+  int n = 0;
+  for (int di = -1; di <= 0; ++di) {
+    for (int dj = -1; dj <= 0; ++dj) {
+      if (const ChartColumn* col = At(i + di, j + dj)) {
+        sum += col->mid();
+        len += col->length();
+        ++n;
+      }
+    }
+  }
+  *length = n > 0 ? len / n : 0;
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (int di = -2; di <= 1; ++di) {
+    for (int dj = -2; dj <= 1; ++dj) {
+      const ChartColumn* col = At(i + di, j + dj);
+      if (col == nullptr) continue;
+      const Eigen::Vector3d x(1, di + 0.5, dj + 0.5);
+      A += x * x.transpose();
+      b += x * col->mid();
+      ++count;
+    }
+  }
+  *gi = *gj = 0;
+  double plane = n > 0 ? sum / n : 0;
+  if (count >= 3) {
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
+    if (lu.rank() == 3) {
+      const Eigen::Vector3d x = lu.solve(b);
+      plane = x(0);
+      *gi = x(1);
+      *gj = x(2);
+    }
+  }
+  *h = n == 4 ? sum / 4 : plane;
+}
+
+std::pair<int, int> Chart::Snap(int32_t i, int32_t j, const std::vector<JunctionLine>& lines) const {
+  constexpr double kSnap = 0.5;  // grid units: a corner this near a cut goes onto its line
+  std::pair<int, int> best{-1, -1};
+  double nearest = kSnap;
+  for (const ChartCut& cut : cuts_) {
+    const double s = cut.Side(i - 0.5, j - 0.5);
+    if (s >= nearest) continue;
+    const JunctionLine& line = lines[cut.junction];
+    double h = 0, length = 0, gi = 0, gj = 0;
+    Corner(i, j, &h, &length, &gi, &gj);
+    const double t = Dot(Point(i - 0.5, j - 0.5, h) - line.point, line.direction);
+    const int k = std::clamp(static_cast<int>(std::lround((t - line.t0) / line.step)), 0,
+                             line.samples() - 1);
+    nearest = s;
+    best = {cut.junction, k};
+  }
+  return best;
+}
+
+void Chart::Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
+  const int axis = info_.axis;
+  std::vector<uint32_t> corner(static_cast<size_t>((ni_ + 1) * (nj_ + 1)), UINT32_MAX);
+  auto regular = [&](int32_t i, int32_t j) {
+    uint32_t& id = corner[static_cast<size_t>(i) * (nj_ + 1) + j];
+    if (id == UINT32_MAX) {
+      id = static_cast<uint32_t>(mesh->vertices.size());
+      double h = 0, length = 0, gi = 0, gj = 0;
+      Corner(i, j, &h, &length, &gi, &gj);
+      mesh->vertices.push_back(Point(i - 0.5, j - 0.5, h));
+      // Across the sheet: the walls' distance along the axis times the cosine of the tilt.
+      const double cosine = 1 / std::sqrt(1 + gi * gi + gj * gj);
+      info_.max_tilt_degrees = std::max(info_.max_tilt_degrees, std::acos(cosine) * 180 / kPi);
+      mesh->vertex_thickness_voxels.push_back(static_cast<float>(length * cosine));
+    }
+    return id;
+  };
+  auto sample = [&](int line, int k) {
+    JunctionLine& l = (*lines)[line];
+    if (l.vertex_of.empty()) l.vertex_of.assign(l.samples(), UINT32_MAX);
+    uint32_t& id = l.vertex_of[k];
+    if (id == UINT32_MAX) {
+      id = static_cast<uint32_t>(mesh->vertices.size());
+      mesh->vertices.push_back(l.At(k));
+      double t = 0;
+      for (double v : l.thickness) t += v;
+      mesh->vertex_thickness_voxels.push_back(
+          static_cast<float>(l.thickness.empty() ? 0 : t / l.thickness.size()));
+    }
+    return id;
+  };
+  auto area = [&](uint32_t a, uint32_t b, uint32_t c) {
+    return Norm(Cross(mesh->vertices[b] - mesh->vertices[a], mesh->vertices[c] - mesh->vertices[a]));
+  };
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      if (!At(i, j)) continue;
+      // The square's corners counter-clockwise in (i, j): normals towards +axis.
+      const int32_t ci[4] = {i, i + 1, i + 1, i}, cj[4] = {j, j, j + 1, j + 1};
+      std::pair<int, int> snap[4];
+      bool any = false;
+      for (int k = 0; k < 4; ++k) {
+        snap[k] = cuts_.empty() ? std::pair{-1, -1} : Snap(ci[k], cj[k], *lines);
+        any |= snap[k].first >= 0;
+      }
+      if (!any) {
+        const uint32_t a = regular(ci[0], cj[0]), b = regular(ci[1], cj[1]),
+                       c = regular(ci[2], cj[2]), d = regular(ci[3], cj[3]);
+        if (Norm2(mesh->vertices[a] - mesh->vertices[c]) <=
+            Norm2(mesh->vertices[b] - mesh->vertices[d])) {
+          mesh->faces.push_back({a, b, c});
+          mesh->faces.push_back({a, c, d});
+        } else {
+          mesh->faces.push_back({a, b, d});
+          mesh->faces.push_back({b, c, d});
+        }
+        mesh->face_piece.push_back(info_.piece);
+        mesh->face_piece.push_back(info_.piece);
+        continue;
+      }
+      // The polygon with the line's samples between two snapped corners of one line.
+      std::vector<uint32_t> polygon;
+      int first_regular = -1;
+      for (int k = 0; k < 4; ++k) {
+        const auto [line, s] = snap[k];
+        if (line < 0) {
+          if (first_regular < 0) first_regular = static_cast<int>(polygon.size());
+          polygon.push_back(regular(ci[k], cj[k]));
+        } else {
+          polygon.push_back(sample(line, s));
+        }
+        const auto [next_line, ns] = snap[(k + 1) % 4];
+        if (line >= 0 && next_line == line && std::abs(ns - s) > 1) {
+          const int step = ns > s ? 1 : -1;
+          for (int m = s + step; m != ns; m += step) polygon.push_back(sample(line, m));
+        }
+      }
+      std::vector<uint32_t> p;
+      for (uint32_t v : polygon) {
+        if (p.empty() || p.back() != v) p.push_back(v);
+      }
+      while (p.size() > 1 && p.front() == p.back()) p.pop_back();
+      if (p.size() < 3 || first_regular < 0) continue;
+      // A fan from a corner that stayed (the square is convex, its snapped side on the line).
+      const uint32_t apex = polygon[first_regular];
+      const size_t at = std::find(p.begin(), p.end(), apex) - p.begin();
+      for (size_t m = 1; m + 1 < p.size(); ++m) {
+        const uint32_t b = p[(at + m) % p.size()], c = p[(at + m + 1) % p.size()];
+        if (area(apex, b, c) < 1e-6) continue;
+        mesh->faces.push_back({apex, b, c});
+        mesh->face_piece.push_back(info_.piece);
+      }
+    }
+  }
+}
+
+}  // namespace sheetmesh

@@ -1,0 +1,114 @@
+// A piece's chart for the mid-surface (mid_surface.h): its columns along its dominant axis on
+// a grid, their walls, and the mesh of their corners. Its junctions (mid_surface_junctions.h)
+// cut it at a junction line, fill it up to the line, and share the line's vertices with the
+// charts that meet there. Internal to the mid-surface.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_CHART_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_CHART_H_
+
+#include <cstdint>
+#include <vector>
+
+#include "common/types.h"
+#include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/surface/mid_surface.h"
+#include "worker/pipeline/surface/mid_surface_junction_line.h"
+
+namespace sheetmesh {
+
+// A column's kept run: the voxel centres it spans along the axis, and its two walls, each
+// somewhere within the voxel beyond its last centre.
+struct ChartColumn {
+  bool present = false;
+  bool filled = false;  // added up to a junction line: its walls the sheet's plane's there
+  int32_t lo = 0, hi = 0;  // first and last voxel centre of the run
+  double wall_lo = 0, wall_hi = 0;
+  double mid() const { return 0.5 * (wall_lo + wall_hi); }
+  double length() const { return wall_hi - wall_lo; }
+};
+
+// A junction's trace in one chart: the line in the chart's (i, j) grid coordinates and the
+// side the chart keeps (s >= 0).
+struct ChartCut {
+  int junction = 0;
+  double ci = 0, cj = 0;  // a point of the line, grid coordinates
+  double di = 0, dj = 0;  // its direction in the grid (unit)
+  double ni = 0, nj = 0;  // the unit normal towards the kept side
+  double Side(double i, double j) const { return (i - ci) * ni + (j - cj) * nj; }
+};
+
+class Chart {
+ public:
+  // The chart of a piece's voxels (at least 3).
+  Chart(std::vector<Index3> voxels, int32_t piece);
+
+  const MidSurfaceChart& info() const { return info_; }
+  int axis() const { return info_.axis; }
+
+  // Voxel coordinates of grid position (i, j) (column centres at integers) at height h.
+  Vec3 Point(double i, double j, double h) const;
+  // Grid coordinates and height of a voxel-coordinate point.
+  void ToGrid(const Vec3& p, double* i, double* j, double* h) const;
+
+  const ChartColumn* At(int32_t i, int32_t j) const;
+  int32_t ni() const { return ni_; }
+  int32_t nj() const { return nj_; }
+
+  // The plane of least squares through the mid-points of the columns within `radius`
+  // voxels of the segment a + t d (t in [ta, tb]); false when fewer than 6 columns are near.
+  bool LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double radius, Vec3* centroid,
+                  Vec3* normal, double* thickness) const;
+
+  // Keeps the side `cut` names: columns beyond the line go, columns between the chart and
+  // the line within `band` of it and along the junction's extent are filled on the plane
+  // (`plane_point`, `plane_normal`) with `thickness`, and those within `band` lie on it.
+  void Cut(const ChartCut& cut, const JunctionLine& line, double band, const Vec3& plane_point,
+           const Vec3& plane_normal, double thickness);
+  // The fraction of the chart's columns on each side of `cut` (s >= 0, s < 0).
+  void Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const;
+  // The trace of `line` in this chart, keeping the side towards `towards` (a voxel-coordinate
+  // point of the chart).
+  ChartCut Trace(const JunctionLine& line, int index, const Vec3& towards) const;
+  // The columns beyond `cut` as a chart of their own (they leave this one).
+  std::vector<Index3> TakeBeyond(const ChartCut& cut);
+  // The voxels of the kept runs, for a map of which chart holds which voxel.
+  template <class F>
+  void ForEachVoxel(F&& f) const {
+    for (int32_t i = 0; i < ni_; ++i) {
+      for (int32_t j = 0; j < nj_; ++j) {
+        const ChartColumn* c = At(i, j);
+        if (c == nullptr || c->filled) continue;
+        for (int32_t h = c->lo; h <= c->hi; ++h) {
+          const Vec3 p = Point(i, j, h);
+          f(Index3{static_cast<int32_t>(std::lround(p.x)), static_cast<int32_t>(std::lround(p.y)),
+                   static_cast<int32_t>(std::lround(p.z))},
+            !HasAll4(i, j));
+        }
+      }
+    }
+  }
+
+  // Appends the chart's vertices and faces to `mesh`; corners on or beyond a cut snap to
+  // their junction's samples (shared with the other charts there, made when first used).
+  void Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh);
+
+ private:
+  bool HasAll4(int32_t i, int32_t j) const;
+  void Columns(std::vector<Index3> voxels);
+  void SmoothWalls();
+  ChartColumn& Cell(int32_t i, int32_t j) { return grid_[static_cast<size_t>(i) * nj_ + j]; }
+  void Corner(int32_t i, int32_t j, double* h, double* length, double* gi, double* gj) const;
+  // The junction sample corner (i, j) snaps to, or -1: (line, sample).
+  std::pair<int, int> Snap(int32_t i, int32_t j, const std::vector<JunctionLine>& lines) const;
+
+  MidSurfaceChart info_;
+  int32_t i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;
+  std::vector<ChartColumn> grid_;
+  std::vector<ChartCut> cuts_;
+};
+
+// The least-squares plane of `points` (centroid and unit normal of least spread).
+void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal);
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_CHART_H_

@@ -1,0 +1,30 @@
+// A junction line of the mid-surface (mid_surface_junctions.h): where charts meet, straight,
+// sampled into vertices every chart ending there shares.
+#ifndef SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_JUNCTION_LINE_H_
+#define SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_JUNCTION_LINE_H_
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "common/types.h"
+
+namespace sheetmesh {
+
+// A straight junction where charts meet: the points p + t u, t in [t0, t1], sampled every
+// `step` voxels; sample k is vertex vertex_of[k] of the mesh once made (UINT32_MAX before).
+struct JunctionLine {
+  Vec3 point;
+  Vec3 direction;  // unit
+  double t0 = 0, t1 = 0, step = 1;
+  double degrees = 0;                // between the charts' planes there (the acute one)
+  std::vector<int32_t> charts;       // the charts that end on it
+  std::vector<uint32_t> vertex_of;   // per sample
+  std::vector<double> thickness;     // per chart in `charts`: its thickness at the line
+  int samples() const { return static_cast<int>(std::floor((t1 - t0) / step)) + 1; }
+  Vec3 At(int k) const { return point + direction * (t0 + k * step); }
+};
+
+}  // namespace sheetmesh
+
+#endif  // SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_JUNCTION_LINE_H_

@@ -1,0 +1,303 @@
+#include "worker/pipeline/surface/mid_surface_junctions.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <cstdio>
+#include <cstdlib>
+
+#include "absl/container/flat_hash_map.h"
+
+namespace sheetmesh {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr size_t kMaxContactPoints = 4000;  // a line's fit needs no more
+
+// Where two charts meet: the voxels by which they do.
+struct Contact {
+  std::vector<Vec3> points;
+  uint64_t count = 0;
+  void Add(const Vec3& p) {
+    // Every k-th past the cap: an even subsample of a long contact.
+    if (points.size() < kMaxContactPoints || (count % (count / kMaxContactPoints + 1)) == 0) {
+      if (points.size() < 2 * kMaxContactPoints) points.push_back(p);
+    }
+    ++count;
+  }
+};
+
+// The principal direction of `points` and their centroid.
+void PrincipalLine(const std::vector<Vec3>& points, Vec3* centroid, Vec3* direction) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Vector3d v = eig.eigenvectors().col(2);
+  *centroid = Vec3(mean.x(), mean.y(), mean.z());
+  *direction = Normalized(Vec3(v.x(), v.y(), v.z()));
+}
+
+// The part t in [*t0, *t1] of the line p + t u inside the box [-0.5, n - 0.5] on each axis;
+// false when none is.
+bool ClipToBox(const Vec3& p, const Vec3& u, const Dims& dims, double* t0, double* t1) {
+  const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
+  const double pp[3] = {p.x, p.y, p.z}, uu[3] = {u.x, u.y, u.z};
+  for (int k = 0; k < 3; ++k) {
+    const double lo = -0.5, hi = n[k] - 0.5;
+    if (std::abs(uu[k]) < 1e-12) {
+      if (pp[k] < lo || pp[k] > hi) return false;
+      continue;
+    }
+    double a = (lo - pp[k]) / uu[k], b = (hi - pp[k]) / uu[k];
+    if (a > b) std::swap(a, b);
+    *t0 = std::max(*t0, a);
+    *t1 = std::min(*t1, b);
+  }
+  return *t1 > *t0;
+}
+
+// A junction found between charts, before lines along one another are merged.
+struct Found {
+  JunctionLine line;
+  uint64_t contact = 0;
+  Vec3 plane_point[2], plane_normal[2];
+  double thickness[2] = {0, 0};
+};
+
+}  // namespace
+
+std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
+                                     const std::vector<Index3>& loose, const Dims& dims,
+                                     const JunctionOptions& options, int32_t* next_piece) {
+  auto key = [&](const Index3& p) -> uint64_t {
+    return static_cast<uint64_t>(p.x) +
+           static_cast<uint64_t>(dims.nx) *
+               (static_cast<uint64_t>(p.y) + static_cast<uint64_t>(dims.ny) * p.z);
+  };
+  auto inside = [&](const Index3& p) {
+    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < dims.nx && p.y < dims.ny && p.z < dims.nz;
+  };
+  // Who holds each voxel: a chart, or none of them (-1).
+  absl::flat_hash_map<uint64_t, int32_t> owner;
+  for (size_t c = 0; c < charts->size(); ++c) {
+    (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { owner[key(p)] = static_cast<int32_t>(c); });
+  }
+  for (const Index3& p : loose) owner.try_emplace(key(p), -1);
+  static constexpr int kStep[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::map<std::pair<int32_t, int32_t>, Contact> contacts;
+  // Charts that touch.
+  for (size_t c = 0; c < charts->size(); ++c) {
+    (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) {
+      for (const auto& s : kStep) {
+        const Index3 q{p.x + s[0], p.y + s[1], p.z + s[2]};
+        if (!inside(q)) continue;
+        const auto it = owner.find(key(q));
+        if (it == owner.end() || it->second < 0 || it->second <= static_cast<int32_t>(c)) continue;
+        contacts[{static_cast<int32_t>(c), it->second}].Add(Vec3(p.x, p.y, p.z));
+      }
+    });
+  }
+  // Charts that touch one component of the voxels between them.
+  {
+    absl::flat_hash_map<uint64_t, uint32_t> index;
+    for (uint32_t k = 0; k < loose.size(); ++k) index[key(loose[k])] = k;
+    std::vector<uint32_t> parent(loose.size());
+    for (uint32_t k = 0; k < loose.size(); ++k) parent[k] = k;
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::vector<std::vector<int32_t>> touching(loose.size());
+    for (uint32_t k = 0; k < loose.size(); ++k) {
+      const Index3& p = loose[k];
+      for (const auto& s : kStep) {
+        const Index3 q{p.x + s[0], p.y + s[1], p.z + s[2]};
+        if (!inside(q)) continue;
+        const auto o = owner.find(key(q));
+        if (o == owner.end()) continue;
+        if (o->second >= 0) {
+          touching[k].push_back(o->second);
+        } else if (const auto j = index.find(key(q)); j != index.end()) {
+          parent[find(k)] = find(j->second);
+        }
+      }
+    }
+    absl::flat_hash_map<uint32_t, std::vector<int32_t>> charts_of;
+    absl::flat_hash_map<uint32_t, std::vector<uint32_t>> members;
+    for (uint32_t k = 0; k < loose.size(); ++k) {
+      const uint32_t root = find(k);
+      members[root].push_back(k);
+      for (int32_t c : touching[k]) charts_of[root].push_back(c);
+    }
+    for (auto& [root, cs] : charts_of) {
+      std::sort(cs.begin(), cs.end());
+      cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
+      for (size_t a = 0; a < cs.size(); ++a) {
+        for (size_t b = a + 1; b < cs.size(); ++b) {
+          Contact& contact = contacts[{cs[a], cs[b]}];
+          for (uint32_t k : members[root]) {
+            contact.Add(Vec3(loose[k].x, loose[k].y, loose[k].z));
+          }
+        }
+      }
+    }
+  }
+  // Each contact's line: where the two charts' planes near it cross.
+  std::vector<Found> found;
+  for (const auto& [pair, contact] : contacts) {
+    if (contact.count < options.min_contact || contact.points.size() < 3) continue;
+    Vec3 c, d;
+    PrincipalLine(contact.points, &c, &d);
+    double ta = 0, tb = 0;
+    for (const Vec3& p : contact.points) {
+      ta = std::min(ta, Dot(p - c, d));
+      tb = std::max(tb, Dot(p - c, d));
+    }
+    constexpr double kRadius = 24;
+    Found f;
+    bool ok = true;
+    const int32_t ids[2] = {pair.first, pair.second};
+    for (int s = 0; s < 2; ++s) {
+      ok = ok && (*charts)[ids[s]]->LocalPlane(c, d, ta, tb, kRadius, &f.plane_point[s],
+                                                &f.plane_normal[s], &f.thickness[s]);
+    }
+    if (!ok) continue;
+    const Vec3& na = f.plane_normal[0];
+    const Vec3& nb = f.plane_normal[1];
+    const double cosine = std::min(1.0, std::abs(Dot(na, nb)));
+    const double degrees = std::acos(cosine) * 180 / kPi;
+    if (degrees < options.min_degrees) continue;
+    const Vec3 u = Normalized(Cross(na, nb));
+    // The point of both planes nearest the contact's centroid.
+    const double k = Dot(na, nb);
+    const double ra = Dot(na, f.plane_point[0] - c), rb = Dot(nb, f.plane_point[1] - c);
+    const double det = 1 - k * k;
+    const double alpha = (ra - k * rb) / det, beta = (rb - k * ra) / det;
+    f.line.point = c + na * alpha + nb * beta;
+    f.line.direction = u;
+    f.line.degrees = degrees;
+    double t0 = 1e300, t1 = -1e300;
+    for (const Vec3& p : contact.points) {
+      const double t = Dot(p - f.line.point, u);
+      t0 = std::min(t0, t);
+      t1 = std::max(t1, t);
+    }
+    f.line.t0 = t0 - kRadius;
+    f.line.t1 = t1 + kRadius;
+    if (!ClipToBox(f.line.point, u, dims, &f.line.t0, &f.line.t1)) continue;
+    f.line.step = options.sample_step;
+    f.line.charts = {ids[0], ids[1]};
+    f.contact = contact.count;
+    found.push_back(f);
+  }
+  // Lines along one another (an X's four halves meet pairwise) are one.
+  std::vector<JunctionLine> lines;
+  std::vector<std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>>> planes;  // per line
+  std::vector<std::vector<double>> thickness;
+  std::vector<uint64_t> weight;
+  for (const Found& f : found) {
+    int merged = -1;
+    for (size_t l = 0; l < lines.size(); ++l) {
+      const JunctionLine& g = lines[l];
+      if (std::abs(Dot(g.direction, f.line.direction)) < std::cos(3 * kPi / 180)) continue;
+      const Vec3 mid = f.line.point + f.line.direction * (0.5 * (f.line.t0 + f.line.t1));
+      const Vec3 off = mid - g.point;
+      if (Norm2(off - g.direction * Dot(off, g.direction)) > 1.5 * 1.5) continue;
+      merged = static_cast<int>(l);
+      break;
+    }
+    if (merged < 0) {
+      lines.push_back(f.line);
+      lines.back().charts.clear();
+      planes.emplace_back();
+      thickness.emplace_back();
+      weight.push_back(0);
+      merged = static_cast<int>(lines.size() - 1);
+    } else {
+      // Weighted by contact; the direction kept pointing one way.
+      JunctionLine& g = lines[merged];
+      const double w0 = double(weight[merged]), w1 = double(f.contact);
+      const Vec3 u = Dot(g.direction, f.line.direction) < 0 ? -f.line.direction : f.line.direction;
+      const Vec3 direction = Normalized(g.direction * w0 + u * w1);
+      const Vec3 p1 = f.line.point;
+      const Vec3 off = p1 - g.point;
+      const Vec3 point = g.point + (off - g.direction * Dot(off, g.direction)) * (w1 / (w0 + w1));
+      const double s = Dot(g.point - point, direction);
+      const double a0 = g.t0 + s, a1 = g.t1 + s;
+      const double sf = Dot(p1 - point, direction) * (Dot(u, f.line.direction) < 0 ? -1 : 1);
+      double b0 = sf + (Dot(u, f.line.direction) < 0 ? -f.line.t1 : f.line.t0);
+      double b1 = sf + (Dot(u, f.line.direction) < 0 ? -f.line.t0 : f.line.t1);
+      g.point = point;
+      g.direction = direction;
+      g.t0 = std::min(a0, b0);
+      g.t1 = std::max(a1, b1);
+      ClipToBox(g.point, g.direction, dims, &g.t0, &g.t1);
+      g.degrees = (g.degrees * w0 + f.line.degrees * w1) / (w0 + w1);
+    }
+    weight[merged] += f.contact;
+    for (int s = 0; s < 2; ++s) {
+      const int32_t c = f.line.charts[s];
+      bool have = false;
+      for (const auto& [chart, plane] : planes[merged]) have |= chart == c;
+      if (!have) {
+        planes[merged].push_back({c, {f.plane_point[s], f.plane_normal[s]}});
+        thickness[merged].push_back(f.thickness[s]);
+      }
+    }
+  }
+  if (getenv("SM_DEBUG_JUNCTIONS")) {
+    for (const JunctionLine& g : lines) fprintf(stderr, "line p=(%.1f %.1f %.1f) u=(%.2f %.2f %.2f) t=[%.1f %.1f] deg %.1f\n", g.point.x, g.point.y, g.point.z, g.direction.x, g.direction.y, g.direction.z, g.t0, g.t1, g.degrees);
+    for (size_t c = 0; c < charts->size(); ++c) { const MidSurfaceChart& i = (*charts)[c]->info(); fprintf(stderr, "chart %zu piece %d voxels %llu axis %d normal (%.2f %.2f %.2f)\n", c, i.piece, (unsigned long long)i.voxels, i.axis, i.normal.x, i.normal.y, i.normal.z); }
+    for (const Found& f : found) fprintf(stderr, "found %d-%d contact %llu deg %.1f\n", f.line.charts[0], f.line.charts[1], (unsigned long long)f.contact, f.line.degrees);
+  }
+  // Each line cuts its charts: split where it runs through one, then cut and fill each.
+  constexpr double kBand = 12;
+  for (size_t l = 0; l < lines.size(); ++l) {
+    JunctionLine& line = lines[l];
+    std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>> cuts = planes[l];
+    std::vector<double> thick = thickness[l];
+    const size_t given = cuts.size();
+    for (size_t k = 0; k < given; ++k) {
+      Chart& chart = *(*charts)[cuts[k].first];
+      const ChartCut trace = chart.Trace(line, static_cast<int>(l), cuts[k].second.first);
+      uint64_t kept = 0, beyond = 0;
+      chart.Sides(trace, &kept, &beyond);
+      if (beyond * 10 > kept + beyond && beyond >= 32) {
+        std::vector<Index3> rest = chart.TakeBeyond(trace);
+        if (rest.size() < 3) continue;
+        if (getenv("SM_DEBUG_JUNCTIONS")) {
+          Index3 lo = rest[0], hi = rest[0];
+          for (const Index3& v : rest) { lo.x = std::min(lo.x, v.x); lo.y = std::min(lo.y, v.y); lo.z = std::min(lo.z, v.z); hi.x = std::max(hi.x, v.x); hi.y = std::max(hi.y, v.y); hi.z = std::max(hi.z, v.z); }
+          fprintf(stderr, "split chart %d: %zu voxels in (%d %d %d)-(%d %d %d)\n", cuts[k].first, rest.size(), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+        }
+        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++));
+        cuts.push_back({static_cast<int32_t>(charts->size() - 1), cuts[k].second});
+        thick.push_back(thick[k]);
+      }
+    }
+    for (size_t k = 0; k < cuts.size(); ++k) {
+      Chart& chart = *(*charts)[cuts[k].first];
+      // Towards the chart's own columns: the side where most of them lie.
+      ChartCut trace = chart.Trace(line, static_cast<int>(l), chart.info().centroid);
+      uint64_t kept = 0, beyond = 0;
+      chart.Sides(trace, &kept, &beyond);
+      if (beyond > kept) {
+        trace.ni = -trace.ni;
+        trace.nj = -trace.nj;
+      }
+      chart.Cut(trace, line, kBand, cuts[k].second.first, cuts[k].second.second, thick[k]);
+      line.charts.push_back(cuts[k].first);
+      line.thickness.push_back(thick[k]);
+    }
+  }
+  return lines;
+}
+
+}  // namespace sheetmesh

@@ -171,8 +171,8 @@ void Chart::SmoothWalls() {
   }
 }
 
-bool Chart::LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double radius,
-                       Vec3* centroid, Vec3* normal, double* thickness) const {
+bool Chart::LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double inner,
+                       double outer, Vec3* centroid, Vec3* normal, double* thickness) const {
   // Near the contact, and over the whole chart: a chart that is a plane (its mid-points
   // within a voxel of it) takes the whole plane, which the voxels near a shallow junction
   // (where two sheets' runs merge for many voxels) cannot bias; a curved one the local fit.
@@ -183,10 +183,12 @@ bool Chart::LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, doubl
       const ChartColumn* c = At(i, j);
       if (c == nullptr || c->filled) continue;
       const Vec3 p = Point(i, j, c->mid());
+      const double t = std::clamp(Dot(p - a, d), ta, tb);
+      const double r2 = Norm2(p - (a + d * t));
+      if (r2 < inner * inner) continue;
       all.push_back(p);
       all_length += c->length();
-      const double t = std::clamp(Dot(p - a, d), ta, tb);
-      if (Norm2(p - (a + d * t)) > radius * radius) continue;
+      if (r2 > outer * outer) continue;
       near.push_back(p);
       near_length += c->length();
     }
@@ -230,6 +232,22 @@ ChartCut Chart::Trace(const JunctionLine& line, int index, const Vec3& towards) 
     cut.nj = -cut.nj;
   }
   return cut;
+}
+
+double Chart::Gap(const ChartCut& cut, const JunctionLine& line) const {
+  double gap = 1e300;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      const ChartColumn* c = At(i, j);
+      if (c == nullptr || c->filled) continue;
+      const double s = cut.Side(i, j);
+      if (s < 0 || s >= gap) continue;
+      const double t = Dot(Point(i, j, c->mid()) - line.point, line.direction);
+      if (t < line.t0 || t > line.t1) continue;
+      gap = s;
+    }
+  }
+  return gap;
 }
 
 void Chart::Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const {

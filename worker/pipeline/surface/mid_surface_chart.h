@@ -53,16 +53,23 @@ class Chart {
   int32_t ni() const { return ni_; }
   int32_t nj() const { return nj_; }
 
-  // The plane of least squares through the mid-points of the columns within `radius`
-  // voxels of the segment a + t d (t in [ta, tb]); false when fewer than 6 columns are near.
-  bool LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double radius, Vec3* centroid,
-                  Vec3* normal, double* thickness) const;
+  // The plane of least squares through the mid-points of the columns between `inner` and
+  // `outer` voxels of the segment a + t d (t in [ta, tb]) — or, when the chart is a plane
+  // beyond `inner` (its mid-points there within a voxel of one), through all of them; false
+  // when fewer than 6 columns are in the ring. `inner` keeps out where two sheets' runs
+  // merge near their junction.
+  bool LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double inner, double outer,
+                  Vec3* centroid, Vec3* normal, double* thickness) const;
 
   // Keeps the side `cut` names: columns beyond the line go, columns between the chart and
   // the line within `band` of it and along the junction's extent are filled on the plane
   // (`plane_point`, `plane_normal`) with `thickness`, and those within `band` lie on it.
   void Cut(const ChartCut& cut, const JunctionLine& line, double band, const Vec3& plane_point,
            const Vec3& plane_normal, double thickness);
+  // How far from `line` (grid units, on the kept side of `cut`) the chart's nearest column
+  // along the line's extent lies: the gap a fill must bridge (the band a shallow crossing's
+  // merged runs took). Infinity when none is along it.
+  double Gap(const ChartCut& cut, const JunctionLine& line) const;
   // The fraction of the chart's columns on each side of `cut` (s >= 0, s < 0).
   void Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const;
   // The trace of `line` in this chart, keeping the side towards `towards` (a voxel-coordinate

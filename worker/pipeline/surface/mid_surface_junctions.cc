@@ -71,11 +71,12 @@ struct Found {
   double thickness[2] = {0, 0};
 };
 
-}  // namespace
-
-std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
-                                     const std::vector<Index3>& loose, const Dims& dims,
-                                     const JunctionOptions& options, int32_t* next_piece) {
+// Which charts meet, and by which voxels: those that touch, and those that touch one
+// component of the `loose` voxels (in no chart).
+std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
+    const std::vector<std::unique_ptr<Chart>>& charts_in, const std::vector<Index3>& loose,
+    const Dims& dims) {
+  const std::vector<std::unique_ptr<Chart>>* charts = &charts_in;
   auto key = [&](const Index3& p) -> uint64_t {
     return static_cast<uint64_t>(p.x) +
            static_cast<uint64_t>(dims.nx) *
@@ -149,6 +150,59 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
       }
     }
   }
+  return contacts;
+}
+
+// A chart whose plane lies between those of two charts it meets, closer to each than they
+// are to one another, is where two sheets ran together (the runs of a shallow crossing
+// merged), not a sheet: its voxels are the junction's.
+bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
+               const std::map<std::pair<int32_t, int32_t>, Contact>& contacts,
+               const JunctionOptions& options) {
+  auto degrees = [&](int32_t a, int32_t b) {
+    const double cosine =
+        std::min(1.0, std::abs(Dot(charts[a]->info().normal, charts[b]->info().normal)));
+    return std::acos(cosine) * 180 / kPi;
+  };
+  std::vector<int32_t> partners;
+  for (const auto& [pair, contact] : contacts) {
+    if (contact.count < options.min_contact) continue;
+    if (pair.first == c) partners.push_back(pair.second);
+    if (pair.second == c) partners.push_back(pair.first);
+  }
+  for (size_t p = 0; p < partners.size(); ++p) {
+    for (size_t q = p + 1; q < partners.size(); ++q) {
+      const double between = degrees(partners[p], partners[q]);
+      if (between > std::max(degrees(c, partners[p]), degrees(c, partners[q])) + 3 &&
+          between > options.min_degrees) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
+                                     const std::vector<Index3>& loose_in, const Dims& dims,
+                                     const JunctionOptions& options, int32_t* next_piece) {
+  std::vector<Index3> loose = loose_in;
+  std::map<std::pair<int32_t, int32_t>, Contact> contacts = FindContacts(*charts, loose, dims);
+  // Merge bands out, then the contacts again.
+  std::vector<int32_t> bands;
+  for (int32_t c = 0; c < static_cast<int32_t>(charts->size()); ++c) {
+    if (MergeBand(c, *charts, contacts, options)) bands.push_back(c);
+  }
+  const bool dropped = !bands.empty();
+  for (int32_t c : bands) {
+    (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { loose.push_back(p); });
+    (*charts)[c].reset();
+  }
+  if (dropped) {
+    charts->erase(std::remove(charts->begin(), charts->end(), nullptr), charts->end());
+    contacts = FindContacts(*charts, loose, dims);
+  }
   // Each contact's line: where the two charts' planes near it cross.
   std::vector<Found> found;
   for (const auto& [pair, contact] : contacts) {
@@ -162,11 +216,44 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     }
     constexpr double kRadius = 24;
     Found f;
-    bool ok = true;
     const int32_t ids[2] = {pair.first, pair.second};
-    for (int s = 0; s < 2; ++s) {
-      ok = ok && (*charts)[ids[s]]->LocalPlane(c, d, ta, tb, kRadius, &f.plane_point[s],
-                                                &f.plane_normal[s], &f.thickness[s]);
+    // First the planes near the contact; then again away from the line they give, by a
+    // band as wide as two sheets at that angle run together, until the line stands.
+    Vec3 line_point = c, line_dir = d;
+    double la = ta, lb = tb, inner = 0;
+    bool ok = false;
+    for (int round = 0; round < 3; ++round) {
+      Found trial = f;
+      bool fitted = true;
+      for (int s = 0; s < 2; ++s) {
+        fitted = fitted && (*charts)[ids[s]]->LocalPlane(line_point, line_dir, la, lb, inner,
+                                                          inner + kRadius, &trial.plane_point[s],
+                                                          &trial.plane_normal[s],
+                                                          &trial.thickness[s]);
+      }
+      if (!fitted) break;  // the last fit stands
+      f = trial;
+      ok = true;
+      const Vec3& na = f.plane_normal[0];
+      const Vec3& nb = f.plane_normal[1];
+      const double sine = Norm(Cross(na, nb));
+      if (sine < std::sin(options.min_degrees * kPi / 180)) break;
+      const Vec3 u = Normalized(Cross(na, nb));
+      const double k = Dot(na, nb);
+      const double ra = Dot(na, f.plane_point[0] - c), rb = Dot(nb, f.plane_point[1] - c);
+      const double det = 1 - k * k;
+      const double alpha = (ra - k * rb) / det, beta = (rb - k * ra) / det;
+      line_point = c + na * alpha + nb * beta;
+      line_dir = u;
+      la = 1e300;
+      lb = -1e300;
+      for (const Vec3& p : contact.points) {
+        const double t = Dot(p - line_point, u);
+        la = std::min(la, t);
+        lb = std::max(lb, t);
+      }
+      const double thick = std::max({f.thickness[0], f.thickness[1], 1.0});
+      inner = std::min(40.0, 1.5 * thick / std::max(0.1, sine) + 2);
     }
     if (!ok) continue;
     const Vec3& na = f.plane_normal[0];
@@ -258,7 +345,7 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     for (const Found& f : found) fprintf(stderr, "found %d-%d contact %llu deg %.1f\n", f.line.charts[0], f.line.charts[1], (unsigned long long)f.contact, f.line.degrees);
   }
   // Each line cuts its charts: split where it runs through one, then cut and fill each.
-  constexpr double kBand = 12;
+  constexpr double kBand = 12, kMaxBand = 64;
   for (size_t l = 0; l < lines.size(); ++l) {
     JunctionLine& line = lines[l];
     std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>> cuts = planes[l];
@@ -292,7 +379,9 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         trace.ni = -trace.ni;
         trace.nj = -trace.nj;
       }
-      chart.Cut(trace, line, kBand, cuts[k].second.first, cuts[k].second.second, thick[k]);
+      // The band reaches the chart's columns: past a shallow crossing's merged runs.
+      const double band = std::min(kMaxBand, std::max(kBand, chart.Gap(trace, line) + 4));
+      chart.Cut(trace, line, band, cuts[k].second.first, cuts[k].second.second, thick[k]);
       line.charts.push_back(cuts[k].first);
       line.thickness.push_back(thick[k]);
     }

@@ -101,7 +101,8 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
   // A single layer: nothing to split (most pieces).
   uint64_t stacked = 0;
   for (const auto& [key, range] : column) stacked += range.second - range.first > 1;
-  if (stacked * 10 < column.size()) return {std::move(voxels)};
+  if (getenv("SM_DEBUG_JUNCTIONS")) fprintf(stderr, "split: %zu voxels, %zu columns, %llu stacked, axis %d\n", voxels.size(), column.size(), (unsigned long long)stacked, axis);
+  if (stacked < std::max<uint64_t>(16, column.size() / 50)) return {std::move(voxels)};
   std::vector<int32_t> lengths;
   for (const Run& r : runs) lengths.push_back(r.hi - r.lo + 1);
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
@@ -196,6 +197,41 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
 }
 
 }  // namespace
+
+uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>& lines) {
+  constexpr double kOnLine = 0.05;  // voxels: a vertex this near a line lies on it
+  auto on = [&](const Vec3& p, const JunctionLine& l) {
+    const Vec3 w = p - l.point;
+    return Norm2(w - l.direction * Dot(w, l.direction)) < kOnLine * kOnLine;
+  };
+  uint64_t moved = 0;
+  std::vector<uint8_t> done(mesh->vertices.size(), 0);
+  for (size_t f = 0; f < mesh->faces.size(); ++f) {
+    const Face& t = mesh->faces[f];
+    const int32_t piece = mesh->face_piece.empty() ? 0 : mesh->face_piece[f];
+    for (const JunctionLine& l : lines) {
+      // The face's edge on the line, and the corner off it.
+      int off = -1, count = 0;
+      for (int k = 0; k < 3; ++k) {
+        if (on(mesh->vertices[t[k]], l)) {
+          ++count;
+        } else {
+          off = k;
+        }
+      }
+      if (count != 2 || off < 0 || done[t[off]]) continue;
+      for (size_t c = 0; c < l.pieces.size(); ++c) {
+        if (l.pieces[c] != piece) continue;
+        Vec3& p = mesh->vertices[t[off]];
+        const Vec3& n = l.plane_normals[c];
+        p = p - n * Dot(p - l.plane_points[c], n);
+        done[t[off]] = 1;
+        ++moved;
+      }
+    }
+  }
+  return moved;
+}
 
 absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
                                            std::span<const int32_t> piece_of_voxel,

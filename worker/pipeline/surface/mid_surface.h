@@ -49,6 +49,12 @@ struct MidSurface {
   std::vector<JunctionLine> junctions;
 };
 
+// Each face along a junction of `lines` (an edge on a line, the face of a piece that ends
+// there) has its other corner put on its piece's plane there, so that the sheets meet at the
+// angle of their planes whatever decimation and the vertex fit did near the line. Returns
+// the vertices moved. The mesh's vertices, faces and face_piece are read; vertices move.
+uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>& lines);
+
 // The mid-surface of every piece of `set` (`piece_of_voxel` aligned with the set's voxels;
 // empty: each 6-connected component is a piece). Pieces of fewer than 3 voxels give no
 // face. kInvalidArgument when the labels do not match the set; kCancelled if asked.

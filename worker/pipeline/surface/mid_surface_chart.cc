@@ -4,19 +4,25 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <map>
+#include <set>
 #include <tuple>
 
 namespace sheetmesh {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// A cut leaves the columns whose centres lie within kZipGap of its line (grid units), so the
+// corners of the rim facing it keep clear of the line; the rim's columns within kZipReach are
+// zipped to it.
+constexpr double kZipGap = 1.0;
+constexpr double kZipReach = kZipGap + 1.5;
 
 // A voxel in a chart's frame: (i, j) across the axis, h along it.
 struct ChartVoxel {
   int32_t i, j, h;
-  bool operator<(const ChartVoxel& o) const {
-    return std::tie(i, j, h) < std::tie(o.i, o.j, o.h);
-  }
+  bool operator<(const ChartVoxel& o) const { return std::tie(i, j, h) < std::tie(o.i, o.j, o.h); }
 };
 
 double Coord(const Vec3& p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
@@ -43,9 +49,11 @@ Chart::Chart(std::vector<Index3> voxels, int32_t piece) {
   info_.voxels = voxels.size();
   if (voxels.empty()) return;
   std::vector<Vec3> points(voxels.size());
-  for (size_t k = 0; k < voxels.size(); ++k) points[k] = Vec3(voxels[k].x, voxels[k].y, voxels[k].z);
+  for (size_t k = 0; k < voxels.size(); ++k)
+    points[k] = Vec3(voxels[k].x, voxels[k].y, voxels[k].z);
   FitPlanePoints(points, &info_.centroid, &info_.normal);
-  const double n[3] = {std::abs(info_.normal.x), std::abs(info_.normal.y), std::abs(info_.normal.z)};
+  const double n[3] = {std::abs(info_.normal.x), std::abs(info_.normal.y),
+                       std::abs(info_.normal.z)};
   info_.axis = static_cast<int>(std::max_element(n, n + 3) - n);
   Columns(std::move(voxels));
   SmoothWalls();
@@ -281,8 +289,8 @@ std::vector<Index3> Chart::TakeBeyond(const ChartCut& cut) {
   return out;
 }
 
-void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band,
-                const Vec3& plane_point, const Vec3& plane_normal, double thickness) {
+void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, const Vec3& plane_point,
+                const Vec3& plane_normal, double thickness) {
   cuts_.push_back(cut);
   const int axis = info_.axis;
   const double tilt = std::max(0.3, std::abs(Coord(plane_normal, axis)));
@@ -305,12 +313,14 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band,
     }
   }
   const int32_t gi0 = static_cast<int32_t>(lo_i), gj0 = static_cast<int32_t>(lo_j);
-  const int32_t gni = static_cast<int32_t>(hi_i) - gi0 + 1, gnj = static_cast<int32_t>(hi_j) - gj0 + 1;
+  const int32_t gni = static_cast<int32_t>(hi_i) - gi0 + 1,
+                gnj = static_cast<int32_t>(hi_j) - gj0 + 1;
   if (gi0 < 0 || gj0 < 0 || gni > ni_ || gnj > nj_) {
     std::vector<ChartColumn> grown(static_cast<size_t>(gni) * gnj);
     for (int32_t i = 0; i < ni_; ++i) {
       for (int32_t j = 0; j < nj_; ++j) {
-        grown[static_cast<size_t>(i - gi0) * gnj + (j - gj0)] = grid_[static_cast<size_t>(i) * nj_ + j];
+        grown[static_cast<size_t>(i - gi0) * gnj + (j - gj0)] =
+            grid_[static_cast<size_t>(i) * nj_ + j];
       }
     }
     for (ChartCut& c : cuts_) {
@@ -327,14 +337,14 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band,
   // Beyond the line: the other charts' side.
   for (int32_t i = 0; i < ni_; ++i) {
     for (int32_t j = 0; j < nj_; ++j) {
-      if (here.Side(i, j) < 0) Cell(i, j) = ChartColumn{};
+      if (here.Side(i, j) < kZipGap) Cell(i, j) = ChartColumn{};
     }
   }
   // Up to the line: the band's columns between the chart and the line, grown from the
   // chart's own towards the line, within the junction's extent and the line's own grid box.
   auto in_extent = [&](int32_t i, int32_t j) {
     const double s = here.Side(i, j);
-    if (s < 0 || s > band) return false;
+    if (s < kZipGap || s > band) return false;
     const Vec3 p = Point(i, j, plane_height(i, j));
     const double t = Dot(p - line.point, line.direction);
     return t >= line.t0 - 0.5 && t <= line.t1 + 0.5;
@@ -383,8 +393,7 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band,
 // are there (the mean of a plane's four values is its value at the corner); the slope, and
 // the height at a rim, come from the plane of least squares through the columns within two
 // of it.
-void Chart::Corner(int32_t i, int32_t j, double* h, double* length, double* gi,
-                   double* gj) const {
+void Chart::Corner(int32_t i, int32_t j, double* h, double* length, double* gi, double* gj) const {
   double sum = 0, len = 0;
   int n = 0;
   for (int di = -1; di <= 0; ++di) {
@@ -424,27 +433,7 @@ void Chart::Corner(int32_t i, int32_t j, double* h, double* length, double* gi,
   *h = n == 4 ? sum / 4 : plane;
 }
 
-std::pair<int, int> Chart::Snap(int32_t i, int32_t j, const std::vector<JunctionLine>& lines) const {
-  constexpr double kSnap = 0.5;  // grid units: a corner this near a cut goes onto its line
-  std::pair<int, int> best{-1, -1};
-  double nearest = kSnap;
-  for (const ChartCut& cut : cuts_) {
-    const double s = cut.Side(i - 0.5, j - 0.5);
-    if (s >= nearest) continue;
-    const JunctionLine& line = lines[cut.junction];
-    double h = 0, length = 0, gi = 0, gj = 0;
-    Corner(i, j, &h, &length, &gi, &gj);
-    const double t = Dot(Point(i - 0.5, j - 0.5, h) - line.point, line.direction);
-    const int k = std::clamp(static_cast<int>(std::lround((t - line.t0) / line.step)), 0,
-                             line.samples() - 1);
-    nearest = s;
-    best = {cut.junction, k};
-  }
-  return best;
-}
-
 void Chart::Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
-  const int axis = info_.axis;
   std::vector<uint32_t> corner(static_cast<size_t>((ni_ + 1) * (nj_ + 1)), UINT32_MAX);
   auto regular = [&](int32_t i, int32_t j) {
     uint32_t& id = corner[static_cast<size_t>(i) * (nj_ + 1) + j];
@@ -460,81 +449,126 @@ void Chart::Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
     }
     return id;
   };
-  auto sample = [&](int line, int k) {
-    JunctionLine& l = (*lines)[line];
-    if (l.vertex_of.empty()) l.vertex_of.assign(l.samples(), UINT32_MAX);
-    uint32_t& id = l.vertex_of[k];
-    if (id == UINT32_MAX) {
-      id = static_cast<uint32_t>(mesh->vertices.size());
-      mesh->vertices.push_back(l.At(k));
-      double t = 0;
-      for (double v : l.thickness) t += v;
-      mesh->vertex_thickness_voxels.push_back(
-          static_cast<float>(l.thickness.empty() ? 0 : t / l.thickness.size()));
-    }
-    return id;
-  };
-  auto area = [&](uint32_t a, uint32_t b, uint32_t c) {
-    return Norm(Cross(mesh->vertices[b] - mesh->vertices[a], mesh->vertices[c] - mesh->vertices[a]));
+  auto emit = [&](uint32_t a, uint32_t b, uint32_t c) {
+    mesh->faces.push_back({a, b, c});
+    mesh->face_piece.push_back(info_.piece);
   };
   for (int32_t i = 0; i < ni_; ++i) {
     for (int32_t j = 0; j < nj_; ++j) {
       if (!At(i, j)) continue;
-      // The square's corners counter-clockwise in (i, j): normals towards +axis.
-      const int32_t ci[4] = {i, i + 1, i + 1, i}, cj[4] = {j, j, j + 1, j + 1};
-      std::pair<int, int> snap[4];
-      bool any = false;
-      for (int k = 0; k < 4; ++k) {
-        snap[k] = cuts_.empty() ? std::pair{-1, -1} : Snap(ci[k], cj[k], *lines);
-        any |= snap[k].first >= 0;
+      // Counter-clockwise in (i, j): normals towards +axis.
+      const uint32_t a = regular(i, j), b = regular(i + 1, j), c = regular(i + 1, j + 1),
+                     d = regular(i, j + 1);
+      if (Norm2(mesh->vertices[a] - mesh->vertices[c]) <=
+          Norm2(mesh->vertices[b] - mesh->vertices[d])) {
+        emit(a, b, c);
+        emit(a, c, d);
+      } else {
+        emit(a, b, d);
+        emit(b, c, d);
       }
-      if (!any) {
-        const uint32_t a = regular(ci[0], cj[0]), b = regular(ci[1], cj[1]),
-                       c = regular(ci[2], cj[2]), d = regular(ci[3], cj[3]);
-        if (Norm2(mesh->vertices[a] - mesh->vertices[c]) <=
-            Norm2(mesh->vertices[b] - mesh->vertices[d])) {
-          mesh->faces.push_back({a, b, c});
-          mesh->faces.push_back({a, c, d});
-        } else {
-          mesh->faces.push_back({a, b, d});
-          mesh->faces.push_back({b, c, d});
+    }
+  }
+  // Each cut's line is zipped to the chart's rim facing it: the rim's corners along the line
+  // (a staircase that runs the line's way, so its corners come in order along it) and the
+  // line's samples over the same stretch, joined by a strip of triangles, each taking the
+  // shorter of the two next diagonals.
+  for (const ChartCut& cut : cuts_) {
+    JunctionLine& line = (*lines)[cut.junction];
+    if (line.vertex_of.empty()) line.vertex_of.assign(line.samples(), UINT32_MAX);
+    auto sample = [&](int k) {
+      uint32_t& id = line.vertex_of[k];
+      if (id == UINT32_MAX) {
+        id = static_cast<uint32_t>(mesh->vertices.size());
+        mesh->vertices.push_back(line.At(k));
+        double t = 0;
+        for (double v : line.thickness) t += v;
+        mesh->vertex_thickness_voxels.push_back(
+            static_cast<float>(line.thickness.empty() ? 0 : t / line.thickness.size()));
+      }
+      return id;
+    };
+    // Rim edges facing the line: the column across them is missing and nearer the line. Each
+    // runs counter-clockwise around its column, so they link head to tail into chains along
+    // the rim.
+    std::map<std::pair<int32_t, int32_t>, std::pair<int32_t, int32_t>> next_corner;
+    std::set<std::pair<int32_t, int32_t>> heads;
+    for (int32_t i = 0; i < ni_; ++i) {
+      for (int32_t j = 0; j < nj_; ++j) {
+        if (!At(i, j) || cut.Side(i, j) > kZipReach) continue;
+        // (neighbour, edge from, edge to): below, right, above, left.
+        const std::array<std::array<int32_t, 6>, 4> sides = {{{i, j - 1, i, j, i + 1, j},
+                                                              {i + 1, j, i + 1, j, i + 1, j + 1},
+                                                              {i, j + 1, i + 1, j + 1, i, j + 1},
+                                                              {i - 1, j, i, j + 1, i, j}}};
+        for (const auto& e : sides) {
+          if (At(e[0], e[1]) || cut.Side(e[0], e[1]) >= cut.Side(i, j)) continue;
+          next_corner[{e[2], e[3]}] = {e[4], e[5]};
+          heads.insert({e[4], e[5]});
         }
-        mesh->face_piece.push_back(info_.piece);
-        mesh->face_piece.push_back(info_.piece);
-        continue;
       }
-      // The polygon with the line's samples between two snapped corners of one line.
-      std::vector<uint32_t> polygon;
-      int first_regular = -1;
-      for (int k = 0; k < 4; ++k) {
-        const auto [line, s] = snap[k];
-        if (line < 0) {
-          if (first_regular < 0) first_regular = static_cast<int>(polygon.size());
-          polygon.push_back(regular(ci[k], cj[k]));
-        } else {
-          polygon.push_back(sample(line, s));
-        }
-        const auto [next_line, ns] = snap[(k + 1) % 4];
-        if (line >= 0 && next_line == line && std::abs(ns - s) > 1) {
-          const int step = ns > s ? 1 : -1;
-          for (int m = s + step; m != ns; m += step) polygon.push_back(sample(line, m));
-        }
+    }
+    for (const auto& [start, unused] : next_corner) {
+      if (heads.count(start) != 0) continue;         // inside a chain
+      std::vector<std::pair<double, uint32_t>> rim;  // (t, vertex) along the chain
+      auto at = start;
+      for (size_t guard = 0; guard <= next_corner.size(); ++guard) {
+        const uint32_t v = regular(at.first, at.second);
+        rim.push_back({Dot(mesh->vertices[v] - line.point, line.direction), v});
+        const auto it = next_corner.find(at);
+        if (it == next_corner.end()) break;
+        at = it->second;
       }
-      std::vector<uint32_t> p;
-      for (uint32_t v : polygon) {
-        if (p.empty() || p.back() != v) p.push_back(v);
-      }
-      while (p.size() > 1 && p.front() == p.back()) p.pop_back();
-      if (p.size() < 3 || first_regular < 0) continue;
-      // A fan from a corner that stayed (the square is convex, its snapped side on the line).
-      const uint32_t apex = polygon[first_regular];
-      const size_t at = std::find(p.begin(), p.end(), apex) - p.begin();
-      for (size_t m = 1; m + 1 < p.size(); ++m) {
-        const uint32_t b = p[(at + m) % p.size()], c = p[(at + m + 1) % p.size()];
-        if (area(apex, b, c) < 1e-6) continue;
-        mesh->faces.push_back({apex, b, c});
-        mesh->face_piece.push_back(info_.piece);
-      }
+      ZipToLine(rim, line, sample, emit, mesh);
+    }
+  }
+}
+
+void Chart::ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const JunctionLine& line,
+                      const std::function<uint32_t(int)>& sample,
+                      const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
+                      TriangleMesh* mesh) {
+  if (rim.size() < 2) return;
+  // The chain runs as the chart's faces' boundary edges do; the strip takes each such edge
+  // reversed. Along the line the chain may run either way.
+  const bool reversed = rim.front().first > rim.back().first;
+  if (reversed) std::reverse(rim.begin(), rim.end());
+  const int k0 = std::clamp(static_cast<int>(std::ceil((rim.front().first - line.t0) / line.step)),
+                            0, line.samples() - 1);
+  const int k1 = std::clamp(static_cast<int>(std::floor((rim.back().first - line.t0) / line.step)),
+                            0, line.samples() - 1);
+  if (k1 < k0) return;
+  // The strip, oriented as the chart's faces are: (rim r + 1, rim r, sample) on the chain's
+  // own run.
+  auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+    const Vec3 n =
+        Cross(mesh->vertices[b] - mesh->vertices[a], mesh->vertices[c] - mesh->vertices[a]);
+    if (Norm2(n) < 1e-12) return;
+    if (reversed) std::swap(b, c);
+    emit(b, a, c);
+  };
+  size_t r = 0;
+  int k = k0;
+  // The ends: the rim's corners before the first sample fan to it, and after the last.
+  while (r + 1 < rim.size() && rim[r + 1].first <= line.t0 + k0 * line.step) {
+    add(rim[r].second, rim[r + 1].second, sample(k0));
+    ++r;
+  }
+  while (r + 1 < rim.size() || k < k1) {
+    const bool can_rim = r + 1 < rim.size(), can_line = k < k1;
+    bool take_rim = can_rim;
+    if (can_rim && can_line) {
+      // The shorter diagonal: rim[r + 1] to sample k, or rim[r] to sample k + 1.
+      const double dr = Norm2(mesh->vertices[rim[r + 1].second] - line.At(k));
+      const double dl = Norm2(mesh->vertices[rim[r].second] - line.At(k + 1));
+      take_rim = dr <= dl;
+    }
+    if (take_rim) {
+      add(rim[r].second, rim[r + 1].second, sample(k));
+      ++r;
+    } else {
+      add(rim[r].second, sample(k + 1), sample(k));
+      ++k;
     }
   }
 }

@@ -6,6 +6,7 @@
 #define SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_CHART_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/types.h"
@@ -19,7 +20,7 @@ namespace sheetmesh {
 // somewhere within the voxel beyond its last centre.
 struct ChartColumn {
   bool present = false;
-  bool filled = false;  // added up to a junction line: its walls the sheet's plane's there
+  bool filled = false;     // added up to a junction line: its walls the sheet's plane's there
   int32_t lo = 0, hi = 0;  // first and last voxel centre of the run
   double wall_lo = 0, wall_hi = 0;
   double mid() const { return 0.5 * (wall_lo + wall_hi); }
@@ -94,18 +95,23 @@ class Chart {
     }
   }
 
-  // Appends the chart's vertices and faces to `mesh`; corners on or beyond a cut snap to
-  // their junction's samples (shared with the other charts there, made when first used).
+  // Appends the chart's vertices and faces to `mesh`; the rim facing each cut is joined to
+  // its junction's samples (shared with the other charts there, made when first used) by a
+  // strip of triangles.
   void Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh);
 
  private:
+  // Joins a chain of rim vertices (t along the line, vertex) to the line's samples over the
+  // same stretch by a strip, each step taking the shorter next diagonal.
+  static void ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const JunctionLine& line,
+                        const std::function<uint32_t(int)>& sample,
+                        const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
+                        TriangleMesh* mesh);
   bool HasAll4(int32_t i, int32_t j) const;
   void Columns(std::vector<Index3> voxels);
   void SmoothWalls();
   ChartColumn& Cell(int32_t i, int32_t j) { return grid_[static_cast<size_t>(i) * nj_ + j]; }
   void Corner(int32_t i, int32_t j, double* h, double* length, double* gi, double* gj) const;
-  // The junction sample corner (i, j) snaps to, or -1: (line, sample).
-  std::pair<int, int> Snap(int32_t i, int32_t j, const std::vector<JunctionLine>& lines) const;
 
   MidSurfaceChart info_;
   int32_t i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;

@@ -21,6 +21,9 @@ struct JunctionLine {
   std::vector<int32_t> charts;       // the charts that end on it
   std::vector<uint32_t> vertex_of;   // per sample
   std::vector<double> thickness;     // per chart in `charts`: its thickness at the line
+  // Per chart: its piece and its plane at the line (the planes cross on it).
+  std::vector<int32_t> pieces;
+  std::vector<Vec3> plane_points, plane_normals;
   int samples() const { return static_cast<int>(std::floor((t1 - t0) / step)) + 1; }
   Vec3 At(int k) const { return point + direction * (t0 + k * step); }
 };

@@ -184,25 +184,19 @@ bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
 
 }  // namespace
 
-std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
-                                     const std::vector<Index3>& loose_in, const Dims& dims,
-                                     const JunctionOptions& options, int32_t* next_piece) {
-  std::vector<Index3> loose = loose_in;
-  std::map<std::pair<int32_t, int32_t>, Contact> contacts = FindContacts(*charts, loose, dims);
-  // Merge bands out, then the contacts again.
-  std::vector<int32_t> bands;
-  for (int32_t c = 0; c < static_cast<int32_t>(charts->size()); ++c) {
-    if (MergeBand(c, *charts, contacts, options)) bands.push_back(c);
-  }
-  const bool dropped = !bands.empty();
-  for (int32_t c : bands) {
-    (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { loose.push_back(p); });
-    (*charts)[c].reset();
-  }
-  if (dropped) {
-    charts->erase(std::remove(charts->begin(), charts->end(), nullptr), charts->end());
-    contacts = FindContacts(*charts, loose, dims);
-  }
+// The junction lines of `contacts`: per contact the line where the two charts' planes near it
+// cross, lines along one another merged; with each line the planes and thickness of its
+// charts.
+struct LineSet {
+  std::vector<JunctionLine> lines;
+  std::vector<std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>>> planes;  // per line
+  std::vector<std::vector<double>> thickness;
+};
+
+LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
+                  const std::map<std::pair<int32_t, int32_t>, Contact>& contacts,
+                  const Dims& dims, const JunctionOptions& options) {
+  const std::vector<std::unique_ptr<Chart>>* charts = &charts_in;
   // Each contact's line: where the two charts' planes near it cross.
   std::vector<Found> found;
   for (const auto& [pair, contact] : contacts) {
@@ -285,9 +279,10 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     found.push_back(f);
   }
   // Lines along one another (an X's four halves meet pairwise) are one.
-  std::vector<JunctionLine> lines;
-  std::vector<std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>>> planes;  // per line
-  std::vector<std::vector<double>> thickness;
+  LineSet set;
+  std::vector<JunctionLine>& lines = set.lines;
+  auto& planes = set.planes;
+  auto& thickness = set.thickness;
   std::vector<uint64_t> weight;
   for (const Found& f : found) {
     int merged = -1;
@@ -344,13 +339,64 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     for (size_t c = 0; c < charts->size(); ++c) { const MidSurfaceChart& i = (*charts)[c]->info(); fprintf(stderr, "chart %zu piece %d voxels %llu axis %d normal (%.2f %.2f %.2f)\n", c, i.piece, (unsigned long long)i.voxels, i.axis, i.normal.x, i.normal.y, i.normal.z); }
     for (const Found& f : found) fprintf(stderr, "found %d-%d contact %llu deg %.1f\n", f.line.charts[0], f.line.charts[1], (unsigned long long)f.contact, f.line.degrees);
   }
-  // Each line cuts its charts: split where it runs through one, then cut and fill each.
+  return set;
+}
+
+std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
+                                     const std::vector<Index3>& loose_in, const Dims& dims,
+                                     const JunctionOptions& options, int32_t* next_piece) {
+  std::vector<Index3> loose = loose_in;
+  // Lines first, and the charts they run through split there (a chart that is two sheets
+  // folded at a T gives a line between its planes' mixture and the next: once split, its
+  // parts' planes give the line again, better), until none is split.
+  LineSet set;
+  for (int round = 0;; ++round) {
+    std::map<std::pair<int32_t, int32_t>, Contact> contacts = FindContacts(*charts, loose, dims);
+    // Merge bands out, then the contacts again.
+    std::vector<int32_t> bands;
+    for (int32_t c = 0; c < static_cast<int32_t>(charts->size()); ++c) {
+      if (MergeBand(c, *charts, contacts, options)) bands.push_back(c);
+    }
+    if (!bands.empty()) {
+      for (int32_t c : bands) {
+        (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { loose.push_back(p); });
+        (*charts)[c].reset();
+      }
+      charts->erase(std::remove(charts->begin(), charts->end(), nullptr), charts->end());
+      contacts = FindContacts(*charts, loose, dims);
+    }
+    set = MakeLines(*charts, contacts, dims, options);
+    if (round == 3) break;
+    bool split = false;
+    for (size_t l = 0; l < set.lines.size(); ++l) {
+      for (const auto& [c, plane] : set.planes[l]) {
+        Chart& chart = *(*charts)[c];
+        const ChartCut trace = chart.Trace(set.lines[l], static_cast<int>(l), plane.first);
+        uint64_t kept = 0, beyond = 0;
+        chart.Sides(trace, &kept, &beyond);
+        if (beyond * 10 <= kept + beyond || beyond < 32) continue;
+        std::vector<Index3> rest = chart.TakeBeyond(trace);
+        if (rest.size() < 3) continue;
+        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++));
+        split = true;
+      }
+    }
+    if (!split) break;
+  }
+  std::vector<JunctionLine>& lines = set.lines;
+  // Each line cuts its charts and fills them up to it.
   constexpr double kBand = 12, kMaxBand = 64;
   for (size_t l = 0; l < lines.size(); ++l) {
     JunctionLine& line = lines[l];
-    std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>> cuts = planes[l];
-    std::vector<double> thick = thickness[l];
-    const size_t given = cuts.size();
+    std::vector<std::pair<int32_t, std::pair<Vec3, Vec3>>> cuts = set.planes[l];
+    std::vector<double> thick = set.thickness[l];
+    // Each plane turned the least to hold the line (merged lines lie a little off the
+    // planes of the pairs they came from): the sheets meet on it at their planes' angle.
+    for (auto& [chart, plane] : cuts) {
+      const Vec3 n = plane.second - line.direction * Dot(plane.second, line.direction);
+      if (Norm2(n) > 1e-12) plane = {line.point, Normalized(n)};
+    }
+    const size_t given = 0;  // charts split above
     for (size_t k = 0; k < given; ++k) {
       Chart& chart = *(*charts)[cuts[k].first];
       const ChartCut trace = chart.Trace(line, static_cast<int>(l), cuts[k].second.first);
@@ -384,6 +430,9 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
       chart.Cut(trace, line, band, cuts[k].second.first, cuts[k].second.second, thick[k]);
       line.charts.push_back(cuts[k].first);
       line.thickness.push_back(thick[k]);
+      line.pieces.push_back(chart.info().piece);
+      line.plane_points.push_back(cuts[k].second.first);
+      line.plane_normals.push_back(cuts[k].second.second);
     }
   }
   return lines;

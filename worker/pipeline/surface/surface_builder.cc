@@ -225,6 +225,10 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
     }
     return t;
   });
+  // The sheets meet at their planes' angle: what decimation and the fits moved near a
+  // junction goes back onto its piece's plane there.
+  const uint64_t flattened = FlattenAtJunctions(&mesh, mid.junctions);
+  if (getenv("SM_DEBUG_JUNCTIONS")) fprintf(stderr, "flattened %llu (lines %zu, pieces %zu)\n", (unsigned long long)flattened, mid.junctions.size(), mid.junctions.empty() ? 0 : mid.junctions[0].pieces.size());
   out.components = sheet.components.count();
   out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   SM_RETURN_IF_ERROR(progress.Update(1.0));

@@ -18,22 +18,11 @@
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/surface/mid_surface_chart.h"
 #include "worker/pipeline/surface/mid_surface_junction_line.h"
 #include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {
-
-// One piece's chart: the axis its height field runs along and its plane's fit.
-struct MidSurfaceChart {
-  int32_t piece = 0;
-  int axis = 2;             // 0, 1, 2: x, y, z
-  Vec3 normal;              // of the least-squares plane of its voxels (unit)
-  Vec3 centroid;            // of its voxels
-  uint64_t voxels = 0;      // of the piece
-  uint64_t columns = 0;     // columns with voxels
-  uint64_t uncovered = 0;   // voxels in second runs of a column (a fold, a touching speck)
-  double max_tilt_degrees = 0;  // the steepest local tilt from the axis, at a vertex
-};
 
 struct MidSurface {
   // Vertices at the columns' corners (voxel coordinates), two faces per column, oriented

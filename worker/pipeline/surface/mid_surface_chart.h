@@ -11,7 +11,6 @@
 
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
-#include "worker/pipeline/surface/mid_surface.h"
 #include "worker/pipeline/surface/mid_surface_junction_line.h"
 
 namespace sheetmesh {
@@ -25,6 +24,18 @@ struct ChartColumn {
   double wall_lo = 0, wall_hi = 0;
   double mid() const { return 0.5 * (wall_lo + wall_hi); }
   double length() const { return wall_hi - wall_lo; }
+};
+
+// One piece's chart: the axis its height field runs along and its plane's fit.
+struct MidSurfaceChart {
+  int32_t piece = 0;
+  int axis = 2;             // 0, 1, 2: x, y, z
+  Vec3 normal;              // of the least-squares plane of its voxels (unit)
+  Vec3 centroid;            // of its voxels
+  uint64_t voxels = 0;      // of the piece
+  uint64_t columns = 0;     // columns with voxels
+  uint64_t uncovered = 0;   // voxels in second runs of a column (a fold, a touching speck)
+  double max_tilt_degrees = 0;  // the steepest local tilt from the axis, at a vertex
 };
 
 // A junction's trace in one chart: the line in the chart's (i, j) grid coordinates and the

@@ -87,8 +87,8 @@ std::string SetCandidate(const ParamSpec& s, const pb::FieldDescriptor* f, pb::M
       return v ? "true" : "false";
     }
     case ParamType::kInteger: {
-      const int64_t tries[] = {3, 1 << 30, 1};
-      if (k >= 3) return "";
+      const int64_t tries[] = {3, 1 << 30, 1, 64};
+      if (k >= 4) return "";
       const int64_t v = tries[k];
       if (!s.range.Contains(double(v)) || (d && std::get<int64_t>(*d) == v)) return "skip";
       if (f->cpp_type() == T::CPPTYPE_INT32) r->SetInt32(m, f, int32_t(v));

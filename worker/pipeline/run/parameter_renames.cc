@@ -40,6 +40,7 @@ const std::vector<Renamed>& RenamedParameters() {
       {"lloyd_tol", "surface.lloyd_tol"},
       {"fold_angle", "surface.fold_angle"},
       {"method", "surface.method"},
+      {"mesher", "surface.mesher"},
       {"placement", "surface.placement"},
       {"thickness_measure", "surface.thickness_measure"},
       {"rim", "surface.rim"},

@@ -395,7 +395,7 @@ std::vector<ParamRow> SurfaceRows() {
                          {"auto", ScvdDomain::kAuto}},
                         "what the SCVD grows over: voxels, columns across the thickness, or auto "
                         "(columns where cells would stack)"));
-  rows.push_back(Choice("surface.method", SM_MEMBER(surface.method),
+  rows.push_back(Choice("surface.mesher", SM_MEMBER(surface.method),
                         {{"scvd", SurfaceMethod::kScvd}, {"midsurface", SurfaceMethod::kMid}},
                         "how a sheet's triangles are made: the SCVD's dual triangles (the "
                         "paper), or its mid-surface at voxel resolution with the aperture, "

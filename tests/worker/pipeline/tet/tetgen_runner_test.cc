@@ -54,7 +54,8 @@ TEST(TetgenRunnerTest, TetgenThatHangsIsKilledAtTheTimeLimit) {
   o.tetgen.program = FakeTetgen(tmp, "sleep 30");
   o.tetgen.time_limit_seconds = 0.5;
   EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
-              StatusIs(absl::StatusCode::kDeadlineExceeded, HasSubstr("time limit of 0.5 s")));
+              StatusIs(absl::StatusCode::kDeadlineExceeded,
+                       HasSubstr("tet.time_limit_seconds = 0.5 s while TetGen ran")));
 }
 
 TEST(TetgenRunnerTest, TetgenThatIsKilledOrFailsGivesTheDocumentedErrors) {

@@ -123,7 +123,7 @@ def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract)
     truth = json.loads(pathlib.Path(str(vol) + ".truth.json").read_text())
     out = folder / ("out_%d%s_s%d_r%g_%s" % (angle, kind, seed, r, method))
     cmd = [cli, "run" if extract else "surface", str(vol), "-o", str(out), "--r=%g" % r,
-           "--surface_method=" + method, "--surface_representation=sheet",
+           "--surface_mesher=" + method, "--surface_representation=sheet",
            "--similarity_hausdorff=false"]
     if volume_mesh:
         cmd.append("--volume_mesh")
@@ -139,7 +139,7 @@ def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract)
     if volume_mesh and "volume_mesh" in report:
         v = report["volume_mesh"]
         row["plc_wedge"] = round(v["input_wedges"]["narrowest_degrees"], 2)
-        row["min_dihedral"] = round(v["quality"]["min_dihedral"]["min"], 2)
+        row["min_dihedral"] = round(v["quality"]["min_dihedral_degrees"]["min"], 2)
     return row
 
 

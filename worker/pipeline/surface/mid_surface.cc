@@ -5,9 +5,8 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
-#include <cstdio>
-#include <cstdlib>
 #include <tuple>
 
 #include "absl/container/flat_hash_map.h"
@@ -26,9 +25,7 @@ constexpr double kPi = 3.14159265358979323846;
 // A voxel in a piece's chart frame: (i, j) across the axis, h along it.
 struct ChartVoxel {
   int32_t i, j, h;
-  bool operator<(const ChartVoxel& o) const {
-    return std::tie(i, j, h) < std::tie(o.i, o.j, o.h);
-  }
+  bool operator<(const ChartVoxel& o) const { return std::tie(i, j, h) < std::tie(o.i, o.j, o.h); }
 };
 
 uint64_t Key(int32_t i, int32_t j) {
@@ -101,7 +98,6 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
   // A single layer: nothing to split (most pieces).
   uint64_t stacked = 0;
   for (const auto& [key, range] : column) stacked += range.second - range.first > 1;
-  if (getenv("SM_DEBUG_JUNCTIONS")) fprintf(stderr, "split: %zu voxels, %zu columns, %llu stacked, axis %d\n", voxels.size(), column.size(), (unsigned long long)stacked, axis);
   if (stacked < std::max<uint64_t>(16, column.size() / 50)) return {std::move(voxels)};
   std::vector<int32_t> lengths;
   for (const Run& r : runs) lengths.push_back(r.hi - r.lo + 1);
@@ -165,19 +161,9 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
     std::vector<Index3>& out = joins[r] || merged ? *junction : layers[find(r)];
     for (int32_t h = run.lo; h <= run.hi; ++h) {
       const Vec3 p = FromFrame(run.i, run.j, h, axis);
-      out.push_back({static_cast<int32_t>(p.x), static_cast<int32_t>(p.y),
-                     static_cast<int32_t>(p.z)});
+      out.push_back(
+          {static_cast<int32_t>(p.x), static_cast<int32_t>(p.y), static_cast<int32_t>(p.z)});
     }
-  }
-  if (getenv("SM_DEBUG_JUNCTIONS")) {
-    for (auto& [root, layer] : layers) {
-      std::vector<int32_t> l;
-      for (uint32_t r = 0; r < runs.size(); ++r) if (!joins[r] && find(r) == root) l.push_back(runs[r].hi - runs[r].lo + 1);
-      std::sort(l.begin(), l.end());
-      double mean = 0; for (int32_t x : l) mean += x; mean /= std::max<size_t>(1, l.size());
-      fprintf(stderr, "layer %u: %zu voxels, joined to %zu, median %d mean %.2f\n", root, layer.size(), joined_to.count(root) ? joined_to[root].size() : 0, l.empty() ? 0 : l[l.size()/2], mean);
-    }
-    fprintf(stderr, "junction voxels %zu\n", junction->size());
   }
   std::vector<std::vector<Index3>> kept;
   for (auto& [root, layer] : layers) {
@@ -194,6 +180,99 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
     return std::tie(a[0].z, a[0].y, a[0].x) < std::tie(b[0].z, b[0].y, b[0].x);
   });
   return kept;
+}
+
+double Coord(const Vec3& p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
+
+// Clips `mesh` to the box [-0.5, n - 0.5] on each axis: a vertex within kOnFace of a face's
+// plane is put on it, a triangle across it cut there (its cut's vertices shared by the
+// triangles on the edge, their thickness interpolated), the parts outside dropped. The
+// vertices left unused go; the lines' sample vertices follow.
+void ClipMeshToBox(const Dims& dims, std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
+  constexpr double kOnFace = 0.2;  // voxels
+  const double extent[3] = {static_cast<double>(dims.nx), static_cast<double>(dims.ny),
+                            static_cast<double>(dims.nz)};
+  std::vector<Vec3>& v = mesh->vertices;
+  std::vector<float>& thick = mesh->vertex_thickness_voxels;
+  for (int k = 0; k < 3; ++k) {
+    for (const double side : {-1.0, 1.0}) {
+      const double bound = side < 0 ? -0.5 : extent[k] - 0.5;
+      // Signed distance outside the face (> 0: outside).
+      auto out = [&](uint32_t x) { return side * (Coord(v[x], k) - bound); };
+      for (size_t x = 0; x < v.size(); ++x) {
+        if (std::abs(out(static_cast<uint32_t>(x))) < kOnFace) {
+          (k == 0 ? v[x].x : k == 1 ? v[x].y : v[x].z) = bound;
+        }
+      }
+      std::map<std::pair<uint32_t, uint32_t>, uint32_t> cut_at;
+      auto cut = [&](uint32_t a, uint32_t b) {
+        const auto key = std::minmax(a, b);
+        const auto it = cut_at.find(key);
+        if (it != cut_at.end()) return it->second;
+        const double da = out(a), db = out(b);
+        const double t = da / (da - db);
+        const uint32_t id = static_cast<uint32_t>(v.size());
+        Vec3 p = v[a] + (v[b] - v[a]) * t;
+        (k == 0 ? p.x : k == 1 ? p.y : p.z) = bound;
+        v.push_back(p);
+        thick.push_back(static_cast<float>(thick[a] + (thick[b] - thick[a]) * t));
+        cut_at[key] = id;
+        return id;
+      };
+      std::vector<Face> faces;
+      std::vector<int32_t> piece;
+      for (size_t f = 0; f < mesh->faces.size(); ++f) {
+        const Face& t = mesh->faces[f];
+        int outside = 0;
+        for (uint32_t x : t) outside += out(x) > 0;
+        const int32_t p = mesh->face_piece.empty() ? 0 : mesh->face_piece[f];
+        if (outside == 0) {
+          faces.push_back(t);
+          piece.push_back(p);
+          continue;
+        }
+        if (outside == 3) continue;
+        // The polygon inside (Sutherland-Hodgman against one plane), as a fan.
+        std::vector<uint32_t> poly;
+        for (int e = 0; e < 3; ++e) {
+          const uint32_t a = t[e], b = t[(e + 1) % 3];
+          const bool a_in = out(a) <= 0, b_in = out(b) <= 0;
+          if (a_in) poly.push_back(a);
+          if (a_in != b_in && out(a) != 0 && out(b) != 0) poly.push_back(cut(a, b));
+        }
+        for (size_t e = 1; e + 1 < poly.size(); ++e) {
+          const Face g = {poly[0], poly[e], poly[e + 1]};
+          if (g[0] == g[1] || g[1] == g[2] || g[0] == g[2]) continue;
+          if (Norm2(Cross(v[g[1]] - v[g[0]], v[g[2]] - v[g[0]])) < 1e-12) continue;
+          faces.push_back(g);
+          piece.push_back(p);
+        }
+      }
+      mesh->faces = std::move(faces);
+      mesh->face_piece = std::move(piece);
+    }
+  }
+  // Compact.
+  std::vector<uint32_t> index(v.size(), UINT32_MAX);
+  std::vector<Vec3> kept;
+  std::vector<float> kept_thick;
+  for (Face& t : mesh->faces) {
+    for (uint32_t& x : t) {
+      if (index[x] == UINT32_MAX) {
+        index[x] = static_cast<uint32_t>(kept.size());
+        kept.push_back(v[x]);
+        kept_thick.push_back(thick[x]);
+      }
+      x = index[x];
+    }
+  }
+  v = std::move(kept);
+  thick = std::move(kept_thick);
+  for (JunctionLine& l : *lines) {
+    for (uint32_t& x : l.vertex_of) {
+      if (x != UINT32_MAX) x = index[x];
+    }
+  }
 }
 
 }  // namespace
@@ -266,18 +345,20 @@ absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
         SplitLayers(std::move(voxels[p]), min_layer, &out.junction_voxels);
     for (size_t k = 0; k < layers.size(); ++k) {
       // The first layer keeps the piece's id; the others are new pieces.
-      charts.push_back(std::make_unique<Chart>(std::move(layers[k]), k == 0 ? p : next_piece++));
+      charts.push_back(
+          std::make_unique<Chart>(std::move(layers[k]), k == 0 ? p : next_piece++, set.dims()));
     }
   }
   // Voxels in no chart: labelled none, and the runs the charts did not keep.
   for (const Index3& v : unlabelled) out.junction_voxels.push_back(v);
-  out.junctions = JoinCharts(&charts, out.junction_voxels, set.dims(), JunctionOptions{},
-                             &next_piece);
+  out.junctions =
+      JoinCharts(&charts, out.junction_voxels, set.dims(), JunctionOptions{}, &next_piece);
   SM_RETURN_IF_ERROR(progress.Update(0.7));
   for (const std::unique_ptr<Chart>& chart : charts) {
     chart->Mesh(&out.junctions, &out.mesh);
     out.charts.push_back(chart->info());
   }
+  ClipMeshToBox(set.dims(), &out.junctions, &out.mesh);
   TriangleMesh& m = out.mesh;
   m.face_thickness_voxels.resize(m.faces.size());
   for (size_t f = 0; f < m.faces.size(); ++f) {

@@ -44,7 +44,7 @@ void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* norma
   *normal = Normalized(Vec3(n.x(), n.y(), n.z()));
 }
 
-Chart::Chart(std::vector<Index3> voxels, int32_t piece) {
+Chart::Chart(std::vector<Index3> voxels, int32_t piece, const Dims& dims) : dims_(dims) {
   info_.piece = piece;
   info_.voxels = voxels.size();
   if (voxels.empty()) return;
@@ -57,6 +57,7 @@ Chart::Chart(std::vector<Index3> voxels, int32_t piece) {
   info_.axis = static_cast<int>(std::max_element(n, n + 3) - n);
   Columns(std::move(voxels));
   SmoothWalls();
+  ExtendToBox();
 }
 
 Vec3 Chart::Point(double i, double j, double h) const {
@@ -79,6 +80,12 @@ const ChartColumn* Chart::At(int32_t i, int32_t j) const {
   if (i < 0 || j < 0 || i >= ni_ || j >= nj_) return nullptr;
   const ChartColumn& c = grid_[static_cast<size_t>(i) * nj_ + j];
   return c.present ? &c : nullptr;
+}
+
+bool Chart::InBox(int32_t i, int32_t j) const {
+  const int64_t extent[3] = {dims_.nx, dims_.ny, dims_.nz};
+  const int64_t a = i0_ + i, b = j0_ + j;
+  return a >= 0 && b >= 0 && a < extent[(info_.axis + 1) % 3] && b < extent[(info_.axis + 2) % 3];
 }
 
 bool Chart::HasAll4(int32_t i, int32_t j) const {
@@ -289,6 +296,122 @@ std::vector<Index3> Chart::TakeBeyond(const ChartCut& cut) {
   return out;
 }
 
+void Chart::Grow(int32_t lo_i, int32_t lo_j, int32_t hi_i, int32_t hi_j) {
+  const int32_t gi0 = std::min(0, lo_i), gj0 = std::min(0, lo_j);
+  const int32_t gni = std::max(ni_ - 1, hi_i) - gi0 + 1, gnj = std::max(nj_ - 1, hi_j) - gj0 + 1;
+  if (gi0 == 0 && gj0 == 0 && gni == ni_ && gnj == nj_) return;
+  std::vector<ChartColumn> grown(static_cast<size_t>(gni) * gnj);
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      grown[static_cast<size_t>(i - gi0) * gnj + (j - gj0)] =
+          grid_[static_cast<size_t>(i) * nj_ + j];
+    }
+  }
+  for (ChartCut& c : cuts_) {
+    c.ci -= gi0;
+    c.cj -= gj0;
+  }
+  grid_ = std::move(grown);
+  i0_ += gi0;
+  j0_ += gj0;
+  ni_ = gni;
+  nj_ = gnj;
+}
+
+void Chart::ExtendToBox() {
+  constexpr int32_t kFitRadius = 4;  // columns: the neighbourhood a cut-off column's fit takes
+  constexpr int kRings = 3;          // columns added beyond the cut-off ones
+  constexpr double kBeyond = 4;      // voxels past the face an added column may lie
+  const int axis = info_.axis;
+  const int64_t extent[3] = {dims_.nx, dims_.ny, dims_.nz};
+  const int32_t n = static_cast<int32_t>(extent[axis]);
+  const int32_t box_i = static_cast<int32_t>(extent[(axis + 1) % 3]);
+  const int32_t box_j = static_cast<int32_t>(extent[(axis + 2) % 3]);
+  auto cut_off = [&](const ChartColumn& c) {
+    return c.present && !c.filled && (c.lo == 0 || c.hi == n - 1);
+  };
+  // Each cut-off column's neighbourhood: the plane of its uncut neighbours' mid-points
+  // (h = a + b di + c dj about the column) and their mean length.
+  struct Fit {
+    int32_t i = 0, j = 0;
+    double a = 0, b = 0, c = 0, length = 0;
+  };
+  std::vector<Fit> fits;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      if (!cut_off(Cell(i, j))) continue;
+      Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      double length = 0;
+      int count = 0;
+      for (int32_t di = -kFitRadius; di <= kFitRadius; ++di) {
+        for (int32_t dj = -kFitRadius; dj <= kFitRadius; ++dj) {
+          const ChartColumn* o = At(i + di, j + dj);
+          if (o == nullptr || o->filled || cut_off(*o)) continue;
+          const Eigen::Vector3d x(1, di, dj);
+          A += x * x.transpose();
+          rhs += x * o->mid();
+          length += o->length();
+          ++count;
+        }
+      }
+      if (count < 6) continue;
+      Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
+      if (lu.rank() < 3) continue;
+      const Eigen::Vector3d x = lu.solve(rhs);
+      fits.push_back({i, j, x(0), x(1), x(2), length / count});
+    }
+  }
+  if (fits.empty()) return;
+  // The cut-off columns: the wall the image shows kept, the one at the box put the sheet's
+  // thickness there beyond it.
+  for (const Fit& fit : fits) {
+    ChartColumn& c = Cell(fit.i, fit.j);
+    if (c.lo == 0 && c.hi == n - 1) {
+      c.wall_lo = fit.a - 0.5 * fit.length;
+      c.wall_hi = fit.a + 0.5 * fit.length;
+    } else if (c.lo == 0) {
+      c.wall_lo = c.wall_hi - fit.length;
+    } else {
+      c.wall_hi = c.wall_lo + fit.length;
+    }
+  }
+  const int32_t old_i0 = i0_, old_j0 = j0_;
+  Grow(std::max(-i0_, -kRings), std::max(-j0_, -kRings),
+       std::min(box_i - 1 - i0_, ni_ - 1 + kRings), std::min(box_j - 1 - j0_, nj_ - 1 + kRings));
+  for (Fit& fit : fits) {
+    fit.i += old_i0 - i0_;
+    fit.j += old_j0 - j0_;
+  }
+  // Rings of columns beyond them on their fit's plane, towards the face the sheet leaves by:
+  // the mesh runs past the box, and the clip to the box ends it on the face.
+  std::vector<Fit> front = std::move(fits);
+  for (int ring = 0; ring < kRings && !front.empty(); ++ring) {
+    std::vector<Fit> next;
+    for (const Fit& fit : front) {
+      for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+        const int32_t a = fit.i + di, b = fit.j + dj;
+        if (a < 0 || b < 0 || a >= ni_ || b >= nj_ || At(a, b) != nullptr) continue;
+        const double h = fit.a + fit.b * di + fit.c * dj;
+        const bool low = h < fit.a && h < 0.5 && h > -0.5 - kBeyond;
+        const bool high = h > fit.a && h > n - 1.5 && h < n - 0.5 + kBeyond;
+        if (!low && !high) continue;
+        ChartColumn& c = Cell(a, b);
+        c.present = c.filled = true;
+        c.lo = c.hi = static_cast<int32_t>(std::lround(h));
+        c.wall_lo = h - 0.5 * fit.length;
+        c.wall_hi = h + 0.5 * fit.length;
+        Fit moved = fit;
+        moved.i = a;
+        moved.j = b;
+        moved.a = h;
+        next.push_back(moved);
+      }
+    }
+    front = std::move(next);
+  }
+}
+
 void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, const Vec3& plane_point,
                 const Vec3& plane_normal, double thickness) {
   cuts_.push_back(cut);
@@ -312,27 +435,8 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
       hi_j = std::max(hi_j, std::ceil(j));
     }
   }
-  const int32_t gi0 = static_cast<int32_t>(lo_i), gj0 = static_cast<int32_t>(lo_j);
-  const int32_t gni = static_cast<int32_t>(hi_i) - gi0 + 1,
-                gnj = static_cast<int32_t>(hi_j) - gj0 + 1;
-  if (gi0 < 0 || gj0 < 0 || gni > ni_ || gnj > nj_) {
-    std::vector<ChartColumn> grown(static_cast<size_t>(gni) * gnj);
-    for (int32_t i = 0; i < ni_; ++i) {
-      for (int32_t j = 0; j < nj_; ++j) {
-        grown[static_cast<size_t>(i - gi0) * gnj + (j - gj0)] =
-            grid_[static_cast<size_t>(i) * nj_ + j];
-      }
-    }
-    for (ChartCut& c : cuts_) {
-      c.ci -= gi0;
-      c.cj -= gj0;
-    }
-    grid_ = std::move(grown);
-    i0_ += gi0;
-    j0_ += gj0;
-    ni_ = gni;
-    nj_ = gnj;
-  }
+  Grow(static_cast<int32_t>(lo_i), static_cast<int32_t>(lo_j), static_cast<int32_t>(hi_i),
+       static_cast<int32_t>(hi_j));
   const ChartCut& here = cuts_.back();
   // Beyond the line: the other charts' side.
   for (int32_t i = 0; i < ni_; ++i) {
@@ -342,12 +446,26 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
   }
   // Up to the line: the band's columns between the chart and the line, grown from the
   // chart's own towards the line, within the junction's extent and the line's own grid box.
+  // An end of the line on the box bounds nothing: the box does (the face it ends on need
+  // not be across the line).
+  auto on_box = [&](const Vec3& p) {
+    const double extent[3] = {static_cast<double>(dims_.nx), static_cast<double>(dims_.ny),
+                              static_cast<double>(dims_.nz)};
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(Coord(p, k) + 0.5) < 1e-6 || std::abs(Coord(p, k) - extent[k] + 0.5) < 1e-6) {
+        return true;
+      }
+    }
+    return false;
+  };
+  const bool open0 = on_box(line.point + line.direction * line.t0);
+  const bool open1 = on_box(line.point + line.direction * line.t1);
   auto in_extent = [&](int32_t i, int32_t j) {
     const double s = here.Side(i, j);
-    if (s < kZipGap || s > band) return false;
+    if (s < kZipGap || s > band || !InBox(i, j)) return false;
     const Vec3 p = Point(i, j, plane_height(i, j));
     const double t = Dot(p - line.point, line.direction);
-    return t >= line.t0 - 0.5 && t <= line.t1 + 0.5;
+    return (open0 || t >= line.t0 - 0.5) && (open1 || t <= line.t1 + 0.5);
   };
   std::vector<std::pair<int32_t, int32_t>> front;
   for (int32_t i = 0; i < ni_; ++i) {
@@ -502,7 +620,9 @@ void Chart::Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
                                                               {i, j + 1, i + 1, j + 1, i, j + 1},
                                                               {i - 1, j, i, j + 1, i, j}}};
         for (const auto& e : sides) {
-          if (At(e[0], e[1]) || cut.Side(e[0], e[1]) >= cut.Side(i, j)) continue;
+          if (At(e[0], e[1]) || cut.Side(e[0], e[1]) >= cut.Side(i, j) || !InBox(e[0], e[1])) {
+            continue;
+          }
           next_corner[{e[2], e[3]}] = {e[4], e[5]};
           heads.insert({e[4], e[5]});
         }

@@ -29,12 +29,12 @@ struct ChartColumn {
 // One piece's chart: the axis its height field runs along and its plane's fit.
 struct MidSurfaceChart {
   int32_t piece = 0;
-  int axis = 2;             // 0, 1, 2: x, y, z
-  Vec3 normal;              // of the least-squares plane of its voxels (unit)
-  Vec3 centroid;            // of its voxels
-  uint64_t voxels = 0;      // of the piece
-  uint64_t columns = 0;     // columns with voxels
-  uint64_t uncovered = 0;   // voxels in second runs of a column (a fold, a touching speck)
+  int axis = 2;                 // 0, 1, 2: x, y, z
+  Vec3 normal;                  // of the least-squares plane of its voxels (unit)
+  Vec3 centroid;                // of its voxels
+  uint64_t voxels = 0;          // of the piece
+  uint64_t columns = 0;         // columns with voxels
+  uint64_t uncovered = 0;       // voxels in second runs of a column (a fold, a touching speck)
   double max_tilt_degrees = 0;  // the steepest local tilt from the axis, at a vertex
 };
 
@@ -50,8 +50,9 @@ struct ChartCut {
 
 class Chart {
  public:
-  // The chart of a piece's voxels (at least 3).
-  Chart(std::vector<Index3> voxels, int32_t piece);
+  // The chart of a piece's voxels (at least 3) in a volume of `dims`, extended to the box
+  // (ExtendToBox).
+  Chart(std::vector<Index3> voxels, int32_t piece, const Dims& dims);
 
   const MidSurfaceChart& info() const { return info_; }
   int axis() const { return info_.axis; }
@@ -106,6 +107,13 @@ class Chart {
     }
   }
 
+  // Where the sheet leaves the box through a face across the chart's axis, its runs end at
+  // the box, not at its walls: each such column's wall at the box is put the sheet's
+  // thickness nearby beyond the other, and a few rings of columns are added past the face on
+  // the plane of the columns near it, so that the mesh runs past the box and its clip
+  // (BuildMidSurface's clip to the box) ends the sheet on the face where its plane meets it.
+  void ExtendToBox();
+
   // Appends the chart's vertices and faces to `mesh`; the rim facing each cut is joined to
   // its junction's samples (shared with the other charts there, made when first used) by a
   // strip of triangles.
@@ -119,12 +127,17 @@ class Chart {
                         const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
                         TriangleMesh* mesh);
   bool HasAll4(int32_t i, int32_t j) const;
+  // Whether grid position (i, j) lies within the volume across the axis.
+  bool InBox(int32_t i, int32_t j) const;
+  // Grows the grid to hold grid positions lo..hi (which may be negative: the origin moves).
+  void Grow(int32_t lo_i, int32_t lo_j, int32_t hi_i, int32_t hi_j);
   void Columns(std::vector<Index3> voxels);
   void SmoothWalls();
   ChartColumn& Cell(int32_t i, int32_t j) { return grid_[static_cast<size_t>(i) * nj_ + j]; }
   void Corner(int32_t i, int32_t j, double* h, double* length, double* gi, double* gj) const;
 
   MidSurfaceChart info_;
+  Dims dims_;
   int32_t i0_ = 0, j0_ = 0, ni_ = 0, nj_ = 0;
   std::vector<ChartColumn> grid_;
   std::vector<ChartCut> cuts_;

@@ -12,19 +12,20 @@
 namespace sheetmesh {
 
 // A straight junction where charts meet: the points p + t u, t in [t0, t1], sampled every
-// `step` voxels; sample k is vertex vertex_of[k] of the mesh once made (UINT32_MAX before).
+// `step` voxels (the ends are samples); sample k is vertex vertex_of[k] of the mesh once made
+// (UINT32_MAX before).
 struct JunctionLine {
   Vec3 point;
   Vec3 direction;  // unit
   double t0 = 0, t1 = 0, step = 1;
-  double degrees = 0;                // between the charts' planes there (the acute one)
-  std::vector<int32_t> charts;       // the charts that end on it
-  std::vector<uint32_t> vertex_of;   // per sample
-  std::vector<double> thickness;     // per chart in `charts`: its thickness at the line
+  double degrees = 0;               // between the charts' planes there (the acute one)
+  std::vector<int32_t> charts;      // the charts that end on it
+  std::vector<uint32_t> vertex_of;  // per sample
+  std::vector<double> thickness;    // per chart in `charts`: its thickness at the line
   // Per chart: its piece and its plane at the line (the planes cross on it).
   std::vector<int32_t> pieces;
   std::vector<Vec3> plane_points, plane_normals;
-  int samples() const { return static_cast<int>(std::floor((t1 - t0) / step)) + 1; }
+  int samples() const { return static_cast<int>(std::floor((t1 - t0) / step + 1e-6)) + 1; }
   Vec3 At(int k) const { return point + direction * (t0 + k * step); }
 };
 

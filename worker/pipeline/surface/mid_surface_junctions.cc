@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <cstdio>
-#include <cstdlib>
 
 #include "absl/container/flat_hash_map.h"
 
@@ -88,10 +86,12 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
   // Who holds each voxel: a chart, or none of them (-1).
   absl::flat_hash_map<uint64_t, int32_t> owner;
   for (size_t c = 0; c < charts->size(); ++c) {
-    (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { owner[key(p)] = static_cast<int32_t>(c); });
+    (*charts)[c]->ForEachVoxel(
+        [&](const Index3& p, bool) { owner[key(p)] = static_cast<int32_t>(c); });
   }
   for (const Index3& p : loose) owner.try_emplace(key(p), -1);
-  static constexpr int kStep[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  static constexpr int kStep[6][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                      {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
   std::map<std::pair<int32_t, int32_t>, Contact> contacts;
   // Charts that touch.
   for (size_t c = 0; c < charts->size(); ++c) {
@@ -194,8 +194,8 @@ struct LineSet {
 };
 
 LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
-                  const std::map<std::pair<int32_t, int32_t>, Contact>& contacts,
-                  const Dims& dims, const JunctionOptions& options) {
+                  const std::map<std::pair<int32_t, int32_t>, Contact>& contacts, const Dims& dims,
+                  const JunctionOptions& options) {
   const std::vector<std::unique_ptr<Chart>>* charts = &charts_in;
   // Each contact's line: where the two charts' planes near it cross.
   std::vector<Found> found;
@@ -220,10 +220,9 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       Found trial = f;
       bool fitted = true;
       for (int s = 0; s < 2; ++s) {
-        fitted = fitted && (*charts)[ids[s]]->LocalPlane(line_point, line_dir, la, lb, inner,
-                                                          inner + kRadius, &trial.plane_point[s],
-                                                          &trial.plane_normal[s],
-                                                          &trial.thickness[s]);
+        fitted = fitted && (*charts)[ids[s]]->LocalPlane(
+                               line_point, line_dir, la, lb, inner, inner + kRadius,
+                               &trial.plane_point[s], &trial.plane_normal[s], &trial.thickness[s]);
       }
       if (!fitted) break;  // the last fit stands
       f = trial;
@@ -281,6 +280,11 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
   // Lines along one another (an X's four halves meet pairwise) are one.
   LineSet set;
   std::vector<JunctionLine>& lines = set.lines;
+  // Samples evenly spaced from end to end, so that a line's end on the box is a sample.
+  for (JunctionLine& line : lines) {
+    const double length = line.t1 - line.t0;
+    line.step = length / std::max(1.0, std::round(length / options.sample_step));
+  }
   auto& planes = set.planes;
   auto& thickness = set.thickness;
   std::vector<uint64_t> weight;
@@ -334,11 +338,6 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       }
     }
   }
-  if (getenv("SM_DEBUG_JUNCTIONS")) {
-    for (const JunctionLine& g : lines) fprintf(stderr, "line p=(%.1f %.1f %.1f) u=(%.2f %.2f %.2f) t=[%.1f %.1f] deg %.1f\n", g.point.x, g.point.y, g.point.z, g.direction.x, g.direction.y, g.direction.z, g.t0, g.t1, g.degrees);
-    for (size_t c = 0; c < charts->size(); ++c) { const MidSurfaceChart& i = (*charts)[c]->info(); fprintf(stderr, "chart %zu piece %d voxels %llu axis %d normal (%.2f %.2f %.2f)\n", c, i.piece, (unsigned long long)i.voxels, i.axis, i.normal.x, i.normal.y, i.normal.z); }
-    for (const Found& f : found) fprintf(stderr, "found %d-%d contact %llu deg %.1f\n", f.line.charts[0], f.line.charts[1], (unsigned long long)f.contact, f.line.degrees);
-  }
   return set;
 }
 
@@ -377,13 +376,18 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         if (beyond * 10 <= kept + beyond || beyond < 32) continue;
         std::vector<Index3> rest = chart.TakeBeyond(trace);
         if (rest.size() < 3) continue;
-        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++));
+        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++, dims));
         split = true;
       }
     }
     if (!split) break;
   }
   std::vector<JunctionLine>& lines = set.lines;
+  // Samples evenly spaced from end to end, so that a line's end on the box is a sample.
+  for (JunctionLine& line : lines) {
+    const double length = line.t1 - line.t0;
+    line.step = length / std::max(1.0, std::round(length / options.sample_step));
+  }
   // Each line cuts its charts and fills them up to it.
   constexpr double kBand = 12, kMaxBand = 64;
   for (size_t l = 0; l < lines.size(); ++l) {
@@ -395,25 +399,6 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     for (auto& [chart, plane] : cuts) {
       const Vec3 n = plane.second - line.direction * Dot(plane.second, line.direction);
       if (Norm2(n) > 1e-12) plane = {line.point, Normalized(n)};
-    }
-    const size_t given = 0;  // charts split above
-    for (size_t k = 0; k < given; ++k) {
-      Chart& chart = *(*charts)[cuts[k].first];
-      const ChartCut trace = chart.Trace(line, static_cast<int>(l), cuts[k].second.first);
-      uint64_t kept = 0, beyond = 0;
-      chart.Sides(trace, &kept, &beyond);
-      if (beyond * 10 > kept + beyond && beyond >= 32) {
-        std::vector<Index3> rest = chart.TakeBeyond(trace);
-        if (rest.size() < 3) continue;
-        if (getenv("SM_DEBUG_JUNCTIONS")) {
-          Index3 lo = rest[0], hi = rest[0];
-          for (const Index3& v : rest) { lo.x = std::min(lo.x, v.x); lo.y = std::min(lo.y, v.y); lo.z = std::min(lo.z, v.z); hi.x = std::max(hi.x, v.x); hi.y = std::max(hi.y, v.y); hi.z = std::max(hi.z, v.z); }
-          fprintf(stderr, "split chart %d: %zu voxels in (%d %d %d)-(%d %d %d)\n", cuts[k].first, rest.size(), lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
-        }
-        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++));
-        cuts.push_back({static_cast<int32_t>(charts->size() - 1), cuts[k].second});
-        thick.push_back(thick[k]);
-      }
     }
     for (size_t k = 0; k < cuts.size(); ++k) {
       Chart& chart = *(*charts)[cuts[k].first];

@@ -111,8 +111,8 @@ absl::StatusOr<DualMesh> BrickedDualMesh(const SheetAnalysis& sheet, const Surfa
       options.bricks.halo > 0 ? options.bricks.halo : SurfaceHalo(local.scvd.radius_voxels, t_max);
   // A brick narrower than its cells and the sheet's thickness, or than the halo it reads,
   // does the whole sheet's work many times over (1 voxel: once a voxel, for ever).
-  const int floor = std::max(
-      static_cast<int>(std::ceil(4 * local.scvd.radius_voxels)) + int{t_max}, bo.halo);
+  const int floor =
+      std::max(static_cast<int>(std::ceil(4 * local.scvd.radius_voxels)) + int{t_max}, bo.halo);
   if (options.bricks.brick < floor) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "surface.bricks = %d is below the smallest brick for r = %.3g on this sheet: max(4 r + "
@@ -194,16 +194,15 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
                                                     const Progress& progress) {
   SurfaceResult out;
   absl::Time t0 = absl::Now();
-  SM_ASSIGN_OR_RETURN(MidSurface mid, BuildMidSurface(sheet.set, piece_of_voxel,
-                                                      progress.Sub(0, 0.3)));
+  SM_ASSIGN_OR_RETURN(MidSurface mid,
+                      BuildMidSurface(sheet.set, piece_of_voxel, progress.Sub(0, 0.3)));
   out.mesh = std::move(mid.mesh);
   out.scvd_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   t0 = absl::Now();
-  const uint64_t target =
-      options.triangles > 0
-          ? options.triangles
-          : TrianglesOfRadius(sheet.set.size(), sheet.thickness_stats.mean,
-                              options.scvd.radius_voxels);
+  const uint64_t target = options.triangles > 0
+                              ? options.triangles
+                              : TrianglesOfRadius(sheet.set.size(), sheet.thickness_stats.mean,
+                                                  options.scvd.radius_voxels);
   if (out.mesh.faces.size() > target) {
     ApertureDecimateOptions d;
     d.triangles = target;
@@ -227,8 +226,7 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
   });
   // The sheets meet at their planes' angle: what decimation and the fits moved near a
   // junction goes back onto its piece's plane there.
-  const uint64_t flattened = FlattenAtJunctions(&mesh, mid.junctions);
-  if (getenv("SM_DEBUG_JUNCTIONS")) fprintf(stderr, "flattened %llu (lines %zu, pieces %zu)\n", (unsigned long long)flattened, mid.junctions.size(), mid.junctions.empty() ? 0 : mid.junctions[0].pieces.size());
+  FlattenAtJunctions(&mesh, mid.junctions);
   out.components = sheet.components.count();
   out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   SM_RETURN_IF_ERROR(progress.Update(1.0));

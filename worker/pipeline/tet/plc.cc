@@ -195,6 +195,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   }
   SM_RETURN_IF_ERROR(
       ResolveClashes(v, clean, sheets.body_pieces, placement, options, &st, &plc, clashes));
+  // The junctions as the untangling left them (its splits along crossings are junctions too).
+  std::vector<uint8_t> held = HeldAtJunctions(st, v.size());
   if (options.short_edge_voxels > 0) {
     plc.collapsed_edges = CollapseShortEdges(st, v, on_face, options.short_edge_voxels);
   }
@@ -204,14 +206,15 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   }
   if (options.contact_voxels > 0) {
     std::vector<Vec3> unmended;
-    plc.mended_contacts = MendContacts(st, v, on_face, options.contact_voxels, &unmended);
+    plc.mended_contacts = MendContacts(st, v, on_face, held, options.contact_voxels, &unmended);
     plc.unmended_contacts = static_cast<uint32_t>(unmended.size());
     for (size_t i = 0; i < unmended.size() && i < kContactPlaces; ++i) {
       plc.contact_places.push_back(placement.ToPhysical(unmended[i]));
     }
   }
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
-    plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
+    plc.opened_wedges = OpenWedges(st, on_face, HeldAtJunctions(st, v.size()),
+                                   options.wedge_degrees, options.wedge_voxels, v);
   }
   // A triangle the mends left with no area covers nothing and holds a corner on its own
   // long edge, which TetGen aborts on: it goes, and a vertex then left exactly on another

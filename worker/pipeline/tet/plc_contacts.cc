@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <queue>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/spatial_grid.h"
@@ -152,7 +154,7 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
 }  // namespace
 
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
-                      double gap, std::vector<Vec3>* unmended) {
+                      const std::vector<uint8_t>& held, double gap, std::vector<Vec3>* unmended) {
   if (!(gap > 0) || s.faces.empty()) return 0;
   uint32_t mended = 0;
   std::vector<uint8_t> failed(v.size(), 0);
@@ -178,12 +180,17 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
     auto joined = [&](uint32_t a, uint32_t b) {
       return edge.contains((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
     };
-    // Each free vertex's nearest contact with a triangle not its own.
+    // Each free vertex's nearest contact with a triangle not its own, nor one it reaches
+    // along the sheets as a wedge of kWedgeKeptDegrees or more.
+    const double wedge_sine = std::sin(kWedgeKeptDegrees * 3.14159265358979323846 / 180);
     std::vector<Contact> found;
     for (uint32_t u = 0; u < v.size(); ++u) {
       if (faces_of[u].empty() || on_face[u] != 0 || failed[u]) continue;
+      if (u < held.size() && held[u]) continue;
       Contact best;
       best.distance = 1e300;
+      absl::flat_hash_map<uint32_t, double> reach;  // ReachAlongSheets as a map
+      bool reached = false;
       grid.Query(v[u] - Vec3(gap, gap, gap), v[u] + Vec3(gap, gap, gap), [&](uint32_t f) {
         const Face& t = s.faces[f];
         if (t[0] == u || t[1] == u || t[2] == u) return;
@@ -191,6 +198,20 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
         if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, gap, &c) ||
             !(c.distance < best.distance))
           return;
+        if (!reached) {
+          for (const auto& [x, d] :
+               ReachAlongSheets(u, kReachFactor * gap / wedge_sine, v, s.faces, faces_of)) {
+            reach[x] = d;
+          }
+          reached = true;
+        }
+        for (uint32_t x : t) {
+          const auto it = reach.find(x);
+          if (it != reach.end() &&
+              it->second + Norm(v[x] - c.at) <= kReachFactor * c.distance / wedge_sine) {
+            return;
+          }
+        }
         // Not onto a neighbour's corner (that collapses an edge of u's own sheet).
         if (c.kind == Contact::kCorner && joined(u, t[c.k])) return;
         // Not onto an edge of u's own triangle (a flat one: the flips' business).
@@ -385,6 +406,30 @@ uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double
   }
   if (n > 0) s = Without(s, drop);
   return n;
+}
+
+std::vector<std::pair<uint32_t, double>> ReachAlongSheets(
+    uint32_t u, double limit, const std::vector<Vec3>& v, const std::vector<Face>& faces,
+    const std::vector<std::vector<uint32_t>>& faces_of) {
+  absl::flat_hash_map<uint32_t, double> done;
+  std::vector<std::pair<uint32_t, double>> out;
+  using Item = std::pair<double, uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  open.push({0.0, u});
+  while (!open.empty()) {
+    const auto [d, x] = open.top();
+    open.pop();
+    if (!done.try_emplace(x, d).second) continue;
+    out.push_back({x, d});
+    for (uint32_t f : faces_of[x]) {
+      for (uint32_t y : faces[f]) {
+        if (done.contains(y)) continue;
+        const double e = d + Norm(v[y] - v[x]);
+        if (e <= limit) open.push({e, y});
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace sheetmesh

@@ -14,6 +14,20 @@
 
 namespace sheetmesh {
 
+// A sheet vertex at distance d from another sheet or a box face that it reaches along the
+// sheets within kReachFactor d / sin(kWedgeKeptDegrees) (the way to a corner there, and on
+// to the nearest point) meets it there in a wedge of a junction, a fold or the box
+// — at an angle of at least that, the rock's — not across a gap: the mends leave it where
+// it is, since moving it would only narrow the wedge. Through a junction at angle a the way
+// is (1 + cos a) d / sin a along straight lines; the factor allows for paths along edges.
+constexpr double kWedgeKeptDegrees = 10.0;
+constexpr double kReachFactor = 2.5;
+// The vertices within path length `limit` of u along the edges of `faces` (faces_of: each
+// vertex's faces), with their path lengths.
+std::vector<std::pair<uint32_t, double>> ReachAlongSheets(
+    uint32_t u, double limit, const std::vector<Vec3>& v, const std::vector<Face>& faces,
+    const std::vector<std::vector<uint32_t>>& faces_of);
+
 // Face k of the box: axis k / 2, low side when k is even. Bit k of an on_face mask.
 inline int Axis(int face) { return face / 2; }
 inline bool Low(int face) { return face % 2 == 0; }
@@ -38,7 +52,14 @@ struct SnappedSheets {
   std::vector<uint32_t> rep;     // per vertex: the vertex it merged into (itself if none)
   SheetTriangles st;             // on the representatives
   bool checked_clean = false;    // the last round's triangles were found not to clash
+  std::vector<uint8_t> held;     // per vertex: HeldAtJunctions of the sheets as given
 };
+
+// The corners of every sheet triangle on a junction (an edge of three or more triangles, or
+// of two of different pieces): where sheets meet, at the angle the surface gives them, the
+// repairs below neither move these vertices nor flip or collapse these triangles' edges, so
+// the junction reaches TetGen as the surface drew it. One entry per vertex of `vertices`.
+std::vector<uint8_t> HeldAtJunctions(const SheetTriangles& s, size_t vertices);
 
 // Vertices within snap_voxels of a box face always snap onto it; those out to
 // snap_clear_voxels snap unless that makes their triangles cut another sheet's (then they
@@ -83,18 +104,21 @@ absl::Status ResolveClashes(const std::vector<Vec3>& v, bool checked_clean,
 
 // Flips sheet edges where that gives better triangles and drops flat rim triangles,
 // keeping only what makes no clash. Returns (flips, drops).
+// No flip touches a `held` vertex.
 std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::vector<Vec3>& v,
                                                  const std::vector<uint8_t>& on_face,
+                                                 const std::vector<uint8_t>& held,
                                                  double fold_degrees, double cap_degrees);
 // Closes slits framed by three rim edges. Returns the number closed.
 uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_degrees);
 // Drops rim triangles that lie on another sheet. Returns the number dropped.
 uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
                       double max_degrees);
-// Opens narrow wedges between a sheet face and a sheet edge, moving vertices in `v`.
-// Returns the number of vertices moved.
+// Opens narrow wedges between a sheet face and a sheet edge, moving vertices in `v` (none
+// `held`). Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
-                    double min_degrees, double max_move, std::vector<Vec3>& v);
+                    const std::vector<uint8_t>& held, double min_degrees, double max_move,
+                    std::vector<Vec3>& v);
 
 // A point on the box's surface: on the faces whose bits are set (bit `face`, as on_face).
 struct BoxPoint {
@@ -104,10 +128,12 @@ struct BoxPoint {
 
 // Moves each sheet vertex (off the box) that lies within gap of a triangle not its own onto
 // it: onto its corner (merging the two), its edge or its interior (splitting the triangles
-// there), nearest first, leaving out moves that make triangles clash. Returns the number
-// mended; the vertices left for a clash go into *unmended (when not null).
+// there), nearest first, leaving out moves that make triangles clash, the `held` vertices
+// and the wedges of junctions and folds (a triangle reached along the sheets about as soon
+// as across). Returns the number mended; the vertices left for a clash go into *unmended
+// (when not null).
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
-                      double gap, std::vector<Vec3>* unmended);
+                      const std::vector<uint8_t>& held, double gap, std::vector<Vec3>* unmended);
 
 // Drops the sheet triangles whose corners lie on a line (within eps voxels: no area, one
 // corner on the long edge), which the mends can leave. Returns the number dropped.
@@ -121,7 +147,9 @@ uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps);
 
 // Collapses sheet edges shorter than max_length (voxels), shortest first, each to its
 // midpoint (or onto its end on the box), where that makes no fold or hole and turns no
-// face by over 30 degrees; a round that makes a clash is undone. Returns the number.
+// face by over 30 degrees (one on a junction by over 1); a vertex on a junction stays, or
+// goes along it where the junction runs straight on; a round that makes a clash is undone.
+// Returns the number.
 uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
                             const std::vector<uint8_t>& on_face, double max_length);
 

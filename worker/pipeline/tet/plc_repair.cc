@@ -126,10 +126,32 @@ std::pair<uint32_t, uint32_t> ImproveSheetTriangles(SheetTriangles& s, const std
 // ImproveSheetTriangles, kept only where it makes no clash: a flip moves the sheet a
 // little, and where that makes it cut another sheet (near a crossing), the vertices of the
 // clash are frozen and the improvement starts over. Returns the flips and drops kept.
+std::vector<uint8_t> HeldAtJunctions(const SheetTriangles& s, size_t vertices) {
+  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> faces_on;
+  for (uint32_t f = 0; f < s.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
+      faces_on[(uint64_t{std::min(a, b)} << 32) | std::max(a, b)].push_back(f);
+    }
+  }
+  std::vector<uint8_t> held(vertices, 0);
+  for (const auto& [edge, faces] : faces_on) {
+    const bool junction =
+        faces.size() >= 3 || (faces.size() == 2 && s.piece[faces[0]] != s.piece[faces[1]]);
+    if (!junction) continue;
+    for (uint32_t f : faces) {
+      for (uint32_t x : s.faces[f]) held[x] = 1;
+    }
+  }
+  return held;
+}
+
 std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::vector<Vec3>& v,
                                                  const std::vector<uint8_t>& on_face,
+                                                 const std::vector<uint8_t>& held,
                                                  double fold_degrees, double cap_degrees) {
   std::vector<uint8_t> frozen(v.size(), 0);
+  for (size_t i = 0; i < held.size() && i < frozen.size(); ++i) frozen[i] = held[i];
   for (int attempt = 0; attempt < 5; ++attempt) {
     SheetTriangles better = st;
     const auto [flips, drops] =
@@ -318,7 +340,8 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
 // its neighbours; vertices on the box stay. A move that makes triangles clash is undone.
 // Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
-                    double min_degrees, double max_move, std::vector<Vec3>& v) {
+                    const std::vector<uint8_t>& held, double min_degrees, double max_move,
+                    std::vector<Vec3>& v) {
   if (!(min_degrees > 0) || !(max_move > 0) || st.faces.empty()) return 0;
   const double sin_min = std::sin(min_degrees * std::numbers::pi / 180.0);
   const double tan_min = std::tan(min_degrees * std::numbers::pi / 180.0);
@@ -380,6 +403,7 @@ uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_fac
       if (faces_of[u].empty()) continue;
       const Wedge w = narrowest(u);
       if (!(w.sine < sin_min) || on_face[w.far] != 0) continue;
+      if (w.far < held.size() && held[w.far]) continue;
       const double before = around(w.far);
       // Moving along the normal keeps the edge's length in the plane.
       const double in_plane = std::sqrt(std::max(0.0, w.length * w.length - w.height * w.height));

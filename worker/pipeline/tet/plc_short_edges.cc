@@ -12,11 +12,20 @@
 #include "worker/pipeline/tet/plc_parts.h"
 
 namespace sheetmesh {
+namespace {
+
+constexpr double kJunctionTurnDegrees = 1.0;  // the most a face on a junction turns
+constexpr double kJunctionStraight = 0.1;     // voxels: how near the line without it a
+                                              // junction vertex collapsed along it lies
+
+}  // namespace
 
 uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
                             const std::vector<uint8_t>& on_face, double max_length) {
   if (!(max_length > 0)) return 0;
   const double max_turn_cos = std::cos(30 * std::numbers::pi / 180);
+  // A face on a junction turns no further than this: the sheets keep their angle there.
+  const double max_junction_turn_cos = std::cos(kJunctionTurnDegrees * std::numbers::pi / 180);
   uint32_t collapsed = 0;
   for (int round = 0; round < 3; ++round) {
     std::vector<std::vector<uint32_t>> faces_of(v.size());
@@ -29,6 +38,18 @@ uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
         faces_of[s.faces[f][k]].push_back(f);
         faces_on[key(s.faces[f][k], s.faces[f][(k + 1) % 3])].push_back(f);
       }
+    }
+    // The junctions: edges of three or more faces, or of two of different pieces; the
+    // vertices on them, and the faces along them.
+    std::vector<uint8_t> on_junction(v.size(), 0), face_on_junction(s.faces.size(), 0);
+    absl::flat_hash_map<uint64_t, bool> junction_edge;
+    for (const auto& [e, faces] : faces_on) {
+      const bool j =
+          faces.size() >= 3 || (faces.size() == 2 && s.piece[faces[0]] != s.piece[faces[1]]);
+      if (!j) continue;
+      junction_edge[e] = true;
+      on_junction[e >> 32] = on_junction[static_cast<uint32_t>(e)] = 1;
+      for (uint32_t f : faces) face_on_junction[f] = 1;
     }
     std::vector<std::pair<double, uint64_t>> short_edges;
     for (const auto& [e, faces] : faces_on) {
@@ -45,10 +66,31 @@ uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
     for (const auto& [len, e] : short_edges) {
       uint32_t a = static_cast<uint32_t>(e >> 32), b = static_cast<uint32_t>(e);
       if (busy[a] || busy[b]) continue;
-      // Where it goes: a vertex on the box stays there (both on it: only on the same faces).
-      if (on_face[b] != 0 && on_face[a] == 0) std::swap(a, b);
+      // A vertex on a junction stays there: the other comes to it. Two on one only along it,
+      // where the line runs straight on (the one left within kJunctionStraight of it).
+      if (on_junction[b] && !on_junction[a]) std::swap(a, b);
+      if (on_junction[b]) {
+        if (!junction_edge.contains(e)) continue;
+        bool straight = true;
+        for (const auto& [f, unused] : junction_edge) {
+          const uint32_t x = static_cast<uint32_t>(f >> 32), y = static_cast<uint32_t>(f);
+          if (f == e || (x != b && y != b)) continue;
+          // The line goes on from b to o; without b, from a to o: b must lie on a-o.
+          const uint32_t o = x == b ? y : x;
+          const Vec3 d = v[o] - v[a];
+          const double len2 = Norm2(d);
+          const double t = len2 > 0 ? std::clamp(Dot(v[b] - v[a], d) / len2, 0.0, 1.0) : 0.0;
+          straight = straight && Norm(v[a] + d * t - v[b]) <= kJunctionStraight;
+        }
+        if (!straight) continue;
+      }
+      // Where it goes: a vertex on the box stays there (both on it: only on the same faces);
+      // so does one on a junction.
+      if (!on_junction[a] && on_face[b] != 0 && on_face[a] == 0) std::swap(a, b);
       if (on_face[b] != 0 && on_face[a] != on_face[b]) continue;
-      const Vec3 to = on_face[a] != 0 && on_face[b] == 0 ? v[a] : (v[a] + v[b]) * 0.5;
+      if (on_junction[a] && on_face[b] != 0) continue;
+      const Vec3 to =
+          on_junction[a] || (on_face[a] != 0 && on_face[b] == 0) ? v[a] : (v[a] + v[b]) * 0.5;
       // The link condition: the vertices joined to both are exactly the faces' third corners
       // on a-b, so the collapse makes no new fold or hole.
       const std::vector<uint32_t>& on_ab = faces_on[e];
@@ -86,8 +128,9 @@ uint32_t CollapseShortEdges(SheetTriangles& s, std::vector<Vec3>& v,
             if (t[k] == a || t[k] == b) now[k] = to;
           }
           const Vec3 n0 = AreaVector(old), n1 = AreaVector(now);
-          ok = ok && Dot(n0, n1) > max_turn_cos * Norm(n0) * Norm(n1) &&
-               AngleRangeDegrees(now).second < 170;
+          const double turn = face_on_junction[f] ? max_junction_turn_cos : max_turn_cos;
+          ok =
+              ok && Dot(n0, n1) > turn * Norm(n0) * Norm(n1) && AngleRangeDegrees(now).second < 170;
         }
       }
       if (!ok) continue;

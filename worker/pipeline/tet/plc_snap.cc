@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <set>
 
@@ -94,11 +95,32 @@ std::vector<uint8_t> SnapVertices(const TriangleMesh& sheets, const Vec3& lo, co
   std::vector<uint8_t>& on_face = s->on_face;
   v = sheets.vertices;
   on_face.assign(v.size(), 0);
+  // A vertex beyond snap_voxels of a face that the sheets take to it within reach (a vertex
+  // within snap_voxels of it as given, kReachFactor d / sin(kWedgeKeptDegrees) away along them)
+  // meets the face in a wedge, not across a gap: it stays (a sheet that ends on the box leaves the
+  // vertices near its end where they are).
+  std::vector<std::vector<uint32_t>> faces_of(v.size());
+  for (uint32_t f = 0; f < sheets.faces.size(); ++f) {
+    for (uint32_t x : sheets.faces[f]) faces_of[x].push_back(f);
+  }
+  const double wedge_sine = std::sin(kWedgeKeptDegrees * std::numbers::pi / 180);
+  auto meets_face = [&](size_t i, int k, bool low, double d) {
+    const double plane = low ? lo[k] : hi[k];
+    for (const auto& [x, way] : ReachAlongSheets(
+             static_cast<uint32_t>(i), kReachFactor * d / wedge_sine, v, sheets.faces, faces_of)) {
+      if (std::abs(sheets.vertices[x][k] - plane) < options.snap_voxels) return true;
+    }
+    return false;
+  };
   for (size_t i = 0; i < v.size(); ++i) {
-    const double limit = hold[i] ? options.snap_voxels : reach;
     bool moved = false;
     for (int k = 0; k < 3; ++k) {
       const double below = v[i][k] - lo[k], above = hi[k] - v[i][k];
+      const double d = std::min(below, above);
+      double limit = hold[i] ? options.snap_voxels : reach;
+      if (d >= options.snap_voxels && d < limit && meets_face(i, k, below < above, d)) {
+        limit = options.snap_voxels;
+      }
       if (below < limit) {
         moved |= v[i][k] != lo[k];
         wide[i] |= below >= options.snap_voxels;
@@ -130,9 +152,10 @@ SnappedSheets SnapToBox(const TriangleMesh& sheets, const Vec3& lo, const Vec3& 
         SnapVertices(sheets, lo, hi, options, hold, &s, &stats->snapped_vertices);
     s.rep = MergeNearDuplicates(s.v, options.merge_voxels, &s.on_face, &stats->merged_vertices);
     s.st = KeepTriangles(sheets, s.v, s.rep, s.on_face, &stats->dropped_triangles);
+    s.held = HeldAtJunctions(s.st, s.v.size());
     if (options.flip_fold_degrees > 0) {
-      std::tie(stats->flipped_edges, stats->dropped_caps) =
-          FlipSheetTriangles(s.st, s.v, s.on_face, options.flip_fold_degrees, options.cap_degrees);
+      std::tie(stats->flipped_edges, stats->dropped_caps) = FlipSheetTriangles(
+          s.st, s.v, s.on_face, s.held, options.flip_fold_degrees, options.cap_degrees);
     }
     if (round + 1 == kSnapRounds ||
         std::none_of(wide.begin(), wide.end(), [](uint8_t w) { return w; })) {

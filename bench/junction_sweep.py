@@ -11,7 +11,9 @@ Per run: S (formula 5), triangles, pieces per plane, the junction's edges (edges
 faces of different pieces, or of three or more faces), the largest distance of their
 vertices from the true line (voxels), the narrowest and widest dihedral across them (the
 wedge between the two sheets' faces meeting there, against the true angle), and with
---volume_mesh the PLC's narrowest wedge and the mesh's smallest angle.
+--volume_mesh the PLC's narrowest wedge and the mesh's smallest angle, beside the narrowest
+wedge of the truth (the junction's angle, and each sheet against each box face it reaches:
+an input wedge can be no wider than the rock's).
 """
 import argparse
 import json
@@ -113,6 +115,38 @@ def junction_figures(ply, truth):
     }
 
 
+def true_wedge(vol, truth):
+    """The narrowest wedge the rock itself has: the junction's angle, and for each sheet
+    and each box face it reaches, the angle between the sheet's plane and the face's."""
+    dims = truth["dims"]
+    img = np.fromfile(vol, dtype=np.uint8).reshape(dims[2], dims[1], dims[0])
+    j = truth["junctions"][0]
+    narrowest = min(j["degrees"], 180 - j["degrees"])
+    for s in truth["sheets"]:
+        n, c = np.array(s["normal"]), np.array(s["center"])
+        half = s["aperture"]["max"] / 2 + 1.0
+        others = [np.array(o["normal"]) for o in truth["sheets"] if o is not s]
+        for k in range(3):
+            for side in (0, dims[k] - 1):
+                layer = np.take(img, side, axis=2 - k)
+                zs, ys = np.nonzero(layer)  # the face's sheet voxels (row, column)
+                if not len(zs):
+                    continue
+                idx = [None, None, None]
+                rest = [a for a in range(3) if a != k]
+                idx[rest[1]], idx[rest[0]] = zs, ys
+                idx[k] = np.full(len(zs), side)
+                pts = np.stack(idx, axis=1).astype(float)
+                d = np.abs((pts - c) @ n)
+                # Voxels of this sheet, away from where the other sheets pass.
+                mine = d <= half
+                for o, other in zip(others, [x for x in truth["sheets"] if x is not s]):
+                    mine &= np.abs((pts - np.array(other["center"])) @ o) > other["aperture"]["max"] / 2 + 2
+                if mine.sum() >= 3:
+                    narrowest = min(narrowest, math.degrees(math.acos(min(1.0, abs(n[k])))))
+    return round(narrowest, 2)
+
+
 def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract):
     cli = str(pathlib.Path(build) / "worker" / "pipeline" / "sheetmesh-pipeline")
     vol = folder / ("j%d%s_s%d_%dx%dx%d_u8.raw" % (angle, kind, seed, dims, dims, dims))
@@ -136,6 +170,7 @@ def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract)
     row["similarity"] = round(report["similarity"]["similarity"], 4)
     row["triangles"] = report["surface"]["triangles"]
     row.update(junction_figures(out / "surface.ply", truth))
+    row["true_wedge"] = true_wedge(vol, truth)
     if volume_mesh and "volume_mesh" in report:
         v = report["volume_mesh"]
         row["plc_wedge"] = round(v["input_wedges"]["narrowest_degrees"], 2)

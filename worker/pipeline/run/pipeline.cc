@@ -15,11 +15,13 @@
 #include "absl/time/clock.h"
 #include "common/file_util.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/extract/separation.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/preview/previews.h"
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/surface/error_density.h"
+#include "worker/pipeline/surface/mid_surface.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
 #include "worker/pipeline/voxel/label_volume.h"
@@ -379,6 +381,32 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   report.thickness = sheet.thickness_stats;
   report.thickness.histogram.clear();
   report.components = sheet.components.count();
+  if (!options.extract && options.surface.method == SurfaceMethod::kMid &&
+      options.extraction.separate) {
+    // A mid-surface is a height field per piece: each component of the phase whose layers
+    // are not (a steep crossing) as separation (Algorithm 2) cuts it, the cells cut away the
+    // junctions between its sheets.
+    StageTimer t(&report, "separate");
+    const std::vector<uint32_t> components = sheet.components.VoxelLabels(sheet.set);
+    const std::vector<int32_t> whole(components.begin(), components.end());
+    SM_ASSIGN_OR_RETURN(
+        piece_of_voxel,
+        MidSurfacePieces(sheet.set, whole, [&]() -> absl::StatusOr<std::vector<int32_t>> {
+          SeparationOptions separation = options.extraction.separation;
+          if (separation.radius_voxels == 0) {
+            separation.radius_voxels =
+                std::max(kSeparationRadiusFloor, sheet.thickness_stats.mean / 2);
+          }
+          SM_ASSIGN_OR_RETURN(const SeparationResult parts,
+                              Separate(sheet.set, separation, progress.Stage("separate")));
+          std::vector<int32_t> separated(sheet.set.size(), -1);
+          parts.pieces.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+            const int64_t at = sheet.set.Find(x, y, z);
+            if (at >= 0) separated[at] = parts.pieces.label[i];
+          });
+          return separated;
+        }));
+  }
 
   SurfaceOptions surface = options.surface;
   if (surface.fit_vertices == VertexFit::kAuto) {

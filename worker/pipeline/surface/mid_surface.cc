@@ -13,6 +13,7 @@
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
 #include "common/status_macros.h"
+#include "worker/pipeline/mesh/vertex_normals.h"
 #include "worker/pipeline/surface/mid_surface_chart.h"
 #include "worker/pipeline/surface/mid_surface_junctions.h"
 #include "worker/pipeline/voxel/components.h"
@@ -49,33 +50,25 @@ Vec3 FromFrame(double i, double j, double h, int axis) {
 
 // The plane of least squares through a piece's voxels.
 void FitPlane(const std::vector<Index3>& voxels, Vec3* centroid, Vec3* normal) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const Index3& p : voxels) mean += Eigen::Vector3d(p.x, p.y, p.z);
-  mean /= static_cast<double>(voxels.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Index3& p : voxels) {
-    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  const Eigen::Vector3d n = eig.eigenvectors().col(0);  // the least spread
-  *centroid = Vec3(mean.x(), mean.y(), mean.z());
-  *normal = Normalized(Vec3(n.x(), n.y(), n.z()));
+  std::vector<Vec3> points;
+  points.reserve(voxels.size());
+  for (const Index3& p : voxels) points.emplace_back(p.x, p.y, p.z);
+  FitPlanePoints(points, centroid, normal);
 }
 
 // Sheets stacked in one piece — two that cross at a shallow angle (the separation's folds
 // do not see 15 degrees), or a sheet and one running along it — are layers of its columns:
 // along the piece's axis a column holds one run of each. Runs of neighbouring columns that
 // touch are one layer; a run that touches two runs of one neighbouring column, or is much
-// longer than the piece's runs are (where two layers merge), joins layers and is left out:
+// longer than a run it touches (where two layers merge), joins layers and is left out:
 // the layers apart are the pieces. Returns the layers of at least `min_voxels` (the piece
 // itself when it has one), and in *junction the voxels left out.
-std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_t min_voxels,
-                                             std::vector<Index3>* junction) {
-  Vec3 centroid, normal;
-  FitPlane(voxels, &centroid, &normal);
-  const double n[3] = {std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)};
-  const int axis = static_cast<int>(std::max_element(n, n + 3) - n);
+//
+// The layers are taken along `axis`; *clean counts the voxels of kept layers in columns
+// where their layer has one run (what a chart of each can mesh).
+std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, int axis,
+                                             uint64_t min_voxels, std::vector<Index3>* junction,
+                                             uint64_t* clean) {
   std::vector<ChartVoxel> v(voxels.size());
   for (size_t k = 0; k < voxels.size(); ++k) v[k] = InFrame(voxels[k], axis);
   std::sort(v.begin(), v.end());
@@ -95,19 +88,34 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
     runs.push_back({v[s].i, v[s].j, v[s].h, v[q - 1].h, s});
     s = q;
   }
-  // A single layer: nothing to split (most pieces).
-  uint64_t stacked = 0;
-  for (const auto& [key, range] : column) stacked += range.second - range.first > 1;
-  if (stacked < std::max<uint64_t>(16, column.size() / 50)) return {std::move(voxels)};
+  // Runs far longer than the piece's are not a height field's: a sheet standing across the
+  // axis (a steep crossing) lies along them.
   std::vector<int32_t> lengths;
   for (const Run& r : runs) lengths.push_back(r.hi - r.lo + 1);
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  const double median = lengths[lengths.size() / 2];
+  const int32_t longest_clean = 3 * lengths[lengths.size() / 2] + 2;
+  auto clean_run = [&](const Run& r) {
+    const int32_t l = r.hi - r.lo + 1;
+    return l <= longest_clean ? l : 0;
+  };
+  // A single layer: nothing to split (most pieces).
+  uint64_t stacked = 0;
+  for (const auto& [key, range] : column) stacked += range.second - range.first > 1;
+  if (stacked < std::max<uint64_t>(16, column.size() / 50)) {
+    *clean = 0;
+    for (const auto& [key, range] : column) {
+      if (range.second - range.first == 1) *clean += clean_run(runs[range.first]);
+    }
+    return {std::move(voxels)};
+  }
+  auto length = [&](uint32_t r) { return runs[r].hi - runs[r].lo + 1; };
   std::vector<uint8_t> joins(runs.size(), 0);
   std::vector<std::pair<uint32_t, uint32_t>> touching;
+  // The shortest run each run touches in a neighbouring column: a run much longer than that
+  // is where two layers run together (a steep sheet's runs are all long, and stay whole).
+  std::vector<int32_t> shortest_beside(runs.size(), INT32_MAX);
   for (uint32_t r = 0; r < runs.size(); ++r) {
     const Run& a = runs[r];
-    if (a.hi - a.lo + 1 > 1.6 * median + 1) joins[r] = 1;
     for (const auto& [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
       const auto it = column.find(Key(a.i + di, a.j + dj));
       if (it == column.end()) continue;
@@ -116,10 +124,14 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
         const Run& b = runs[o];
         if (b.lo > a.hi + 1 || b.hi < a.lo - 1) continue;
         ++touches;
+        shortest_beside[r] = std::min(shortest_beside[r], length(o));
         if (r < o) touching.push_back({r, o});
       }
       if (touches > 1) joins[r] = 1;
     }
+  }
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    if (shortest_beside[r] != INT32_MAX && length(r) > 1.6 * shortest_beside[r] + 1) joins[r] = 1;
   }
   std::vector<uint32_t> parent(runs.size());
   for (uint32_t r = 0; r < runs.size(); ++r) parent[r] = r;
@@ -154,11 +166,16 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
     }
   }
   absl::flat_hash_map<uint32_t, std::vector<Index3>> layers;
+  absl::flat_hash_map<std::pair<uint32_t, uint64_t>, uint32_t> runs_in_column;  // of a layer
+  std::vector<uint8_t> junction_run(runs.size(), 0);
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    const auto j = joins[r] ? joined_to.end() : joined_to.find(find(r));
+    junction_run[r] = joins[r] || (j != joined_to.end() && j->second.size() >= 3);
+    if (!junction_run[r]) ++runs_in_column[{find(r), Key(runs[r].i, runs[r].j)}];
+  }
   for (uint32_t r = 0; r < runs.size(); ++r) {
     const Run& run = runs[r];
-    const auto j = joins[r] ? joined_to.end() : joined_to.find(find(r));
-    const bool merged = j != joined_to.end() && j->second.size() >= 3;
-    std::vector<Index3>& out = joins[r] || merged ? *junction : layers[find(r)];
+    std::vector<Index3>& out = junction_run[r] ? *junction : layers[find(r)];
     for (int32_t h = run.lo; h <= run.hi; ++h) {
       const Vec3 p = FromFrame(run.i, run.j, h, axis);
       out.push_back(
@@ -166,6 +183,13 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
     }
   }
   std::vector<std::vector<Index3>> kept;
+  *clean = 0;
+  for (uint32_t r = 0; r < runs.size(); ++r) {
+    if (!junction_run[r] && layers[find(r)].size() >= min_voxels &&
+        runs_in_column[{find(r), Key(runs[r].i, runs[r].j)}] == 1) {
+      *clean += clean_run(runs[r]);
+    }
+  }
   for (auto& [root, layer] : layers) {
     if (layer.size() >= min_voxels) {
       kept.push_back(std::move(layer));
@@ -173,7 +197,14 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
       junction->insert(junction->end(), layer.begin(), layer.end());
     }
   }
-  if (kept.size() <= 1) return {std::move(voxels)};  // no two layers worth a chart each
+  if (kept.size() <= 1) {  // no two layers worth a chart each
+    *clean = 0;
+    for (const auto& [key, range] : column) {
+      if (range.second - range.first == 1) *clean += clean_run(runs[range.first]);
+    }
+    junction->clear();
+    return {std::move(voxels)};
+  }
   // Largest first, ties by the first voxel: the same order every run.
   std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
     if (a.size() != b.size()) return a.size() > b.size();
@@ -183,6 +214,44 @@ std::vector<std::vector<Index3>> SplitLayers(std::vector<Index3> voxels, uint64_
 }
 
 double Coord(const Vec3& p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
+
+// A piece as the sheets a chart each can mesh: its layers along the axis of its plane, each
+// split again the same way (three sheets), to a depth of 3. *clean (when given) is the share
+// of the voxels not left to junctions that lie in columns of one run of their layer, runs no
+// longer than a height field's.
+std::vector<std::vector<Index3>> SplitPiece(std::vector<Index3> voxels, uint64_t min_voxels,
+                                            std::vector<Index3>* junction, double* clean = nullptr,
+                                            int depth = 0) {
+  Vec3 centroid, normal;
+  FitPlane(voxels, &centroid, &normal);
+  const double n[3] = {std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)};
+  const int axis = static_cast<int>(std::max_element(n, n + 3) - n);
+  const uint64_t all = voxels.size();
+  const size_t junction_before = junction->size();
+  uint64_t clean_voxels = 0;
+  std::vector<std::vector<Index3>> layers =
+      SplitLayers(std::move(voxels), axis, min_voxels, junction, &clean_voxels);
+  if (clean != nullptr) {
+    const uint64_t left = all - (junction->size() - junction_before);
+    *clean = left == 0 ? 1.0 : static_cast<double>(clean_voxels) / left;
+  }
+  if (layers.size() <= 1 || depth >= 2) return layers;
+  std::vector<std::vector<Index3>> out;
+  for (std::vector<Index3>& layer : layers) {
+    for (std::vector<Index3>& l :
+         SplitPiece(std::move(layer), min_voxels, junction, nullptr, depth + 1)) {
+      out.push_back(std::move(l));
+    }
+  }
+  // Largest first, ties by the first voxel: the same order every run.
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() > b.size();
+    return std::tie(a[0].z, a[0].y, a[0].x) < std::tie(b[0].z, b[0].y, b[0].x);
+  });
+  return out;
+}
+
+uint64_t MinLayerVoxels(uint64_t piece_voxels) { return std::max<uint64_t>(64, piece_voxels / 50); }
 
 // Clips `mesh` to the box [-0.5, n - 0.5] on each axis: a vertex within kOnFace of a face's
 // plane is put on it, a triangle across it cut there (its cut's vertices shared by the
@@ -312,6 +381,152 @@ uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>&
   return moved;
 }
 
+uint64_t SettleAtBox(const Dims& dims, TriangleMesh* mesh) {
+  constexpr double kOnFace = 0.1;     // voxels: a rim vertex this near a face lies on it
+  constexpr double kClear = 1.0;      // voxels: the others kept this far off
+  constexpr double kLeaves = 0.2588;  // sin 15 degrees: the least slope slid along
+  constexpr double kMostSlide = 1.5;  // voxels
+  constexpr double kMostRim = 1.0;    // voxels: the most a rim vertex moves along a face
+  std::vector<Vec3>& v = mesh->vertices;
+  const std::vector<Face>& faces = mesh->faces;
+  absl::flat_hash_map<uint64_t, int> uses;
+  auto key = [](uint32_t a, uint32_t b) {
+    return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+  };
+  for (const Face& t : faces) {
+    for (int k = 0; k < 3; ++k) ++uses[key(t[k], t[(k + 1) % 3])];
+  }
+  std::vector<uint8_t> rim(v.size(), 0), fixed(v.size(), 0);
+  std::vector<int32_t> piece_of(v.size(), -1);
+  std::vector<std::vector<uint32_t>> faces_of(v.size());
+  for (uint32_t f = 0; f < faces.size(); ++f) {
+    const Face& t = faces[f];
+    const int32_t p = mesh->face_piece.empty() ? 0 : mesh->face_piece[f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      const int u = uses[key(a, b)];
+      if (u == 1) rim[a] = rim[b] = 1;
+      if (u > 2) fixed[a] = fixed[b] = 1;  // on a junction
+      if (piece_of[a] >= 0 && piece_of[a] != p) fixed[a] = 1;
+      piece_of[a] = p;
+      faces_of[a].push_back(f);
+    }
+  }
+  const std::vector<Vec3> normals = VertexNormals(v, faces);
+  auto face_normal = [&](uint32_t f) {
+    const Face& t = faces[f];
+    return Cross(v[t[1]] - v[t[0]], v[t[2]] - v[t[0]]);
+  };
+  // Whether a face around x, with x back at `from`, turns over or by more than 60 degrees.
+  auto Turns = [&](uint32_t x, const Vec3& from) {
+    const Vec3 now_at = v[x];
+    std::vector<Vec3> now;
+    for (uint32_t f : faces_of[x]) now.push_back(face_normal(f));
+    v[x] = from;
+    bool turned = false;
+    for (size_t i = 0; i < now.size() && !turned; ++i) {
+      const Vec3 before = face_normal(faces_of[x][i]);
+      turned = Dot(now[i], before) <= 0.5 * Norm(now[i]) * Norm(before);
+    }
+    v[x] = now_at;
+    return turned;
+  };
+  const double extent[3] = {static_cast<double>(dims.nx), static_cast<double>(dims.ny),
+                            static_cast<double>(dims.nz)};
+  uint64_t moved = 0;
+  for (uint32_t x = 0; x < v.size(); ++x) {
+    if (faces_of[x].empty()) continue;
+    for (int k = 0; k < 3; ++k) {
+      for (const double side : {-1.0, 1.0}) {
+        const double bound = side < 0 ? -0.5 : extent[k] - 0.5;
+        const double d = -side * (Coord(v[x], k) - bound);  // > 0 inside
+        if (rim[x]) {
+          if (std::abs(d) >= kOnFace) continue;
+          const Vec3 from = v[x];
+          (k == 0 ? v[x].x : k == 1 ? v[x].y : v[x].z) = bound;
+          // Along the face onto the line where the sheet's plane near it (of its neighbours
+          // off the box, two rings) meets the face: a straight rim, not the voxels' zig-zag.
+          std::vector<Vec3> near;
+          for (uint32_t f : faces_of[x]) {
+            for (uint32_t y : faces[f]) {
+              for (uint32_t g : faces_of[y]) {
+                for (uint32_t z : faces[g]) {
+                  if (!rim[z] && piece_of[z] == piece_of[x]) near.push_back(v[z]);
+                }
+              }
+            }
+          }
+          std::sort(near.begin(), near.end(), [](const Vec3& a, const Vec3& b) {
+            return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+          });
+          near.erase(std::unique(near.begin(), near.end()), near.end());
+          if (near.size() >= 4 && !fixed[x]) {
+            Vec3 c, n;
+            FitPlanePoints(near, &c, &n);
+            Vec3 in_face = n;
+            (k == 0 ? in_face.x : k == 1 ? in_face.y : in_face.z) = 0;
+            const double slope = Norm(in_face);
+            const double s = -Dot(n, v[x] - c) / std::max(slope, 1e-12);
+            if (slope >= kLeaves && std::abs(s) <= kMostRim) {
+              const Vec3 on = v[x];
+              v[x] = v[x] + in_face / slope * s;
+              if (Turns(x, from)) v[x] = on;
+            }
+          }
+          if (Turns(x, from)) v[x] = from;
+          moved += !(v[x] == from);
+          continue;
+        }
+        if (fixed[x] || d >= kClear) continue;
+        Vec3 in(0, 0, 0);
+        (k == 0 ? in.x : k == 1 ? in.y : in.z) = -side;
+        const Vec3& n = normals[x];
+        Vec3 along = in - n * Dot(in, n);
+        const double slope = Norm(along);
+        if (slope < kLeaves) continue;
+        along = along / slope;
+        double step = std::min(kMostSlide, (kClear - d) / slope);
+        const Vec3 from = v[x];
+        for (int tries = 0; tries < 4; ++tries, step /= 2) {
+          v[x] = from + along * step;
+          if (!Turns(x, from)) break;
+          v[x] = from;
+        }
+        moved += !(v[x] == from);
+      }
+    }
+  }
+  return moved;
+}
+
+absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
+    const VoxelSet& set, std::span<const int32_t> pieces,
+    const std::function<absl::StatusOr<std::vector<int32_t>>()>& separate) {
+  constexpr double kClean = 0.95;
+  int32_t count = 0;
+  for (int32_t p : pieces) count = std::max(count, p + 1);
+  std::vector<std::vector<Index3>> voxels(count);
+  set.ForEachVoxel([&](uint64_t index, int32_t x, int32_t y, int32_t z) {
+    if (pieces[index] >= 0) voxels[pieces[index]].push_back({x, y, z});
+  });
+  std::vector<uint8_t> clean(count, 1);
+  for (int32_t p = 0; p < count; ++p) {
+    if (voxels[p].size() < 3) continue;
+    std::vector<Index3> junction;
+    double share = 1;
+    const uint64_t min_layer = MinLayerVoxels(voxels[p].size());
+    SplitPiece(std::move(voxels[p]), min_layer, &junction, &share);
+    clean[p] = share >= kClean;
+  }
+  std::vector<int32_t> out(pieces.begin(), pieces.end());
+  if (std::all_of(clean.begin(), clean.end(), [](uint8_t c) { return c; })) return out;
+  SM_ASSIGN_OR_RETURN(const std::vector<int32_t> separated, separate());
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i] >= 0 && !clean[out[i]]) out[i] = separated[i] < 0 ? -1 : count + separated[i];
+  }
+  return out;
+}
+
 absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
                                            std::span<const int32_t> piece_of_voxel,
                                            const Progress& progress) {
@@ -340,9 +555,9 @@ absl::StatusOr<MidSurface> BuildMidSurface(const VoxelSet& set,
   for (int32_t p = 0; p < pieces; ++p) {
     SM_RETURN_IF_ERROR(progress.Update(0.5 * p / std::max(1, pieces)));
     if (voxels[p].size() < 3) continue;
-    const uint64_t min_layer = std::max<uint64_t>(64, voxels[p].size() / 50);
+    const uint64_t min_layer = MinLayerVoxels(voxels[p].size());
     std::vector<std::vector<Index3>> layers =
-        SplitLayers(std::move(voxels[p]), min_layer, &out.junction_voxels);
+        SplitPiece(std::move(voxels[p]), min_layer, &out.junction_voxels);
     for (size_t k = 0; k < layers.size(); ++k) {
       // The first layer keeps the piece's id; the others are new pieces.
       charts.push_back(

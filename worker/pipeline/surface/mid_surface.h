@@ -11,6 +11,7 @@
 #define SHEETMESH_WORKER_PIPELINE_SURFACE_MID_SURFACE_H_
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -43,6 +44,25 @@ struct MidSurface {
 // angle of their planes whatever decimation and the vertex fit did near the line. Returns
 // the vertices moved. The mesh's vertices, faces and face_piece are read; vertices move.
 uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>& lines);
+
+// A sheet meets a box face at the angle of its plane, as it meets another sheet: the
+// vertices of the mesh's rim within 0.1 voxel of a face of the box of `dims` go onto it, and
+// every other vertex within a voxel of a face slides along its sheet (in its tangent plane)
+// until it is a voxel off, where the sheet leaves the face at 15 degrees or more and no face
+// around it turns over. What decimation and the vertex fit moved near the box would otherwise
+// be pressed flat onto the face by the volume mesh's snapping, a sliver wedge where the rock
+// has none. Returns the vertices moved.
+uint64_t SettleAtBox(const Dims& dims, TriangleMesh* mesh);
+
+// The pieces a mid-surface can mesh: each of `pieces` (a label per voxel of `set`, -1 none)
+// whose layers are height fields (95% of its voxels outside junctions in columns of one run
+// of their layer) stays as it is; the voxels of the others take the label `separate` gives
+// them (separation's pieces, aligned the same way; -1: cut away, a junction), renumbered
+// past `pieces`' labels. `separate` is called only when some piece needs it; its errors
+// pass through.
+absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
+    const VoxelSet& set, std::span<const int32_t> pieces,
+    const std::function<absl::StatusOr<std::vector<int32_t>>()>& separate);
 
 // The mid-surface of every piece of `set` (`piece_of_voxel` aligned with the set's voxels;
 // empty: each 6-connected component is a piece). Pieces of fewer than 3 voxels give no

@@ -227,6 +227,7 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
   // The sheets meet at their planes' angle: what decimation and the fits moved near a
   // junction goes back onto its piece's plane there.
   FlattenAtJunctions(&mesh, mid.junctions);
+  SettleAtBox(sheet.set.dims(), &mesh);
   out.components = sheet.components.count();
   out.attributes_seconds = absl::ToDoubleSeconds(absl::Now() - t0);
   SM_RETURN_IF_ERROR(progress.Update(1.0));

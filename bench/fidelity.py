@@ -14,8 +14,11 @@ and DPM (../shared/data, skipped when absent), the phantom sample, the presets t
 rough_slab (walls rough and not parallel), rough_network and vuggy_network (thin sheets
 opening into vugs), a 192³ phantom, and a planar constant-aperture junction built here.
 
-Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--budgets 100,200,...] [--FLAG=VALUE]
-Other --FLAG=VALUE arguments go to sheetmesh's surface runs (e.g. --surface_fit_walls=false).
+Usage: /usr/bin/python3 bench/fidelity.py [BUILD_DIR] [--budgets 100,200,...]
+           [--volumes NAME,...] [--sheets_only] [--FLAG=VALUE]
+--volumes keeps the volumes whose name holds one of the words; --sheets_only skips the
+automatic choice (the sheets-only run gives the row). Other --FLAG=VALUE arguments go to
+sheetmesh's surface runs (e.g. --surface_fit_walls=false, --surface_mesher=midsurface).
 Writes bench/out/fidelity.md and prints the table.
 """
 import argparse
@@ -147,6 +150,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("build", nargs="?", default=os.path.join(ROOT, "build"))
     ap.add_argument("--budgets", default="100,200,500,1000,2000,5000,10000,20000")
+    ap.add_argument("--volumes", default="", help="words of the volumes' names to keep")
+    ap.add_argument("--sheets_only", action="store_true")
     args, extra = ap.parse_known_args()
     cli = os.path.join(args.build, "worker", "pipeline", "sheetmesh-pipeline")
     out_root = os.path.join(ROOT, "bench", "out", "fidelity")
@@ -156,15 +161,23 @@ def main():
              "| S sheets only | S peer | Δ S | shortfall ratio "
              "| Dice ours / peer | Hausdorff ours / peer | s ours / peer |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    keep = [w for w in args.volumes.split(",") if w]
     for name, raw, dims, value in volumes(cli, out_root):
+        if keep and not any(w in name for w in keep):
+            continue
         vdir = os.path.join(out_root, name.replace(" ", "_").replace("^", ""))
         os.makedirs(vdir, exist_ok=True)
         last = None
         for budget in budgets:
             try:
-                tri, sim, shell, dice, haus, secs, r, dec, kinds = ours(cli, raw, dims, value, budget,
-                                                                        vdir, extra)
-                sheet_only = ours(cli, raw, dims, value, budget, vdir, extra, "sheet")[1]
+                if args.sheets_only:
+                    tri, sim, shell, dice, haus, secs, r, dec, kinds = ours(
+                        cli, raw, dims, value, budget, vdir, extra, "sheet")
+                    sheet_only = sim
+                else:
+                    tri, sim, shell, dice, haus, secs, r, dec, kinds = ours(
+                        cli, raw, dims, value, budget, vdir, extra)
+                    sheet_only = ours(cli, raw, dims, value, budget, vdir, extra, "sheet")[1]
             except subprocess.CalledProcessError as e:
                 line = "| %s | %d | refused: %s |" % (name, budget, e.stderr.strip().splitlines()[-1])
                 print(line, flush=True)

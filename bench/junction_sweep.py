@@ -155,7 +155,8 @@ def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract)
                         "--junction_degrees=%d" % angle, "--junction=" + kind, "--seed=%d" % seed,
                         "-o", str(vol)], check=True, stdout=subprocess.DEVNULL)
     truth = json.loads(pathlib.Path(str(vol) + ".truth.json").read_text())
-    out = folder / ("out_%d%s_s%d_r%g_%s" % (angle, kind, seed, r, method))
+    out = folder / ("out_%d%s_s%d_r%g_%s%s" % (angle, kind, seed, r, method,
+                                               "_extract" if extract else ""))
     cmd = [cli, "run" if extract else "surface", str(vol), "-o", str(out), "--r=%g" % r,
            "--surface_mesher=" + method, "--surface_representation=sheet",
            "--similarity_hausdorff=false"]

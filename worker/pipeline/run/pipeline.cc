@@ -392,17 +392,19 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     SM_ASSIGN_OR_RETURN(
         piece_of_voxel,
         MidSurfacePieces(sheet.set, whole, [&]() -> absl::StatusOr<std::vector<int32_t>> {
-          SeparationOptions separation = options.extraction.separation;
-          if (separation.radius_voxels == 0) {
-            separation.radius_voxels =
-                std::max(kSeparationRadiusFloor, sheet.thickness_stats.mean / 2);
-          }
-          SM_ASSIGN_OR_RETURN(const SeparationResult parts,
-                              Separate(sheet.set, separation, progress.Stage("separate")));
+          // Separation with its own tidying: pieces below M to the junction, the gaps it cut
+          // regrown within the phase (extraction without detection's additions).
+          ExtractionOptions e = options.extraction;
+          e.refine = false;
+          e.detect = false;
+          e.separate = true;
+          e.recover_extend.memory_bytes = MemoryBudget(options.input.open.limits);
+          SM_ASSIGN_OR_RETURN(const ExtractionResult parts,
+                              ExtractFeatures(sheet.set, e, progress.Stage("separate")));
           std::vector<int32_t> separated(sheet.set.size(), -1);
-          parts.pieces.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
+          parts.model.set.ForEachVoxel([&](uint64_t i, int32_t x, int32_t y, int32_t z) {
             const int64_t at = sheet.set.Find(x, y, z);
-            if (at >= 0) separated[at] = parts.pieces.label[i];
+            if (at >= 0) separated[at] = parts.model.label[i];
           });
           return separated;
         }));

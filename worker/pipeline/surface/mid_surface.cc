@@ -503,6 +503,7 @@ absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
     const VoxelSet& set, std::span<const int32_t> pieces,
     const std::function<absl::StatusOr<std::vector<int32_t>>()>& separate) {
   constexpr double kClean = 0.95;
+  const double kShallow = std::cos(20 * kPi / 180);
   int32_t count = 0;
   for (int32_t p : pieces) count = std::max(count, p + 1);
   std::vector<std::vector<Index3>> voxels(count);
@@ -515,14 +516,35 @@ absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
     std::vector<Index3> junction;
     double share = 1;
     const uint64_t min_layer = MinLayerVoxels(voxels[p].size());
-    SplitPiece(std::move(voxels[p]), min_layer, &junction, &share);
+    const std::vector<std::vector<Index3>> layers =
+        SplitPiece(std::move(voxels[p]), min_layer, &junction, &share);
     clean[p] = share >= kClean;
+    // Layers whose planes differ by more than a shallow crossing: separation sees their folds.
+    std::vector<Vec3> normals;
+    for (const std::vector<Index3>& layer : layers) {
+      Vec3 c, n;
+      FitPlane(layer, &c, &n);
+      for (const Vec3& m : normals) clean[p] &= std::abs(Dot(m, n)) >= kShallow;
+      normals.push_back(n);
+    }
   }
   std::vector<int32_t> out(pieces.begin(), pieces.end());
   if (std::all_of(clean.begin(), clean.end(), [](uint8_t c) { return c; })) return out;
   SM_ASSIGN_OR_RETURN(const std::vector<int32_t> separated, separate());
+  // Separation's small pieces (flat cells cut off beside a junction) are the junction's: a
+  // chart of them would lie over the sheet beside them once that is filled up to the line.
+  std::vector<uint64_t> component_size(count, 0);
+  absl::flat_hash_map<std::pair<int32_t, int32_t>, uint64_t> part_size;
   for (size_t i = 0; i < out.size(); ++i) {
-    if (out[i] >= 0 && !clean[out[i]]) out[i] = separated[i] < 0 ? -1 : count + separated[i];
+    if (out[i] < 0 || clean[out[i]]) continue;
+    ++component_size[out[i]];
+    if (separated[i] >= 0) ++part_size[{out[i], separated[i]}];
+  }
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i] < 0 || clean[out[i]]) continue;
+    const bool small = separated[i] < 0 ||
+                       part_size[{out[i], separated[i]}] < MinLayerVoxels(component_size[out[i]]);
+    out[i] = small ? -1 : count + separated[i];
   }
   return out;
 }

@@ -58,7 +58,8 @@ uint64_t SettleAtBox(const Dims& dims, TriangleMesh* mesh);
 // whose layers are height fields (95% of its voxels outside junctions in columns of one run
 // of their layer) stays as it is; the voxels of the others take the label `separate` gives
 // them (separation's pieces, aligned the same way; -1: cut away, a junction), renumbered
-// past `pieces`' labels. `separate` is called only when some piece needs it; its errors
+// past `pieces`' labels; its pieces under a fiftieth of their component (at least 64
+// voxels) are junction too (-1). `separate` is called only when some piece needs it; its errors
 // pass through.
 absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
     const VoxelSet& set, std::span<const int32_t> pieces,

@@ -8,18 +8,18 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-"$cli" phantom --preset=sample -o "$tmp/s_128x112x96_u8.raw" | grep -q "sheet voxels" || fail phantom
+"$cli" phantom --preset=sample -o "$tmp/s_128x112x96_u8.raw" | grep "sheet voxels" > /dev/null || fail phantom
 [ -f "$tmp/s_128x112x96_u8.raw.truth.json" ] || fail "phantom truth"
 # A raw name without dims: the phantom says how to read it back, and that works.
 hint=$("$cli" phantom --preset=sample -o "$tmp/nameless.raw" | grep -o -- "--dims=[^ ]* --dtype=[a-z0-9]*") ||
   fail "phantom: no read-back hint for a raw name without dims"
 "$cli" info "$tmp/nameless.raw" $hint > /dev/null || fail "phantom: its read-back hint"
-"$cli" phantom --preset=sample -o "$tmp/s2_128x112x96_u8.raw" | grep -q "holds no dims" &&
+"$cli" phantom --preset=sample -o "$tmp/s2_128x112x96_u8.raw" | grep "holds no dims" > /dev/null &&
   fail "phantom: a hint where the name has the dims"
 "$cli" info "$tmp/s_128x112x96_u8.raw" --json > "$tmp/info.json"
 /usr/bin/python3 -c "import json,sys; j=json.load(open('$tmp/info.json')); sys.exit(0 if j['dims']==[128,112,96] and j['sheet_voxels']>0 else 1)" || fail "info json"
-"$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip | grep -q wrote || fail convert
-"$cli" surface "$tmp/s.nrrd" --r 7 -o "$tmp/surf" --similarity_hausdorff=false | grep -q "similarity" || fail surface
+"$cli" convert "$tmp/s_128x112x96_u8.raw" -o "$tmp/s.nrrd" --out_format=nrrd-gzip | grep wrote > /dev/null || fail convert
+"$cli" surface "$tmp/s.nrrd" --r 7 -o "$tmp/surf" --similarity_hausdorff=false | grep "similarity" > /dev/null || fail surface
 for f in surface.ply surface.vtp surface.vtu surface.obj report.json; do [ -f "$tmp/surf/$f" ] || fail "surface wrote no $f"; done
 # meshio (which reads no PolyData) takes the surface .vtu with its thickness per triangle.
 /usr/bin/python3 - "$tmp/surf/surface.vtu" <<'PY' || fail "meshio cannot read surface.vtu with its cell data"
@@ -32,7 +32,7 @@ for name in ("thickness", "thickness_voxels", "piece"):
     assert name in m.cell_data and len(m.cell_data[name][0]) == len(tri), name
 assert (m.cell_data["thickness_voxels"][0] >= 0).all()
 PY
-"$cli" score "$tmp/s.nrrd" "$tmp/surf/surface.ply" --similarity_hausdorff=false | grep -q "similarity" || fail score
+"$cli" score "$tmp/s.nrrd" "$tmp/surf/surface.ply" --similarity_hausdorff=false | grep "similarity" > /dev/null || fail score
 cat > "$tmp/cfg.json" <<'JSON'
 {"separate": {"D_ang": 140}, "r": 8, "volume_mesh": true}
 JSON
@@ -40,12 +40,12 @@ JSON
 # Progress on stderr, a line per stage (piped), in order, ending with the write; stdout as before.
 grep -q "^stage 1/[0-9]* read" "$tmp/run_progress.txt" || fail "run showed no progress: $(cat "$tmp/run_progress.txt")"
 sed -n 's#^stage \([0-9]*\)/.*#\1#p' "$tmp/run_progress.txt" | sort -n -c || fail "run's stages out of order"
-tail -1 "$tmp/run_progress.txt" | grep -q "write 100%" || fail "run's progress did not end with the write"
+tail -1 "$tmp/run_progress.txt" | grep "write 100%" > /dev/null || fail "run's progress did not end with the write"
 grep -q "^stage" "$tmp/run.txt" && fail "progress went to stdout"
 grep -q "surface     r = 6" "$tmp/run.txt" || fail "the flag --r must override the config's r"
 grep -q "volume mesh" "$tmp/run.txt" || fail "the config's volume_mesh must apply"
 for f in model.vdb pieces.csv volume.vtu volume.msh volume.inp report.json; do [ -f "$tmp/run/$f" ] || fail "run wrote no $f"; done
-"$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol" | grep -q "conform" || fail volume
+"$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol" | grep "conform" > /dev/null || fail volume
 [ -f "$tmp/vol/volume_report.json" ] || fail "volume report"
 # Two processes (each with its own hash seed) give the same volume mesh, byte for byte.
 "$cli" volume "$tmp/run/surface.ply" --volume "$tmp/s_128x112x96_u8.raw" -o "$tmp/vol2" \
@@ -60,7 +60,7 @@ expect_error() {
   local code=0
   out=$("$@" 2>&1) || code=$?
   [ "$code" -ne 0 ] || fail "expected an error from: $*"
-  echo "$out" | grep -q -- "$EXPECT" || fail "message '$out' lacks '$EXPECT'"
+  grep -q -- "$EXPECT" <<< "$out" || fail "message '$out' lacks '$EXPECT'"
 }
 head -c 1000 "$tmp/s_128x112x96_u8.raw" > "$tmp/cut_128x112x96_u8.raw"
 EXPECT="truncated" expect_error "$cli" info "$tmp/cut_128x112x96_u8.raw"

@@ -22,7 +22,7 @@ case_() {
   local w
   IFS='|' read -ra ws <<< "$words"
   for w in "${ws[@]}"; do
-    echo "$out" | grep -qF -- "$w" || fail "$name: the message lacks '$w': $out"
+    grep -F -- "$w" <<< "$out" > /dev/null || fail "$name: the message lacks '$w': $out"
   done
 }
 
@@ -104,7 +104,7 @@ case_ detect_R_1000 0 "extract" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tm
 case_ tet_min_dihedral_69.99 2 "tet_min_dihedral = 69.99|[0, 20]" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --volume_mesh --tet_min_dihedral=69.99
 case_ seed_above_its_range 2 "surface_seed|9007199254740992" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --surface_seed=9007199254740993
 case_ all_nan_names_no_sentinel 2 "every voxel is NaN" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1
-"$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1 2>&1 | grep -q "inf" && fail "all-NaN: the message quotes the empty range's sentinel"
+"$cli" info "$tmp/nan_8x8x8_f32.raw" --window=0:1 2>&1 | grep "inf" > /dev/null && fail "all-NaN: the message quotes the empty range's sentinel"
 case_ spacing_1e-6_m 0 "model.vdb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/tiny" --spacing=1e-6,1e-6,1e-6 --unit=m
 # A job beyond the memory it may use: an error naming the stage, exit 2, no file.
 case_ out_of_memory 2 "out of memory in stage|--memory_limit_gb" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/oom" --memory_limit_gb=0.2
@@ -138,8 +138,8 @@ out=$(timeout 120 "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/limited" --volu
   --plc_lattice=0.25 --plc_grading=0.1 --tet_time_limit_seconds=4 --similarity_hausdorff=false 2>&1) || code=$?
 cases=$((cases + 1))
 case $code in
-  0) echo "$out" | grep -q "stopped at tet.time_limit_seconds" || fail "time limit: no warning: $out" ;;
-  1) echo "$out" | grep -q "tet.time_limit_seconds = 4" || fail "time limit: $out" ;;
+  0) grep -q "stopped at tet.time_limit_seconds" <<< "$out" || fail "time limit: no warning: $out" ;;
+  1) grep -q "tet.time_limit_seconds = 4" <<< "$out" || fail "time limit: $out" ;;
   *) fail "time limit: exit $code: $out" ;;
 esac
 # A subnormal permeability ran as an all-zero tensor: the table's range is physical, in m².

@@ -340,6 +340,21 @@ absl::StatusOr<RadiusSearchResult> SearchRadius(const SheetAnalysis& sheet,
                                                 const Progress& progress) {
   Evaluator eval(sheet, surface, piece_of_voxel, options.height, progress);
   RadiusSearchResult out;
+  if (options.goal == RadiusGoal::kTriangles && surface.method == SurfaceMethod::kMid) {
+    // The mid-surface is decimated to any count: no r to search, the count given is made.
+    out.choice.radius = surface.scvd.radius_voxels;
+    out.choice.decimated_to = options.triangles;
+    SM_ASSIGN_OR_RETURN(out.surface, eval.Take(out.choice.radius, out.choice.decimated_to));
+    const double faces = static_cast<double>(out.surface.mesh.num_faces());
+    out.choice.target_reached = std::abs(faces - options.triangles) <= 0.05 * options.triangles;
+    if (!out.choice.target_reached) {
+      out.choice.message =
+          absl::StrCat("the mid-surface gives ", out.surface.mesh.num_faces(), " triangles where ",
+                       options.triangles, " were asked: its outline and junctions need them");
+    }
+    SM_RETURN_IF_ERROR(progress.Update(1.0));
+    return out;
+  }
   SM_ASSIGN_OR_RETURN(out.choice, Search(eval, sheet, surface, options));
   out.choice.trials = eval.trials();
   SM_ASSIGN_OR_RETURN(out.surface, eval.Take(out.choice.radius, out.choice.decimated_to));

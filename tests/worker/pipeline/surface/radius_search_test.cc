@@ -121,6 +121,22 @@ TEST(RadiusSearchTest, TriangleGoalMeetsTheBudgetWithinFivePercent) {
   }
 }
 
+TEST(RadiusSearchTest, TheMidSurfaceIsDecimatedToTheCountWithoutASearch) {
+  const SheetAnalysis sheet = Sheet();
+  SurfaceOptions s;
+  s.method = SurfaceMethod::kMid;
+  for (const uint64_t budget : {200u, 1000u}) {
+    RadiusSearchOptions o;
+    o.goal = RadiusGoal::kTriangles;
+    o.triangles = budget;
+    SM_ASSERT_OK_AND_ASSIGN(RadiusSearchResult found, SearchRadius(sheet, s, o));
+    EXPECT_TRUE(found.choice.trials.empty());
+    EXPECT_EQ(found.choice.decimated_to, budget);
+    EXPECT_TRUE(found.choice.target_reached) << found.choice.message;
+    EXPECT_NEAR(static_cast<double>(found.surface.mesh.num_faces()), budget, 0.05 * budget);
+  }
+}
+
 TEST(RadiusSearchTest, TriangleGoalBelowTheOutlineOrBeyondTheFinestIsSaid) {
   const SheetAnalysis sheet = Sheet();
   RadiusSearchOptions o;

@@ -202,7 +202,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   }
   if (options.cap_degrees < 180) plc.closed_slits = CloseSlits(st, v, options.cap_degrees);
   if (options.overlap_voxels > 0) {
-    plc.dropped_overlaps = DropOverlaps(st, v, options.overlap_voxels, options.overlap_degrees);
+    plc.dropped_overlaps = DropOverlaps(st, v, on_face, HeldAtJunctions(st, v.size()),
+                                        options.overlap_voxels, options.overlap_degrees);
   }
   if (options.contact_voxels > 0) {
     std::vector<Vec3> unmended;

@@ -111,9 +111,12 @@ std::pair<uint32_t, uint32_t> FlipSheetTriangles(SheetTriangles& st, const std::
                                                  double fold_degrees, double cap_degrees);
 // Closes slits framed by three rim edges. Returns the number closed.
 uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_degrees);
-// Drops rim triangles that lie on another sheet. Returns the number dropped.
-uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
-                      double max_degrees);
+// Drops rim triangles that lie on another sheet; an edge on a box face (both ends on one,
+// `on_face`) is no rim, and two triangles that share a `held` vertex (a junction's) meet
+// there at the junction's angle, however small. Returns the number dropped.
+uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
+                      const std::vector<uint8_t>& on_face, const std::vector<uint8_t>& held,
+                      double gap, double max_degrees);
 // Opens narrow wedges between a sheet face and a sheet edge, moving vertices in `v` (none
 // `held`). Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,

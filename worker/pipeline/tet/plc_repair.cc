@@ -246,8 +246,9 @@ uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_de
 // one with more rim edges goes (ties: the smaller), if it has a rim edge at all: a fragment
 // lying on a sheet, or a sheet's rim running over another sheet. Two interior triangles
 // are left as they are, as dropping one would open a hole. Returns the number dropped.
-uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
-                      double max_degrees) {
+uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
+                      const std::vector<uint8_t>& on_face, const std::vector<uint8_t>& held,
+                      double gap, double max_degrees) {
   constexpr int kSamples = 6;  // points per edge of the barycentric grid sampled
   const double max_sin = std::sin(max_degrees * std::numbers::pi / 180.0);
   auto corners = [&](uint32_t f) {
@@ -283,7 +284,7 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
     faces_only.faces = s.faces;
     const EdgeIndex edges(faces_only);
     for (const EdgeIndex::Edge& e : edges.edges()) {
-      if (e.count == 1) ++rim[edges.faces(e)[0]];
+      if (e.count == 1 && (on_face[e.a] & on_face[e.b]) == 0) ++rim[edges.faces(e)[0]];
     }
     std::vector<double> area(n);
     std::vector<Vec3> lo(n), hi(n);
@@ -313,6 +314,12 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v, double gap,
         for (uint32_t x : s.faces[a])
           shared += x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2];
         if (shared >= 2) continue;
+        bool at_junction = false;
+        for (uint32_t x : s.faces[a]) {
+          at_junction |=
+              held[x] && (x == s.faces[b][0] || x == s.faces[b][1] || x == s.faces[b][2]);
+        }
+        if (at_junction) continue;
         const Vec3 na = AreaVector(corners(a)), nb = AreaVector(corners(b));
         if (Norm(Cross(na, nb)) > max_sin * Norm(na) * Norm(nb)) continue;
         if (!near_interior(a, b) && !near_interior(b, a)) continue;

@@ -154,8 +154,10 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
 }
 
 // A chart whose plane lies between those of two charts it meets, closer to each than they
-// are to one another, is where two sheets ran together (the runs of a shallow crossing
-// merged), not a sheet: its voxels are the junction's.
+// are to one another and within kBandDegrees of both, is where two sheets ran together (the
+// runs of a shallow crossing merged), not a sheet: its voxels are the junction's.
+constexpr double kBandDegrees = 20;
+
 bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
                const std::map<std::pair<int32_t, int32_t>, Contact>& contacts,
                const JunctionOptions& options) {
@@ -173,8 +175,10 @@ bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
   for (size_t p = 0; p < partners.size(); ++p) {
     for (size_t q = p + 1; q < partners.size(); ++q) {
       const double between = degrees(partners[p], partners[q]);
-      if (between > std::max(degrees(c, partners[p]), degrees(c, partners[q])) + 3 &&
-          between > options.min_degrees) {
+      const double off = std::max(degrees(c, partners[p]), degrees(c, partners[q]));
+      // A band lies along both (they ran together there at a shallow angle); a sheet that
+      // meets two others steeply is a sheet of a network, whatever the angles between.
+      if (between > off + 3 && between > options.min_degrees && off <= kBandDegrees) {
         return true;
       }
     }

@@ -19,6 +19,7 @@
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
+#include "worker/pipeline/surface/mid_surface_box.h"
 #include "worker/pipeline/surface/mid_surface_chart.h"
 #include "worker/pipeline/surface/mid_surface_junction_line.h"
 #include "worker/pipeline/voxel/voxel_set.h"
@@ -44,15 +45,6 @@ struct MidSurface {
 // angle of their planes whatever decimation and the vertex fit did near the line. Returns
 // the vertices moved. The mesh's vertices, faces and face_piece are read; vertices move.
 uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>& lines);
-
-// A sheet meets a box face at the angle of its plane, as it meets another sheet: the
-// vertices of the mesh's rim within 0.1 voxel of a face of the box of `dims` go onto it, and
-// every other vertex within a voxel of a face slides along its sheet (in its tangent plane)
-// until it is a voxel off, where the sheet leaves the face at 15 degrees or more and no face
-// around it turns over. What decimation and the vertex fit moved near the box would otherwise
-// be pressed flat onto the face by the volume mesh's snapping, a sliver wedge where the rock
-// has none. Returns the vertices moved.
-uint64_t SettleAtBox(const Dims& dims, TriangleMesh* mesh);
 
 // The pieces a mid-surface can mesh: each of `pieces` (a label per voxel of `set`, -1 none)
 // whose layers are height fields (95% of its voxels outside junctions in columns of one run

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <tuple>
 #include <vector>
 
 #include "common/types.h"
@@ -27,6 +28,18 @@ struct ChartColumn {
 };
 
 // One piece's chart: the axis its height field runs along and its plane's fit.
+// A voxel in a chart's frame: (i, j) across the axis, h along it.
+struct ChartVoxel {
+  int32_t i, j, h;
+  bool operator<(const ChartVoxel& o) const { return std::tie(i, j, h) < std::tie(o.i, o.j, o.h); }
+};
+
+// A cut leaves the columns whose centres lie within kZipGap of its line (grid units), so the
+// corners of the rim facing it keep clear of the line; the rim's columns within kZipReach are
+// zipped to it.
+inline constexpr double kZipGap = 1.0;
+inline constexpr double kZipReach = kZipGap + 1.5;
+
 struct MidSurfaceChart {
   int32_t piece = 0;
   int axis = 2;                 // 0, 1, 2: x, y, z

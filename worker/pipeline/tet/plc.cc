@@ -214,8 +214,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     }
   }
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
-    plc.opened_wedges = OpenWedges(st, on_face, HeldAtJunctions(st, v.size()),
-                                   options.wedge_degrees, options.wedge_voxels, v);
+    plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }
   // A triangle the mends left with no area covers nothing and holds a corner on its own
   // long edge, which TetGen aborts on: it goes, and a vertex then left exactly on another

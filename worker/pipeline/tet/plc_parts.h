@@ -117,11 +117,12 @@ uint32_t CloseSlits(SheetTriangles& s, const std::vector<Vec3>& v, double min_de
 uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
                       const std::vector<uint8_t>& on_face, const std::vector<uint8_t>& held,
                       double gap, double max_degrees);
-// Opens narrow wedges between a sheet face and a sheet edge, moving vertices in `v` (none
-// `held`). Returns the number of vertices moved.
+// Opens narrow wedges (below min_degrees) between a sheet face and a sheet edge, moving
+// vertices in `v`; a junction at a true angle of min_degrees or more is not touched, and
+// one narrower is opened like any wedge (holding its vertices kept NETL's 4.2-degree
+// wedge at r = 5, bench/RESULTS.md issue 64). Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
-                    const std::vector<uint8_t>& held, double min_degrees, double max_move,
-                    std::vector<Vec3>& v);
+                    double min_degrees, double max_move, std::vector<Vec3>& v);
 
 // A point on the box's surface: on the faces whose bits are set (bit `face`, as on_face).
 struct BoxPoint {

@@ -347,8 +347,7 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
 // its neighbours; vertices on the box stay. A move that makes triangles clash is undone.
 // Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
-                    const std::vector<uint8_t>& held, double min_degrees, double max_move,
-                    std::vector<Vec3>& v) {
+                    double min_degrees, double max_move, std::vector<Vec3>& v) {
   if (!(min_degrees > 0) || !(max_move > 0) || st.faces.empty()) return 0;
   const double sin_min = std::sin(min_degrees * std::numbers::pi / 180.0);
   const double tan_min = std::tan(min_degrees * std::numbers::pi / 180.0);
@@ -410,7 +409,6 @@ uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_fac
       if (faces_of[u].empty()) continue;
       const Wedge w = narrowest(u);
       if (!(w.sine < sin_min) || on_face[w.far] != 0) continue;
-      if (w.far < held.size() && held[w.far]) continue;
       const double before = around(w.far);
       // Moving along the normal keeps the edge's length in the plane.
       const double in_plane = std::sqrt(std::max(0.0, w.length * w.length - w.height * w.height));

@@ -95,6 +95,11 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "degrees",
                         "a tetrahedron below this may get its new vertex on a sheet face or edge "
                         "(0: every sheet triangle stays one face)"));
+  rows.push_back(Number("improve.sheet_move_voxels", SM_MEMBER(volume.improve.sheet_move_voxels),
+                        "[0, 10]", "voxels",
+                        "for a tetrahedron below improve.split_sheets_below_degrees, the sheet "
+                        "vertices of its star may move this far (half at a junction, none on "
+                        "the box; 0: the PLC's vertices stay)"));
   rows.push_back(Number("improve.radius_weight", SM_MEMBER(volume.improve.radius_weight), "[0, 1]",
                         "",
                         "smoothing raises the mean of (1 - w) min dihedral + w 70.53 degrees "

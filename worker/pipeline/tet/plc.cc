@@ -17,6 +17,15 @@ namespace {
 constexpr size_t kContactPlaces = 10;  // unmended contacts the report names
 constexpr double kTouchVoxels = 1e-6;  // a vertex this near a sheet edge or face lies on it
 
+// The offset of coordinate k of seed i, in [-0.5, 0.5) (kSeedJitterVoxels).
+double Jitter(uint64_t i, int k) {
+  uint64_t x = (i + 1) * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(k) * 0xBF58476D1CE4E5B9ull;
+  x ^= x >> 31;
+  x *= 0x94D049BB133111EBull;
+  x ^= x >> 29;
+  return static_cast<double>(x >> 11) / 9007199254740992.0 - 0.5;
+}
+
 // The sheets' median edge sets the spacing of the seeded points, so that the tetrahedra
 // off the sheets are about as large as those on them. 0 without sheets.
 double MedianEdge(const Plc& plc) {
@@ -268,8 +277,14 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   const LatticeLevels levels =
       GradeLattice(plc.box_lo, plc.box_hi,
                    (options.lattice > 0 ? options.lattice : 1.0) * median_edge, options.grading);
+  const double jitter = kSeedJitterVoxels * plc.voxel_length;
   if (options.seed_box && !levels.spacing.empty()) {
     box_points = SeedBox(plc, levels);
+    for (size_t i = 0; i < box_points.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        if (!(box_points[i].on_face & (3 << (2 * k)))) box_points[i].p[k] += jitter * Jitter(i, k);
+      }
+    }
     for (const BoxPoint& b : box_points) plc.vertices.push_back(b.p);
     plc.box_points = static_cast<uint32_t>(box_points.size());
   }
@@ -285,7 +300,10 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.lattice_spacing = levels.spacing.front();
     plc.lattice_levels = static_cast<uint32_t>(levels.spacing.size());
     plc.lattice_coarsest = levels.spacing.back();
-    const std::vector<Vec3> seeds = SeedLattice(plc, levels);
+    std::vector<Vec3> seeds = SeedLattice(plc, levels);
+    for (size_t i = 0; i < seeds.size(); ++i) {
+      for (int k = 0; k < 3; ++k) seeds[i][k] += jitter * Jitter(box_points.size() + i, k);
+    }
     plc.seed_points = static_cast<uint32_t>(seeds.size());
     plc.vertices.insert(plc.vertices.end(), seeds.begin(), seeds.end());
   }

@@ -344,7 +344,9 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
 // after can mend them without splitting the face many times over. The edge's far end
 // moves straight away from the face's plane until the edge stands min_degrees off it, by
 // at most max_move in all, and only where that opens the narrowest wedge around it and
-// its neighbours; vertices on the box stay. A move that makes triangles clash is undone.
+// its neighbours; vertices on the box stay. So does the third corner of a face that meets
+// a box face along an edge at under min_degrees, straight off the box face. A move that
+// makes triangles clash is undone.
 // Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
                     double min_degrees, double max_move, std::vector<Vec3>& v) {
@@ -424,6 +426,45 @@ uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_fac
         any = true;
       } else {
         v[w.far] = start;
+      }
+    }
+    if (!any) break;
+  }
+  // A sheet face with an edge on a box face meets that face at its own angle: where that is
+  // under min_degrees (a sheet grazing the box), its third corner moves straight off the
+  // box face until it is min_degrees, as for an edge over a face, unless that narrows the
+  // wedges around it.
+  for (int round = 0; round < 3; ++round) {
+    bool any = false;
+    for (const Face& t : st.faces) {
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = t[k], b = t[(k + 1) % 3], o = t[(k + 2) % 3];
+        const uint8_t shared = on_face[a] & on_face[b];
+        if (shared == 0 || on_face[o] != 0) continue;
+        for (int face = 0; face < 6; ++face) {
+          if (!(shared & (1 << face))) continue;
+          const int axis = Axis(face);
+          const double inward = Low(face) ? 1.0 : -1.0;
+          const Vec3 e = Normalized(v[b] - v[a]);
+          const Vec3 s = v[o] - v[a];
+          const double h = (v[o][axis] - v[a][axis]) * inward;  // > 0: inside the box
+          const Vec3 across = s - e * Dot(s, e);
+          const double in_plane = std::sqrt(std::max(0.0, Norm2(across) - h * h));
+          if (!(h > 0) || !(h < in_plane * tan_min)) continue;
+          const double before = around(o);
+          const Vec3 start = v[o];
+          Vec3 to = start;
+          to[axis] += inward * (in_plane * tan_min - h);
+          const Vec3 off = to - original[o];
+          if (Norm(off) > max_move) to = original[o] + off * (max_move / Norm(off));
+          v[o] = to;
+          if (around(o) < std::min(before, sin_min) - 1e-12) {
+            v[o] = start;
+            continue;
+          }
+          moved[o] = 1;
+          any = true;
+        }
       }
     }
     if (!any) break;

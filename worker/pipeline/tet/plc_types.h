@@ -23,6 +23,13 @@ struct PlcFacet {
 
 inline constexpr int32_t kBoundaryMarker = 1;     // the box faces
 inline constexpr int32_t kFirstSheetMarker = 10;  // sheet triangle t has marker 10 + t
+// The seeded points (box points, lattice) sit on regular lattices, in many sets of four or
+// five on one sphere or plane with the sheets' traces on the box. TetGen 1.5 resolves most
+// such ties but not all: DPM's sheet at y = 49.5 met the box's seeds so that every TetGen
+// run aborted while recovering segments (`run --r=7`: "terminate called after throwing an
+// instance of 'int'"). Each seed moves by a fixed pseudo-random offset of at most half
+// this (voxels) per free coordinate; a box point stays in its face or on its edge.
+inline constexpr double kSeedJitterVoxels = 1e-4;
 
 // What building the PLC changed, for the report.
 struct PlcStats {
@@ -124,7 +131,9 @@ struct PlcOptions {
   // is as small as the wedge, and that nothing after can mend. The edge's far end moves
   // straight away from the face's plane until the wedge is wedge_degrees wide, by at most
   // wedge_voxels, where that widens the narrowest wedge around it and makes no clash;
-  // vertices on the box stay (bench/RESULTS.md). 0 for either: no moves.
+  // vertices on the box stay (bench/RESULTS.md). A sheet face meeting a box face along an
+  // edge within wedge_degrees (a sheet grazing the box) has its third corner moved off the
+  // box face the same way. 0 for either: no moves.
   double wedge_degrees = 12.0;
   double wedge_voxels = 1.0;
   // A sheet vertex within this many voxels of another sheet's triangle (off its own) moves

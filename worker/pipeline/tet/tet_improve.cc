@@ -22,10 +22,15 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
   const absl::Time start = absl::Now();
   *report = {};
   TetMeshEditor ed(mesh);
-  VertexFreedom freedom(*mesh, box_lo, box_hi, input_nodes);
+  VertexFreedom freedom(*mesh, box_lo, box_hi, input_nodes,
+                        options.split_sheets_below_degrees > 0 ? options.sheet_move_voxels : 0);
   VertexInserter inserter(ed, freedom, options);
   const SmoothingOptions smoothing{options.smoothing_floor_degrees, options.radius_weight};
   report->movable_vertices = freedom.movable();
+  std::vector<uint32_t> balls;  // the PLC sheet vertices that may move, as they began
+  for (uint32_t v = 0; v < ed.num_nodes(); ++v) {
+    if (freedom.in_ball(v)) balls.push_back(v);
+  }
   report->sliding_vertices = freedom.sliding();
   std::tie(report->min_dihedral_before, report->mean_dihedral_before) = ed.MinMean();
   absl::Status status;
@@ -114,7 +119,9 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       if (freedom.may_move(v)) todo.push_back(v);
     }
     auto wants = [&](uint32_t v) {
-      if (ed.StarMin(v) >= options.target_degrees) return false;
+      const double worst = ed.StarMin(v);
+      if (worst >= options.target_degrees) return false;
+      if (freedom.in_ball(v) && worst >= options.split_sheets_below_degrees) return false;
       if (move_tried[v] == 0 || !ed.UnchangedSince(v, move_tried[v])) return true;
       ++report->retries_skipped;
       return false;
@@ -135,6 +142,12 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     if (changes == 0) break;
   }
   std::tie(report->min_dihedral_after, report->mean_dihedral_after) = ed.MinMean();
+  for (uint32_t v : balls) {
+    const double moved = Norm(ed.node(v) - freedom.anchor(v));
+    if (!(moved > 0)) continue;
+    ++report->moved_sheet_vertices;
+    report->max_sheet_move = std::max(report->max_sheet_move, moved);
+  }
   report->sheet_face_splits = inserter.facet_splits();
   report->sheet_edge_splits = inserter.edge_splits();
   ed.Finish();

@@ -13,7 +13,10 @@
 //  - smoothing of the vertices: box vertices slide within their face or edge, so the
 //    domain is unchanged; the vertices TetGen added on a sheet slide within the sheet
 //    triangle or along the sheet edge they lie on, so the sheets are unchanged too (their
-//    faces still tile every input triangle); the PLC's own vertices never move.
+//    faces still tile every input triangle); the PLC's own sheet vertices off the box move
+//    at most sheet_move_voxels (half at a junction), and only to raise a star's worst below
+//    split_sheets_below_degrees (four sheet vertices nearly on one circle: a sliver no
+//    vertex off the sheets can mend). Those few moves are the only change to the sheets.
 // A flip or an insertion is kept only if it raises the worst tetrahedron it touches (or,
 // for the mean, raises the mean without lowering that worst), and nothing ever inverts.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_IMPROVE_H_
@@ -33,8 +36,8 @@
 
 namespace sheetmesh {
 
-// Improves `mesh` in place. Nodes [0, input_nodes) are the PLC's vertices and never move
-// if they are on a sheet. The faces (the facets' triangles, box and sheets) stay faces,
+// Improves `mesh` in place. Nodes [0, input_nodes) are the PLC's vertices; on a sheet they
+// move only as options.sheet_move_voxels allows (the caller takes their new places back). The faces (the facets' triangles, box and sheets) stay faces,
 // each of them within the facet it tiles, and vertices on the box faces stay on them, so the
 // mesh keeps conforming to the PLC bounded by [box_lo, box_hi]. Tetrahedra must be
 // positively oriented (TetVolume > 0). Returns kCancelled if `progress` asks, leaving a

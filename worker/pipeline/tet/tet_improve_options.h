@@ -45,6 +45,14 @@ struct TetImproveOptions {
   // 0 keeps every sheet face as it came from TetGen. Only tetrahedra below
   // insert_below_degrees get a new vertex at all, so the lower of the two applies.
   double split_sheets_below_degrees = 15.0;
+  // A tetrahedron below split_sheets_below_degrees whose corners are the sheets' own
+  // vertices (a flat gap framed by sheet edges, four sheet vertices nearly on one circle)
+  // is out of reach of every vertex off the sheets. Then the sheet vertices of its star
+  // may move by at most this far from where the PLC put them (in units of the smallest
+  // voxel edge; half as far where sheets meet), to raise the worst tetrahedron and nothing
+  // else; vertices on the box stay. The sheet's faces move with them: the similarity of
+  // the volume mesh's sheets counts the cost. 0 keeps every PLC vertex where it is.
+  double sheet_move_voxels = 1.0;
   // A budget: no flip or insertion that could take the mesh past this many tetrahedra
   // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from
   // VolumeMeshOptions::max_tetrahedra.
@@ -59,6 +67,8 @@ struct TetImproveReport {
   uint64_t inserted_vertices = 0;  // new vertices (off slivers, or on sheets next to them)
   uint64_t sheet_face_splits = 0;  // of those, on a sheet face (splitting it in three)
   uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
+  uint32_t moved_sheet_vertices = 0;  // PLC sheet vertices moved (sheet_move_voxels)
+  double max_sheet_move = 0;          // the farthest of them moved, in the mesh's units
   uint64_t over_budget = 0;        // insertions not tried for TetImproveOptions::max_tetrahedra
   uint64_t retries_skipped = 0;    // flips and moves not tried again: failed, nothing changed
   uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)

@@ -263,6 +263,9 @@ VertexInserter::Candidate VertexInserter::BestSheetSplit(uint32_t t) const {
 }
 
 void VertexInserter::Apply(const Candidate& c) {
+  for (uint32_t f : c.split) {
+    for (uint32_t w : ed_.mesh().faces[f]) fr_.Freeze(w);
+  }
   const uint32_t v = ed_.AddNode(c.p);
   if (c.split.empty()) {
     fr_.AddFree(c.p);

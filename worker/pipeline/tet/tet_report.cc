@@ -35,6 +35,8 @@ nlohmann::json TetImproveReport::Fields() const {
           {"inserted_vertices", inserted_vertices},
           {"sheet_face_splits", sheet_face_splits},
           {"sheet_edge_splits", sheet_edge_splits},
+          {"moved_sheet_vertices", moved_sheet_vertices},
+          {"max_sheet_move_voxels", max_sheet_move},
           {"over_budget", over_budget},
           {"retries_skipped", retries_skipped},
           {"movable_vertices", movable_vertices},

@@ -7,7 +7,8 @@
 namespace sheetmesh {
 
 VertexFreedom::VertexFreedom(const TetMesh& mesh, const Vec3& lo, const Vec3& hi,
-                             uint32_t input_nodes) {
+                             uint32_t input_nodes, double sheet_reach)
+    : reach_(sheet_reach) {
   const size_t n = mesh.nodes.size();
   // Which coordinates each vertex may change: none on a sheet; on the box, not the ones
   // that put it on a box face.
@@ -26,6 +27,7 @@ VertexFreedom::VertexFreedom(const TetMesh& mesh, const Vec3& lo, const Vec3& hi
     for (uint32_t v : mesh.faces[f]) mask_[v] = 0;
   }
   ClassifySheetNodes(mesh, input_nodes, off_box);
+  if (reach_ > 0) ClassifyPlcSheetNodes(mesh, input_nodes, off_box);
 }
 
 Vec3 VertexFreedom::Constrain(uint32_t v, Vec3 d) const {
@@ -34,6 +36,8 @@ Vec3 VertexFreedom::Constrain(uint32_t v, Vec3 d) const {
       return d - axis_[v] * Dot(d, axis_[v]);
     case Slide::kLine:
       return axis_[v] * Dot(d, axis_[v]);
+    case Slide::kBall:
+      return d;
     case Slide::kNone:
       break;
   }
@@ -49,6 +53,11 @@ Vec3 VertexFreedom::Place(uint32_t v, const Vec3& p) const {
       return p - axis_[v] * Dot(p - anchor_[v], axis_[v]);
     case Slide::kLine:
       return anchor_[v] + axis_[v] * Dot(p - anchor_[v], axis_[v]);
+    case Slide::kBall: {
+      const Vec3 d = p - anchor_[v];
+      const double n = Norm(d);
+      return n <= reach_of_[v] ? p : anchor_[v] + d * (reach_of_[v] / n);
+    }
     case Slide::kNone:
       break;
   }
@@ -62,8 +71,13 @@ uint32_t VertexFreedom::movable() const {
 }
 
 uint32_t VertexFreedom::sliding() const {
-  return static_cast<uint32_t>(
-      std::count_if(slide_.begin(), slide_.end(), [](Slide s) { return s != Slide::kNone; }));
+  return static_cast<uint32_t>(std::count_if(slide_.begin(), slide_.end(), [](Slide s) {
+    return s == Slide::kPlane || s == Slide::kLine;
+  }));
+}
+
+uint32_t VertexFreedom::in_balls() const {
+  return static_cast<uint32_t>(std::count(slide_.begin(), slide_.end(), Slide::kBall));
 }
 
 void VertexFreedom::AddFree(const Vec3& p) {
@@ -160,6 +174,69 @@ void VertexFreedom::ClassifySheetNodes(const TetMesh& m, uint32_t input_nodes,
       slide_[v] = Slide::kLine;
       axis_[v] = dir;
     }
+  }
+}
+
+// The PLC's sheet vertices that may move within the ball: off the box, with every sheet
+// face around them a whole input triangle (the pieces of a split one must stay in one
+// plane). A vertex where sheets meet (faces of two pieces, or an edge in more than two
+// faces) moves within kJunctionReach of the reach: the junction's tangles at small r hold
+// slivers too, and a shorter move bends the junction's angle less.
+void VertexFreedom::ClassifyPlcSheetNodes(const TetMesh& m, uint32_t input_nodes,
+                                          const std::vector<uint8_t>& off_box) {
+  const uint32_t n = std::min<uint32_t>(input_nodes, static_cast<uint32_t>(m.nodes.size()));
+  reach_of_.assign(m.nodes.size(), 0);
+  std::vector<int32_t> piece(n, -1);
+  std::vector<uint8_t> eligible(n, 0), on_box(n, 0), junction(n, 0);
+  std::vector<std::pair<uint64_t, int32_t>> edges;  // (edge key, piece) of sheet faces
+  std::vector<int32_t> markers;
+  for (uint32_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_piece[f] >= 0) markers.push_back(m.face_marker[f]);
+  }
+  std::sort(markers.begin(), markers.end());
+  auto split = [&](int32_t marker) {
+    const auto [lo, hi] = std::equal_range(markers.begin(), markers.end(), marker);
+    return hi - lo > 1;
+  };
+  for (uint32_t f = 0; f < m.faces.size(); ++f) {
+    const auto& face = m.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = face[k];
+      if (v >= n) continue;
+      if (m.face_piece[f] < 0) {
+        on_box[v] = 1;
+        continue;
+      }
+      if (piece[v] < 0) {
+        piece[v] = m.face_piece[f];
+        eligible[v] = 1;
+      } else if (piece[v] != m.face_piece[f]) {
+        junction[v] = 1;
+      }
+      if (split(m.face_marker[f])) eligible[v] = 0;
+    }
+    if (m.face_piece[f] < 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = std::min(face[k], face[(k + 1) % 3]);
+      const uint32_t b = std::max(face[k], face[(k + 1) % 3]);
+      edges.push_back({(uint64_t{a} << 32) | b, m.face_piece[f]});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i > 2) {
+      for (const uint32_t v : {uint32_t(edges[i].first >> 32), uint32_t(edges[i].first)}) {
+        if (v < n) junction[v] = 1;
+      }
+    }
+    i = j;
+  }
+  for (uint32_t v = 0; v < n; ++v) {
+    if (!eligible[v] || on_box[v] || off_box[v] != 7 || slide_[v] != Slide::kNone) continue;
+    slide_[v] = Slide::kBall;
+    reach_of_[v] = junction[v] ? kJunctionReach * reach_ : reach_;
   }
 }
 

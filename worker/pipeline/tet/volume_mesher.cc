@@ -450,6 +450,11 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
     if (!at_limit(st)) return st;
     r.sliver_refinement.stopped = limit_reached;
   }
+  // The improvement may have moved sheet vertices of the PLC within their reach
+  // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
+  for (size_t i = 0; i < plc.vertices.size() && i < r.mesh.nodes.size(); ++i) {
+    plc.vertices[i] = r.mesh.nodes[i];
+  }
   static_cast<PlcStats&>(r) = plc;
   r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);
   r.conformity = CheckConformity(plc, r.mesh);

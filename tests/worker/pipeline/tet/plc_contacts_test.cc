@@ -71,6 +71,7 @@ TEST(PlcContactsTest, TheMendedContactMeshesWithoutSlivers) {
   VolumeMeshOptions joined;
   joined.plc.grading = 0.4;  // the lattice this case was built at
   joined.sliver_rounds = 0;  // the mend alone
+  joined.improve.sheet_move_voxels = 0;
   VolumeMeshOptions apart = joined;
   apart.plc.contact_voxels = 0;
   const Dims dims{60, 60, 60};
@@ -91,9 +92,13 @@ TEST(PlcContactsTest, TheMendedContactMeshesWithoutSlivers) {
 TEST(PlcContactsTest, TheGapLeftApartIsRefinedAway) {
   // Left apart (no mend), the slivers in the gap are pinned by the sheets: bisecting the
   // sheet triangles around them and meshing again lifts the smallest angle over 10 degrees.
+  // (The sheets' vertices held where the PLC put them: moving them mends the gap too,
+  // below.)
   VolumeMeshOptions apart;
   apart.plc.grading = 0.4;
   apart.plc.contact_voxels = 0;
+  VolumeMeshOptions moving = apart;
+  apart.improve.sheet_move_voxels = 0;
   VolumeMeshOptions once = apart;
   once.sliver_rounds = 0;
   const Dims dims{60, 60, 60};
@@ -106,6 +111,12 @@ TEST(PlcContactsTest, TheGapLeftApartIsRefinedAway) {
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_GT(r.conformity.sheet_triangles, s.conformity.sheet_triangles);
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  // By default the improvement moves the sheet vertices that pin them (up to 1 voxel) and
+  // no refinement round is needed.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult m, BuildVolumeMesh(Diamond(), dims, {}, moving));
+  EXPECT_GE(m.quality.min_dihedral.min, 10.0);
+  EXPECT_GT(m.improvement.moved_sheet_vertices, 0u);
+  EXPECT_EQ(m.conformity.conforming, m.conformity.sheet_triangles);
 }
 
 TEST(PlcContactsTest, ARimRunningHalfAVoxelOverAnotherSheetIsNamedNotMoved) {

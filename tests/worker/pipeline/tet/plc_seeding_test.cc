@@ -14,6 +14,9 @@
 namespace sheetmesh {
 namespace {
 
+// The seeds are offset by at most kSeedJitterVoxels / 2 per coordinate (plc_types.h).
+constexpr double kSlack = 2 * kSeedJitterVoxels;
+
 using ::sheetmesh::testing::ClosestPair;
 using ::sheetmesh::testing::DistanceToSheets;
 using ::sheetmesh::testing::Square;
@@ -62,7 +65,7 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
     EXPECT_EQ(seen[v], bits) << "box point " << v;
     // 3 off the box's corners and edges of its own level, and off the sheet.
     const double d = DistanceToSheets(plc, p);
-    EXPECT_GT(d, 3.0 - 1e-9);
+    EXPECT_GT(d, 3.0 - kSlack);
     if (d < 13.0) near.push_back(p);
   }
   // Each outline runs once round its face, in order: its length is the face's perimeter.
@@ -76,7 +79,7 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   }
   // Level 0 points are 5 apart along rows and edges.
   ASSERT_GT(near.size(), 1u);
-  EXPECT_NEAR(ClosestPair(near), 5.0, 1e-9);
+  EXPECT_NEAR(ClosestPair(near), 5.0, kSlack);
   // Not seeded unless asked.
   o.seed_box = false;
   SM_ASSERT_OK_AND_ASSIGN(Plc plain, BuildPlc(sheet, {60, 60, 60}, {}, o));
@@ -106,18 +109,18 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
     const Vec3& p = plc.vertices[i];
     const double d = DistanceToSheets(plc, p);
-    EXPECT_GT(d, 3.0 - 1e-9);
+    EXPECT_GT(d, 3.0 - kSlack);
     for (int k = 0; k < 3; ++k) {
-      EXPECT_GE(p[k], -0.5 + 3.0 - 1e-9);
-      EXPECT_LE(p[k], 59.5 - 3.0 + 1e-9);
+      EXPECT_GE(p[k], -0.5 + 3.0 - kSlack);
+      EXPECT_LE(p[k], 59.5 - 3.0 + kSlack);
     }
     (d <= 15.5 ? near : far).push_back(p);
   }
   ASSERT_FALSE(near.empty());
   ASSERT_FALSE(far.empty());
   // A BCC lattice's nearest neighbours are sqrt(3)/2 spacings apart.
-  EXPECT_NEAR(ClosestPair(near), std::sqrt(3.0) / 2 * 5, 1e-9);
-  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+  EXPECT_NEAR(ClosestPair(near), std::sqrt(3.0) / 2 * 5, kSlack);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - kSlack);
   // None at 0.
   PlcOptions off;
   off.lattice = 0;
@@ -172,14 +175,14 @@ TEST(PlcTest, TheSeededLatticeHasTheGradedSpacingAtEachDistance) {
   std::vector<Vec3> level1, coarsest;
   for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
     const double d = DistanceToSheets(plc, plc.vertices[i]);
-    EXPECT_GT(d, 3.0 - 1e-9);
+    EXPECT_GT(d, 3.0 - kSlack);
     if (d >= 8 && d < 18) level1.push_back(plc.vertices[i]);
     if (d >= 38) coarsest.push_back(plc.vertices[i]);
   }
   ASSERT_GE(level1.size(), 2u);
   ASSERT_GE(coarsest.size(), 2u);
-  EXPECT_NEAR(ClosestPair(level1), std::sqrt(3.0) / 2 * 10, 1e-9);
-  EXPECT_NEAR(ClosestPair(coarsest), std::sqrt(3.0) / 2 * 40, 1e-9);
+  EXPECT_NEAR(ClosestPair(level1), std::sqrt(3.0) / 2 * 10, kSlack);
+  EXPECT_NEAR(ClosestPair(coarsest), std::sqrt(3.0) / 2 * 40, kSlack);
   // A grading of 0.4 keeps each level 2.5 of its spacings wide: more seeds.
   o.grading = 0.4;
   SM_ASSERT_OK_AND_ASSIGN(Plc slow, BuildPlc(sheet, {200, 200, 200}, {}, o));
@@ -203,17 +206,17 @@ TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
   SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
   ASSERT_GT(thin.seed_points, 0u);
   for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
-    EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - 1e-9);
-    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + 1e-9);
+    EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - kSlack);
+    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + kSlack);
   }
   std::vector<Vec3> far = far_seeds(thin);
   ASSERT_GE(far.size(), 2u);
-  EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, 1e-9);
+  EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, kSlack);
   // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
   SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
   far = far_seeds(thick);
   ASSERT_GE(far.size(), 2u);
-  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - 1e-9);
+  EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - kSlack);
 }
 
 }  // namespace

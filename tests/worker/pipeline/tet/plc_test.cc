@@ -202,10 +202,14 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, {}));
   EXPECT_EQ(r.dropped_overlaps, 1u);
   EXPECT_EQ(r.conformity.conforming, 32u);
+  // Kept (and nothing else to mend it: no sheet vertex moves, no refinement round), its
+  // sliver stays.
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult with, BuildVolumeMesh(m, {20, 20, 20}, {}, [] {
                             VolumeMeshOptions o;
                             o.plc.overlap_voxels = 0;
                             o.plc.contact_voxels = 0;
+                            o.improve.sheet_move_voxels = 0;
+                            o.sliver_rounds = 0;
                             return o;
                           }()));
   EXPECT_EQ(with.conformity.conforming, 33u);
@@ -268,12 +272,50 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
     EXPECT_EQ(d.opened_wedges, 0u);
     EXPECT_LT(Norm(Nearest(d, w0) - w0), 1e-12);
   }
-  // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed).
+  // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed),
+  // the sheet's vertices held where the PLC puts them. (The improvement may move them:
+  // then the closed wedge's sliver mends too, improve.sheet_move_voxels.)
   VolumeMeshOptions opened, closed;
+  opened.improve.sheet_move_voxels = closed.improve.sheet_move_voxels = 0;
   closed.plc.wedge_degrees = 0;
   VolumeMeshResult r, s;
   MeshWithAndWithout(NarrowWedge(), dims, opened, closed, &r, &s);
   EXPECT_EQ(r.opened_wedges, 1u);
+}
+
+// A sheet grazing the box: a triangle with its edge a-b on the face z = -0.5 of a 20^3
+// box rises 8 degrees off it to O, 16 voxels in (too far off the face to be snapped onto
+// it). O moves straight up until the triangle stands 12 degrees off the face (by at most
+// plc.wedge_voxels): the narrowest input wedge is the face's, no longer 8 degrees.
+TEST(PlcTest, ASheetGrazingABoxFaceIsLiftedOffIt) {
+  const Dims dims{20, 20, 20};
+  const double tan8 = std::tan(8 * std::numbers::pi / 180);
+  const double tan12 = std::tan(12 * std::numbers::pi / 180);
+  TriangleMesh m;
+  const Vec3 o0(9, 17.5, -0.5 + 16 * tan8);
+  m.vertices = {{4, 1.5, -0.5}, {14, 1.5, -0.5}, o0};
+  m.faces = {{0, 1, 2}};
+  m.face_piece = {0};
+  m.face_thickness_voxels = {1};
+  PlcOptions base;
+  base.lattice = 0;
+  PlcOptions off = base;
+  off.wedge_degrees = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc closed, BuildPlc(m, dims, {}, off));
+  EXPECT_EQ(closed.opened_wedges, 0u);
+  EXPECT_NEAR(MeasureWedges(closed, 10).narrowest_degrees, 8, 1e-9);
+  // By default it moves 1 voxel, the most it may: atan(3.249 / 16) = 11.48 degrees.
+  SM_ASSERT_OK_AND_ASSIGN(const Plc a, BuildPlc(m, dims, {}, base));
+  EXPECT_EQ(a.opened_wedges, 1u);
+  EXPECT_LT(Norm(Nearest(a, o0) - (o0 + Vec3(0, 0, 1))), 1e-12);
+  EXPECT_NEAR(MeasureWedges(a, 10).narrowest_degrees,
+              std::atan((16 * tan8 + 1) / 16) * 180 / std::numbers::pi, 1e-9);
+  // Allowed 2 voxels, exactly 12 degrees.
+  PlcOptions far = base;
+  far.wedge_voxels = 2;
+  SM_ASSERT_OK_AND_ASSIGN(const Plc b, BuildPlc(m, dims, {}, far));
+  EXPECT_NEAR(Nearest(b, o0).z, -0.5 + 16 * tan12, 1e-9);
+  EXPECT_NEAR(MeasureWedges(b, 10).narrowest_degrees, 12, 1e-9);
 }
 
 TEST(PlcTest, ASlitFramedByThreeRimEdgesIsClosed) {
@@ -380,6 +422,8 @@ TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
   VolumeMeshOptions with;
   with.plc.contact_voxels = 0;
   with.plc.overlap_voxels = 0;
+  VolumeMeshOptions moving = with;
+  with.improve.sheet_move_voxels = 0;  // the sheets' vertices held: the refinement's work
   VolumeMeshOptions without = with;
   without.tetgen.min_dihedral_degrees = 0;  // no aim: no refinement
   VolumeMeshResult r, off;
@@ -393,6 +437,15 @@ TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
   EXPECT_GT(r.sheet_faces, off.sheet_faces);
   // Not yet to 10 degrees: the worst left is not pinned at the refined triangles.
   EXPECT_GT(r.quality.min_dihedral.min, 5);
+  // Where the improvement may move the sheets' vertices (by default, 1 voxel), it lifts
+  // them too (8.06 degrees), if not to 10 either: the gap is a near contact, which the PLC
+  // mends by default (plc.contact_voxels).
+  SM_ASSERT_OK_AND_ASSIGN(const VolumeMeshResult moved,
+                          BuildVolumeMesh(m, {40, 40, 22}, {}, moving));
+  EXPECT_GT(moved.improvement.moved_sheet_vertices, 0u);
+  EXPECT_LE(moved.improvement.max_sheet_move, 1 + 1e-9);
+  EXPECT_GT(moved.quality.min_dihedral.min, off.quality.min_dihedral.min + 2);
+  EXPECT_EQ(moved.conformity.conforming, moved.conformity.sheet_triangles);
 }
 
 TEST(PlcTest, AnEdgeAcrossACornerOfABoxFaceIsASegmentOfItsFacet) {

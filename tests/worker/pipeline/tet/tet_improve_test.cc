@@ -13,6 +13,7 @@
 #include "tests/testing/status_matchers.h"
 #include "worker/pipeline/tet/plc.h"
 #include "worker/pipeline/tet/tet_mesh_editor.h"
+#include "worker/pipeline/tet/vertex_freedom.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -183,6 +184,7 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   off.plc.lattice = 0;
   VolumeMeshOptions on = off;
   on.improve = {};
+  on.improve.sheet_move_voxels = 0;  // the PLC's sheet vertices stay (see SheetVerticesMove...)
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult before, BuildVolumeMesh(sheet, dims, {}, off));
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult after, BuildVolumeMesh(sheet, dims, {}, on));
   const TetImproveReport& r = after.improvement;
@@ -322,6 +324,90 @@ TEST(TetImproveTest, ZeroPassesLeavesTheMeshAsItIs) {
   EXPECT_EQ(m.tets, copy.tets);
   EXPECT_EQ(report.passes, 0);
   EXPECT_EQ(report.min_dihedral_after, report.min_dihedral_before);
+}
+
+// Two planar sheets crossing at right angles in a 20^3 box: A at z = 10 from face to face
+// of the box in x and y, B at x = 9.5 inside it, sharing A's vertices on the junction
+// line. A PLC sheet vertex may move within its ball only off the box, half as far on the
+// junction; the ball holds it within its reach; a vertex whose face is split stays.
+TEST(VertexFreedomTest, PlcSheetVerticesMoveOffTheBoxHalfAsFarAtJunctions) {
+  TriangleMesh sheets;
+  auto grid = [&](auto at, int nu, int nv, int32_t piece) {
+    const uint32_t first = static_cast<uint32_t>(sheets.vertices.size());
+    for (int j = 0; j <= nv; ++j)
+      for (int i = 0; i <= nu; ++i) sheets.vertices.push_back(at(i, j));
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) {
+        const uint32_t v = first + j * (nu + 1) + i;
+        sheets.faces.push_back({v, v + 1, v + nu + 2});
+        sheets.faces.push_back({v, v + nu + 2, v + nu + 1});
+        sheets.face_piece.insert(sheets.face_piece.end(), 2, piece);
+      }
+  };
+  grid([](int i, int j) { return Vec3(-0.5 + 2 * i, -0.5 + 2 * j, 10); }, 10, 10, 0);
+  grid([](int i, int j) { return Vec3(9.5, 3.5 + 2 * i, 4 + 2 * j); }, 6, 6, 1);
+  // B's vertices on the junction line are A's: merge them.
+  std::vector<uint32_t> same(sheets.vertices.size());
+  for (uint32_t v = 0; v < same.size(); ++v) {
+    same[v] = v;
+    for (uint32_t w = 0; w < v; ++w) {
+      if (sheets.vertices[w] == sheets.vertices[v]) {
+        same[v] = w;
+        break;
+      }
+    }
+  }
+  for (auto& f : sheets.faces)
+    for (uint32_t& v : f) v = same[v];
+  sheets.face_thickness_voxels.assign(sheets.faces.size(), 2);
+  const Dims dims{20, 20, 20};
+  VolumeMeshOptions o;
+  o.improve.passes = 0;
+  SM_ASSERT_OK_AND_ASSIGN(const VolumeMeshResult r, BuildVolumeMesh(sheets, dims, {}, o));
+  SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(sheets, dims, {}, o.plc));
+  const uint32_t input = static_cast<uint32_t>(plc.vertices.size());
+  const VertexFreedom none(r.mesh, plc.box_lo, plc.box_hi, input, 0);
+  VertexFreedom fr(r.mesh, plc.box_lo, plc.box_hi, input, 1.0);
+  std::vector<uint8_t> on_sheet(r.mesh.nodes.size(), 0);
+  for (size_t f = 0; f < r.mesh.faces.size(); ++f) {
+    if (r.mesh.face_piece[f] < 0) continue;
+    for (uint32_t v : r.mesh.faces[f]) on_sheet[v] = 1;
+  }
+  int balls = 0, junction = 0, box = 0;
+  for (uint32_t v = 0; v < input; ++v) {
+    EXPECT_FALSE(none.in_ball(v));
+    if (!on_sheet[v]) {
+      EXPECT_FALSE(fr.in_ball(v)) << v;
+      continue;
+    }
+    const Vec3& p = r.mesh.nodes[v];
+    const bool at_box = p.x == -0.5 || p.x == 19.5 || p.y == -0.5 || p.y == 19.5 ||
+                        p.z == -0.5 || p.z == 19.5;
+    const bool at_junction = p.x == 9.5 && p.z == 10 && p.y >= 3.5 && p.y <= 15.5;
+    EXPECT_EQ(fr.in_ball(v), !at_box) << v << " at " << p.x << "," << p.y << "," << p.z;
+    if (at_junction) {
+      EXPECT_NEAR(Norm(fr.Place(v, p + Vec3(0, 0, 5)) - p), 0.5, 1e-12) << v;
+    } else if (!at_box) {
+      EXPECT_NEAR(Norm(fr.Place(v, p + Vec3(0, 0, 5)) - p), 1.0, 1e-12) << v;
+    }
+    balls += fr.in_ball(v);
+    junction += at_junction;
+    box += at_box;
+  }
+  EXPECT_EQ(junction, 7);  // y = 3.5 ... 15.5
+  EXPECT_GT(box, 0);
+  EXPECT_GT(balls, 80);
+  // Within the ball any way; past it, back onto its sphere.
+  uint32_t v = 0;
+  while (!fr.in_ball(v) || r.mesh.nodes[v].x == 9.5) ++v;
+  const Vec3 a = r.mesh.nodes[v];
+  EXPECT_EQ(fr.Constrain(v, {0.3, -0.2, 0.1}), Vec3(0.3, -0.2, 0.1));
+  EXPECT_EQ(fr.Place(v, a + Vec3(0.5, 0, 0)), a + Vec3(0.5, 0, 0));
+  EXPECT_NEAR(Norm(fr.Place(v, a + Vec3(0, 3, 4)) - a), 1.0, 1e-12);
+  EXPECT_NEAR(Norm(fr.Place(v, a + Vec3(0, 3, 4)) - (a + Vec3(0, 0.6, 0.8))), 0, 1e-12);
+  fr.Freeze(v);
+  EXPECT_FALSE(fr.in_ball(v));
+  EXPECT_EQ(fr.in_balls(), static_cast<uint32_t>(balls - 1));
 }
 
 }  // namespace

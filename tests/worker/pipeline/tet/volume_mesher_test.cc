@@ -115,10 +115,11 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
 TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsStillTile) {
   const TriangleMesh sheets = PhantomJunction();
   const Dims dims{56, 56, 56};
-  // The PLC's wedge opening (tested on its own) would move the sheets here; kept still,
-  // the splits are what mends the sliver.
+  // The PLC's wedge opening and the improvement's sheet vertex moves (tested on their own)
+  // would move the sheets here; kept still, the splits are what mends the sliver.
   VolumeMeshOptions split;
   split.plc.wedge_degrees = 0;
+  split.improve.sheet_move_voxels = 0;
   split.plc.grading = 0.4;  // the lattice this case was built at
   split.sliver_rounds = 0;  // the improvement's splits alone
   VolumeMeshOptions whole = split;
@@ -449,9 +450,12 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   m.face_thickness_voxels = {1, 1};
   VolumeMeshOptions o;
   // The mends that would open it (a vertex moved off the other sheet's plane, or onto it
-  // where it lies within a voxel) are off: this is about what cannot be mended.
+  // where it lies within a voxel, or moved by the improvement) are off: this is about what
+  // cannot be mended.
   o.plc.wedge_degrees = 0;
   o.plc.contact_voxels = 0;
+  VolumeMeshOptions moving = o;
+  o.improve.sheet_move_voxels = 0;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(m, {20, 20, 20}, {}, o));
   EXPECT_NEAR(r.wedges.narrowest_degrees, 5, 1e-6);
   EXPECT_EQ(r.wedges.narrow_edges, 1u);
@@ -459,6 +463,16 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_EQ(r.sliver_refinement.rounds, 0u);
   EXPECT_THAT(r.sliver_refinement.stopped, HasSubstr("narrowest wedge"));
+  // Where the improvement may move the sheets' own vertices (by default, up to 1 voxel;
+  // half that on the junction), the far corners move off each other's planes: the wedge
+  // the mesh has, as measured on its own sheets, is then over 10 degrees, and so is every
+  // tetrahedron.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult w, BuildVolumeMesh(m, {20, 20, 20}, {}, moving));
+  EXPECT_GT(w.improvement.moved_sheet_vertices, 0u);
+  EXPECT_LE(w.improvement.max_sheet_move, 1 + 1e-9);
+  EXPECT_GE(w.quality.min_dihedral.min, 10.0);
+  EXPECT_GE(w.wedges.narrowest_degrees, w.quality.min_dihedral.min - 1e-6);
+  EXPECT_EQ(w.conformity.conforming, w.conformity.sheet_triangles);
 }
 
 }  // namespace

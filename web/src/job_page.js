@@ -45,13 +45,16 @@ function qualityTable(report) {
   const q = vm.quality || {};
   const row = (label, key) => el("tr", {}, el("th", {}, label),
     el("td", {}, fmt(q[key] && q[key].min, 3)), el("td", {}, fmt(q[key] && q[key].mean, 3)));
-  return el("table", { id: "quality" },
+  const table = el("table", { id: "quality" },
     el("thead", {}, el("tr", {}, el("th", {}, "Table 3"), el("th", {}, "min"), el("th", {}, "mean"))),
     el("tbody", {},
       el("tr", {}, el("th", {}, "tetrahedra"), el("td", { colspan: 2, "data-key": "tetrahedra" }, String(vm.tetrahedra))),
       el("tr", {}, el("th", {}, "nodes"), el("td", { colspan: 2, "data-key": "nodes" }, String(vm.nodes))),
       row("dihedral angle (°)", "min_dihedral_degrees"), row("radius aspect", "radius_aspect"),
       row("gamma", "gamma"), row("edge aspect", "edge_aspect")));
+  // A minimum under tet.min_dihedral is said, with where and why (never silent).
+  if (!vm.angle_warning) return table;
+  return el("div", {}, table, el("p", { id: "angle-warning", class: "warning" }, `Warning: ${vm.angle_warning.text}`));
 }
 
 // The permeability tensor (darcy), its principal values and the mesh / image ratios.

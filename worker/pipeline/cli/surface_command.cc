@@ -47,6 +47,7 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
       "radius aspect %.2f/%.2f (min/mean)\n",
       q.min_dihedral.min, q.min_dihedral.mean, q.gamma.min, q.gamma.mean, q.edge_aspect.min,
       q.edge_aspect.mean, q.radius_aspect.min, q.radius_aspect.mean);
+  if (v.angle_warning) out << "  warning   " << v.angle_warning->Line() << "\n";
   if (v.improvement.time_limited) {
     out << absl::StrFormat(
         "  warning   the improvement stopped at tet.time_limit_seconds after %.1f s, its mesh "

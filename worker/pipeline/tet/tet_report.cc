@@ -2,6 +2,7 @@
 // report's JSON names (run/pipeline_report.cc nests them).
 #include <nlohmann/json.hpp>
 
+#include "absl/strings/str_format.h"
 #include "worker/pipeline/tet/plc.h"
 #include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/tet_improve.h"
@@ -25,6 +26,22 @@ nlohmann::json TetQuality::Fields() const {
           {"gamma", gamma.Fields()},
           {"edge_aspect", edge_aspect.Fields()},
           {"radius_aspect", radius_aspect.Fields()}};
+}
+
+std::string AngleWarning::Line() const {
+  return absl::StrFormat(
+      "min dihedral %.2f° under tet.min_dihedral = %g° at voxel (%.0f, %.0f, %.0f): %s", degrees,
+      aim_degrees, at_voxel.x, at_voxel.y, at_voxel.z, cause);
+}
+
+nlohmann::json AngleWarning::Fields() const {
+  return {{"degrees", degrees},
+          {"aim_degrees", aim_degrees},
+          {"at", {at.x, at.y, at.z}},
+          {"at_voxel", {at_voxel.x, at_voxel.y, at_voxel.z}},
+          {"corners_on_sheets", corners_on_sheets},
+          {"cause", cause},
+          {"text", Line()}};
 }
 
 nlohmann::json TetImproveReport::Fields() const {
@@ -100,6 +117,7 @@ nlohmann::json VolumeMeshStats::Fields() const {
     j["bodies"] = list;
   }
   if (delivered_similarity) j["similarity_of_its_sheets"] = *delivered_similarity;
+  if (angle_warning) j["angle_warning"] = angle_warning->Fields();
   j["voxels_per_tetrahedron"] = voxels_per_tet;
   j["volume"] = quality.volume;
   j["tetgen_switches"] = tetgen_switches;

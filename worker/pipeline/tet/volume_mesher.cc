@@ -7,6 +7,7 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/mesh_io.h"
@@ -396,6 +397,51 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   return absl::OkStatus();
 }
 
+// The warning for a minimum under the aim: where the worst tetrahedron is (in the units of
+// `placement`; the caller places it), how many of its corners the sheets hold, and why.
+AngleWarning DescribeWorst(const TetMesh& mesh, double worst, double aim, double wedge,
+                           const Placement& placement) {
+  AngleWarning w;
+  w.degrees = worst;
+  w.aim_degrees = aim;
+  size_t at = 0;
+  double lowest = 1e300;
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    const Tet& q = mesh.tets[t];
+    const double d =
+        MinDihedralDegrees(mesh.nodes[q[0]], mesh.nodes[q[1]], mesh.nodes[q[2]], mesh.nodes[q[3]]);
+    if (d < lowest) lowest = d, at = t;
+  }
+  const Tet& q = mesh.tets[at];
+  std::vector<uint8_t> on_sheet(mesh.nodes.size(), 0);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    if (mesh.face_piece[f] < 0) continue;
+    for (uint32_t v : mesh.faces[f]) on_sheet[v] = 1;
+  }
+  Vec3 centre(0, 0, 0);
+  for (uint32_t v : q) {
+    centre += mesh.nodes[v] * 0.25;
+    w.corners_on_sheets += on_sheet[v];
+  }
+  w.at = centre;
+  for (int k = 0; k < 3; ++k) w.at_voxel[k] = (centre[k] - placement.origin[k]) / placement.spacing[k];
+  constexpr double kWedgeTolerance = 1e-6;  // degrees
+  if (worst >= wedge - kWedgeTolerance) {
+    w.cause = absl::StrFormat(
+        "two facets of the input meet there at %.2f degrees (sheets, or a sheet and the box): no "
+        "conforming mesh does better (plc.wedge_degrees opens such wedges up to plc.wedge_voxels)",
+        wedge);
+  } else if (w.corners_on_sheets >= 3) {
+    w.cause = absl::StrFormat(
+        "%d of its corners are on the sheets, which hold them (a near contact, or a flat gap "
+        "framed by sheet edges, as the sheets' triangles at this r leave it)",
+        w.corners_on_sheets);
+  } else {
+    w.cause = "the improvement found nothing better there within improve.passes";
+  }
+  return w;
+}
+
 // BuildVolumeMesh in the units `placement` gives (see there).
 absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, const Dims& dims,
                                                   const Placement& placement,
@@ -489,6 +535,11 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   r.mesh.voxel_length = PhysicalLength(1.0, placement);
   r.mesh.unit = placement.unit;
   r.quality = MeasureQuality(r.mesh);
+  const double aim = options.tetgen.min_dihedral_degrees;
+  if (aim > 0 && r.quality.min_dihedral.min < aim && !r.mesh.tets.empty()) {
+    r.angle_warning = DescribeWorst(r.mesh, r.quality.min_dihedral.min, aim,
+                                    r.wedges.narrowest_degrees, placement);
+  }
   r.nodes = r.mesh.nodes.size();
   r.tetrahedra = r.mesh.tets.size();
   r.sheet_faces = r.mesh.num_sheet_faces();
@@ -532,6 +583,7 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
   auto place = [&](Vec3& p) { p = {p.x * s + origin.x, p.y * s + origin.y, p.z * s + origin.z}; };
   for (Vec3& p : r.mesh.nodes) place(p);
   for (Vec3& p : r.contact_places) place(p);
+  if (r.angle_warning) place(r.angle_warning->at);
   const double cube = s * s * s;
   r.lattice_spacing *= s;
   r.lattice_coarsest *= s;

@@ -50,6 +50,21 @@ struct Conformity {
   nlohmann::json Fields() const;
 };
 
+// Where the mesh's smallest dihedral angle is under the aim (tet.min_dihedral), so that it
+// is never silent: the angle, the tetrahedron's centre and why it is left.
+struct AngleWarning {
+  double degrees = 0;         // the smallest dihedral angle
+  double aim_degrees = 0;     // tet.min_dihedral
+  Vec3 at;                    // the worst tetrahedron's centre, physical units
+  Vec3 at_voxel;              // the same, in voxel indices (x, y, z)
+  int corners_on_sheets = 0;  // of its 4 corners, on sheet faces
+  std::string cause;          // why, in words, with what may help
+
+  // "min dihedral 5.66° under tet.min_dihedral = 10° at voxel (51, 52, 30): CAUSE".
+  std::string Line() const;
+  nlohmann::json Fields() const;
+};
+
 // What the volume mesh is and how it was made: everything the report says of it. The PLC's
 // own figures come first (PlcStats).
 struct VolumeMeshStats : PlcStats {
@@ -68,6 +83,7 @@ struct VolumeMeshStats : PlcStats {
   // after the PLC's snaps and repairs), set by the pipeline: the surface the user gets in
   // the volume mesh, beside the score of the surface it was made from.
   std::optional<double> delivered_similarity;
+  std::optional<AngleWarning> angle_warning;  // set where the minimum is under the aim
   double voxels_per_tet = 0;  // the box's voxels per tetrahedron (the paper's 1 : 6704)
   TetQuality quality;
   Conformity conformity;

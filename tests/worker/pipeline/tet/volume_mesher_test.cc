@@ -463,6 +463,14 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_EQ(r.sliver_refinement.rounds, 0u);
   EXPECT_THAT(r.sliver_refinement.stopped, HasSubstr("narrowest wedge"));
+  // Never silent: the report and the CLI say the angle, where and why.
+  ASSERT_TRUE(r.angle_warning.has_value());
+  EXPECT_DOUBLE_EQ(r.angle_warning->degrees, r.quality.min_dihedral.min);
+  EXPECT_EQ(r.angle_warning->aim_degrees, 10.0);
+  EXPECT_THAT(r.angle_warning->cause, HasSubstr("meet there at 5.00 degrees"));
+  EXPECT_NEAR(r.angle_warning->at_voxel.z, 10, 1.0);  // in the wedge, along the edge at z = 10
+  EXPECT_GE(r.angle_warning->at_voxel.x, 5 - 1e-9);
+  EXPECT_THAT(r.angle_warning->Line(), HasSubstr("under tet.min_dihedral = 10"));
   // Where the improvement may move the sheets' own vertices (by default, up to 1 voxel;
   // half that on the junction), the far corners move off each other's planes: the wedge
   // the mesh has, as measured on its own sheets, is then over 10 degrees, and so is every
@@ -473,6 +481,7 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   EXPECT_GE(w.quality.min_dihedral.min, 10.0);
   EXPECT_GE(w.wedges.narrowest_degrees, w.quality.min_dihedral.min - 1e-6);
   EXPECT_EQ(w.conformity.conforming, w.conformity.sheet_triangles);
+  EXPECT_FALSE(w.angle_warning.has_value());
 }
 
 }  // namespace

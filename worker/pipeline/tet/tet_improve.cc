@@ -141,6 +141,30 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     if (status.ok()) status = progress.Update(static_cast<double>(pass + 1) / options.passes);
     if (changes == 0) break;
   }
+  // The sheet moves the angles do not need go back, in quarters towards where they began:
+  // as far as the vertex's star stays kBackMargin over the aim (at the mesh's minimum where
+  // that is lower, at the aim where the minimum is under it: a move that lifts a sliver
+  // towards the aim stays, for the sliver rounds that may follow). A vertex whose face was
+  // split since it moved stays (its face's pieces lie in the plane it made).
+  constexpr double kBackMargin = 2.0;  // degrees
+  const double keep_above =
+      std::max(options.aim_degrees,
+               std::min(options.aim_degrees + kBackMargin, ed.MinMean().first));
+  for (uint32_t v : balls) {
+    const Vec3 now = ed.node(v), anchor = freedom.anchor(v);
+    if (now == anchor || !freedom.in_ball(v)) continue;
+    for (const double share : {0.0, 0.25, 0.5, 0.75}) {
+      ed.node(v) = anchor + (now - anchor) * share;
+      double worst = 1e300;
+      for (uint32_t t : ed.star(v)) worst = std::min(worst, ed.Quality(ed.tet(t)));
+      if (worst >= keep_above) {
+        for (uint32_t t : ed.star(v)) ed.Remeasure(t);
+        if (share == 0) ++report->returned_sheet_vertices;
+        break;
+      }
+      ed.node(v) = now;
+    }
+  }
   std::tie(report->min_dihedral_after, report->mean_dihedral_after) = ed.MinMean();
   for (uint32_t v : balls) {
     const double moved = Norm(ed.node(v) - freedom.anchor(v));

@@ -53,6 +53,11 @@ struct TetImproveOptions {
   // else; vertices on the box stay. The sheet's faces move with them: the similarity of
   // the volume mesh's sheets counts the cost. 0 keeps every PLC vertex where it is.
   double sheet_move_voxels = 1.0;
+  // The angle the mesh is meant to reach (tet.min_dihedral; the caller sets it). After the
+  // passes, a PLC sheet vertex moved by sheet_move_voxels goes back towards where it began
+  // as far as its star then stays 2 degrees over this (at the mesh's minimum where that is
+  // lower, but never under this): the sheets change only where the angles need it.
+  double aim_degrees = 10.0;
   // A budget: no flip or insertion that could take the mesh past this many tetrahedra
   // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from
   // VolumeMeshOptions::max_tetrahedra.
@@ -69,6 +74,7 @@ struct TetImproveReport {
   uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
   uint32_t moved_sheet_vertices = 0;  // PLC sheet vertices moved (sheet_move_voxels)
   double max_sheet_move = 0;          // the farthest of them moved, in the mesh's units
+  uint32_t returned_sheet_vertices = 0;  // moved, then taken back all the way (not counted above)
   uint64_t over_budget = 0;        // insertions not tried for TetImproveOptions::max_tetrahedra
   uint64_t retries_skipped = 0;    // flips and moves not tried again: failed, nothing changed
   uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)

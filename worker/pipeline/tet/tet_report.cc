@@ -54,6 +54,7 @@ nlohmann::json TetImproveReport::Fields() const {
           {"sheet_edge_splits", sheet_edge_splits},
           {"moved_sheet_vertices", moved_sheet_vertices},
           {"max_sheet_move_voxels", max_sheet_move},
+          {"returned_sheet_vertices", returned_sheet_vertices},
           {"over_budget", over_budget},
           {"retries_skipped", retries_skipped},
           {"movable_vertices", movable_vertices},

@@ -317,6 +317,7 @@ absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Prog
   *rederived = RederiveFacetFaces(plc, mesh);
   TetImproveOptions improve = options.improve;
   improve.max_tetrahedra = options.max_tetrahedra;
+  improve.aim_degrees = options.tetgen.min_dihedral_degrees;
   return ImproveTetMesh(mesh, plc.box_lo, plc.box_hi, static_cast<uint32_t>(plc.vertices.size()),
                         improve, report, progress);
 }
@@ -395,6 +396,67 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
     r->sliver_refinement.split_edges += split;
   }
   return absl::OkStatus();
+}
+
+// The PLC's sheet vertices the improvement moved go back towards their place in the PLC
+// (in quarters) as far as each one's star stays at or above `keep_above`; a vertex on a
+// sheet triangle the improvement split stays (the pieces lie in the plane it made).
+// Recounts the moved vertices and the farthest move in r->improvement. Returns how many
+// went all the way back.
+uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult* r) {
+  TetMesh& m = r->mesh;
+  const uint32_t n = static_cast<uint32_t>(std::min(plc.vertices.size(), m.nodes.size()));
+  std::vector<uint8_t> held(n, 0), on_sheet(n, 0);
+  absl::flat_hash_map<int32_t, int> faces_of_marker;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_piece[f] >= 0) ++faces_of_marker[m.face_marker[f]];
+  }
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_piece[f] < 0) continue;
+    const bool split = faces_of_marker[m.face_marker[f]] > 1;
+    for (uint32_t v : m.faces[f]) {
+      if (v >= n) continue;
+      on_sheet[v] = 1;
+      held[v] |= split;
+    }
+  }
+  std::vector<std::vector<uint32_t>> star(n);
+  for (uint32_t t = 0; t < m.tets.size(); ++t) {
+    for (uint32_t v : m.tets[t]) {
+      if (v < n) star[v].push_back(t);
+    }
+  }
+  auto star_worst = [&](uint32_t v) {
+    double w = 1e300;
+    for (uint32_t t : star[v]) {
+      const Tet& q = m.tets[t];
+      w = std::min(w, MinDihedralDegrees(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]));
+    }
+    return w;
+  };
+  uint32_t returned = 0, moved = 0;
+  double farthest = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    const Vec3 now = m.nodes[v], anchor = plc.vertices[v];
+    if (!on_sheet[v] || now == anchor) continue;
+    if (!held[v]) {
+      for (const double share : {0.0, 0.25, 0.5, 0.75}) {
+        m.nodes[v] = anchor + (now - anchor) * share;
+        if (star_worst(v) >= keep_above) break;
+        m.nodes[v] = now;
+      }
+    }
+    const double d = Norm(m.nodes[v] - anchor);
+    if (d > 0) {
+      ++moved;
+      farthest = std::max(farthest, d);
+    } else {
+      ++returned;
+    }
+  }
+  r->improvement.moved_sheet_vertices = moved;
+  r->improvement.max_sheet_move = farthest;
+  return returned;
 }
 
 // The warning for a minimum under the aim: where the worst tetrahedron is (in the units of
@@ -496,6 +558,14 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
     if (!at_limit(st)) return st;
     r.sliver_refinement.stopped = limit_reached;
   }
+  // Where the mesh stays under the aim after every round, the sheet moves that did not
+  // lift its minimum go back (the improvement keeps those that lift a sliver towards the
+  // aim, for the rounds that may follow).
+  const double aim = options.tetgen.min_dihedral_degrees;
+  if (aim > 0 && !r.mesh.tets.empty()) {
+    const double worst = MeasureQuality(r.mesh).min_dihedral.min;
+    if (worst < aim) r.improvement.returned_sheet_vertices += TakeBackSheetMoves(plc, worst, &r);
+  }
   // The improvement may have moved sheet vertices of the PLC within their reach
   // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
   for (size_t i = 0; i < plc.vertices.size() && i < r.mesh.nodes.size(); ++i) {
@@ -535,7 +605,6 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   r.mesh.voxel_length = PhysicalLength(1.0, placement);
   r.mesh.unit = placement.unit;
   r.quality = MeasureQuality(r.mesh);
-  const double aim = options.tetgen.min_dihedral_degrees;
   if (aim > 0 && r.quality.min_dihedral.min < aim && !r.mesh.tets.empty()) {
     r.angle_warning = DescribeWorst(r.mesh, r.quality.min_dihedral.min, aim,
                                     r.wedges.narrowest_degrees, placement);

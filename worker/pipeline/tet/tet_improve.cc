@@ -142,14 +142,11 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     if (changes == 0) break;
   }
   // The sheet moves the angles do not need go back, in quarters towards where they began:
-  // as far as the vertex's star stays kBackMargin over the aim (at the mesh's minimum where
-  // that is lower, at the aim where the minimum is under it: a move that lifts a sliver
+  // as far as the vertex's star stays at the mesh's minimum, so the minimum stays what the
+  // passes reached (at the aim where the minimum is under it: a move that lifts a sliver
   // towards the aim stays, for the sliver rounds that may follow). A vertex whose face was
   // split since it moved stays (its face's pieces lie in the plane it made).
-  constexpr double kBackMargin = 2.0;  // degrees
-  const double keep_above =
-      std::max(options.aim_degrees,
-               std::min(options.aim_degrees + kBackMargin, ed.MinMean().first));
+  const double keep_above = std::max(options.aim_degrees, ed.MinMean().first);
   for (uint32_t v : balls) {
     const Vec3 now = ed.node(v), anchor = freedom.anchor(v);
     if (now == anchor || !freedom.in_ball(v)) continue;

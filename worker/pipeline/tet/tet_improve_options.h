@@ -55,8 +55,8 @@ struct TetImproveOptions {
   double sheet_move_voxels = 1.0;
   // The angle the mesh is meant to reach (tet.min_dihedral; the caller sets it). After the
   // passes, a PLC sheet vertex moved by sheet_move_voxels goes back towards where it began
-  // as far as its star then stays 2 degrees over this (at the mesh's minimum where that is
-  // lower, but never under this): the sheets change only where the angles need it.
+  // as far as its star then stays at the mesh's minimum (or at this, where the minimum is
+  // under it): the sheets change only where the angles need it.
   double aim_degrees = 10.0;
   // A budget: no flip or insertion that could take the mesh past this many tetrahedra
   // (0: none); at the budget, flips that add none (3-2, 4-4) still run. The caller sets it from

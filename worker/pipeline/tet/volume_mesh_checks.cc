@@ -23,6 +23,14 @@ absl::flat_hash_set<FaceKey> TetFaces(const TetMesh& mesh) {
 
 }  // namespace
 
+bool NodesFollowPlc(const Plc& plc, const TetMesh& mesh, double slack) {
+  if (mesh.nodes.size() < plc.vertices.size()) return false;
+  for (size_t i = 0; i < plc.vertices.size(); ++i) {
+    if (!(Norm(mesh.nodes[i] - plc.vertices[i]) <= slack)) return false;
+  }
+  return true;
+}
+
 Conformity CheckConformity(const Plc& plc, const TetMesh& mesh) {
   Conformity c;
   c.sheet_triangles = plc.sheet_triangles.size();

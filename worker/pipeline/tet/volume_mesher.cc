@@ -202,6 +202,9 @@ absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Prog
   TetImproveOptions improve = options.improve;
   improve.max_tetrahedra = options.max_tetrahedra;
   improve.aim_degrees = options.tetgen.min_dihedral_degrees;
+  // Sheet vertices move only where the mesh's first nodes are the PLC's, in order (TetGen
+  // drops a point that coincides with another, and numbers the rest again).
+  if (!NodesFollowPlc(plc, *mesh, 0)) improve.sheet_move_voxels = 0;
   return ImproveTetMesh(mesh, plc.box_lo, plc.box_hi, static_cast<uint32_t>(plc.vertices.size()),
                         improve, report, progress);
 }
@@ -340,14 +343,16 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   // lift its minimum go back (the improvement keeps those that lift a sliver towards the
   // aim, for the rounds that may follow).
   const double aim = options.tetgen.min_dihedral_degrees;
-  if (aim > 0 && !r.mesh.tets.empty()) {
+  const bool moved = r.improvement.moved_sheet_vertices > 0 &&
+                     NodesFollowPlc(plc, r.mesh, options.improve.sheet_move_voxels + 1e-9);
+  if (moved && aim > 0 && !r.mesh.tets.empty()) {
     const double worst = MeasureQuality(r.mesh).min_dihedral.min;
     if (worst < aim) r.improvement.returned_sheet_vertices += TakeBackSheetMoves(plc, worst, &r);
   }
   // The improvement may have moved sheet vertices of the PLC within their reach
   // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
-  for (size_t i = 0; i < plc.vertices.size() && i < r.mesh.nodes.size(); ++i) {
-    plc.vertices[i] = r.mesh.nodes[i];
+  if (moved) {
+    for (size_t i = 0; i < plc.vertices.size(); ++i) plc.vertices[i] = r.mesh.nodes[i];
   }
   static_cast<PlcStats&>(r) = plc;
   r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);

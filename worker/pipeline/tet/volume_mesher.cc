@@ -6,6 +6,7 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/time/clock.h"
@@ -430,7 +431,22 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
   unit.origin = {0, 0, 0};
   VolumeMeshOptions o = options;
   o.tetgen.max_volume /= s * s * s;  // unit^3 (0 stays 0: none)
-  SM_ASSIGN_OR_RETURN(VolumeMeshResult r, BuildInPlacement(surface, dims, unit, o, progress));
+  absl::StatusOr<VolumeMeshResult> built = BuildInPlacement(surface, dims, unit, o, progress);
+  if (!built.ok() && built.status().code() == absl::StatusCode::kInternal &&
+      absl::StrContains(built.status().message(), "does not conform") &&
+      o.improve.sheet_move_voxels > 0) {
+    // A mesh whose moved sheet vertices left it not conforming (seen once, on the
+    // rough_network preset at r = 5, cause not yet found) is made again with the PLC's
+    // vertices held, as before the moves existed; the report says so.
+    const std::string why(built.status().message().substr(0, 120));
+    o.improve.sheet_move_voxels = 0;
+    built = BuildInPlacement(surface, dims, unit, o, progress);
+    if (built.ok()) {
+      built->tetgen_recovery.push_back(
+          absl::StrCat("meshed again with improve.sheet_move_voxels = 0: ", why));
+    }
+  }
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult r, std::move(built));
   const Vec3& origin = placement.origin;
   auto place = [&](Vec3& p) { p = {p.x * s + origin.x, p.y * s + origin.y, p.z * s + origin.z}; };
   for (Vec3& p : r.mesh.nodes) place(p);

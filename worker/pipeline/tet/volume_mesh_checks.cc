@@ -24,9 +24,12 @@ absl::flat_hash_set<FaceKey> TetFaces(const TetMesh& mesh) {
 }  // namespace
 
 bool NodesFollowPlc(const Plc& plc, const TetMesh& mesh, double slack) {
-  if (mesh.nodes.size() < plc.vertices.size()) return false;
-  for (size_t i = 0; i < plc.vertices.size(); ++i) {
-    if (!(Norm(mesh.nodes[i] - plc.vertices[i]) <= slack)) return false;
+  for (const Face& t : plc.sheet_triangles) {
+    for (uint32_t v : t) {
+      if (v >= mesh.nodes.size() || !(Norm(mesh.nodes[v] - plc.vertices[v]) <= slack)) {
+        return false;
+      }
+    }
   }
   return true;
 }
@@ -143,13 +146,16 @@ uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult*
   for (size_t f = 0; f < m.faces.size(); ++f) {
     if (m.face_piece[f] >= 0) ++faces_of_marker[m.face_marker[f]];
   }
+  for (const Face& t : plc.sheet_triangles) {  // the PLC's sheet vertices (NodesFollowPlc)
+    for (uint32_t v : t) {
+      if (v < n) on_sheet[v] = 1;
+    }
+  }
   for (size_t f = 0; f < m.faces.size(); ++f) {
     if (m.face_piece[f] < 0) continue;
     const bool split = faces_of_marker[m.face_marker[f]] > 1;
     for (uint32_t v : m.faces[f]) {
-      if (v >= n) continue;
-      on_sheet[v] = 1;
-      held[v] |= split;
+      if (v < n) held[v] |= split;
     }
   }
   std::vector<std::vector<uint32_t>> star(n);

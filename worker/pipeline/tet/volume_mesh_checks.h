@@ -11,9 +11,9 @@
 
 namespace sheetmesh {
 
-// Whether the mesh's first nodes are the PLC's vertices in order, each within `slack` of
-// its place in the PLC (TetGen drops a point that coincides with another and numbers the
-// rest again: then they are not).
+// Whether the mesh's nodes of the PLC's sheet vertices have the PLC's numbers, each within
+// `slack` of its place in the PLC (TetGen drops a point that coincides with another and
+// numbers the rest again: then they may not).
 bool NodesFollowPlc(const Plc& plc, const TetMesh& mesh, double slack);
 
 // Whether every sheet triangle of `plc` is exactly tiled by faces of the mesh's tetrahedra.

@@ -203,9 +203,10 @@ absl::Status Finish(const Plc& plc, const VolumeMeshOptions& options, const Prog
   TetImproveOptions improve = options.improve;
   improve.max_tetrahedra = options.max_tetrahedra;
   improve.aim_degrees = options.tetgen.min_dihedral_degrees;
-  // Sheet vertices move only where the mesh's first nodes are the PLC's, in order (TetGen
+  // Sheet vertices move only where the mesh's nodes of them have the PLC's numbers (TetGen
   // drops a point that coincides with another, and numbers the rest again).
-  if (!NodesFollowPlc(plc, *mesh, 0)) improve.sheet_move_voxels = 0;
+  constexpr double kSamePoint = 1e-6;  // voxels: TetGen's output keeps 16 digits
+  if (!NodesFollowPlc(plc, *mesh, kSamePoint)) improve.sheet_move_voxels = 0;
   return ImproveTetMesh(mesh, plc.box_lo, plc.box_hi, static_cast<uint32_t>(plc.vertices.size()),
                         improve, report, progress);
 }
@@ -345,7 +346,7 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   // aim, for the rounds that may follow).
   const double aim = options.tetgen.min_dihedral_degrees;
   const bool moved = r.improvement.moved_sheet_vertices > 0 &&
-                     NodesFollowPlc(plc, r.mesh, options.improve.sheet_move_voxels + 1e-9);
+                     NodesFollowPlc(plc, r.mesh, options.improve.sheet_move_voxels + 1e-6);
   if (moved && aim > 0 && !r.mesh.tets.empty()) {
     const double worst = MeasureQuality(r.mesh).min_dihedral.min;
     if (worst < aim) r.improvement.returned_sheet_vertices += TakeBackSheetMoves(plc, worst, &r);
@@ -353,7 +354,9 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   // The improvement may have moved sheet vertices of the PLC within their reach
   // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
   if (moved) {
-    for (size_t i = 0; i < plc.vertices.size(); ++i) plc.vertices[i] = r.mesh.nodes[i];
+    for (const Face& t : plc.sheet_triangles) {
+      for (uint32_t v : t) plc.vertices[v] = r.mesh.nodes[v];
+    }
   }
   static_cast<PlcStats&>(r) = plc;
   r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);

@@ -113,12 +113,12 @@ std::vector<ParamRow> FlowRows() {
       "flow", SM_MEMBER(flow.enabled),
       "the sample's permeability tensor on the volume mesh, which it turns on (Darcy flow in the "
       "rock, the cubic law a³/12 on each sheet face, three unit gradients)"));
-  rows.push_back(Number("permeability.matrix", SM_MEMBER(flow.matrix_permeability), "[1e-25, 0.001]",
-                        "m²",
+  rows.push_back(Number("permeability.matrix", SM_MEMBER(flow.matrix_permeability),
+                        "[1e-25, 0.001]", "m²",
                         "permeability of the rock between the sheets (1e-18 m²: about a "
                         "microdarcy, a tight rock)"));
-  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability), "0 | [1e-25, 0.001]",
-                        "m²",
+  rows.push_back(Number("permeability.body", SM_MEMBER(flow.body_permeability),
+                        "0 | [1e-25, 0.001]", "m²",
                         "permeability inside the pieces meshed as bodies; 0: each body's own, "
                         "the parallel-plate law a²/12 of its thickness a = 2 × volume / wall area "
                         "(a thick fracture meshed as a body carries what it would as a sheet)"));

@@ -37,11 +37,11 @@
 namespace sheetmesh {
 
 // Improves `mesh` in place. Nodes [0, input_nodes) are the PLC's vertices; on a sheet they
-// move only as options.sheet_move_voxels allows (the caller takes their new places back). The faces (the facets' triangles, box and sheets) stay faces,
-// each of them within the facet it tiles, and vertices on the box faces stay on them, so the
-// mesh keeps conforming to the PLC bounded by [box_lo, box_hi]. Tetrahedra must be
-// positively oriented (TetVolume > 0). Returns kCancelled if `progress` asks, leaving a
-// valid mesh.
+// move only as options.sheet_move_voxels allows (the caller takes their new places back). The faces
+// (the facets' triangles, box and sheets) stay faces, each of them within the facet it tiles, and
+// vertices on the box faces stay on them, so the mesh keeps conforming to the PLC bounded by
+// [box_lo, box_hi]. Tetrahedra must be positively oriented (TetVolume > 0). Returns kCancelled if
+// `progress` asks, leaving a valid mesh.
 absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_hi,
                             uint32_t input_nodes, const TetImproveOptions& options,
                             TetImproveReport* report, const Progress& progress = {});

@@ -65,21 +65,21 @@ struct TetImproveOptions {
 };
 
 struct TetImproveReport {
-  int passes = 0;                  // rounds run (stops early when a round changes nothing)
-  uint64_t edge_removals = 0;      // edges removed (3-2, 4-4, 5-6, ... flips)
-  uint64_t face_removals = 0;      // 2-3 flips
-  uint64_t smoothing_moves = 0;    // vertex moves accepted
-  uint64_t inserted_vertices = 0;  // new vertices (off slivers, or on sheets next to them)
-  uint64_t sheet_face_splits = 0;  // of those, on a sheet face (splitting it in three)
-  uint64_t sheet_edge_splits = 0;  // of those, on a sheet edge (splitting its faces in two)
-  uint32_t moved_sheet_vertices = 0;  // PLC sheet vertices moved (sheet_move_voxels)
-  double max_sheet_move = 0;          // the farthest of them moved, in the mesh's units
+  int passes = 0;                        // rounds run (stops early when a round changes nothing)
+  uint64_t edge_removals = 0;            // edges removed (3-2, 4-4, 5-6, ... flips)
+  uint64_t face_removals = 0;            // 2-3 flips
+  uint64_t smoothing_moves = 0;          // vertex moves accepted
+  uint64_t inserted_vertices = 0;        // new vertices (off slivers, or on sheets next to them)
+  uint64_t sheet_face_splits = 0;        // of those, on a sheet face (splitting it in three)
+  uint64_t sheet_edge_splits = 0;        // of those, on a sheet edge (splitting its faces in two)
+  uint32_t moved_sheet_vertices = 0;     // PLC sheet vertices moved (sheet_move_voxels)
+  double max_sheet_move = 0;             // the farthest of them moved, in the mesh's units
   uint32_t returned_sheet_vertices = 0;  // moved, then taken back all the way (not counted above)
-  uint64_t over_budget = 0;        // insertions not tried for TetImproveOptions::max_tetrahedra
-  uint64_t retries_skipped = 0;    // flips and moves not tried again: failed, nothing changed
-  uint32_t movable_vertices = 0;   // vertices that may move (sliding ones included)
-  uint32_t sliding_vertices = 0;   // sheet vertices TetGen added, free within their sheet
-                                   // triangle or along their sheet edge
+  uint64_t over_budget = 0;       // insertions not tried for TetImproveOptions::max_tetrahedra
+  uint64_t retries_skipped = 0;   // flips and moves not tried again: failed, nothing changed
+  uint32_t movable_vertices = 0;  // vertices that may move (sliding ones included)
+  uint32_t sliding_vertices = 0;  // sheet vertices TetGen added, free within their sheet
+                                  // triangle or along their sheet edge
   double min_dihedral_before = 0, mean_dihedral_before = 0;  // degrees
   double min_dihedral_after = 0, mean_dihedral_after = 0;
   double seconds = 0;

@@ -45,9 +45,9 @@ class Smoother {
   }
 
   // Tries the ring's centroid and the optimal-Delaunay point, then climbs: first the worst
-  // tetrahedra, then the mean (a PLC sheet vertex within its ball: the worst only). Leaves the vertex at the best position; true if it moved
-  // (the caller measures the star again). Reads the vertex's star and its ring and writes
-  // only the vertex's position.
+  // tetrahedra, then the mean (a PLC sheet vertex within its ball: the worst only). Leaves the
+  // vertex at the best position; true if it moved (the caller measures the star again). Reads the
+  // vertex's star and its ring and writes only the vertex's position.
   bool Run() {
     if (fr_.in_ball(v_)) {
       // A PLC sheet vertex: the sheet moves with it, for its worst tetrahedra only.

@@ -66,11 +66,11 @@ class VertexFreedom {
   void ClassifyPlcSheetNodes(const TetMesh& mesh, uint32_t input_nodes,
                              const std::vector<uint8_t>& off_box);
 
-  std::vector<uint8_t> mask_;  // per vertex: bit k set = coordinate k may change
-  std::vector<Slide> slide_;   // per vertex: sheet vertices that may slide
-  std::vector<Vec3> axis_;     // per vertex: the plane's normal or the line's direction
-  std::vector<Vec3> anchor_;   // per sliding vertex: its position before any move
-  double reach_ = 0;           // of a kBall vertex from its anchor
+  std::vector<uint8_t> mask_;     // per vertex: bit k set = coordinate k may change
+  std::vector<Slide> slide_;      // per vertex: sheet vertices that may slide
+  std::vector<Vec3> axis_;        // per vertex: the plane's normal or the line's direction
+  std::vector<Vec3> anchor_;      // per sliding vertex: its position before any move
+  double reach_ = 0;              // of a kBall vertex from its anchor
   std::vector<double> reach_of_;  // per kBall vertex: its own (shorter at a junction)
   static constexpr double kJunctionReach = 0.5;
 };

@@ -168,7 +168,8 @@ uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult*
     double w = 1e300;
     for (uint32_t t : star[v]) {
       const Tet& q = m.tets[t];
-      w = std::min(w, MinDihedralDegrees(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]));
+      w = std::min(w,
+                   MinDihedralDegrees(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]));
     }
     return w;
   };
@@ -222,7 +223,8 @@ AngleWarning DescribeWorst(const TetMesh& mesh, double worst, double aim, double
     w.corners_on_sheets += on_sheet[v];
   }
   w.at = centre;
-  for (int k = 0; k < 3; ++k) w.at_voxel[k] = (centre[k] - placement.origin[k]) / placement.spacing[k];
+  for (int k = 0; k < 3; ++k)
+    w.at_voxel[k] = (centre[k] - placement.origin[k]) / placement.spacing[k];
   constexpr double kWedgeTolerance = 1e-6;  // degrees
   if (worst >= wedge - kWedgeTolerance) {
     w.cause = absl::StrFormat(

@@ -321,17 +321,17 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
           MeshWithinBudget(sheets, dims, placement, options, timed, &plc_options, &plc, &r);
       !st.ok()) {
     if (!at_limit(st)) return st;
-    return absl::DeadlineExceededError(
-        absl::StrCat("the volume stage went past tet.time_limit_seconds = ",
-                     options.tetgen.time_limit_seconds, " s while TetGen ran"));
+    return absl::DeadlineExceededError(absl::StrCat(
+        "the volume stage went past tet.time_limit_seconds = ", options.tetgen.time_limit_seconds,
+        " s while TetGen ran"));
   }
   r.lattice = plc_options.lattice;
   r.grading = plc_options.grading;
   r.tetgen_tetrahedra = r.mesh.tets.size();
   const std::string limit_reached =
       absl::StrCat("tet.time_limit_seconds = ", options.tetgen.time_limit_seconds, " s");
-  if (absl::Status st = Finish(plc, options, timed.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets,
-                               &r.improvement);
+  if (absl::Status st =
+          Finish(plc, options, timed.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets, &r.improvement);
       !st.ok()) {
     if (!at_limit(st)) return st;
     r.improvement.time_limited = true;
@@ -426,8 +426,8 @@ absl::StatusOr<VolumeMeshResult> BuildVolumeMesh(const TriangleMesh& surface, co
   const Vec3& h = placement.spacing;
   const double s = std::min({h.x, h.y, h.z});
   if (!(s > 0) || !std::isfinite(s) || !std::isfinite(std::max({h.x, h.y, h.z}))) {
-    return absl::InvalidArgumentError(absl::StrCat("the volume mesh needs a positive spacing, not ",
-                                                   h.x, ",", h.y, ",", h.z));
+    return absl::InvalidArgumentError(
+        absl::StrCat("the volume mesh needs a positive spacing, not ", h.x, ",", h.y, ",", h.z));
   }
   Placement unit = placement;
   unit.spacing = {h.x / s, h.y / s, h.z / s};

@@ -119,9 +119,10 @@ TEST(PipelineTest, SurfaceInBricksMeshesLikeTheWholeSheetAndFeedsTheVolumeMesh) 
   PipelineOptions tiny = bricked;
   tiny.output.dir = tmp.File("tiny");
   tiny.surface.bricks.halo = 0;
-  EXPECT_THAT(RunPipeline(tiny), StatusIs(absl::StatusCode::kInvalidArgument,
-                                          ::testing::AllOf(::testing::HasSubstr("surface.bricks = 32"),
-                                                           ::testing::HasSubstr("give at least"))));
+  EXPECT_THAT(RunPipeline(tiny),
+              StatusIs(absl::StatusCode::kInvalidArgument,
+                       ::testing::AllOf(::testing::HasSubstr("surface.bricks = 32"),
+                                        ::testing::HasSubstr("give at least"))));
 
   // An error-driven density has the whole sheet's scale: refused, named.
   bricked.surface.error_density = 1;

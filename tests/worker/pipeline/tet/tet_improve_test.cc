@@ -381,8 +381,8 @@ TEST(VertexFreedomTest, PlcSheetVerticesMoveOffTheBoxHalfAsFarAtJunctions) {
       continue;
     }
     const Vec3& p = r.mesh.nodes[v];
-    const bool at_box = p.x == -0.5 || p.x == 19.5 || p.y == -0.5 || p.y == 19.5 ||
-                        p.z == -0.5 || p.z == 19.5;
+    const bool at_box =
+        p.x == -0.5 || p.x == 19.5 || p.y == -0.5 || p.y == 19.5 || p.z == -0.5 || p.z == 19.5;
     const bool at_junction = p.x == 9.5 && p.z == 10 && p.y >= 3.5 && p.y <= 15.5;
     EXPECT_EQ(fr.in_ball(v), !at_box) << v << " at " << p.x << "," << p.y << "," << p.z;
     if (at_junction) {

@@ -1,5 +1,4 @@
 #include "worker/pipeline/tet/volume_mesher.h"
-#include "worker/pipeline/mesh/mesh_io.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -14,6 +13,7 @@
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/tetgen_runner.h"
 

@@ -460,14 +460,20 @@ TEST(PipelineTest, SheetFacesCarryAnApertureThatIsZeroOnlyOverAHole) {
   EXPECT_GT(j["junction_faces"].get<size_t>(), 0u);
 }
 
-TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
-  SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
+// The NETL fracture (../shared/data) at radius r, its sheet label, no Hausdorff distance.
+PipelineOptions Netl(double r) {
   PipelineOptions o;
   o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
   o.input.selection = PhaseSelection::Labels({255});
-  o.extract = false;  // the image's own components, every one
-  o.surface.scvd.radius_voxels = 7;
+  o.surface.scvd.radius_voxels = r;
   o.score.hausdorff = false;
+  return o;
+}
+
+TEST(PipelineTest, NetlFractureMeshesWithItsKnownShape) {
+  SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
+  PipelineOptions o = Netl(7);
+  o.extract = false;  // the image's own components, every one
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
   EXPECT_EQ(r.sheet_voxels, 84595u);
   EXPECT_EQ(r.components, 63u);
@@ -484,12 +490,8 @@ TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
   // filled the mesh with slivers below 0.01 degrees.
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   TempDir tmp;
-  PipelineOptions o;
-  o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
-  o.input.selection = PhaseSelection::Labels({255});
+  PipelineOptions o = Netl(7);
   o.output.dir = tmp.File("out");
-  o.surface.scvd.radius_voxels = 7;
-  o.score.hausdorff = false;
   o.volume_mesh = true;
   SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
   EXPECT_GT(r.volume_mesh->conformity.sheet_triangles, 400u);
@@ -522,12 +524,8 @@ TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
 TEST(PipelineTest, NetlAtRadius11SheetVerticesMoveForTheSliversTheyPin) {
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   TempDir tmp;
-  PipelineOptions o;
-  o.input.path = testing::SharedDataFile("netl_binary_fracture_small.tif");
-  o.input.selection = PhaseSelection::Labels({255});
+  PipelineOptions o = Netl(11);
   o.extract = false;
-  o.surface.scvd.radius_voxels = 11;
-  o.score.hausdorff = false;
   o.score.grid_rates.clear();
   o.volume_mesh = true;
   PipelineOptions fixed = o;

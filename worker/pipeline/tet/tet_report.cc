@@ -7,7 +7,7 @@
 #include "worker/pipeline/tet/split_mesh.h"
 #include "worker/pipeline/tet/tet_improve.h"
 #include "worker/pipeline/tet/tet_quality.h"
-#include "worker/pipeline/tet/volume_mesher.h"
+#include "worker/pipeline/tet/volume_mesh_stats.h"
 
 namespace sheetmesh {
 

@@ -1,13 +1,13 @@
 // What the volume mesher checks and says of TetGen's and the improvement's mesh: that it
 // conforms to the PLC, sheet faces TetGen listed wrongly taken again, the sheet vertices'
 // moves the angles do not need taken back, and the warning for a minimum under the aim.
-// Internal to the volume mesher (volume_mesher.h).
+// Internal to the volume mesher (volume_mesher.cc).
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_CHECKS_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_VOLUME_MESH_CHECKS_H_
 
 #include <cstdint>
 
-#include "worker/pipeline/tet/volume_mesher.h"
+#include "worker/pipeline/tet/volume_mesh_stats.h"
 
 namespace sheetmesh {
 

@@ -27,6 +27,7 @@
 #include "common/exit_codes.h"
 #include "common/file_util.h"
 #include "common/flags_help.h"
+#include "common/json_parse.h"
 #include "common/progress_line.h"
 #include "common/status_macros.h"
 #include "google/protobuf/util/json_util.h"
@@ -55,6 +56,22 @@ ABSL_FLAG(bool, json, false, "print jobs as JSON");
 
 namespace sheetmesh::client {
 namespace {
+
+// The warnings a job's report carries, as the offline CLI prints them: a volume mesh whose
+// smallest dihedral angle is under tet.min_dihedral (where, and why). A report that is
+// missing or does not parse says nothing here (the files are the user's to read).
+void PrintWarnings(const std::string& dir) {
+  absl::StatusOr<std::string> text = ReadFileToString(dir + "/report.json");
+  if (!text.ok()) return;
+  absl::StatusOr<nlohmann::json> report = ParseJson(*text, "report.json");
+  if (!report.ok() || !report->is_object()) return;
+  const auto vm = report->find("volume_mesh");
+  if (vm == report->end() || !vm->is_object()) return;
+  const auto w = vm->find("angle_warning");
+  if (w != vm->end() && w->is_object() && w->contains("text") && (*w)["text"].is_string()) {
+    std::cout << "warning   " << (*w)["text"].get<std::string>() << "\n";
+  }
+}
 
 constexpr char kUsage[] =
     "sheetmesh COMMAND [ARGS] [--server=host:port]\n\n"
@@ -255,6 +272,7 @@ absl::Status Mesh(SheetmeshClient& c, const std::vector<std::string>& args,
   }
   std::cout << "downloading " << done.artifacts_size() << " files to " << out << "\n";
   SM_RETURN_IF_ERROR(DownloadAll(c, done, out, ""));
+  PrintWarnings(out);
   std::cout << "results in " << std::filesystem::absolute(out).string() << "\n";
   return absl::OkStatus();
 }

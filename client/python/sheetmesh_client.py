@@ -15,12 +15,14 @@ name, a value of the wrong type) and ``SheetmeshError`` for what else the client
 """
 
 import hashlib
+import json
 import os
 import pathlib
 import sys
 import tempfile
 import time
 import uuid
+import warnings
 
 import grpc
 
@@ -56,6 +58,22 @@ _RETRYABLE = (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.DEADLINE_EXCEEDED, gr
 
 class SheetmeshError(Exception):
     """A failure the client detected: a job that failed, a download that did not verify."""
+
+
+class AngleWarning(UserWarning):
+    """A volume mesh whose smallest dihedral angle is under ``tet_min_dihedral``; the
+    message says the angle, where it is (voxel indices) and why (the report's
+    ``volume_mesh.angle_warning``). ``mesh`` issues it with :func:`warnings.warn`."""
+
+
+def _warn_from_report(path):
+    try:
+        report = json.loads(pathlib.Path(path).read_text())
+    except (OSError, ValueError):
+        return
+    warning = (report.get("volume_mesh") or {}).get("angle_warning") if isinstance(report, dict) else None
+    if isinstance(warning, dict) and warning.get("text"):
+        warnings.warn(AngleWarning(warning["text"]), stacklevel=3)
 
 
 def file_digest(path):
@@ -321,7 +339,8 @@ class SheetmeshClient:
         slices, or a file with its detached header: name the file to open with ``main=``).
         ``fields`` are the job's parameters (``r=5``, ``extract=True``) and the volume
         format's fields (``dims="512x512x400"``, ``dtype="uint16"``, ``spacing=[0.005] * 3``,
-        ``unit="mm"``) by name."""
+        ``unit="mm"``) by name. A volume mesh whose smallest dihedral angle is under
+        ``tet_min_dihedral`` issues an :class:`AngleWarning` saying where and why."""
         volume = pathlib.Path(volume)
         main = fields.pop("main", "")
         formats = {k: fields.pop(k) for k in list(fields) if k in _FORMAT_FIELDS}
@@ -352,6 +371,7 @@ class SheetmeshClient:
             error.job, error.kept = job, kept
             raise error
         self.download_artifacts(job, folder)
+        _warn_from_report(pathlib.Path(folder) / "report.json")
         return job
 
     # -- volumes and health ----------------------------------------------------------------

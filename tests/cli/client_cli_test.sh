@@ -85,6 +85,18 @@ printf 'NRRD0004\ntype: uint8\ndimension: 3\nsizes: 64 64 64\nencoding: raw\ndat
 grep -q "volume of 2 files" "$tmp/nhdr.txt" || fail "nhdr upload: $(cat "$tmp/nhdr.txt")"
 [ -f "$tmp/nhdrout/report.json" ] || fail "detached NRRD mesh wrote no report"
 
+# A volume mesh under its aim (tet.min_dihedral = 20, the most it takes) ends with the
+# report's warning line, as the offline CLI prints it; one at or over it with none.
+"$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/aim" --r=5 --volume_mesh --tet_min_dihedral=20 $s \
+  > "$tmp/aim.txt" || fail "mesh --volume_mesh: $(cat "$tmp/aim.txt")"
+worst=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['volume_mesh']['quality']['min_dihedral_degrees']['min'])" "$tmp/aim/report.json")
+if /usr/bin/python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 20 else 1)" "$worst"; then
+  grep -q "^warning   min dihedral .* under tet.min_dihedral = 20° at voxel (" "$tmp/aim.txt" ||
+    fail "a minimum of $worst under 20 printed no warning: $(cat "$tmp/aim.txt")"
+else
+  ! grep -q "^warning" "$tmp/aim.txt" || fail "a minimum of $worst warned: $(cat "$tmp/aim.txt")"
+fi
+
 # mesh by reference.
 "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" --reference -o "$tmp/ref" $s > /dev/null || fail "mesh --reference"
 [ -f "$tmp/ref/report.json" ] || fail "reference mesh wrote no report"

@@ -15,6 +15,7 @@ import sys
 import tempfile
 import time
 import unittest
+import warnings
 
 import grpc
 
@@ -108,6 +109,23 @@ class PythonClientTest(unittest.TestCase):
         listed = [j.name for j in self.client.list_jobs(page_size=1)]
         self.assertIn(job.name, listed)
         self.assertIn(again.name, listed)
+
+    def test_a_volume_mesh_under_its_aim_warns_naming_the_angle(self):
+        out = self.tmp / "aim_out"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            job = self.client.mesh(self.volume, out, r=5, volume_mesh=True, tet_min_dihedral=20)
+        self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+        report = json.loads((out / "report.json").read_text())
+        worst = report["volume_mesh"]["quality"]["min_dihedral_degrees"]["min"]
+        angle = [w for w in caught if issubclass(w.category, sheetmesh_client.AngleWarning)]
+        if worst < 20:
+            self.assertEqual(len(angle), 1, [str(w.message) for w in caught])
+            text = str(angle[0].message)
+            self.assertIn("min dihedral %.2f° under tet.min_dihedral = 20°" % worst, text)
+            self.assertIn("at voxel (", text)
+        else:
+            self.assertEqual(angle, [])
 
     def test_reference_inside_root_and_refused_outside(self):
         out = self.tmp / "ref_out"

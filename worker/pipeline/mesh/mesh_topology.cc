@@ -198,11 +198,14 @@ bool WedgesOverlap(const Vec3& p, const Vec3& a1, const Vec3& a2, const Vec3& b1
 
 bool FacesClash(const std::vector<Vec3>& v, const Face& a, const Face& b,
                 double fold_angle_degrees) {
+  // The distinct corners they share (a face with a repeated corner counts it once).
   int shared = 0;
   uint32_t sv[3];
-  for (uint32_t x : a)
-    for (uint32_t y : b)
-      if (x == y) sv[shared++] = x;
+  for (int i = 0; i < 3; ++i) {
+    const uint32_t x = a[i];
+    if ((i > 0 && x == a[0]) || (i > 1 && x == a[1])) continue;
+    if (x == b[0] || x == b[1] || x == b[2]) sv[shared++] = x;
+  }
   const Triangle ta = {v[a[0]], v[a[1]], v[a[2]]}, tb = {v[b[0]], v[b[1]], v[b[2]]};
   if (shared == 0) return TrianglesIntersect(ta, tb);
   if (shared == 1) {

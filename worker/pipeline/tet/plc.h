@@ -46,6 +46,12 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc);
 // vertices stay (points of the PLC). Returns the number removed.
 uint32_t DropSheetTriangles(const std::vector<uint8_t>& drop, Plc* plc);
 
+// Moves the lattice seeds (the last plc->seed_points vertices, on no facet) by a fixed
+// pseudo-random offset of at most voxels / 2 per coordinate, drawn for `salt`: TetGen 1.5
+// crashes on some PLCs (a segfault while recovering facets with -Y) and meshes the same
+// sheets with the seeds a thousandth of a voxel elsewhere; where the seeds go is free.
+void MoveSeeds(uint32_t salt, double voxels, Plc* plc);
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_TET_PLC_H_

@@ -151,6 +151,48 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
   owner = std::move(kept);
 }
 
+// Applies the contacts of a round to s and v, leaving out those whose faces then clash
+// (their vertices marked `failed`) until none do; none at all where a clash is no
+// contact's. Returns the number applied.
+uint32_t ApplyWithoutClashes(std::vector<Contact> contacts, SheetTriangles& s, std::vector<Vec3>& v,
+                             std::vector<uint8_t>& failed) {
+  SheetTriangles out;
+  std::vector<Vec3> moved;
+  for (int attempt = 0; attempt < 6 && !contacts.empty(); ++attempt) {
+    out = s;
+    moved = v;
+    std::vector<int> owner;
+    Apply(contacts, out, moved, owner);
+    TriangleMesh check;
+    check.vertices = moved;
+    check.faces = out.faces;
+    const auto clashes = FindSelfIntersections(check, 100000, 1.0);
+    if (clashes.empty()) {
+      s = std::move(out);
+      v = std::move(moved);
+      return static_cast<uint32_t>(contacts.size());
+    }
+    std::vector<uint8_t> bad(contacts.size(), 0);
+    bool any = false;
+    for (const auto& [f, g] : clashes) {
+      for (const uint32_t x : {f, g}) {
+        if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
+      }
+    }
+    if (!any) return 0;  // clashes no contact made: left to the clash check
+    std::vector<Contact> keep;
+    for (size_t i = 0; i < contacts.size(); ++i) {
+      if (bad[i]) {
+        failed[contacts[i].vertex] = 1;
+      } else {
+        keep.push_back(contacts[i]);
+      }
+    }
+    contacts = std::move(keep);
+  }
+  return 0;
+}
+
 }  // namespace
 
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
@@ -276,45 +318,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
       }
       round_contacts.push_back(c);
     }
-    // Apply; contacts whose faces then clash are left out, until none do.
-    SheetTriangles out;
-    std::vector<Vec3> moved;
-    for (int attempt = 0; attempt < 6 && !round_contacts.empty(); ++attempt) {
-      out = s;
-      moved = v;
-      std::vector<int> owner;
-      Apply(round_contacts, out, moved, owner);
-      TriangleMesh check;
-      check.vertices = moved;
-      check.faces = out.faces;
-      const auto clashes = FindSelfIntersections(check, 100000, 1.0);
-      std::vector<uint8_t> bad(round_contacts.size(), 0);
-      bool any = false;
-      for (const auto& [f, g] : clashes) {
-        for (const uint32_t x : {f, g}) {
-          if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
-        }
-      }
-      if (clashes.empty()) break;
-      if (!any) {  // clashes no contact made: leave them to the clash check
-        round_contacts.clear();
-        break;
-      }
-      std::vector<Contact> keep;
-      for (size_t i = 0; i < round_contacts.size(); ++i) {
-        if (bad[i]) {
-          failed[round_contacts[i].vertex] = 1;
-        } else {
-          keep.push_back(round_contacts[i]);
-        }
-      }
-      round_contacts = std::move(keep);
-      if (round_contacts.empty() || attempt == 5) round_contacts.clear();
-    }
-    if (round_contacts.empty()) continue;
-    s = std::move(out);
-    v = std::move(moved);
-    mended += static_cast<uint32_t>(round_contacts.size());
+    mended += ApplyWithoutClashes(round_contacts, s, v, failed);
   }
   // What is left: vertices still within gap of a triangle not their own.
   if (unmended != nullptr) {
@@ -323,6 +327,70 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
     }
   }
   return mended;
+}
+
+uint32_t CloseCaps(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
+                   double cap_degrees, double max_move) {
+  if (!(cap_degrees < 180) || !(max_move > 0)) return 0;
+  const double max_cos = std::cos(cap_degrees * 3.14159265358979323846 / 180);
+  uint32_t closed = 0;
+  std::vector<uint8_t> failed(v.size(), 0);
+  for (int round = 0; round < 4 && !s.faces.empty(); ++round) {
+    std::vector<std::vector<uint32_t>> faces_of(v.size());
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      for (uint32_t x : s.faces[f]) faces_of[x].push_back(f);
+    }
+    // Each cap: its wide corner c (off the box), the long edge a-b, c's foot on it.
+    std::vector<Contact> found;
+    for (uint32_t f = 0; f < s.faces.size(); ++f) {
+      const Face& t = s.faces[f];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t c = t[k], a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+        if (on_face[c] != 0 || failed[c]) continue;
+        const Vec3 ca = v[a] - v[c], cb = v[b] - v[c];
+        if (!(Dot(ca, cb) < max_cos * Norm(ca) * Norm(cb))) continue;
+        Contact cap;
+        cap.kind = Contact::kEdge;
+        cap.vertex = c;
+        cap.face = f;
+        cap.k = (k + 1) % 3;  // the edge from t[k + 1] = a to t[k + 2] = b
+        cap.at = ClosestOnSegment(v[c], v[a], v[b]);
+        cap.distance = Norm(cap.at - v[c]);
+        if (!(cap.distance <= max_move)) continue;
+        for (uint32_t g : faces_of[a]) {
+          const Face& h = s.faces[g];
+          if (h[0] == b || h[1] == b || h[2] == b) cap.edge_faces.push_back(g);
+        }
+        found.push_back(cap);
+      }
+    }
+    if (found.empty()) break;
+    // Lowest first; a vertex and a face take part in one a round.
+    std::sort(found.begin(), found.end(),
+              [](const Contact& x, const Contact& y) { return x.distance < y.distance; });
+    std::vector<uint8_t> busy_vertex(v.size(), 0), busy_face(s.faces.size(), 0);
+    std::vector<Contact> round_caps;
+    for (const Contact& c : found) {
+      bool busy = busy_vertex[c.vertex];
+      for (uint32_t g : c.edge_faces) {
+        for (uint32_t x : s.faces[g]) busy = busy || busy_vertex[x];
+      }
+      for (uint32_t g : faces_of[c.vertex]) busy = busy || busy_face[g];
+      for (uint32_t g : c.edge_faces) busy = busy || busy_face[g];
+      if (busy) continue;
+      for (uint32_t g : c.edge_faces) {
+        busy_face[g] = 1;
+        for (uint32_t x : s.faces[g]) busy_vertex[x] = 1;
+      }
+      for (uint32_t g : faces_of[c.vertex]) busy_face[g] = 1;
+      busy_vertex[c.vertex] = 1;
+      round_caps.push_back(c);
+    }
+    const uint32_t n = ApplyWithoutClashes(round_caps, s, v, failed);
+    if (n == 0 && round_caps.size() == found.size()) break;
+    closed += n;
+  }
+  return closed;
 }
 
 uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps) {

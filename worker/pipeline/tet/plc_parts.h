@@ -139,6 +139,16 @@ struct BoxPoint {
 uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
                       const std::vector<uint8_t>& held, double gap, std::vector<Vec3>* unmended);
 
+// Closes the caps the mends left (a sheet triangle whose corner c has an angle over
+// cap_degrees, c nearly on the long edge a-b): c moves onto a-b, by at most max_move, the
+// cap goes and every other face on a-b is split at c, so the sheet keeps its topology and
+// loses a sliver of area. A cap at a junction is closed as well (the flips before leave
+// those). TetGen must otherwise fill the cap's flat wedge with slivers, and its exact
+// intersection test finds a cap folded onto a neighbour where ours cannot. Moves that
+// make a clash are left out. Returns the number closed.
+uint32_t CloseCaps(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
+                   double cap_degrees, double max_move);
+
 // Drops the sheet triangles whose corners lie on a line (within eps voxels: no area, one
 // corner on the long edge), which the mends can leave. Returns the number dropped.
 uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double eps);

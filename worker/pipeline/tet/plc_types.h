@@ -55,6 +55,8 @@ struct PlcStats {
   uint32_t dropped_overlaps = 0;      // rim triangles dropped for lying on another sheet
   uint32_t closed_slits = 0;          // slits framed by three rim edges closed by
                                       // splitting a face (PlcOptions::cap_degrees)
+  uint32_t closed_caps = 0;           // sheet triangles with a corner over cap_degrees left
+                                      // by the mends, closed onto their long edge (CloseCaps)
   uint32_t opened_wedges = 0;         // sheet vertices moved off a sheet face's plane
                                       // to open a narrow wedge (PlcOptions::wedge_degrees)
   uint32_t collapsed_edges = 0;       // sheet edges shorter than

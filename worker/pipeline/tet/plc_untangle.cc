@@ -129,7 +129,8 @@ bool Untangler::MoveAVertex(uint32_t a, uint32_t b, std::vector<uint8_t>* touche
     }
   }
   for (uint32_t u : corners) {
-    const uint8_t faces_on = on_face_[u];
+    // A point the splits added (past on_face_) lies off the box faces.
+    const uint8_t faces_on = u < on_face_.size() ? on_face_[u] : 0;
     if (faces_on != 0 && (faces_on & (faces_on - 1)) != 0) continue;  // a box edge or corner
     const uint32_t other =
         std::find(st_.faces[a].begin(), st_.faces[a].end(), u) != st_.faces[a].end() ? b : a;

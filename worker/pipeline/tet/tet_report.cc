@@ -89,6 +89,7 @@ nlohmann::json PlcStats::Fields() const {
           {"dropped_overlaps", dropped_overlaps},
           {"closed_slits", closed_slits},
           {"opened_wedges", opened_wedges},
+          {"closed_caps", closed_caps},
           {"collapsed_edges", collapsed_edges},
           {"mended_contacts", mended_contacts},
           {"unmended_contacts", unmended_contacts},
@@ -125,6 +126,7 @@ nlohmann::json VolumeMeshStats::Fields() const {
   j["tetgen_seconds"] = tetgen_seconds;
   j["tetgen_tetrahedra"] = tetgen_tetrahedra;
   j["tetgen_recovery"] = tetgen_recovery;
+  j["tetgen_seed_moves"] = seed_moves;
   // The sizing used: the lattice (in median sheet edges and physical units, finest and
   // coarsest level), its grading, and the budget with the TetGen runs it took.
   j["sizing"] = {{"lattice", lattice},

@@ -70,6 +70,7 @@ struct VolumeMeshStats : PlcStats {
   // TetGen runs that crashed or failed before the one that made the mesh: their switches
   // and errors (RunTetgenRecovering).
   std::vector<std::string> tetgen_recovery;
+  uint32_t seed_moves = 0;            // times the lattice seeds were moved for TetGen to try again
   double tetgen_seconds = 0;          // the last TetGen run's
   uint64_t tetgen_tetrahedra = 0;     // TetGen's, before the improvement
   uint64_t max_tetrahedra = 0;        // the budget asked for (0: none)

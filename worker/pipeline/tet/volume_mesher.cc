@@ -57,9 +57,16 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
 // `repair` allows, TetGen's own exact check (-d) names the sheet triangles that cut
 // through each other though sheetmesh's checks passed them (a sheet crumpled within a
 // voxel, nearly flat on itself: the rough network at r = 3): the smaller of each pair is
-// removed from *plc, counted with the PLC's repairs, and the tries run again. What failed
+// removed from *plc, counted with the PLC's repairs, and the tries run again. Each try is
+// made again with the lattice seeds moved first (kSeedMoves). What failed
 // is said in r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::
 // failed_plc_path).
+// TetGen's crashes are tried again with the same switches and the lattice seeds moved
+// (MoveSeeds), this many times, before the switches give way: on the rough network at
+// r = 3 two of four such moves let -Y mesh what it crashed on.
+constexpr uint32_t kSeedMoves = 2;
+constexpr double kSeedMoveVoxels = 2e-3;
+
 absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& options, bool repair,
                                             const Progress& progress, VolumeMeshResult* r) {
   std::vector<TetgenOptions> tries = {options};
@@ -75,15 +82,23 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& optio
   absl::Status last;
   for (int round = 0; round <= kRepairRounds; ++round) {
     for (size_t i = 0; i < tries.size(); ++i) {
-      absl::StatusOr<TetMesh> mesh = RunTetgen(*plc, tries[i], progress);
-      // Only a crash or an error of TetGen's own is tried again; limits and cancels are final.
-      if (mesh.ok() || mesh.status().code() != absl::StatusCode::kInternal) {
-        if (mesh.ok() && (i > 0 || round > 0)) r->tetgen_switches = TetgenSwitches(tries[i]);
-        return mesh;
+      for (uint32_t moved = 0; moved <= kSeedMoves; ++moved) {
+        if (moved > 0) {
+          if (plc->seed_points == 0) break;
+          MoveSeeds(++r->seed_moves, kSeedMoveVoxels, plc);
+        }
+        absl::StatusOr<TetMesh> mesh = RunTetgen(*plc, tries[i], progress);
+        // Only a crash or an error of TetGen's own is tried again; limits and cancels are
+        // final.
+        if (mesh.ok() || mesh.status().code() != absl::StatusCode::kInternal) {
+          if (mesh.ok() && (i > 0 || round > 0)) r->tetgen_switches = TetgenSwitches(tries[i]);
+          return mesh;
+        }
+        last = mesh.status();
+        r->tetgen_recovery.push_back(absl::StrCat(TetgenSwitches(tries[i]),
+                                                  moved > 0 ? " (lattice seeds moved)" : "", ": ",
+                                                  last.message().substr(0, 160)));
       }
-      last = mesh.status();
-      r->tetgen_recovery.push_back(
-          absl::StrCat(TetgenSwitches(tries[i]), ": ", last.message().substr(0, 160)));
     }
     if (!repair || round == kRepairRounds) break;
     absl::StatusOr<std::vector<std::pair<uint32_t, uint32_t>>> pairs =

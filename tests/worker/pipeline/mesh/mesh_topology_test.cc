@@ -130,5 +130,14 @@ TEST(MeshTopologyTest, WedgesSharingAVertexOverlapWhereTheirPlanesLineEntersBoth
   EXPECT_FALSE(WedgesOverlap(p, {4, 0, 0}, {0, 4, 0}, {0, 4, 0}, {-4, 0, 0}));
 }
 
+TEST(MeshTopologyTest, AFaceWithARepeatedCornerCountsItOnceAgainstAnother) {
+  // (0, 0, 1) repeats corner 0; shared with (0, 2, 3) it is one corner, not two, and the
+  // flat face (0, 0, 1) covers nothing beyond it. (Counted twice per occurrence, a face of
+  // three equal corners overran the list of shared corners.)
+  const std::vector<Vec3> v = {{0, 0, 0}, {4, 0, 0}, {0, 4, 0}, {0, 0, 4}};
+  EXPECT_FALSE(FacesClash(v, {0, 0, 1}, {0, 2, 3}));
+  EXPECT_FALSE(FacesClash(v, {0, 1, 1}, {0, 1, 1}));
+}
+
 }  // namespace
 }  // namespace sheetmesh

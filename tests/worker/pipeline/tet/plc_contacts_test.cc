@@ -1,5 +1,5 @@
-// A sheet vertex nearly touching another sheet is moved onto it in the PLC, and a sheet
-// edge far shorter than the rest collapses.
+// A sheet vertex nearly touching another sheet is moved onto it in the PLC, a sheet edge
+// far shorter than the rest collapses, and a cap the mends leave at a junction closes.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -8,8 +8,10 @@
 
 #include "tests/testing/status_matchers.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/plc_parts.h"
 #include "worker/pipeline/tet/volume_mesher.h"
 
 namespace sheetmesh {
@@ -182,6 +184,64 @@ TEST(PlcContactsTest, AnEdgeOfAVoxelCollapsesToItsMidpoint) {
   EXPECT_EQ(r.collapsed_edges, 1u);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
+}
+
+// A junction of three triangles on the edge a-b = (10, 10, 10)-(14, 10, 10): sheet 0's
+// cap (a, b, c), its corner c 0.1 voxel off the middle of a-b in the cap's plane (an
+// angle of 177 degrees there), sheet 0's neighbour (b, a, d) and sheet 1's (a, b, e).
+struct CapJunction {
+  std::vector<Vec3> v = {{10, 10, 10}, {14, 10, 10}, {12, 10.1, 10}, {12, 6, 10}, {12, 10, 14}};
+  SheetTriangles s;
+  CapJunction() {
+    s.faces = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+    s.source = {0, 1, 2};
+    s.piece = {0, 0, 1};
+    s.thickness = {2, 2, 2};
+  }
+};
+
+TEST(PlcContactsTest, ACapAtAJunctionClosesOntoItsLongEdgeSplittingTheOtherFacesThere) {
+  CapJunction j;
+  const std::vector<uint8_t> off_box(j.v.size(), 0);
+  EXPECT_EQ(CloseCaps(j.s, j.v, off_box, 160, 1.0), 1u);
+  EXPECT_LT(Norm(j.v[2] - Vec3(12, 10, 10)), 1e-12) << "c moves onto a-b, 0.1 voxel";
+  // The cap is gone; the two other faces on a-b are each split at c.
+  ASSERT_EQ(j.s.faces.size(), 4u);
+  double area[2] = {0, 0};
+  for (size_t f = 0; f < j.s.faces.size(); ++f) {
+    const Face& t = j.s.faces[f];
+    EXPECT_TRUE(t[0] == 2 || t[1] == 2 || t[2] == 2) << "every face is a half at c";
+    const Triangle c = {j.v[t[0]], j.v[t[1]], j.v[t[2]]};
+    EXPECT_LT(AngleRangeDegrees(c).second, 160.0);
+    area[j.s.piece[f]] += Area(c);
+  }
+  EXPECT_NEAR(area[0], 8.0, 1e-9);  // sheet 0 loses the cap's 0.2 and nothing else
+  EXPECT_NEAR(area[1], 8.0, 1e-9);
+  TriangleMesh m;
+  m.vertices = j.v;
+  m.faces = j.s.faces;
+  EXPECT_TRUE(FindSelfIntersections(m, 10, 1.0).empty());
+  // The edge a-b is gone, a-c and c-b each on three faces: the junction runs through c.
+  int on_ac = 0, on_cb = 0;
+  for (const Face& t : j.s.faces) {
+    auto has = [&](uint32_t x) { return t[0] == x || t[1] == x || t[2] == x; };
+    EXPECT_FALSE(has(0) && has(1));
+    on_ac += has(0) && has(2);
+    on_cb += has(2) && has(1);
+  }
+  EXPECT_EQ(on_ac, 2);
+  EXPECT_EQ(on_cb, 2);
+}
+
+TEST(PlcContactsTest, ACapHigherThanTheMoveAllowsOrOnTheBoxStays) {
+  CapJunction j;
+  std::vector<uint8_t> on_face(j.v.size(), 0);
+  EXPECT_EQ(CloseCaps(j.s, j.v, on_face, 160, 0.05), 0u);  // 0.1 voxel needed
+  EXPECT_EQ(CloseCaps(j.s, j.v, on_face, 178, 1.0), 0u);   // 177 degrees is no cap at 178
+  on_face[2] = 1;                                          // c on the box face x = lo
+  EXPECT_EQ(CloseCaps(j.s, j.v, on_face, 160, 1.0), 0u);
+  EXPECT_EQ(j.s.faces.size(), 3u);
+  EXPECT_EQ(j.v[2].y, 10.1);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -217,6 +218,34 @@ TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
   far = far_seeds(thick);
   ASSERT_GE(far.size(), 2u);
   EXPECT_GE(ClosestPair(far), std::sqrt(3.0) / 2 * 10 - kSlack);
+}
+
+TEST(PlcTest, MovingTheSeedsMovesOnlyTheSeedsByAtMostHalfTheStepTheSameWayForASalt) {
+  const TriangleMesh sheet = Square(10, 50, 30, 8);
+  SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, {}));
+  ASSERT_GT(plc.seed_points, 0u);
+  const size_t first_seed = plc.vertices.size() - plc.seed_points;
+  Plc once = plc, again = plc, other = plc;
+  MoveSeeds(1, 2e-3, &once);
+  MoveSeeds(1, 2e-3, &again);
+  MoveSeeds(2, 2e-3, &other);
+  double farthest = 0;
+  size_t moved = 0, differ = 0;
+  for (size_t i = 0; i < plc.vertices.size(); ++i) {
+    const Vec3 d = once.vertices[i] - plc.vertices[i];
+    if (i < first_seed) {
+      EXPECT_EQ(Norm(d), 0.0) << "vertex " << i << " is the box's or a sheet's";
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) farthest = std::max(farthest, std::abs(d[k]));
+    moved += Norm(d) > 0;
+    EXPECT_EQ(Norm(again.vertices[i] - once.vertices[i]), 0.0);
+    differ += Norm(other.vertices[i] - once.vertices[i]) > 0;
+  }
+  EXPECT_LE(farthest, 1e-3);
+  EXPECT_GT(farthest, 5e-4);
+  EXPECT_EQ(moved, plc.seed_points);
+  EXPECT_EQ(differ, plc.seed_points);  // another salt, another offset
 }
 
 }  // namespace

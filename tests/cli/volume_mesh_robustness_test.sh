@@ -44,6 +44,22 @@ mesh rough_run_r11 run "$tmp/rough_160x160x160_u8.raw" --r=11
 # stays crumpled, TetGen's own intersection check naming what it crashed on); the
 # improvement is off in these: the failures were all before it.
 mesh rough_surface_r3 surface "$tmp/rough_160x160x160_u8.raw" --r=3 --improve_passes=0
+# The same surface read back from its PLY: TetGen crashed on every try (-Y: segfault;
+# without: abort) on caps the mends left at junctions, now closed (closed_caps).
+ply_log=$("$cli" volume "$tmp/rough_surface_r3/surface.ply" --volume "$tmp/rough_160x160x160_u8.raw" \
+  -o "$tmp/rough_ply_r3" --output_volume_formats=vtu --improve_passes=0 2>&1) ||
+  fail "rough_ply_r3: $(echo "$ply_log" | tail -n 2)"
+cases=$((cases + 1))
+/usr/bin/python3 - "$tmp/rough_ply_r3/volume_report.json" <<'PY' || fail "rough_ply_r3: the report"
+import json, sys
+vm = json.load(open(sys.argv[1]))["volume_mesh"]
+c = vm["conformity"]
+assert c["conforming"] == c["sheet_triangles"] > 0, c
+assert vm["closed_caps"] > 0, vm["closed_caps"]
+print("  %-26s %7d tets, min dihedral %5.2f, caps closed %d, TetGen retries %d" % (
+    "rough_ply_r3", vm["tetrahedra"], vm["quality"]["min_dihedral_degrees"]["min"],
+    vm["closed_caps"], len(vm["tetgen_recovery"])))
+PY
 "$cli" phantom --preset=sample -o "$tmp/sample_128x112x96_u8.raw" > /dev/null
 mesh sample_surface_r2 surface "$tmp/sample_128x112x96_u8.raw" --labels=255 --r=2 --improve_passes=0
 # Found by the property test: a sheet edge across the corner of a box face (TetGen crashed

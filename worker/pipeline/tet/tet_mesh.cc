@@ -1,5 +1,9 @@
 #include "worker/pipeline/tet/tet_mesh.h"
 
+#include <algorithm>
+#include <array>
+
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_format.h"
 #include "worker/pipeline/tet/plc.h"
 
@@ -25,14 +29,13 @@ TriangleMesh TetMesh::SheetSurface(const Placement& placement) const {
   TriangleMesh out;
   out.body_pieces = body_pieces;
   std::vector<uint32_t> index(nodes.size(), UINT32_MAX);
-  for (size_t f = 0; f < faces.size(); ++f) {
-    if (face_piece[f] < 0) continue;
+  auto add = [&](const std::array<uint32_t, 3>& face, int32_t piece, float thickness) {
     Face g;
     for (int k = 0; k < 3; ++k) {
-      uint32_t& i = index[faces[f][k]];
+      uint32_t& i = index[face[k]];
       if (i == UINT32_MAX) {
         i = static_cast<uint32_t>(out.vertices.size());
-        const Vec3& p = nodes[faces[f][k]];
+        const Vec3& p = nodes[face[k]];
         out.vertices.push_back({(p.x - placement.origin.x) / placement.spacing.x,
                                 (p.y - placement.origin.y) / placement.spacing.y,
                                 (p.z - placement.origin.z) / placement.spacing.z});
@@ -40,8 +43,32 @@ TriangleMesh TetMesh::SheetSurface(const Placement& placement) const {
       g[k] = i;
     }
     out.faces.push_back(g);
-    out.face_piece.push_back(face_piece[f]);
-    out.face_thickness_voxels.push_back(face_thickness_voxels[f]);
+    out.face_piece.push_back(piece);
+    out.face_thickness_voxels.push_back(thickness);
+  };
+  for (size_t f = 0; f < faces.size(); ++f) {
+    if (face_piece[f] >= 0) add(faces[f], face_piece[f], face_thickness_voxels[f]);
+  }
+  if (tet_region.empty()) return out;
+  // A body cut by the box is bounded there by box faces, which are no sheet's: its walls
+  // alone are open, and filling them by the parity of crossings fills the wrong side. Its
+  // region's tetrahedra's faces on the box close it (with no thickness: they add no prism).
+  absl::flat_hash_set<std::array<uint32_t, 3>> on_box;
+  for (size_t f = 0; f < faces.size(); ++f) {
+    if (face_piece[f] >= 0) continue;
+    std::array<uint32_t, 3> key = faces[f];
+    std::sort(key.begin(), key.end());
+    on_box.insert(key);
+  }
+  for (size_t t = 0; t < tets.size(); ++t) {
+    if (tet_region[t] < 0) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::array<uint32_t, 3> face = {tets[t][(k + 1) % 4], tets[t][(k + 2) % 4],
+                                            tets[t][(k + 3) % 4]};
+      std::array<uint32_t, 3> key = face;
+      std::sort(key.begin(), key.end());
+      if (on_box.contains(key)) add(face, tet_region[t], 0);
+    }
   }
   return out;
 }

@@ -13,6 +13,7 @@
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/mesh/mesh_io.h"
 #include "worker/pipeline/phantom/phantom.h"
+#include "worker/pipeline/phantom/phantom_presets.h"
 #include "worker/pipeline/volume/raw_io.h"
 #include "worker/pipeline/volume/volume_open.h"
 
@@ -435,6 +436,32 @@ TEST(PipelineTest, TheReportScoresTheSheetsTheVolumeMeshHas) {
   const nlohmann::json j = nlohmann::json::parse(r.ToJson());
   EXPECT_DOUBLE_EQ(j["volume_mesh"]["similarity_of_its_sheets"].get<double>(),
                    *r.volume_mesh->delivered_similarity);
+}
+
+TEST(PipelineTest, ABodyTheBoxCutsIsScoredClosedByItsFacesOnTheBox) {
+  // The thick_slab preset (100 x 100 x 111, one slab 30-50 voxels thick across the box),
+  // meshed as a body: its walls in the volume mesh are open where the box cuts it, and the
+  // score of the volume mesh's sheets filled the wrong side (-0.0065 against 0.95 at r = 5).
+  TempDir tmp;
+  PhantomOptions p = *PhantomPreset("thick_slab");
+  PhantomTruth truth = *PlanPhantom(p);
+  const std::string path = tmp.File("slab_" + p.dims.ToString() + "_u8.raw");
+  VolumeInfo info;
+  info.dims = p.dims;
+  auto sink = *CreateRawWriter(path, info);
+  ASSERT_TRUE(GeneratePhantom(&truth, *sink).ok());
+  PipelineOptions o;
+  o.input.path = path;
+  o.output.dir = tmp.File("out");
+  o.extract = false;
+  o.surface.scvd.radius_voxels = 7;
+  o.volume_mesh = true;
+  o.score.hausdorff = false;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipeline(o));
+  ASSERT_TRUE(r.volume_mesh && r.volume_mesh->delivered_similarity);
+  ASSERT_FALSE(r.volume_mesh->bodies.empty()) << "the slab is meshed as a body";
+  EXPECT_GT(r.similarity->score.similarity, 0.8);
+  EXPECT_NEAR(*r.volume_mesh->delivered_similarity, r.similarity->score.similarity, 0.05);
 }
 
 TEST(PipelineTest, SheetFacesCarryAnApertureThatIsZeroOnlyOverAHole) {

@@ -86,21 +86,42 @@ TEST(TetgenRunnerTest, ATetgenCrashIsRecoveredWithOtherSwitchesAndReported) {
       FakeTetgen(tmp, "case \"$1\" in *q*Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
                           BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
-  ASSERT_EQ(r.tetgen_recovery.size(), 1u);
+  // The same switches first run again twice with the lattice seeds moved (kSeedMoves).
+  ASSERT_EQ(r.tetgen_recovery.size(), 3u);
   EXPECT_THAT(r.tetgen_recovery[0], HasSubstr("-pzQq1.5/10O2/3Y: TetGen crashed with signal 11"));
+  EXPECT_THAT(r.tetgen_recovery[1],
+              HasSubstr("-pzQq1.5/10O2/3Y (lattice seeds moved): TetGen crashed with signal 11"));
+  EXPECT_EQ(r.seed_moves, 2u);
   EXPECT_EQ(r.tetgen_switches, "-pzQO2/3Y");
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_TRUE(std::filesystem::exists(tmp.File("failed.poly")));
   // Crashing under -Y whatever the rest: TetGen may then add points on the sheets.
   o.tetgen.program = FakeTetgen(tmp, "case \"$1\" in *Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
   SM_ASSERT_OK_AND_ASSIGN(r, BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
-  EXPECT_EQ(r.tetgen_recovery.size(), 2u);
+  EXPECT_EQ(r.tetgen_recovery.size(), 6u);
   EXPECT_EQ(r.tetgen_switches, "-pzQO2/3");
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   // Crashing whatever: the last error is returned.
   o.tetgen.program = FakeTetgen(tmp, "kill -11 $$");
   EXPECT_THAT(BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o),
               StatusIs(absl::StatusCode::kInternal, HasSubstr("signal 11")));
+}
+
+// TetGen 1.5 crashes on some PLCs and meshes them with the lattice seeds a thousandth of a
+// voxel elsewhere: a crash is first tried again with the same switches and the seeds moved.
+TEST(TetgenRunnerTest, ACrashThatTheSeedsMovedAvoidKeepsTheSwitches) {
+  TempDir tmp;
+  VolumeMeshOptions o;
+  const std::string once = tmp.File("crashed_once");
+  o.tetgen.program = FakeTetgen(tmp, "if [ ! -e " + once + " ]; then touch " + once +
+                                         "; kill -11 $$; fi\nexec tetgen \"$@\"");
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
+  ASSERT_EQ(r.tetgen_recovery.size(), 1u);
+  EXPECT_THAT(r.tetgen_recovery[0], HasSubstr("-pzQq1.5/10O2/3Y: TetGen crashed with signal 11"));
+  EXPECT_EQ(r.seed_moves, 1u);
+  EXPECT_EQ(r.tetgen_switches, "-pzQq1.5/10O2/3Y");
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
 }
 
 TEST(TetgenRunnerTest, CancellationKillsTetgen) {

@@ -46,6 +46,13 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
       ") holds (about ", std::llround(room), "); raise it to at least ", box_volume / room));
 }
 
+// A try of TetGen that crashed (a signal, not an error it reports) runs again with the
+// same switches and the lattice seeds moved (MoveSeeds), this many times, before the
+// switches give way: on the rough network at r = 3 two of four such moves let -Y mesh what
+// it crashed on.
+constexpr uint32_t kSeedMoves = 2;
+constexpr double kSeedMoveVoxels = 2e-3;
+
 // TetGen 1.5 can crash, or give up recovering a facet, on a PLC it meshes with other
 // switches: asked to add no point on the facets (-Y), it segfaults where recovering a sheet
 // triangle whole needs one (the DPM junction at r = 3). TetGen runs again, first without
@@ -57,16 +64,9 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
 // `repair` allows, TetGen's own exact check (-d) names the sheet triangles that cut
 // through each other though sheetmesh's checks passed them (a sheet crumpled within a
 // voxel, nearly flat on itself: the rough network at r = 3): the smaller of each pair is
-// removed from *plc, counted with the PLC's repairs, and the tries run again. Each try is
-// made again with the lattice seeds moved first (kSeedMoves). What failed
-// is said in r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::
-// failed_plc_path).
-// TetGen's crashes are tried again with the same switches and the lattice seeds moved
-// (MoveSeeds), this many times, before the switches give way: on the rough network at
-// r = 3 two of four such moves let -Y mesh what it crashed on.
-constexpr uint32_t kSeedMoves = 2;
-constexpr double kSeedMoveVoxels = 2e-3;
-
+// removed from *plc, counted with the PLC's repairs, and the tries run again. A try that
+// crashed runs again with the lattice seeds moved first (kSeedMoves). What failed is said
+// in r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::failed_plc_path).
 absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& options, bool repair,
                                             const Progress& progress, VolumeMeshResult* r) {
   std::vector<TetgenOptions> tries = {options};
@@ -98,6 +98,8 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& optio
         r->tetgen_recovery.push_back(absl::StrCat(TetgenSwitches(tries[i]),
                                                   moved > 0 ? " (lattice seeds moved)" : "", ": ",
                                                   last.message().substr(0, 160)));
+        // An error TetGen reports (an exit code) is the PLC's, wherever the seeds are.
+        if (!absl::StrContains(last.message(), "crashed with signal")) break;
       }
     }
     if (!repair || round == kRepairRounds) break;

@@ -34,11 +34,13 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
                              const Placement& placement, const PlcOptions& options = {},
                              std::vector<Clash>* clashes = nullptr);
 
-// Bisects every edge of each marked sheet triangle (of plc->sheet_triangles) but those
-// lying in a box face, and with each edge every sheet triangle on it, at a new vertex in
-// its middle (appended to the vertices): the sheets keep their shape, their edges there
-// halve. The new triangles are appended, each with its facet, piece and thickness. Returns
-// the number of edges split.
+// Refines each marked sheet triangle (of plc->sheet_triangles) by longest-edge bisection
+// until its longest edge is half what it was: an edge is split at its middle (a new vertex
+// appended) once it is the longest of every sheet triangle on it, the others refined along
+// their own longest edge first, so no angle falls below half of what it was and the
+// sheets keep their shape. Edges in a box face are not split (a triangle whose chain reaches
+// one stays as it is). The new triangles are appended, each with its facet, piece and
+// thickness. Returns the number of edges split.
 uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc);
 
 // Removes the marked sheet triangles (of plc->sheet_triangles) with their facets; the

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <limits>
+#include <optional>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
@@ -44,22 +47,29 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
     }
   };
   for (uint32_t t = 0; t < tris.size(); ++t) link(t, true);
-  // The marked triangles' edges, off the box's faces, in a fixed order.
-  std::vector<std::pair<uint32_t, uint32_t>> edges;
-  for (uint32_t t = 0; t < std::min(marked.size(), tris.size()); ++t) {
-    if (!marked[t]) continue;
+  using Edge = std::pair<uint32_t, uint32_t>;
+  // Edges in a strict order: by length, ties by their corners, so that every triangle has
+  // one longest edge and a chain of ever longer edges ends.
+  auto longer = [&](const Edge& e, const Edge& f) {
+    const double le = Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
+    const double lf = Norm2(plc->vertices[f.second] - plc->vertices[f.first]);
+    return le != lf ? le > lf : e > f;
+  };
+  auto longest_edge = [&](uint32_t t) {
+    Edge best{0, 0};
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
-      if (OnBoxFace(plc->vertices[a], plc->vertices[b], plc->box_lo, plc->box_hi)) continue;
-      edges.emplace_back(std::min(a, b), std::max(a, b));
+      const Edge e{std::min(a, b), std::max(a, b)};
+      if (k == 0 || longer(e, best)) best = e;
     }
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  uint32_t split = 0;
-  for (const auto& [a, b] : edges) {
+    return best;
+  };
+  // The longest edge each triangle is to be refined to (squared; infinite: none), which
+  // both halves of a split keep.
+  std::vector<double> target(tris.size(), std::numeric_limits<double>::infinity());
+  auto bisect = [&](const Edge& e) {
+    const auto [a, b] = e;
     const std::vector<uint32_t> on_edge = faces_of[EdgeKey(a, b)];
-    if (on_edge.empty()) continue;
     const uint32_t m = static_cast<uint32_t>(plc->vertices.size());
     plc->vertices.push_back((plc->vertices[a] + plc->vertices[b]) * 0.5);
     for (const uint32_t f : on_edge) {
@@ -80,9 +90,55 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
       plc->sheet_thickness.push_back(plc->sheet_thickness[f]);
       plc->facets.push_back(
           {{{second[0], second[1], second[2]}}, kFirstSheetMarker + static_cast<int32_t>(added)});
+      target.push_back(target[f]);
       link(added, true);
     }
+  };
+  uint32_t split = 0;
+  // Longest-edge bisection: `e` is split once it is the longest edge of every triangle on it
+  // (each triangle with a longer edge is refined along that one first), so that no split
+  // narrows a triangle's angles to less than half of what they were. An edge in a box face
+  // is not split (the face's facet would need the point too): false, and the chain stops.
+  std::function<bool(const Edge&)> refine = [&](const Edge& e) {
+    if (OnBoxFace(plc->vertices[e.first], plc->vertices[e.second], plc->box_lo, plc->box_hi)) {
+      return false;
+    }
+    for (;;) {
+      const std::vector<uint32_t>& on_edge = faces_of[EdgeKey(e.first, e.second)];
+      if (on_edge.empty()) return false;
+      std::optional<Edge> first;
+      for (const uint32_t f : on_edge) {
+        const Edge l = longest_edge(f);
+        if (l != e) {
+          first = l;
+          break;
+        }
+      }
+      if (!first) break;
+      if (!refine(*first)) return false;
+    }
+    bisect(e);
     ++split;
+    return true;
+  };
+  auto length2 = [&](const Edge& e) {
+    return Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
+  };
+  // Each marked triangle is bisected until its longest edge is half what it was (twice for
+  // a well-shaped one), the pieces its neighbours' splits cut from it included.
+  for (uint32_t t = 0; t < std::min(marked.size(), tris.size()); ++t) {
+    if (marked[t]) target[t] = 0.25 * length2(longest_edge(t));
+  }
+  for (bool again = true; again;) {
+    again = false;
+    for (uint32_t t = 0; t < tris.size(); ++t) {
+      if (!(length2(longest_edge(t)) > target[t])) continue;
+      if (refine(longest_edge(t))) {
+        again = true;
+      } else {
+        target[t] = std::numeric_limits<double>::infinity();  // its chain reaches the box
+      }
+    }
   }
   return split;
 }

@@ -273,10 +273,12 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
     EXPECT_LT(Norm(Nearest(d, w0) - w0), 1e-12);
   }
   // The opened wedge meshes with a better worst tetrahedron (14.0 degrees, 4.8 closed),
-  // the sheet's vertices held where the PLC puts them. (The improvement may move them:
-  // then the closed wedge's sliver mends too, improve.sheet_move_voxels.)
+  // the sheet's vertices held where the PLC puts them and the sheet triangles as the PLC
+  // makes them. (The improvement may move them, the sliver rounds refine them: then the
+  // closed wedge's sliver mends too, improve.sheet_move_voxels, sliver_rounds.)
   VolumeMeshOptions opened, closed;
   opened.improve.sheet_move_voxels = closed.improve.sheet_move_voxels = 0;
+  opened.sliver_rounds = closed.sliver_rounds = 0;
   closed.plc.wedge_degrees = 0;
   VolumeMeshResult r, s;
   MeshWithAndWithout(NarrowWedge(), dims, opened, closed, &r, &s);
@@ -374,7 +376,7 @@ double SheetArea(const Plc& plc) {
   return area;
 }
 
-TEST(PlcTest, RefiningBisectsTheEdgesAndEveryTriangleOnThem) {
+TEST(PlcTest, RefiningBisectsLongestEdgesUntilTheyHalveWithoutNarrowingAnAngle) {
   // Two sheets of different pieces; the first ends on the box (x = -0.5), where its edges
   // in the box face must stay whole.
   const TriangleMesh m = Append(Square(-0.5, 12, 10, 2, 3, 2.0f), Square(4, 16, 8, 2, 5, 4.0f));
@@ -385,9 +387,7 @@ TEST(PlcTest, RefiningBisectsTheEdgesAndEveryTriangleOnThem) {
   const Plc original = plc;
   const uint32_t split = RefineSheetTriangles(marked, &plc);
   EXPECT_GT(split, 0u);
-  // Every edge but those in the box face x = -0.5 or y = -0.5 (2 + 2 of the first sheet's 16);
-  // an interior edge splits two triangles, a rim edge one.
-  EXPECT_EQ(split, 2u * 16 - 4);
+  // Each split bisects the one or two triangles on its edge.
   EXPECT_GE(plc.sheet_triangles.size(), before + split);
   EXPECT_LE(plc.sheet_triangles.size(), before + 2 * split);
   EXPECT_EQ(plc.vertices.size(), original.vertices.size() + split);
@@ -402,6 +402,24 @@ TEST(PlcTest, RefiningBisectsTheEdgesAndEveryTriangleOnThem) {
     EXPECT_EQ(plc.facets[6 + t].polygons, (std::vector<std::vector<uint32_t>>{{f[0], f[1], f[2]}}));
     EXPECT_EQ(plc.sheet_thickness[t], plc.sheet_piece[t] == 3 ? 2.0f : 4.0f);
   }
+  // The triangles are right and isosceles and stay so (longest-edge bisection narrows no
+  // angle, makes no cap); the second sheet's, off the box, have their longest edges halved
+  // (6 sqrt 2 -> 3 sqrt 2); the first's that reach the box face stay whole.
+  size_t whole = 0;
+  for (size_t t = 0; t < plc.sheet_triangles.size(); ++t) {
+    const Face& f = plc.sheet_triangles[t];
+    const Vec3 p[3] = {plc.vertices[f[0]], plc.vertices[f[1]], plc.vertices[f[2]]};
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
+      const double degrees = std::acos(Dot(u, w) / (Norm(u) * Norm(w))) * 180 / std::numbers::pi;
+      EXPECT_TRUE(std::abs(degrees - 45) < 1e-6 || std::abs(degrees - 90) < 1e-6) << degrees;
+      longest = std::max(longest, Norm(u));
+    }
+    if (plc.sheet_piece[t] == 5) EXPECT_LE(longest, 3 * std::sqrt(2.0) + 1e-9);
+    whole += plc.sheet_piece[t] == 3 && longest > 6.25 * std::sqrt(2.0) / 2 + 1e-9;
+  }
+  EXPECT_GT(whole, 0u);
   // No new vertex in the box face x = -0.5, and the box facets untouched.
   for (size_t i = original.vertices.size(); i < plc.vertices.size(); ++i) {
     EXPECT_GT(plc.vertices[i].x, -0.5 + 1e-9);

@@ -32,7 +32,7 @@ struct VolumeMeshOptions {
   // budget allows. The least possible is TetGen's mesh at that coarsest lattice (or with
   // none, when plc.lattice is 0): a budget below it is kInvalidArgument naming it.
   uint64_t max_tetrahedra = 0;
-  // Rounds of bisecting the sheet triangles around slivers they pin (RefineAtSlivers; 0:
+  // Rounds of refining the sheet triangles around slivers they pin (RefineAtSlivers; 0:
   // none), each a TetGen run and an improvement of its own. Over the 140 runs of the volume
   // mesh sweep a third round was never kept (bench/RESULTS.md, issue 41). Users turn it off
   // with tet.min_dihedral = 0, its aim; tests of the steps before it turn it off here.

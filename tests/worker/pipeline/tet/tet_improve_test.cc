@@ -182,6 +182,7 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   off.tetgen.max_volume = 4;
   off.tetgen.steiner_on_sheets = true;
   off.plc.lattice = 0;
+  off.sliver_rounds = 0;  // the pass on TetGen's mesh of this PLC, not of a finer one
   VolumeMeshOptions on = off;
   on.improve = {};
   on.improve.sheet_move_voxels = 0;  // the PLC's sheet vertices stay (see SheetVerticesMove...)

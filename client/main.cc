@@ -65,11 +65,16 @@ void PrintWarnings(const std::string& dir) {
   if (!text.ok()) return;
   absl::StatusOr<nlohmann::json> report = ParseJson(*text, "report.json");
   if (!report.ok() || !report->is_object()) return;
-  const auto vm = report->find("volume_mesh");
-  if (vm == report->end() || !vm->is_object()) return;
-  const auto w = vm->find("angle_warning");
-  if (w != vm->end() && w->is_object() && w->contains("text") && (*w)["text"].is_string()) {
-    std::cout << "warning   " << (*w)["text"].get<std::string>() << "\n";
+  // The report's warnings: a surface under the grid floor, a volume mesh under its aim.
+  for (const auto& [section, key] :
+       {std::pair<const char*, const char*>{"similarity", "floor_warning"},
+        {"volume_mesh", "angle_warning"}}) {
+    const auto s = report->find(section);
+    if (s == report->end() || !s->is_object()) continue;
+    const auto w = s->find(key);
+    if (w != s->end() && w->is_object() && w->contains("text") && (*w)["text"].is_string()) {
+      std::cout << "warning   " << (*w)["text"].get<std::string>() << "\n";
+    }
   }
 }
 

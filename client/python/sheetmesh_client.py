@@ -66,14 +66,25 @@ class AngleWarning(UserWarning):
     ``volume_mesh.angle_warning``). ``mesh`` issues it with :func:`warnings.warn`."""
 
 
+class FidelityWarning(UserWarning):
+    """A surface whose similarity is under every grid model of the report (the paper's
+    Table 2 baselines, a floor any mesh should beat); the message says both figures and
+    what to try (the report's ``similarity.floor_warning``). ``mesh`` issues it with
+    :func:`warnings.warn`."""
+
+
 def _warn_from_report(path):
     try:
         report = json.loads(pathlib.Path(path).read_text())
     except (OSError, ValueError):
         return
-    warning = (report.get("volume_mesh") or {}).get("angle_warning") if isinstance(report, dict) else None
-    if isinstance(warning, dict) and warning.get("text"):
-        warnings.warn(AngleWarning(warning["text"]), stacklevel=3)
+    if not isinstance(report, dict):
+        return
+    for section, key, category in (("similarity", "floor_warning", FidelityWarning),
+                                   ("volume_mesh", "angle_warning", AngleWarning)):
+        warning = (report.get(section) or {}).get(key)
+        if isinstance(warning, dict) and warning.get("text"):
+            warnings.warn(category(warning["text"]), stacklevel=3)
 
 
 def file_digest(path):

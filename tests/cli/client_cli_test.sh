@@ -94,7 +94,15 @@ if /usr/bin/python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 20 else 1
   grep -q "^warning   min dihedral .* under tet.min_dihedral = 20° at voxel (" "$tmp/aim.txt" ||
     fail "a minimum of $worst under 20 printed no warning: $(cat "$tmp/aim.txt")"
 else
-  ! grep -q "^warning" "$tmp/aim.txt" || fail "a minimum of $worst warned: $(cat "$tmp/aim.txt")"
+  ! grep -q "^warning   min dihedral" "$tmp/aim.txt" || fail "a minimum of $worst warned: $(cat "$tmp/aim.txt")"
+fi
+# A surface under the grid floor (the report's similarity.floor_warning) is a warning line
+# too, and there is none without it.
+if /usr/bin/python3 -c "import json,sys; sys.exit(0 if 'floor_warning' in json.load(open(sys.argv[1]))['similarity'] else 1)" "$tmp/aim/report.json"; then
+  grep -q "^warning   similarity .* is under the grid model's" "$tmp/aim.txt" ||
+    fail "a surface under the grid floor printed no warning: $(cat "$tmp/aim.txt")"
+else
+  ! grep -q "^warning   similarity" "$tmp/aim.txt" || fail "a floor warning without one in the report"
 fi
 
 # mesh by reference.

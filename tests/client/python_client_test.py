@@ -126,6 +126,13 @@ class PythonClientTest(unittest.TestCase):
             self.assertIn("at voxel (", text)
         else:
             self.assertEqual(angle, [])
+        # A surface under the grid floor warns too, exactly when the report says so.
+        floor = [w for w in caught if issubclass(w.category, sheetmesh_client.FidelityWarning)]
+        if "floor_warning" in report["similarity"]:
+            self.assertEqual(len(floor), 1, [str(w.message) for w in caught])
+            self.assertIn("is under the grid model's", str(floor[0].message))
+        else:
+            self.assertEqual(floor, [])
 
     def test_reference_inside_root_and_refused_outside(self):
         out = self.tmp / "ref_out"

@@ -119,6 +119,8 @@ async function results(root, job) {
   if (!names.includes("report.json")) return;
   const report = await (await api.fetchArtifact(job.name, "report.json")).json();
   root.append(el("h3", {}, "Fidelity"), numbers(report));
+  const floor = (report.similarity || {}).floor_warning;
+  if (floor) root.append(el("p", { id: "floor-warning", class: "warning" }, `Warning: ${floor.text}`));
   const previews = names.filter((n) => n.endsWith(".png"));
   if (previews.length) {
     root.append(el("h3", {}, "Previews"), el("div", { class: "previews" }, previews.map((n) =>

@@ -236,6 +236,8 @@ void PrintRun(const PipelineReport& r, std::ostream& out) {
       out << absl::StrFormat("  k=%d: %.4f (%d cells)", g.rate, g.similarity, g.grid_quantity);
     }
     out << "\n";
+    if (const std::optional<std::string> w = sim.FloorWarning())
+      out << "  warning   " << *w << "\n";
   }
   if (r.volume_mesh) PrintVolumeMesh(*r.volume_mesh, out);
   PrintSplit(r.volume_split, out);

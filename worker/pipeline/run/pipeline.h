@@ -54,6 +54,12 @@ struct SimilarityReport {
   double shell_similarity = 0;         // the other prism model
   std::vector<GridFigure> grid;
 
+  // Where the mesh scores under every grid model of `grid` (the paper's Table 2 baselines,
+  // each with far more cells than the mesh has triangles: a floor any mesh should beat),
+  // the line that says so and what to do (the report's similarity.floor_warning, printed
+  // by the CLIs, issued by the Python client, shown on the job page); none otherwise.
+  std::optional<std::string> FloorWarning() const;
+
   nlohmann::json Fields() const;
 };
 

@@ -2,7 +2,10 @@
 // this only nests them.
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 
+#include "absl/strings/str_format.h"
 #include "common/json_text.h"
 #include "common/version.h"
 #include "worker/pipeline/run/parameters_json.h"
@@ -15,6 +18,23 @@ nlohmann::json Vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
+std::optional<std::string> SimilarityReport::FloorWarning() const {
+  if (grid.empty()) return std::nullopt;
+  const GridFigure& floor = *std::min_element(
+      grid.begin(), grid.end(),
+      [](const GridFigure& a, const GridFigure& b) { return a.similarity < b.similarity; });
+  if (!(score.similarity < floor.similarity)) return std::nullopt;
+  return absl::StrFormat(
+      "similarity %.4f is under the grid model's %.4f (every %d%s voxel kept, %d cells: the "
+      "paper's Table 2 floor); a finer budget (a smaller r, more triangles) or "
+      "surface.representation = auto or body for thick pieces scores higher",
+      score.similarity, floor.similarity, floor.rate,
+      floor.rate == 2   ? "nd"
+      : floor.rate == 3 ? "rd"
+                        : "th",
+      floor.grid_quantity);
+}
+
 nlohmann::json SimilarityReport::Fields() const {
   nlohmann::json j = score.Fields();
   j["against"] = against_model ? "extracted model" : "input sheet phase";
@@ -25,6 +45,15 @@ nlohmann::json SimilarityReport::Fields() const {
         {{"rate", f.rate}, {"similarity", f.similarity}, {"grid_quantity", f.grid_quantity}});
   }
   j["grid_models"] = g;
+  if (const std::optional<std::string> w = FloorWarning()) {
+    const GridFigure& floor = *std::min_element(
+        grid.begin(), grid.end(),
+        [](const GridFigure& a, const GridFigure& b) { return a.similarity < b.similarity; });
+    j["floor_warning"] = {{"text", *w},
+                          {"similarity", score.similarity},
+                          {"floor", floor.similarity},
+                          {"rate", floor.rate}};
+  }
   if (raw) {
     j["raw"] = raw->Fields();
     j["raw"]["against"] = "input sheet phase";

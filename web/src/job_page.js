@@ -27,6 +27,18 @@ function unitOf(report) {
   return spacing.every((s) => s === 1) ? "voxels" : "volume units";
 }
 
+// Each piece as a sheet or a body, and why (the report's representation block).
+function representationTable(report) {
+  const pieces = (report.representation || {}).pieces || [];
+  if (!pieces.length) return el("p", {}, "Every piece a sheet (surface.representation = sheet).");
+  return el("table", { id: "representation" },
+    el("thead", {}, el("tr", {}, ["piece", "as", "why"].map((h) => el("th", {}, h)))),
+    el("tbody", {}, pieces.map((p) => el("tr", {},
+      el("td", {}, p.part_of >= 0 ? `${p.piece} (a lens of ${p.part_of})` : p.piece),
+      el("td", { "data-key": "representation" }, p.representation),
+      el("td", {}, p.reason || "")))));
+}
+
 function piecesTable(report) {
   const pieces = report.pieces || [];
   const unit = unitOf(report);
@@ -126,7 +138,8 @@ async function results(root, job) {
     root.append(el("h3", {}, "Previews"), el("div", { class: "previews" }, previews.map((n) =>
       el("figure", {}, linkedImage(job.name, n), el("figcaption", {}, n)))));
   }
-  root.append(el("h3", {}, "Pieces"), piecesTable(report), el("h3", {}, "Volume mesh"), qualityTable(report));
+  root.append(el("h3", {}, "Pieces"), piecesTable(report), el("h3", {}, "Sheets and bodies"),
+    representationTable(report), el("h3", {}, "Volume mesh"), qualityTable(report));
   if (report.flow) {
     const canvas = el("canvas", { id: "permeability_chart", width: 560, height: 280 });
     root.append(el("h3", {}, "Permeability"), permeabilityTable(report.flow), canvas);

@@ -308,6 +308,13 @@ async function main() {
   const p0 = full.pieces[0];
   check(rows[0][4] === Number(p0.dip_degrees).toFixed(1) && rows[0][5] === Number(p0.dip_direction_degrees).toFixed(1),
     `piece ${p0.piece}: dip ${rows[0][4]}, dip direction ${rows[0][5]}`);
+  // Each piece as a sheet or a body, and why, as report.json says.
+  const reps = (full.representation || {}).pieces || [];
+  if (reps.length) {
+    const why = await page.$$eval("#representation tbody tr", (r) => r.map((x) => [...x.cells].map((c) => c.textContent)));
+    check(why.length === reps.length && why.every((row, i) => row[1] === reps[i].representation && row[2] === reps[i].reason && row[2] !== ""),
+      `the sheets-and-bodies table has report.json's ${reps.length} pieces with their reasons (${JSON.stringify(why[0])})`);
+  }
   const tets = (await page.textContent('#quality td[data-key="tetrahedra"]')).trim();
   check(tets === String(full.volume_mesh.tetrahedra), `Table 3: ${tets} tetrahedra, report.json ${full.volume_mesh.tetrahedra}`);
   const minDihedral = await page.$eval("#quality tbody tr:nth-child(3) td", (td) => td.textContent);

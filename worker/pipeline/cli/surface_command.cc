@@ -198,16 +198,19 @@ void PrintRun(const PipelineReport& r, std::ostream& out) {
       out << "            apertures counted from voxels: " << g.levels.problem << "\n";
     }
   }
-  if (r.representation && r.representation->bodies > 0) {
-    out << absl::StrFormat(
-        "bodies      %d of the pieces meshed as closed surfaces (piece: "
-        "triangles, similarity as a body / as a sheet)\n",
-        r.representation->bodies);
-    for (const PieceRepresentation& p : r.representation->pieces) {
-      if (!p.body || !p.body_similarity || !p.sheet_similarity) continue;
-      out << absl::StrFormat("            %d%s: %d, %.4f / %.4f\n", p.piece,
-                             p.part_of >= 0 ? absl::StrCat(" (a lens of ", p.part_of, ")") : "",
-                             p.body_triangles, *p.body_similarity, *p.sheet_similarity);
+  if (r.representation && !r.representation->pieces.empty()) {
+    // Each piece as what, and why (the largest ten; the report lists them all).
+    std::vector<const PieceRepresentation*> largest;
+    for (const PieceRepresentation& p : r.representation->pieces) largest.push_back(&p);
+    std::stable_sort(largest.begin(), largest.end(),
+                     [](const auto* a, const auto* b) { return a->voxels > b->voxels; });
+    if (largest.size() > 10) largest.resize(10);
+    out << absl::StrFormat("pieces as   %d of %d meshed as closed surfaces (piece: as what, why)\n",
+                           r.representation->bodies, r.representation->pieces.size());
+    for (const PieceRepresentation* p : largest) {
+      out << absl::StrFormat("            %d%s: %s, %s\n", p->piece,
+                             p->part_of >= 0 ? absl::StrCat(" (a lens of ", p->part_of, ")") : "",
+                             p->body ? "body" : "sheet", p->reason);
     }
   }
   const SimilarityReport& sim = *r.similarity;

@@ -441,17 +441,21 @@ std::vector<ParamRow> SurfaceRows() {
                          {"body", RepresentationMode::kBody}},
                         "each piece as a sheet (one layer of triangles with thickness), a body "
                         "(the closed surface around it, a region of the volume mesh) or auto: "
-                        "whichever scores better with the piece's share of the triangles (where "
-                        "a volume mesh follows, bodies only as thick as the next two say)"));
+                        "whichever scores better with the piece's share of the triangles, "
+                        "bodies only as thick as the next two say (a thin piece is a sheet with "
+                        "its aperture)"));
   rows.push_back(Number("surface.body_min_thickness", SM_MEMBER(representation.body_min_thickness),
                         "[0, 10000]", "voxels",
-                        "in auto where a volume mesh follows, a piece thinner than this (median "
-                        "thickness) stays a sheet without a trial as a body"));
+                        "in auto, a piece thinner than this (median thickness) stays a sheet "
+                        "without a trial as a body"));
   rows.push_back(Number("surface.body_min_aspect", SM_MEMBER(representation.body_min_aspect),
                         "[0, 100]", "",
-                        "in auto, a lens of a piece (and where a volume mesh follows, a piece) is "
-                        "tried as a body only where its median thickness is at least this "
-                        "fraction of its width"));
+                        "in auto, a piece or a lens of one is tried as a body only where its "
+                        "median thickness is at least this fraction of its width"));
+  rows.push_back(Bool("surface.thin_bodies", SM_MEMBER(representation.try_thin_bodies),
+                      "in auto where the surface is the result (no volume mesh, no --grey), try "
+                      "thin pieces as bodies too and keep whichever scores better (a body has no "
+                      "aperture)"));
   rows.push_back(Number(
       "surface.fold_angle", SM_MEMBER(surface.dual.fold_angle_degrees), "[0, 180)", "degrees",
       "a candidate meeting a kept triangle below this dihedral angle is refused"));

@@ -444,9 +444,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   if (options.representation.mode != RepresentationMode::kSheet) {
     StageTimer t(&report, "representation");
     RepresentationOptions representation = options.representation;
-    // Thin pieces as bodies only where the surface is the result: a volume mesh would fill
-    // them with flat tetrahedra, and grey apertures are measured across sheets.
-    representation.try_thin_bodies = !MeshesVolume(options) && !grey;
+    // Thin pieces as bodies only where asked (surface.thin_bodies) and the surface is the
+    // result: a volume mesh would fill them with flat tetrahedra, and grey apertures are
+    // measured across sheets.
+    representation.try_thin_bodies =
+        options.representation.try_thin_bodies && !MeshesVolume(options) && !grey;
     SM_ASSIGN_OR_RETURN(report.representation,
                         ChooseRepresentation(sheet, piece_of_voxel, representation, &result.mesh,
                                              progress.Stage("representation")));

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "common/status_macros.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/similarity/similarity.h"
@@ -305,6 +306,21 @@ bool BodyWins(const PieceRepresentation& choice, const TriangleMesh& body, bool 
          *choice.body_similarity > *choice.sheet_similarity;
 }
 
+// Why BodyWins chose as it did, in words.
+std::string TrialReason(const PieceRepresentation& choice, const TriangleMesh& body, bool thin) {
+  const double sheet = *choice.sheet_similarity, closed = *choice.body_similarity;
+  if (choice.body_triangles > (1 + kTriangleTolerance) * choice.sheet_triangles) {
+    return absl::StrFormat("its body needs %d triangles, over the sheet's %d",
+                           choice.body_triangles, choice.sheet_triangles);
+  }
+  if (!thin && choice.median_thickness < kBodyThicknessPerEdge * MeanEdgeLength(body)) {
+    return absl::StrFormat(
+        "its body's triangles (mean edge %.1f voxels) are too wide for its median thickness %.1f",
+        MeanEdgeLength(body), choice.median_thickness);
+  }
+  return absl::StrFormat("as a body it scores %.4f, as a sheet %.4f", closed, sheet);
+}
+
 // The thick parts of a piece: 6-connected sets of its voxels whose τ is at least `least`,
 // of kMinLensVoxels or more, each as its sorted voxel keys.
 absl::StatusOr<std::vector<std::vector<uint64_t>>> ThickParts(const PieceVoxels& pv,
@@ -414,6 +430,8 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
     lens.body_similarity = ScoreModel(Union(with_body, inside), *own).similarity;
     if (!BodyWins(lens, body.mesh, false) || CutsThrough(kept, body.mesh)) continue;
     lens.body = true;
+    lens.reason =
+        absl::StrCat("a thick part of piece ", piece, ": ", TrialReason(lens, body.mesh, false));
     score = *lens.body_similarity;
     *sheet_part = std::move(kept);
     chosen->Add(body.mesh, chosen->next_id++, piece);
@@ -506,17 +524,35 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       const bool thin = options.try_thin_bodies;
       const bool thin_trial = thin && thin_tried + choice.voxels <= kThinBodyTrialVoxels;
       if (thin_trial) thin_tried += choice.voxels;
-      if (body_mode || thin_trial ||
-          (choice.median_thickness >= options.body_min_thickness &&
-           Stout(choice.median_thickness, Width(pv.keys, dims), options.body_min_aspect) &&
-           MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size()))) {
+      const double width = Width(pv.keys, dims);
+      if (choice.median_thickness < options.body_min_thickness) {
+        choice.reason = absl::StrFormat(
+            "thin: median thickness %.1f voxels, under surface.body_min_thickness %g",
+            choice.median_thickness, options.body_min_thickness);
+      } else if (!Stout(choice.median_thickness, width, options.body_min_aspect)) {
+        choice.reason = absl::StrFormat(
+            "thin against its width: median thickness %.1f of %.0f voxels, under "
+            "surface.body_min_aspect %g",
+            choice.median_thickness, width, options.body_min_aspect);
+      } else if (!MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size())) {
+        choice.reason =
+            absl::StrFormat("its %d triangles would be wider than twice its median thickness %.1f",
+                            faces.size(), choice.median_thickness);
+      }
+      if (body_mode || thin_trial || choice.reason.empty()) {
         const VoxelSet own = VoxelSetFromSortedLinear(dims, pv.keys);
         SM_ASSIGN_OR_RETURN(BodySurface body,
                             Trial(sheet_part, own, piece, options.height, &choice));
         // Another piece's sheet near a body would be joined to it in a volume mesh; where
         // the surface is the result, the two may simply lie side by side.
-        choice.body = body_mode || (BodyWins(choice, body.mesh, thin) &&
-                                    (thin || !NearOthers(*mesh, piece, own, kNearVoxels)));
+        const bool near = !thin && NearOthers(*mesh, piece, own, kNearVoxels);
+        choice.body = body_mode || (BodyWins(choice, body.mesh, thin) && !near);
+        choice.reason =
+            body_mode ? "surface.representation = body"
+            : BodyWins(choice, body.mesh, thin) && near
+                ? absl::StrFormat("another piece's sheet runs within %g voxels of its body",
+                                  kNearVoxels)
+                : TrialReason(choice, body.mesh, thin);
         if (choice.body) {
           chosen.Add(body.mesh, piece, -1);
           sheet_part = TriangleMesh();
@@ -528,6 +564,7 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
         choice.sheet_triangles = sheet_part.num_faces();
       }
     }
+    if (choice.reason.empty()) choice.reason = "no voxels of its own to try as a body";
     if (choice.body) ++chosen.report.bodies;
     Append(sheet_part, &sheets);
     chosen.report.pieces.push_back(choice);

@@ -10,6 +10,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -43,12 +44,13 @@ struct RepresentationOptions {
   double body_min_aspect = 0.25;
   PrismHeight height = PrismHeight::kFace;  // how a sheet's faces are scored
   // In auto, whether a thin piece is tried as a body too. By default bodies are held to
-  // what a volume mesh can fill (body_min_thickness, body_min_aspect, thick enough for
-  // their triangles). Where the surface is the result (no volume mesh, no grey apertures
-  // wanted of its sheets), the pipeline sets this: every piece is tried both ways (thin ones
-  // up to about half a million voxels in all: beyond, the trials would cost more than the
-  // run) and keeps the better — a planar fracture's closed surface may follow its voxels
-  // better than its sheet, at a coarse budget as at a fine one.
+  // thick pieces (body_min_thickness, body_min_aspect, thick enough for their triangles):
+  // a fracture user comes for the aperture, which a body does not carry. Where the surface
+  // is the result (no volume mesh, no grey apertures wanted of its sheets) and the user asks
+  // (surface.thin_bodies), every piece is tried both ways (thin ones up to about half a
+  // million voxels in all: beyond, the trials would cost more than the run) and keeps the
+  // better — a planar fracture's closed surface may follow its voxels better than its
+  // sheet, at a coarse budget as at a fine one.
   bool try_thin_bodies = false;
 };
 
@@ -66,6 +68,7 @@ struct PieceRepresentation {
   uint64_t body_triangles = 0;             // the body's faces, when tried
   uint64_t body_triangles_before = 0;      // at voxel resolution, before decimation
   bool body = false;                       // chosen as a body
+  std::string reason;                      // why, in words (the report and the CLI say it)
 
   nlohmann::json Fields() const;
 };

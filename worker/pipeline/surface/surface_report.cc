@@ -75,7 +75,8 @@ nlohmann::json PieceRepresentation::Fields() const {
                       {"voxels", voxels},
                       {"thickness_voxels", thickness},
                       {"median_thickness_voxels", median_thickness},
-                      {"sheet_triangles", sheet_triangles}};
+                      {"sheet_triangles", sheet_triangles},
+                      {"reason", reason}};
   if (sheet_similarity) j["sheet_similarity"] = *sheet_similarity;
   if (body_similarity) {
     j["body_similarity"] = *body_similarity;

@@ -531,9 +531,10 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
             choice.median_thickness, options.body_min_thickness);
       } else if (!Stout(choice.median_thickness, width, options.body_min_aspect)) {
         choice.reason = absl::StrFormat(
-            "thin against its width: median thickness %.1f of %.0f voxels, under "
-            "surface.body_min_aspect %g",
-            choice.median_thickness, width, options.body_min_aspect);
+            "thin against its width: median thickness %.1f voxels, %.2f of its width %.0f, "
+            "under surface.body_min_aspect %g",
+            choice.median_thickness, choice.median_thickness / width, width,
+            options.body_min_aspect);
       } else if (!MayBeThickEnough(choice.voxels, choice.median_thickness, faces.size())) {
         choice.reason =
             absl::StrFormat("its %d triangles would be wider than twice its median thickness %.1f",

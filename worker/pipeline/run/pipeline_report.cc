@@ -16,14 +16,20 @@ namespace {
 
 nlohmann::json Vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
+// The grid model that scores lowest (the floor), or none.
+const GridFigure* Floor(const std::vector<GridFigure>& grid) {
+  if (grid.empty()) return nullptr;
+  return &*std::min_element(grid.begin(), grid.end(), [](const GridFigure& a, const GridFigure& b) {
+    return a.similarity < b.similarity;
+  });
+}
+
 }  // namespace
 
 std::optional<std::string> SimilarityReport::FloorWarning() const {
-  if (grid.empty()) return std::nullopt;
-  const GridFigure& floor = *std::min_element(
-      grid.begin(), grid.end(),
-      [](const GridFigure& a, const GridFigure& b) { return a.similarity < b.similarity; });
-  if (!(score.similarity < floor.similarity)) return std::nullopt;
+  const GridFigure* floor_model = Floor(grid);
+  if (floor_model == nullptr || !(score.similarity < floor_model->similarity)) return std::nullopt;
+  const GridFigure& floor = *floor_model;
   return absl::StrFormat(
       "similarity %.4f is under the grid model's %.4f (every %d%s voxel kept, %d cells: the "
       "paper's Table 2 floor); a finer budget (a smaller r, more triangles) or "
@@ -46,9 +52,7 @@ nlohmann::json SimilarityReport::Fields() const {
   }
   j["grid_models"] = g;
   if (const std::optional<std::string> w = FloorWarning()) {
-    const GridFigure& floor = *std::min_element(
-        grid.begin(), grid.end(),
-        [](const GridFigure& a, const GridFigure& b) { return a.similarity < b.similarity; });
+    const GridFigure& floor = *Floor(grid);
     j["floor_warning"] = {{"text", *w},
                           {"similarity", score.similarity},
                           {"floor", floor.similarity},

@@ -546,14 +546,14 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
                             Trial(sheet_part, own, piece, options.height, &choice));
         // Another piece's sheet near a body would be joined to it in a volume mesh; where
         // the surface is the result, the two may simply lie side by side.
-        const bool near = !thin && NearOthers(*mesh, piece, own, kNearVoxels);
-        choice.body = body_mode || (BodyWins(choice, body.mesh, thin) && !near);
+        const bool wins = BodyWins(choice, body.mesh, thin);
+        const bool near = wins && !thin && NearOthers(*mesh, piece, own, kNearVoxels);
+        choice.body = body_mode || (wins && !near);
         choice.reason =
             body_mode ? "surface.representation = body"
-            : BodyWins(choice, body.mesh, thin) && near
-                ? absl::StrFormat("another piece's sheet runs within %g voxels of its body",
-                                  kNearVoxels)
-                : TrialReason(choice, body.mesh, thin);
+            : near    ? absl::StrFormat("another piece's sheet runs within %g voxels of its body",
+                                        kNearVoxels)
+                      : TrialReason(choice, body.mesh, thin);
         if (choice.body) {
           chosen.Add(body.mesh, piece, -1);
           sheet_part = TriangleMesh();

@@ -50,9 +50,11 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
   using Edge = std::pair<uint32_t, uint32_t>;
   // Edges in a strict order: by length, ties by their corners, so that every triangle has
   // one longest edge and a chain of ever longer edges ends.
+  auto length2 = [&](const Edge& e) {
+    return Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
+  };
   auto longer = [&](const Edge& e, const Edge& f) {
-    const double le = Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
-    const double lf = Norm2(plc->vertices[f.second] - plc->vertices[f.first]);
+    const double le = length2(e), lf = length2(f);
     return le != lf ? le > lf : e > f;
   };
   auto longest_edge = [&](uint32_t t) {
@@ -120,9 +122,6 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
     bisect(e);
     ++split;
     return true;
-  };
-  auto length2 = [&](const Edge& e) {
-    return Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
   };
   // Each marked triangle is bisected until its longest edge is half what it was (twice for
   // a well-shaped one), the pieces its neighbours' splits cut from it included.

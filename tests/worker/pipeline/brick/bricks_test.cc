@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/file_util.h"
+#include "tests/testing/preset_sheets.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/phantom/phantom.h"
@@ -25,15 +26,7 @@ using ::testing::HasSubstr;
 
 // A preset's phantom at `dims`, as a raw file named with its dims.
 std::string Phantom(const TempDir& tmp, const std::string& preset, const Dims& dims) {
-  PhantomOptions o = *PhantomPreset(preset);
-  o.dims = dims;
-  PhantomTruth truth = *PlanPhantom(o);
-  const std::string path = tmp.File(preset + "_" + dims.ToString() + "_u8.raw");
-  VolumeInfo info;
-  info.dims = dims;
-  auto sink = *CreateRawWriter(path, info);
-  EXPECT_TRUE(GeneratePhantom(&truth, *sink).ok());
-  return path;
+  return ::sheetmesh::testing::PresetRawFile(tmp, preset, dims);
 }
 
 // A preset's phantom at `dims` written by `make_sink` (a reader's format).
@@ -434,16 +427,21 @@ TEST(BricksTest, APlansSizesAreCheckedBeforeAnythingIsSizedFromThem) {
               }),
               StatusIs(absl::StatusCode::kResourceExhausted,
                        ::testing::AllOf(HasSubstr("plan.json: dims"), HasSubstr("1048576"))));
-  EXPECT_THAT(edited([](nlohmann::json& j) { j["brick_size"] = {1, 1, 1}; }),
+  EXPECT_THAT(edited([](nlohmann::json& j) {
+                j["brick_size"] = {1, 1, 1};
+              }),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("more than 65536 bricks")));
-  EXPECT_THAT(edited([](nlohmann::json& j) { j["dims"] = {64, 56, 96}; }),
+  EXPECT_THAT(edited([](nlohmann::json& j) {
+                j["dims"] = {64, 56, 96};
+              }),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("bricks[4]")));
   EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"].erase(j["bricks"].size() - 1); }),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("7 bricks hold")));
   EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"][1]["core"] = {0, 0, 0, 32, 32, 32}; }),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("bricks[1]")));
-  EXPECT_THAT(edited([](nlohmann::json& j) { j["bricks"][0]["core"] = {0, 0, 0, 33, 32, 32}; }),
-              StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("not a cell of the plan's grid")));
+  EXPECT_THAT(
+      edited([](nlohmann::json& j) { j["bricks"][0]["core"] = {0, 0, 0, 33, 32, 32}; }),
+      StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("not a cell of the plan's grid")));
   EXPECT_THAT(MakeBrickPlan(o, {{1, 1, 1}, {0, 0, 0}}).status(),
               StatusIs(absl::StatusCode::kInvalidArgument, HasSubstr("more than 65536 bricks")));
 }

@@ -8,6 +8,7 @@
 
 #include "common/file_util.h"
 #include "tests/testing/grey_phantoms.h"
+#include "tests/testing/preset_sheets.h"
 #include "tests/testing/shared_data.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
@@ -20,6 +21,7 @@
 namespace sheetmesh {
 namespace {
 
+using ::sheetmesh::testing::PresetRawFile;
 using ::sheetmesh::testing::StatusIs;
 using ::sheetmesh::testing::TempDir;
 
@@ -443,13 +445,7 @@ TEST(PipelineTest, ABodyTheBoxCutsIsScoredClosedByItsFacesOnTheBox) {
   // meshed as a body: its walls in the volume mesh are open where the box cuts it, and the
   // score of the volume mesh's sheets filled the wrong side (-0.0065 against 0.95 at r = 5).
   TempDir tmp;
-  PhantomOptions p = *PhantomPreset("thick_slab");
-  PhantomTruth truth = *PlanPhantom(p);
-  const std::string path = tmp.File("slab_" + p.dims.ToString() + "_u8.raw");
-  VolumeInfo info;
-  info.dims = p.dims;
-  auto sink = *CreateRawWriter(path, info);
-  ASSERT_TRUE(GeneratePhantom(&truth, *sink).ok());
+  const std::string path = PresetRawFile(tmp, "thick_slab");
   PipelineOptions o;
   o.input.path = path;
   o.output.dir = tmp.File("out");

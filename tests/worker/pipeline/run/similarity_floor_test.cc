@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/file_util.h"
+#include "tests/testing/preset_sheets.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/testing/temp_dir.h"
 #include "worker/pipeline/phantom/phantom.h"
@@ -17,6 +18,7 @@
 namespace sheetmesh {
 namespace {
 
+using ::sheetmesh::testing::PresetRawFile;
 using ::sheetmesh::testing::TempDir;
 
 TEST(SimilarityFloorTest, ASurfaceUnderEveryGridModelWarnsNamingTheFloor) {
@@ -46,13 +48,7 @@ TEST(SimilarityFloorTest, AThickSlabMeshedAsASheetScoresUnderTheGridFloorAndSays
   // The thick_slab preset (one slab 30-50 voxels thick) forced to one layer at r = 3
   // scores about 0.87, under the coarsest grid model's 0.91: the report says so.
   TempDir tmp;
-  PhantomOptions p = *PhantomPreset("thick_slab");
-  PhantomTruth truth = *PlanPhantom(p);
-  const std::string path = tmp.File("slab_" + p.dims.ToString() + "_u8.raw");
-  VolumeInfo info;
-  info.dims = p.dims;
-  auto sink = *CreateRawWriter(path, info);
-  ASSERT_TRUE(GeneratePhantom(&truth, *sink).ok());
+  const std::string path = PresetRawFile(tmp, "thick_slab");
   PipelineOptions o;
   o.input.path = path;
   o.output.dir = tmp.File("out");

@@ -231,7 +231,8 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   }
   if (options.contact_voxels > 0) {
     std::vector<Vec3> unmended;
-    plc.mended_contacts = MendContacts(st, v, on_face, held, options.contact_voxels, &unmended);
+    plc.mended_contacts = MendContacts(st, v, on_face, held, options.contact_voxels,
+                                       options.zip_rims, &unmended, &plc.mended_edge_contacts);
     plc.unmended_contacts = static_cast<uint32_t>(unmended.size());
     for (size_t i = 0; i < unmended.size() && i < kContactPlaces; ++i) {
       plc.contact_places.push_back(placement.ToPhysical(unmended[i]));

@@ -195,21 +195,31 @@ uint32_t ApplyWithoutClashes(std::vector<Contact> contacts, SheetTriangles& s, s
 
 }  // namespace
 
-uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
-                      const std::vector<uint8_t>& held, double gap, std::vector<Vec3>* unmended) {
+uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8_t>& on_face,
+                      const std::vector<uint8_t>& held, double gap, bool zip_rims,
+                      std::vector<Vec3>* unmended, uint32_t* edge_contacts) {
   if (!(gap > 0) || s.faces.empty()) return 0;
   uint32_t mended = 0;
   std::vector<uint8_t> failed(v.size(), 0);
-  for (int round = 0; round < 4; ++round) {
+  // A vertex near another sheet with a neighbour that is too (a rim along it) waits: the
+  // edge contacts of a later round may join its neighbours there, making it a point's.
+  std::vector<uint8_t> along_line(v.size(), 0);
+  const size_t first_joint = v.size();  // the edge contacts' joints come after
+  constexpr int kRounds = 6;
+  for (int round = 0; round < kRounds; ++round) {
+    const uint32_t joined_edges = zip_rims ? MendEdgeContacts(s, v, on_face, gap) : 0;
+    if (edge_contacts != nullptr) *edge_contacts += joined_edges;
+    failed.resize(v.size(), 0);
+    along_line.assign(v.size(), 0);
     // The triangles in a grid; each vertex's faces and neighbours.
     std::vector<std::vector<uint32_t>> faces_of(v.size());
-    absl::flat_hash_set<uint64_t> edge;
+    absl::flat_hash_map<uint64_t, int> edge;  // each edge's number of faces
     double longest = gap;
     for (uint32_t f = 0; f < s.faces.size(); ++f) {
       for (int k = 0; k < 3; ++k) {
         const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
         faces_of[a].push_back(f);
-        edge.insert((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
+        ++edge[EdgeKey(a, b)];
         longest = std::max(longest, Norm(v[a] - v[b]));
       }
     }
@@ -219,9 +229,13 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
       TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, gap, &lo, &hi);
       grid.Insert(f, lo, hi);
     }
-    auto joined = [&](uint32_t a, uint32_t b) {
-      return edge.contains((uint64_t{std::min(a, b)} << 32) | std::max(a, b));
+    auto joined = [&](uint32_t a, uint32_t b) { return edge.contains(EdgeKey(a, b)); };
+    auto normal = [&](const Face& t) {
+      const Vec3 n = Cross(v[t[1]] - v[t[0]], v[t[2]] - v[t[0]]);
+      const double len = Norm(n);
+      return len > 0 ? n * (1 / len) : n;
     };
+    const double steep_cos = std::cos(kSteepRimDegrees * 3.14159265358979323846 / 180);
     // Each free vertex's nearest contact with a triangle not its own, nor one it reaches
     // along the sheets as a wedge of kWedgeKeptDegrees or more.
     const double wedge_sine = std::sin(kWedgeKeptDegrees * 3.14159265358979323846 / 180);
@@ -233,6 +247,15 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
       best.distance = 1e300;
       absl::flat_hash_map<uint32_t, double> reach;  // ReachAlongSheets as a map
       bool reached = false;
+      // u on a rim next to a joint the edge contacts made (index first_joint or more).
+      bool by_joint = false;
+      for (uint32_t f : faces_of[u]) {
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
+          const uint32_t x = a == u ? b : b == u ? a : UINT32_MAX;
+          by_joint = by_joint || (x != UINT32_MAX && x >= first_joint && edge[EdgeKey(a, b)] == 1);
+        }
+      }
       grid.Query(v[u] - Vec3(gap, gap, gap), v[u] + Vec3(gap, gap, gap), [&](uint32_t f) {
         const Face& t = s.faces[f];
         if (t[0] == u || t[1] == u || t[2] == u) return;
@@ -240,7 +263,15 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
         if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, gap, &c) ||
             !(c.distance < best.distance))
           return;
-        if (!reached) {
+        // A rim vertex next to a joint, its faces all standing steeply on t, is no wedge
+        // with t, however soon the sheets reach it through the joint: moving it lays the
+        // rim on t at the faces' own angle. (Without the joint, rims near a junction moved
+        // and made slivers: the planar junction at r = 3, 15.3 to 6.7 degrees.)
+        bool steep = zip_rims && by_joint;
+        const Vec3 nt = normal(t);
+        for (uint32_t g : faces_of[u])
+          steep = steep && std::abs(Dot(normal(s.faces[g]), nt)) <= steep_cos;
+        if (!reached && !steep) {
           for (const auto& [x, d] :
                ReachAlongSheets(u, kReachFactor * gap / wedge_sine, v, s.faces, faces_of)) {
             reach[x] = d;
@@ -249,7 +280,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
         }
         for (uint32_t x : t) {
           const auto it = reach.find(x);
-          if (it != reach.end() &&
+          if (!steep && it != reach.end() &&
               it->second + Norm(v[x] - c.at) <= kReachFactor * c.distance / wedge_sine) {
             return;
           }
@@ -263,7 +294,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
       });
       if (best.distance < 1e300) found.push_back(best);
     }
-    if (found.empty()) break;
+    if (found.empty() && joined_edges == 0) break;
     // A contact along a line, u and a neighbour both near the other sheet (a rim running
     // over it), is not a point's: moving u would lay its edges on that sheet, or leave
     // them in a wedge over it. It stays, and is reported. Neighbours that both land on
@@ -282,13 +313,14 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
           }
         }
         if (line) {
-          failed[c.vertex] = 1;
+          along_line[c.vertex] = 1;
         } else {
           points.push_back(c);
         }
       }
       found = std::move(points);
     }
+    if (found.empty() && joined_edges == 0) break;
     // Nearest first; each vertex and face takes part in one contact a round.
     std::sort(found.begin(), found.end(),
               [](const Contact& a, const Contact& b) { return a.distance < b.distance; });
@@ -323,7 +355,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector
   // What is left: vertices still within gap of a triangle not their own.
   if (unmended != nullptr) {
     for (uint32_t u = 0; u < v.size(); ++u) {
-      if (failed[u]) unmended->push_back(v[u]);
+      if (failed[u] || along_line[u]) unmended->push_back(v[u]);
     }
   }
   return mended;

@@ -22,6 +22,10 @@ namespace sheetmesh {
 // is (1 + cos a) d / sin a along straight lines; the factor allows for paths along edges.
 constexpr double kWedgeKeptDegrees = 10.0;
 constexpr double kReachFactor = 2.5;
+// A rim vertex near another sheet whose faces all stand on it at this angle or more is
+// moved onto it however soon the sheets reach it (MendContacts): a T-junction left short,
+// not a wedge.
+constexpr double kSteepRimDegrees = 30.0;
 // The vertices within path length `limit` of u along the edges of `faces` (faces_of: each
 // vertex's faces), with their path lengths.
 std::vector<std::pair<uint32_t, double>> ReachAlongSheets(
@@ -136,8 +140,23 @@ struct BoxPoint {
 // and the wedges of junctions and folds (a triangle reached along the sheets about as soon
 // as across). Returns the number mended; the vertices left for a clash go into *unmended
 // (when not null).
-uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<uint8_t>& on_face,
-                      const std::vector<uint8_t>& held, double gap, std::vector<Vec3>* unmended);
+// With zip_rims, each round first joins sheet edges that pass within gap of each other
+// (MendEdgeContacts), which makes the vertices of a rim running along another sheet
+// point contacts, and a rim vertex whose faces stand steeply on the sheet it nearly touches
+// moves onto it however soon the sheets reach it; those joins are counted into
+// *edge_contacts (when not null). New vertices get on_face 0.
+uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8_t>& on_face,
+                      const std::vector<uint8_t>& held, double gap, bool zip_rims,
+                      std::vector<Vec3>* unmended, uint32_t* edge_contacts = nullptr);
+
+// Joins pairs of sheet edges that pass within gap of each other away from their corners
+// (closer than gap to none of them), not side by side, not edges of neighbouring faces and
+// not a wedge of a junction or fold (the rule of kReachFactor): both split where they pass
+// closest, at one new vertex (on the line of the edge with more faces; halfway between
+// equals). Joins that make triangles clash or repeat are left. One round, each face in one
+// join; returns the number joined.
+uint32_t MendEdgeContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8_t>& on_face,
+                          double gap);
 
 // Closes the caps the mends left (a sheet triangle whose corner c has an angle over
 // cap_degrees, c nearly on the long edge a-b): c moves onto a-b, by at most max_move, the

@@ -63,8 +63,10 @@ struct PlcStats {
                                       // PlcOptions::short_edge_voxels, collapsed
   uint32_t mended_contacts = 0;       // sheet vertices moved onto another sheet they
                                       // nearly touched (PlcOptions::contact_voxels)
+  uint32_t mended_edge_contacts = 0;  // pairs of sheet edges passing that close, joined
+                                      // where they pass closest (MendEdgeContacts)
   uint32_t unmended_contacts = 0;     // such vertices left where they are: the move made
-                                      // a clash
+                                      // a clash, or a rim along another sheet stayed
   std::vector<Vec3> contact_places;   // where the first of those are, physical units
   uint32_t joined_touches = 0;        // sheet vertices lying on another sheet triangle's
                                       // edge or face, joined to it (JoinTouches)
@@ -146,6 +148,10 @@ struct PlcOptions {
   // at 0.75 the 192^3 phantom kept 8.12° and the rough network 7.59°, at 1.5 11.03° and
   // 10.00° (bench/RESULTS.md). 0: none.
   double contact_voxels = 1.5;
+  // A rim running along another sheet within contact_voxels, its faces standing on it, is
+  // zipped onto it (MendEdgeContacts, then its vertices moved). Off only where TetGen
+  // refuses the zipped PLC (BuildVolumeMesh meshes again without).
+  bool zip_rims = true;
   // Sheet edges shorter than this many voxels collapse to their midpoint, where that makes
   // no fold, hole or clash: TetGen must keep every sheet edge, and one of 1.7 voxels among
   // edges of 25 (the paper phantom at r = 15) pins a tetrahedron of 5.55°. 0: none.

@@ -92,6 +92,7 @@ nlohmann::json PlcStats::Fields() const {
           {"closed_caps", closed_caps},
           {"collapsed_edges", collapsed_edges},
           {"mended_contacts", mended_contacts},
+          {"mended_edge_contacts", mended_edge_contacts},
           {"unmended_contacts", unmended_contacts},
           {"joined_touches", joined_touches},
           {"contact_places", places},

@@ -1,5 +1,6 @@
-// A sheet vertex nearly touching another sheet is moved onto it in the PLC, a sheet edge
-// far shorter than the rest collapses, and a cap the mends leave at a junction closes.
+// A sheet vertex nearly touching another sheet is moved onto it in the PLC, two sheet edges
+// passing close are joined (a rim along another sheet is zipped onto it), a sheet edge far
+// shorter than the rest collapses, and a cap the mends leave at a junction closes.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -121,22 +122,101 @@ TEST(PlcContactsTest, TheGapLeftApartIsRefinedAway) {
   EXPECT_EQ(m.conformity.conforming, m.conformity.sheet_triangles);
 }
 
-TEST(PlcContactsTest, ARimRunningHalfAVoxelOverAnotherSheetIsNamedNotMoved) {
-  // B upright in the plane x = 32.5, 25 x 25, its lower rim 0.5 voxel over A (6 vertices
-  // at z = 20.5; A's vertices 2.5 off B's plane): moving them onto A would lay B's rim
-  // edges across A's triangles, so they stay, and the report names where.
+// B upright in the plane x = 32.5, 25 x 25 (edges 5), its lower rim 0.5 voxel over A (6
+// vertices at z = 20.5, over A's diagonals; A's vertices 2.5 off B's plane).
+TriangleMesh RimOverA() {
   TriangleMesh b = Square(22.5, 47.5, 32.5, 5, 1, 3, 0);
   for (Vec3& p : b.vertices) p.z -= 2;
+  return Append(SheetA(), b);
+}
+
+TEST(PlcContactsTest, ARimRunningHalfAVoxelOverAnotherSheetIsZippedOntoIt) {
+  // Each rim vertex has a neighbour near A too (a contact along a line): alone, moving it
+  // would lay its edges across A's triangles. The rim's edges cross A's edges y = 25 ... 45
+  // half a voxel above them: each pair is joined where it passes closest (on A's edge, of
+  // two faces against the rim's one), after which each rim vertex lies between two joints
+  // and moves onto A's diagonal under it. The whole rim lies on A; nothing is left.
   Placement pl;
   pl.spacing = {0.5, 0.5, 0.5};
-  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(Append(SheetA(), b), {60, 60, 60}, pl, {}));
-  EXPECT_EQ(plc.mended_contacts, 0u);
-  EXPECT_EQ(plc.unmended_contacts, 6u);
-  ASSERT_EQ(plc.contact_places.size(), 6u);
-  for (const Vec3& p : plc.contact_places) {  // physical units
-    EXPECT_NEAR(p.x, 32.5 * 0.5, 1e-9);
-    EXPECT_NEAR(p.z, 20.5 * 0.5, 1e-9);
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(RimOverA(), {60, 60, 60}, pl, {}));
+  EXPECT_EQ(plc.mended_edge_contacts, 5u);
+  EXPECT_EQ(plc.mended_contacts, 6u);
+  EXPECT_EQ(plc.unmended_contacts, 0u);
+  EXPECT_TRUE(plc.contact_places.empty());
+  int on_a = 0;
+  for (size_t f = 0; f < plc.sheet_triangles.size(); ++f) {
+    if (plc.sheet_piece[f] != 1) continue;
+    for (uint32_t v : plc.sheet_triangles[f]) {
+      const Vec3& p = plc.vertices[v];  // physical units
+      EXPECT_FALSE(std::abs(p.z - 20.5 * 0.5) < 1e-9) << "a rim vertex left over A";
+      on_a += std::abs(p.z - 20 * 0.5) < 1e-9;
+    }
   }
+  EXPECT_GT(on_a, 0);
+  // A keeps its shape and its area; the two sheets share the 11 vertices of the rim.
+  double area_a = 0;
+  for (size_t f = 0; f < plc.sheet_triangles.size(); ++f) {
+    const Face& t = plc.sheet_triangles[f];
+    if (plc.sheet_piece[f] != 0) continue;
+    const Triangle c = {plc.vertices[t[0]], plc.vertices[t[1]], plc.vertices[t[2]]};
+    for (const Vec3& p : c) EXPECT_NEAR(p.z, 10.0, 1e-9);
+    area_a += Area(c);
+  }
+  EXPECT_NEAR(area_a, 40.0 * 40 * 0.25, 1e-6);
+  TriangleMesh check;
+  check.vertices = plc.vertices;
+  check.faces = plc.sheet_triangles;
+  EXPECT_TRUE(FindSelfIntersections(check).empty());
+}
+
+TEST(PlcContactsTest, TheZippedRimMeshesAtTenDegrees) {
+  // Left half a voxel over A (contacts off), the gap under the rim is filled with slivers;
+  // zipped, there is no gap.
+  VolumeMeshOptions zipped;
+  zipped.sliver_rounds = 0;
+  VolumeMeshOptions apart = zipped;
+  apart.plc.contact_voxels = 0;
+  const Dims dims{60, 60, 60};
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(RimOverA(), dims, {}, zipped));
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(RimOverA(), dims, {}, apart));
+  EXPECT_EQ(r.mended_edge_contacts, 5u);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0);
+  EXPECT_LT(s.quality.min_dihedral.min, r.quality.min_dihedral.min);
+}
+
+TEST(PlcContactsTest, TwoEdgesPassingCloseAreJoinedWhereTheyPassClosest) {
+  // A: two triangles on the edge (0,0,0)-(10,0,0); B: one triangle upright in x = 5 whose
+  // lower edge (a rim) passes 0.4 voxel over A's edge at (5, 0). They are joined at one
+  // new vertex on A's edge (of two faces, against B's one), each face on either edge
+  // split there; A stays flat.
+  SheetTriangles s;
+  std::vector<Vec3> v = {{0, 0, 0},    {10, 0, 0},  {5, 8, 0}, {5, -8, 0},
+                         {5, -5, 0.4}, {5, 5, 0.4}, {5, 0, 8}};
+  s.faces = {{0, 1, 2}, {1, 0, 3}, {4, 5, 6}};
+  s.source = {0, 1, 2};
+  s.piece = {0, 0, 1};
+  s.thickness = {3, 3, 3};
+  std::vector<uint8_t> on_face(v.size(), 0);
+  EXPECT_EQ(MendEdgeContacts(s, v, on_face, 1.5), 1u);
+  ASSERT_EQ(v.size(), 8u);
+  EXPECT_NEAR(Norm(v[7] - Vec3(5, 0, 0)), 0, 1e-12);
+  EXPECT_EQ(s.faces.size(), 6u);
+  EXPECT_EQ(on_face.size(), v.size());
+  int with_joint = 0;
+  for (const Face& f : s.faces) with_joint += f[0] == 7 || f[1] == 7 || f[2] == 7;
+  EXPECT_EQ(with_joint, 6);
+  // Farther apart than the gap, or meeting at a corner, nothing is joined.
+  SheetTriangles far = s;
+  std::vector<Vec3> w = {{0, 0, 0},  {10, 0, 0}, {5, 8, 0}, {5, -8, 0},
+                         {5, -5, 2}, {5, 5, 2},  {5, 0, 9}};
+  far.faces = {{0, 1, 2}, {1, 0, 3}, {4, 5, 6}};
+  far.source = {0, 1, 2};
+  far.piece = {0, 0, 1};
+  far.thickness = {3, 3, 3};
+  on_face.assign(w.size(), 0);
+  EXPECT_EQ(MendEdgeContacts(far, w, on_face, 1.5), 0u);
+  EXPECT_EQ(w.size(), 7u);
 }
 
 TEST(PlcContactsTest, AVertexNearAnotherSheetsVertexMergesIntoIt) {

@@ -239,7 +239,14 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   const double in_plane = std::sqrt(72.0);  // |O-W| in A's plane
   PlcOptions base;
   base.lattice = 0;
-  // By default W moves 1 voxel (the most it may) straight down: 10.0 degrees.
+  // By default the contact mends come first: O-W passes 0.375 voxel under A's edge
+  // (14, 5)-(5, 14), and the two edges are joined where they pass closest
+  // (plc_contacts_test.cc); the wedge opening is measured with them off.
+  SM_ASSERT_OK_AND_ASSIGN(const Plc joined, BuildPlc(NarrowWedge(), dims, {}, base));
+  EXPECT_EQ(joined.mended_edge_contacts, 1u);
+  EXPECT_EQ(joined.sheet_triangles.size(), 4u);
+  base.contact_voxels = 0;
+  // W moves 1 voxel (the most it may) straight down: 10.0 degrees.
   SM_ASSERT_OK_AND_ASSIGN(const Plc a, BuildPlc(NarrowWedge(), dims, {}, base));
   EXPECT_EQ(a.opened_wedges, 1u);
   EXPECT_LT(Norm(Nearest(a, w0) - Vec3(11, 11, 10.5)), 1e-12);
@@ -277,6 +284,7 @@ TEST(PlcTest, ANarrowWedgeBetweenASheetFaceAndAnEdgeOverItOpens) {
   // makes them. (The improvement may move them, the sliver rounds refine them: then the
   // closed wedge's sliver mends too, improve.sheet_move_voxels, sliver_rounds.)
   VolumeMeshOptions opened, closed;
+  opened.plc.contact_voxels = closed.plc.contact_voxels = 0;
   opened.improve.sheet_move_voxels = closed.improve.sheet_move_voxels = 0;
   opened.sliver_rounds = closed.sliver_rounds = 0;
   closed.plc.wedge_degrees = 0;

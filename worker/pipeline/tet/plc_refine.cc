@@ -33,6 +33,7 @@ bool OnBoxFace(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
 
 uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
   std::vector<Face>& tris = plc->sheet_triangles;
+  const size_t vertices_before = plc->vertices.size();
   const size_t first_sheet_facet = plc->facets.size() - tris.size();
   // Each edge's triangles, kept up to date as they split.
   absl::flat_hash_map<uint64_t, std::vector<uint32_t>> faces_of;
@@ -137,6 +138,26 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
       } else {
         target[t] = std::numeric_limits<double>::infinity();  // its chain reaches the box
       }
+    }
+  }
+  // The lattice seeds stay the last vertices (MoveSeeds moves those, and they are on no
+  // facet): the midpoints go before them.
+  const size_t seeds = plc->seed_points;
+  if (seeds > 0 && plc->vertices.size() > vertices_before) {
+    const size_t first_seed = vertices_before - seeds;
+    std::rotate(plc->vertices.begin() + static_cast<std::ptrdiff_t>(first_seed),
+                plc->vertices.begin() + static_cast<std::ptrdiff_t>(vertices_before),
+                plc->vertices.end());
+    auto remap = [&](uint32_t& i) {
+      if (i >= vertices_before) i -= static_cast<uint32_t>(seeds);
+    };
+    for (PlcFacet& f : plc->facets) {
+      for (auto& polygon : f.polygons) {
+        for (uint32_t& i : polygon) remap(i);
+      }
+    }
+    for (Face& t : tris) {
+      for (uint32_t& i : t) remap(i);
     }
   }
   return split;

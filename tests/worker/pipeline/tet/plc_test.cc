@@ -400,6 +400,17 @@ TEST(PlcTest, RefiningBisectsLongestEdgesUntilTheyHalveWithoutNarrowingAnAngle) 
   EXPECT_LE(plc.sheet_triangles.size(), before + 2 * split);
   EXPECT_EQ(plc.vertices.size(), original.vertices.size() + split);
   EXPECT_NEAR(SheetArea(plc), area, 1e-9 * area);
+  // The lattice seeds are still the last vertices, where they were (MoveSeeds moves the
+  // last seed_points vertices); the midpoints come before them.
+  ASSERT_GT(plc.seed_points, 0u);
+  const size_t seeds = plc.seed_points, first_seed = plc.vertices.size() - seeds;
+  for (size_t i = 0; i < seeds; ++i) {
+    EXPECT_EQ(plc.vertices[first_seed + i],
+              original.vertices[original.vertices.size() - seeds + i]);
+  }
+  for (const Face& f : plc.sheet_triangles) {
+    for (uint32_t v : f) EXPECT_LT(v, first_seed);
+  }
   // One facet per sheet triangle, in order, with its marker; pieces and thicknesses kept.
   ASSERT_EQ(plc.facets.size(), 6 + plc.sheet_triangles.size());
   ASSERT_EQ(plc.sheet_piece.size(), plc.sheet_triangles.size());

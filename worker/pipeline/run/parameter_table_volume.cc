@@ -67,6 +67,9 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "voxels",
                         "a sheet vertex this near another sheet moves onto it, joining the two "
                         "(0: none)"));
+  rows.push_back(Bool("plc.zip_rims", SM_MEMBER(volume.plc.zip_rims),
+                      "two sheet edges passing within plc.contact_voxels of each other are joined "
+                      "where they pass closest, so a rim along another sheet is zipped onto it"));
   rows.push_back(Number("plc.lattice", SM_MEMBER(volume.plc.lattice), "0 | [0.25, 8]", "",
                         "seed a graded lattice off the sheets, spaced this many median sheet "
                         "edges (0: none)"));

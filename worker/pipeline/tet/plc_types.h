@@ -148,9 +148,9 @@ struct PlcOptions {
   // at 0.75 the 192^3 phantom kept 8.12° and the rough network 7.59°, at 1.5 11.03° and
   // 10.00° (bench/RESULTS.md). 0: none.
   double contact_voxels = 1.5;
-  // A rim running along another sheet within contact_voxels, its faces standing on it, is
-  // zipped onto it (MendEdgeContacts, then its vertices moved). Off only where TetGen
-  // refuses the zipped PLC (BuildVolumeMesh meshes again without).
+  // Sheet edges passing within contact_voxels of each other are joined, so a rim running
+  // along another sheet is zipped onto it (MendEdgeContacts, then its vertices moved).
+  // Where TetGen refuses the zipped PLC, BuildVolumeMesh meshes again without.
   bool zip_rims = true;
   // Sheet edges shorter than this many voxels collapse to their midpoint, where that makes
   // no fold, hole or clash: TetGen must keep every sheet edge, and one of 1.7 voxels among

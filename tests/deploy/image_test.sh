@@ -79,7 +79,13 @@ for _ in $(seq 120); do "$cli" health --server=127.0.0.1:50052 > /dev/null 2>&1 
 "$cli" mesh "$tmp/volumes/rock_128x112x96_u8.raw" --server=127.0.0.1:50052 --r=7 -o "$tmp/out-compose" > "$tmp/mesh2.log" ||
   { cat "$tmp/mesh2.log" >&2; (cd "$tmp/deploy" && docker-compose -p sheetmeshtest logs --tail=30) >&2; fail "mesh through compose"; }
 grep -q '"similarity"' "$tmp/out-compose/report.json" || fail "no report through compose"
-curl -sf http://127.0.0.1:8080/v1/jobs | grep '"SUCCEEDED"' > /dev/null || fail "the gateway does not list the job"
+# The gateway may come up after the servers (on a busy machine it once answered too late).
+listed=0
+for _ in $(seq 60); do
+  curl -sf http://127.0.0.1:8080/v1/jobs | grep -q '"SUCCEEDED"' && { listed=1; break; }
+  sleep 0.5
+done
+[ "$listed" = 1 ] || fail "the gateway does not list the job (30 s)"
 workers=$(cd "$tmp/deploy" && docker-compose -p sheetmeshtest ps -q worker | wc -l)
 [ "$workers" = 3 ] || fail "$workers workers up, not 3"
 echo "compose: PostgreSQL, two servers, $workers workers and the gateway; the sample meshed through server2 and a worker"

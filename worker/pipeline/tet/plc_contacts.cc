@@ -95,11 +95,9 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
     contact_of[c.vertex] = static_cast<int>(i);
     if (c.kind == Contact::kCorner) into[c.vertex] = s.faces[c.face][c.k];
   }
-  std::vector<uint8_t> drop(s.faces.size(), 0);
   auto add = [&](uint32_t f, const Face& face, int by) {
     AddFace(s, f, face);
     owner.push_back(by);
-    drop.push_back(0);
   };
   for (size_t i = 0; i < contacts.size(); ++i) {
     const Contact& c = contacts[i];
@@ -116,20 +114,9 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
       add(c.face, {t[2], t[0], c.vertex}, by);
       continue;
     }
-    // Every face on edge (a, b) splits at u into (..a, u..) and (..u, b..).
-    const uint32_t a = t[c.k], b = t[(c.k + 1) % 3];
-    for (uint32_t f : c.edge_faces) {
-      const Face g = s.faces[f];
-      const int ia = g[0] == a ? 0 : g[1] == a ? 1 : 2;
-      const int ib = g[0] == b ? 0 : g[1] == b ? 1 : 2;
-      Face first = g, second = g;
-      first[ib] = c.vertex;
-      second[ia] = c.vertex;
-      s.faces[f] = first;
-      owner[f] = by;
-      add(f, second, by);
-    }
+    SplitEdgeFaces(t[c.k], t[(c.k + 1) % 3], c.vertex, c.edge_faces, by, s, owner);
   }
+  std::vector<uint8_t> drop(s.faces.size(), 0);
   // Merges re-point the faces; those left with a repeated corner, or repeating another
   // face, go. The faces of a moved vertex belong to its contact.
   absl::flat_hash_set<std::array<uint32_t, 3>> seen;
@@ -154,43 +141,20 @@ void Apply(const std::vector<Contact>& contacts, SheetTriangles& s, std::vector<
 // Applies the contacts of a round to s and v, leaving out those whose faces then clash
 // (their vertices marked `failed`) until none do; none at all where a clash is no
 // contact's. Returns the number applied.
-uint32_t ApplyWithoutClashes(std::vector<Contact> contacts, SheetTriangles& s, std::vector<Vec3>& v,
-                             std::vector<uint8_t>& failed) {
-  SheetTriangles out;
-  std::vector<Vec3> moved;
-  for (int attempt = 0; attempt < 6 && !contacts.empty(); ++attempt) {
-    out = s;
-    moved = v;
-    std::vector<int> owner;
-    Apply(contacts, out, moved, owner);
-    TriangleMesh check;
-    check.vertices = moved;
-    check.faces = out.faces;
-    const auto clashes = FindSelfIntersections(check, 100000, 1.0);
-    if (clashes.empty()) {
-      s = std::move(out);
-      v = std::move(moved);
-      return static_cast<uint32_t>(contacts.size());
-    }
-    std::vector<uint8_t> bad(contacts.size(), 0);
-    bool any = false;
-    for (const auto& [f, g] : clashes) {
-      for (const uint32_t x : {f, g}) {
-        if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
-      }
-    }
-    if (!any) return 0;  // clashes no contact made: left to the clash check
-    std::vector<Contact> keep;
-    for (size_t i = 0; i < contacts.size(); ++i) {
-      if (bad[i]) {
-        failed[contacts[i].vertex] = 1;
-      } else {
-        keep.push_back(contacts[i]);
-      }
-    }
-    contacts = std::move(keep);
-  }
-  return 0;
+uint32_t ApplyWithoutClashes(const std::vector<Contact>& contacts, SheetTriangles& s,
+                             std::vector<Vec3>& v, std::vector<uint8_t>& failed) {
+  std::vector<size_t> left_out;
+  const uint32_t made = ApplyLeavingClashesOut(
+      contacts.size(),
+      [&](const std::vector<size_t>& kept, SheetTriangles& out, std::vector<Vec3>& moved,
+          std::vector<int>& owner) {
+        std::vector<Contact> these;
+        for (size_t i : kept) these.push_back(contacts[i]);
+        Apply(these, out, moved, owner);
+      },
+      s, v, &left_out);
+  for (size_t i : left_out) failed[contacts[i].vertex] = 1;
+  return made;
 }
 
 }  // namespace
@@ -216,23 +180,10 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8
     was_line.resize(v.size(), 0);
     along_line.assign(v.size(), 0);
     // The triangles in a grid; each vertex's faces and neighbours.
-    std::vector<std::vector<uint32_t>> faces_of(v.size());
-    absl::flat_hash_map<uint64_t, int> edge;  // each edge's number of faces
-    double longest = gap;
-    for (uint32_t f = 0; f < s.faces.size(); ++f) {
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
-        faces_of[a].push_back(f);
-        ++edge[EdgeKey(a, b)];
-        longest = std::max(longest, Norm(v[a] - v[b]));
-      }
-    }
-    SpatialGrid grid(longest);
-    for (uint32_t f = 0; f < s.faces.size(); ++f) {
-      Vec3 lo, hi;
-      TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, gap, &lo, &hi);
-      grid.Insert(f, lo, hi);
-    }
+    const SheetIndex index = IndexSheets(s, v, gap);
+    const std::vector<std::vector<uint32_t>>& faces_of = index.faces_of;
+    const auto& edge = index.edge_faces;
+    const SpatialGrid& grid = index.grid;
     auto joined = [&](uint32_t a, uint32_t b) { return edge.contains(EdgeKey(a, b)); };
     auto normal = [&](const Face& t) {
       const Vec3 n = Cross(v[t[1]] - v[t[0]], v[t[2]] - v[t[0]]);
@@ -257,7 +208,8 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8
         for (int k = 0; k < 3; ++k) {
           const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
           const uint32_t x = a == u ? b : b == u ? a : UINT32_MAX;
-          by_joint = by_joint || (x != UINT32_MAX && x >= first_joint && edge[EdgeKey(a, b)] == 1);
+          by_joint = by_joint ||
+                     (x != UINT32_MAX && x >= first_joint && edge.at(EdgeKey(a, b)).size() == 1);
         }
       }
       if (was_line[u] && !by_joint) {
@@ -515,6 +467,91 @@ uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double
   }
   if (n > 0) s = Without(s, drop);
   return n;
+}
+
+SheetIndex IndexSheets(const SheetTriangles& s, const std::vector<Vec3>& v, double grow) {
+  SheetIndex index;
+  index.faces_of.resize(v.size());
+  double longest = grow;
+  for (uint32_t f = 0; f < s.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
+      index.faces_of[a].push_back(f);
+      index.edge_faces[EdgeKey(a, b)].push_back(f);
+      longest = std::max(longest, Norm(v[a] - v[b]));
+    }
+  }
+  index.grid = SpatialGrid(longest);
+  for (uint32_t f = 0; f < s.faces.size(); ++f) {
+    Vec3 lo, hi;
+    TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, grow, &lo, &hi);
+    index.grid.Insert(f, lo, hi);
+  }
+  return index;
+}
+
+void SplitEdgeFaces(uint32_t a, uint32_t b, uint32_t w, const std::vector<uint32_t>& on_edge,
+                    int by, SheetTriangles& s, std::vector<int>& owner) {
+  for (uint32_t f : on_edge) {
+    // (.. a .. b ..) -> (.. a .. w ..) and (.. w .. b ..): the same orientation.
+    const Face g = s.faces[f];
+    const int ia = g[0] == a ? 0 : g[1] == a ? 1 : 2;
+    const int ib = g[0] == b ? 0 : g[1] == b ? 1 : 2;
+    Face first = g, second = g;
+    first[ib] = w;
+    second[ia] = w;
+    s.faces[f] = first;
+    owner[f] = by;
+    AddFace(s, f, second);
+    owner.push_back(by);
+  }
+}
+
+uint32_t ApplyLeavingClashesOut(size_t n, const ApplyChanges& apply, SheetTriangles& s,
+                                std::vector<Vec3>& v, std::vector<size_t>* left_out) {
+  std::vector<size_t> kept(n);
+  for (size_t i = 0; i < n; ++i) kept[i] = i;
+  for (int attempt = 0; attempt < 6 && !kept.empty(); ++attempt) {
+    SheetTriangles out = s;
+    std::vector<Vec3> moved = v;
+    std::vector<int> owner;
+    apply(kept, out, moved, owner);
+    TriangleMesh check;
+    check.vertices = moved;
+    check.faces = out.faces;
+    auto clashes = FindSelfIntersections(check, 100000, 1.0);
+    // A triangle repeated is a clash too (TetGen aborts on it).
+    absl::flat_hash_map<std::array<uint32_t, 3>, uint32_t> seen;
+    for (uint32_t f = 0; f < out.faces.size(); ++f) {
+      std::array<uint32_t, 3> k = {out.faces[f][0], out.faces[f][1], out.faces[f][2]};
+      std::sort(k.begin(), k.end());
+      const auto [it, fresh] = seen.try_emplace(k, f);
+      if (!fresh) clashes.push_back({it->second, f});
+    }
+    if (clashes.empty()) {
+      s = std::move(out);
+      v = std::move(moved);
+      return static_cast<uint32_t>(kept.size());
+    }
+    std::vector<uint8_t> bad(kept.size(), 0);
+    bool any = false;
+    for (const auto& [f, g] : clashes) {
+      for (const uint32_t x : {f, g}) {
+        if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
+      }
+    }
+    if (!any) return 0;  // clashes no change made: left to the clash check
+    std::vector<size_t> next;
+    for (size_t i = 0; i < kept.size(); ++i) {
+      if (bad[i]) {
+        if (left_out != nullptr) left_out->push_back(kept[i]);
+      } else {
+        next.push_back(kept[i]);
+      }
+    }
+    kept = std::move(next);
+  }
+  return 0;
 }
 
 std::vector<std::pair<uint32_t, double>> ReachAlongSheets(

@@ -55,50 +55,16 @@ struct EdgeContact {
   double distance;
 };
 
-// Splits every face on edge (a, b) at vertex w, keeping each face's orientation; the new
-// faces copy their attributes and get `by` in owner.
-void SplitEdge(uint32_t a, uint32_t b, uint32_t w, const std::vector<uint32_t>& on_edge, int by,
-               SheetTriangles& s, std::vector<int>& owner) {
-  for (uint32_t f : on_edge) {
-    const Face g = s.faces[f];
-    const int ia = g[0] == a ? 0 : g[1] == a ? 1 : 2;
-    const int ib = g[0] == b ? 0 : g[1] == b ? 1 : 2;
-    Face first = g, second = g;
-    first[ib] = w;
-    second[ia] = w;
-    s.faces[f] = first;
-    owner[f] = by;
-    s.faces.push_back(second);
-    s.source.push_back(s.source[f]);
-    s.piece.push_back(s.piece[f]);
-    s.thickness.push_back(s.thickness[f]);
-    owner.push_back(by);
-  }
-}
-
 }  // namespace
 
 uint32_t MendEdgeContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8_t>& on_face,
                           double gap) {
   if (!(gap > 0) || s.faces.empty()) return 0;
   on_face.resize(v.size(), 0);
-  std::vector<std::vector<uint32_t>> faces_of(v.size());
-  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
-  double longest = gap;
-  for (uint32_t f = 0; f < s.faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = s.faces[f][k], b = s.faces[f][(k + 1) % 3];
-      faces_of[a].push_back(f);
-      edge_faces[EdgeKey(a, b)].push_back(f);
-      longest = std::max(longest, Norm(v[a] - v[b]));
-    }
-  }
-  SpatialGrid grid(longest);
-  for (uint32_t f = 0; f < s.faces.size(); ++f) {
-    Vec3 lo, hi;
-    TriangleBox({v[s.faces[f][0]], v[s.faces[f][1]], v[s.faces[f][2]]}, gap, &lo, &hi);
-    grid.Insert(f, lo, hi);
-  }
+  SheetIndex index = IndexSheets(s, v, gap);
+  const std::vector<std::vector<uint32_t>>& faces_of = index.faces_of;
+  auto& edge_faces = index.edge_faces;
+  const SpatialGrid& grid = index.grid;
   std::vector<EdgeContact> found;
   const double wedge_sine = std::sin(kWedgeKeptDegrees * 3.14159265358979323846 / 180);
   for (const auto& [key, faces] : edge_faces) {
@@ -183,51 +149,24 @@ uint32_t MendEdgeContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<u
     for (uint32_t f : f2) busy[f] = 1;
     round.push_back(e);
   }
-  // Applied together; those whose faces then clash are left out, until none do.
-  for (int attempt = 0; attempt < 6 && !round.empty(); ++attempt) {
-    SheetTriangles out = s;
-    std::vector<Vec3> moved = v;
-    std::vector<int> owner(s.faces.size(), -1);
-    for (size_t i = 0; i < round.size(); ++i) {
-      const EdgeContact& e = round[i];
-      const uint32_t w = static_cast<uint32_t>(moved.size());
-      moved.push_back(e.at);
-      SplitEdge(e.a, e.b, w, edge_faces[EdgeKey(e.a, e.b)], static_cast<int>(i), out, owner);
-      SplitEdge(e.c, e.d, w, edge_faces[EdgeKey(e.c, e.d)], static_cast<int>(i), out, owner);
-    }
-    TriangleMesh check;
-    check.vertices = moved;
-    check.faces = out.faces;
-    auto clashes = FindSelfIntersections(check, 100000, 1.0);
-    // A triangle repeated is a clash too (TetGen aborts on it).
-    absl::flat_hash_map<std::array<uint32_t, 3>, uint32_t> seen;
-    for (uint32_t f = 0; f < out.faces.size(); ++f) {
-      std::array<uint32_t, 3> k = {out.faces[f][0], out.faces[f][1], out.faces[f][2]};
-      std::sort(k.begin(), k.end());
-      const auto [it, fresh] = seen.try_emplace(k, f);
-      if (!fresh) clashes.push_back({it->second, f});
-    }
-    std::vector<uint8_t> bad(round.size(), 0);
-    bool any = false;
-    for (const auto& [f, g] : clashes) {
-      for (const uint32_t x : {f, g}) {
-        if (owner[x] >= 0) bad[owner[x]] = 1, any = true;
-      }
-    }
-    if (clashes.empty()) {
-      s = std::move(out);
-      v = std::move(moved);
-      on_face.resize(v.size(), 0);
-      return static_cast<uint32_t>(round.size());
-    }
-    if (!any) return 0;  // clashes no contact made: left to the clash check
-    std::vector<EdgeContact> keep;
-    for (size_t i = 0; i < round.size(); ++i) {
-      if (!bad[i]) keep.push_back(round[i]);
-    }
-    round = std::move(keep);
-  }
-  return 0;
+  // Applied together; those whose faces then clash or repeat a triangle are left out.
+  const uint32_t made = ApplyLeavingClashesOut(
+      round.size(),
+      [&](const std::vector<size_t>& kept, SheetTriangles& out, std::vector<Vec3>& moved,
+          std::vector<int>& owner) {
+        owner.assign(out.faces.size(), -1);
+        for (size_t i = 0; i < kept.size(); ++i) {
+          const EdgeContact& e = round[kept[i]];
+          const uint32_t w = static_cast<uint32_t>(moved.size());
+          moved.push_back(e.at);
+          const int by = static_cast<int>(i);
+          SplitEdgeFaces(e.a, e.b, w, edge_faces[EdgeKey(e.a, e.b)], by, out, owner);
+          SplitEdgeFaces(e.c, e.d, w, edge_faces[EdgeKey(e.c, e.d)], by, out, owner);
+        }
+      },
+      s, v, nullptr);
+  on_face.resize(v.size(), 0);
+  return made;
 }
 
 }  // namespace sheetmesh

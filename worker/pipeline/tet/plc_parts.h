@@ -5,10 +5,13 @@
 #define SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_
 
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/status/status.h"
+#include "worker/pipeline/mesh/spatial_grid.h"
 #include "worker/pipeline/mesh/triangle_mesh.h"
 #include "worker/pipeline/tet/plc_types.h"
 
@@ -46,6 +49,33 @@ struct SheetTriangles {
 
 // `s` without the triangles marked in `drop`.
 SheetTriangles Without(const SheetTriangles& s, const std::vector<uint8_t>& drop);
+
+// Each vertex's faces, each edge's faces (by EdgeKey), and the faces in a grid by their
+// boxes grown by `grow` (cells as long as the longest edge, or grow): what the mends look
+// things up in.
+struct SheetIndex {
+  std::vector<std::vector<uint32_t>> faces_of;
+  absl::flat_hash_map<uint64_t, std::vector<uint32_t>> edge_faces;
+  SpatialGrid grid{1.0};
+};
+SheetIndex IndexSheets(const SheetTriangles& s, const std::vector<Vec3>& v, double grow);
+
+// Splits each face of on_edge (the faces on edge a-b) at vertex w, keeping its orientation:
+// the face keeps the half with a, the half with b is appended with its attributes; both
+// get `by` in owner (one entry per face).
+void SplitEdgeFaces(uint32_t a, uint32_t b, uint32_t w, const std::vector<uint32_t>& on_edge,
+                    int by, SheetTriangles& s, std::vector<int>& owner);
+
+// Makes the kept changes of a round on copies of the sheets: owner gets, per face, the
+// position in `kept` of the change that made or moved it (-1: none).
+using ApplyChanges = std::function<void(const std::vector<size_t>& kept, SheetTriangles& s,
+                                        std::vector<Vec3>& v, std::vector<int>& owner)>;
+// Makes a round's n changes together; those whose faces then clash, or repeat a triangle
+// (TetGen aborts on it), are left out (appended to *left_out, when not null) and the rest
+// made again, at most six times; none is made where a clash is no change's. Returns how
+// many were made.
+uint32_t ApplyLeavingClashesOut(size_t n, const ApplyChanges& apply, SheetTriangles& s,
+                                std::vector<Vec3>& v, std::vector<size_t>* left_out);
 
 // The sheets on the box: vertices (index coordinates) moved onto the box faces they are
 // near, near-duplicates merged, the triangles still triangles and off the box faces,

@@ -67,6 +67,98 @@ void ForEachLevel(const Plc& plc, const LatticeLevels& levels, Candidates&& cand
   }
 }
 
+// A sheet lying nearer a box face than the lattice's first band (kLatticeKeep spacings)
+// keeps the face's seeded points away, so TetGen, which may add none there (-Y), spans the
+// face beneath it with a few triangles as long as the face (a grazing sheet at r = 11: a
+// box triangle 120 voxels long 5 voxels under the sheet, tetrahedra of 4.5° between). Each
+// sheet vertex within `reach` of a face, where its sheet lies within kBeneathDegrees of the
+// face's plane, gives the face a point straight beneath it: the layer between the sheet and
+// the face is then prisms of the sheet's triangles. Such points keep kBeneathApart of the
+// first spacing from each other and from the face's other points, and from the sheets'
+// traces on the face and the face's edges.
+constexpr double kBeneathDegrees = 45;
+constexpr double kBeneathApart = 0.5;
+
+double PointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double len2 = Norm2(ab);
+  const double t = len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return Norm2(p - (a + ab * t));
+}
+
+void AddPointsBeneathSheets(const Plc& plc, double reach, std::vector<BoxPoint>* points) {
+  const double apart = kBeneathApart * reach / kLatticeKeep;
+  const double cos_max = std::cos(kBeneathDegrees * M_PI / 180.0);
+  const Vec3 lo = plc.box_lo, hi = plc.box_hi;
+  const double tol = 1e-9 * (1.0 + Norm(hi - lo));
+  std::vector<Vec3> normal(plc.vertices.size(), Vec3(0, 0, 0));
+  std::vector<uint8_t> used(plc.vertices.size(), 0);
+  for (const Face& f : plc.sheet_triangles) {
+    const Vec3 n =
+        Cross(plc.vertices[f[1]] - plc.vertices[f[0]], plc.vertices[f[2]] - plc.vertices[f[0]]);
+    for (uint32_t v : f) {
+      // One side's normal: a sheet's faces may be wound either way, so flip to agree.
+      normal[v] = normal[v] + (Dot(normal[v], n) < 0 ? n * -1.0 : n);
+      used[v] = 1;
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    for (int high = 0; high < 2; ++high) {
+      const double plane = high ? hi[k] : lo[k];
+      const uint8_t bit = static_cast<uint8_t>(1 << (2 * k + high));
+      // What a new point keeps away from: the face's points and the sheets' traces on it.
+      SpatialGrid near(apart);
+      std::vector<Vec3> taken;
+      auto keep = [&](const Vec3& p) {
+        near.Insert(static_cast<uint32_t>(taken.size()), p, p);
+        taken.push_back(p);
+      };
+      for (const BoxPoint& q : *points) {
+        if (q.on_face & bit) keep(q.p);
+      }
+      std::vector<std::pair<Vec3, Vec3>> traces;
+      for (const Face& f : plc.sheet_triangles) {
+        for (int e = 0; e < 3; ++e) {
+          const Vec3 &p = plc.vertices[f[e]], &q = plc.vertices[f[(e + 1) % 3]];
+          if (std::abs(p[k] - plane) < tol && std::abs(q[k] - plane) < tol)
+            traces.push_back({p, q});
+          if (std::abs(p[k] - plane) < tol) keep(p);
+        }
+      }
+      SpatialGrid trace_grid(apart);
+      for (uint32_t i = 0; i < traces.size(); ++i) {
+        const auto& [p, q] = traces[i];
+        trace_grid.Insert(i, Vec3(std::min(p.x, q.x), std::min(p.y, q.y), std::min(p.z, q.z)),
+                          Vec3(std::max(p.x, q.x), std::max(p.y, q.y), std::max(p.z, q.z)));
+      }
+      for (uint32_t v = 0; v < plc.vertices.size(); ++v) {
+        const Vec3& x = plc.vertices[v];
+        const double d = std::abs(x[k] - plane);
+        if (!used[v] || d < tol || d >= reach || Norm(normal[v]) == 0) continue;
+        if (std::abs(normal[v][k]) < cos_max * Norm(normal[v])) continue;
+        Vec3 p = x;
+        p[k] = plane;
+        if (p[a] < lo[a] + apart || p[a] > hi[a] - apart || p[b] < lo[b] + apart ||
+            p[b] > hi[b] - apart) {
+          continue;
+        }
+        const Vec3 r(apart, apart, apart);
+        bool crowded = false;
+        near.Query(p - r, p + r,
+                   [&](uint32_t i) { crowded = crowded || Norm2(taken[i] - p) < apart * apart; });
+        trace_grid.Query(p - r, p + r, [&](uint32_t i) {
+          crowded = crowded ||
+                    PointSegmentDistance2(p, traces[i].first, traces[i].second) < apart * apart;
+        });
+        if (crowded) continue;
+        keep(p);
+        points->push_back({p, bit});
+      }
+    }
+  }
+}
+
 }  // namespace
 
 LatticeLevels GradeLattice(const Vec3& box_lo, const Vec3& box_hi, double spacing, double grading) {
@@ -166,6 +258,7 @@ std::vector<BoxPoint> SeedBox(const Plc& plc, const LatticeLevels& levels) {
       }
     }
   });
+  if (!levels.spacing.empty()) AddPointsBeneathSheets(plc, levels.inner[0], &points);
   return points;
 }
 

@@ -87,6 +87,52 @@ TEST(PlcTest, BoxSeedsLieOnTheBoxInItsFacetsGradedAwayFromTheSheets) {
   EXPECT_EQ(plain.box_points, 0u);
 }
 
+TEST(PlcTest, ASheetNearlyParallelToABoxFaceGivesTheFacePointsBeneathItsVertices) {
+  // The 40 x 40 sheet (edges 5) 2 voxels over the bottom face z = -0.5 of a 60^3 box: the
+  // lattice's first band starts 3 from the sheet, so no seeded point of the face lies
+  // beneath it; each sheet vertex then gives the face one straight beneath it, but those
+  // within 2.5 (half a spacing) of the face's points beside the sheet.
+  const TriangleMesh sheet = Square(10, 50, 1.5, 8);
+  PlcOptions o;
+  o.lattice = 1.0;
+  o.seed_box = true;
+  SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
+  const uint32_t first = 8 + 81, end = first + plc.box_points;
+  std::vector<Vec3> beneath;
+  for (uint32_t v = first; v < end; ++v) {
+    const Vec3& p = plc.vertices[v];
+    if (std::abs(p.z + 0.5) < 1e-12 && p.x > 10 - 1 && p.x < 50 + 1 && p.y > 10 - 1 &&
+        p.y < 50 + 1) {
+      beneath.push_back(p);
+    }
+  }
+  // Every interior vertex (7 x 7) has its point, offset in the face by the seeds' jitter.
+  for (int j = 1; j < 8; ++j) {
+    for (int i = 1; i < 8; ++i) {
+      const Vec3 want(10 + 5 * i, 10 + 5 * j, -0.5);
+      const bool found = std::any_of(beneath.begin(), beneath.end(), [&](const Vec3& p) {
+        return std::abs(p.x - want.x) <= kSlack && std::abs(p.y - want.y) <= kSlack &&
+               p.z == want.z;
+      });
+      EXPECT_TRUE(found) << "no face point beneath (" << want.x << ", " << want.y << ")";
+    }
+  }
+  EXPECT_LE(beneath.size(), 81u);
+  EXPECT_GE(ClosestPair(beneath), 5.0 - kSlack);
+  // Each is a point of the bottom facet (index 4: the low face across z).
+  for (const auto& poly : plc.facets[4].polygons) {
+    if (poly.size() == 1 && std::abs(plc.vertices[poly[0]].z + 0.5) < 1e-12) {
+      EXPECT_GE(poly[0], first);
+    }
+  }
+  // A sheet standing upright on the face gives it none beside its trace.
+  const TriangleMesh upright = Square(10, 50, 30, 8, 0, 3, 0);  // x = 30, over y and z
+  SM_ASSERT_OK_AND_ASSIGN(Plc wall, BuildPlc(upright, {60, 60, 60}, {}, o));
+  for (uint32_t v = 8 + 81; v < 8 + 81 + wall.box_points; ++v) {
+    EXPECT_GT(DistanceToSheets(wall, wall.vertices[v]), 3.0 - kSlack);
+  }
+}
+
 TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   // A 40 x 40 square sheet of 8 x 8 quads (edges 5 and 7.07 voxels: median 5) in a 60^3
   // box; the lattice at 1 x the median edge has spacing 5 next to the sheet.

@@ -23,6 +23,7 @@ namespace {
 using ::sheetmesh::testing::Append;
 using ::sheetmesh::testing::ClosestPair;
 using ::sheetmesh::testing::DistanceToSheets;
+using ::sheetmesh::testing::Grid;
 using ::sheetmesh::testing::Square;
 using ::sheetmesh::testing::StatusIs;
 using ::sheetmesh::testing::TempDir;
@@ -197,6 +198,21 @@ TEST(VolumeMesherTest, SheetsReachingTheBoxEndOnIt) {
   EXPECT_GT(r.snapped_vertices, 0u);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+}
+
+TEST(VolumeMesherTest, ASheetGrazingABoxFaceMeshesAtTenDegrees) {
+  // A sheet tilted 3 degrees, 3 to 5 voxels over the bottom face of a 140 x 120 x 80 box,
+  // its triangles about 12 voxels long (as r = 11 makes them): the lattice keeps off its
+  // gap to the face, and without the face's points beneath it TetGen (which adds none on
+  // the box) spanned the face there with triangles as long as the box and 4.5-degree
+  // tetrahedra between.
+  const double tan3 = std::tan(3 * std::numbers::pi / 180);
+  const TriangleMesh sheet =
+      Grid([&](double u, double v) { return Vec3(u, v, 3.0 + (u - 10) * tan3); }, 10, 100, 8);
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(sheet, {140, 120, 80}, {}, {}));
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  EXPECT_GE(r.quality.min_dihedral.min, 10.0);
+  EXPECT_FALSE(r.angle_warning.has_value());
 }
 
 TEST(VolumeMesherTest, ASheetEndingAVoxelShortOfTheBoxSnapsOntoItUnlessThatMakesAClash) {

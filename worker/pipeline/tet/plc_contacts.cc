@@ -386,6 +386,83 @@ uint32_t CloseCaps(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<ui
   return closed;
 }
 
+uint32_t JoinNarrowCorners(SheetTriangles& s, std::vector<Vec3>& v, double gap) {
+  if (!(gap > 0)) return 0;
+  const double narrow_cos = std::cos(kWedgeKeptDegrees * 3.14159265358979323846 / 180);
+  uint32_t joined = 0;
+  std::vector<uint8_t> failed(v.size(), 0);
+  for (int round = 0; round < 8 && !s.faces.empty(); ++round) {
+    const SheetIndex index = IndexSheets(s, v, 0.0);
+    const auto& faces_of = index.faces_of;
+    auto joined_to = [&](uint32_t a, uint32_t b) {
+      return index.edge_faces.contains(EdgeKey(a, b));
+    };
+    // Each vertex u's nearest edge x-y that leaves u's neighbour x within kWedgeKeptDegrees
+    // of x-u and passes within gap of u.
+    std::vector<Contact> found;
+    failed.resize(v.size(), 0);
+    for (uint32_t u = 0; u < v.size(); ++u) {
+      if (faces_of[u].empty() || failed[u]) continue;
+      Contact best;
+      best.distance = gap;
+      for (uint32_t f : faces_of[u]) {
+        for (const uint32_t x : s.faces[f]) {
+          if (x == u) continue;
+          for (const uint32_t g : faces_of[x]) {
+            const Face& t = s.faces[g];
+            if (t[0] == u || t[1] == u || t[2] == u) continue;
+            for (int k = 0; k < 3; ++k) {
+              const uint32_t a = t[k], b = t[(k + 1) % 3];
+              if (a != x && b != x) continue;
+              const uint32_t y = a == x ? b : a;
+              if (joined_to(u, y)) continue;
+              const Vec3 p = v[u] - v[x], q = v[y] - v[x];
+              const double along = Dot(p, q) / std::max(1e-300, Norm2(q));
+              const double d = Norm(p - q * along);
+              if (Dot(p, q) < narrow_cos * Norm(p) * Norm(q) || along >= 1 ||
+                  !(d < best.distance)) {
+                continue;
+              }
+              best.kind = Contact::kEdge;
+              best.vertex = u, best.face = g, best.k = k;
+              best.at = v[u];  // u stays; the edge comes to it
+              best.distance = d;
+            }
+          }
+        }
+      }
+      if (best.distance < gap) found.push_back(best);
+    }
+    if (found.empty()) break;
+    std::sort(found.begin(), found.end(),
+              [](const Contact& x, const Contact& y) { return x.distance < y.distance; });
+    std::vector<uint8_t> busy_vertex(v.size(), 0), busy_face(s.faces.size(), 0);
+    std::vector<Contact> apply;
+    for (Contact& c : found) {
+      const Face& t = s.faces[c.face];
+      const uint32_t a = t[c.k], b = t[(c.k + 1) % 3];
+      for (uint32_t f : faces_of[a]) {
+        const Face& g = s.faces[f];
+        if (g[0] == b || g[1] == b || g[2] == b) c.edge_faces.push_back(f);
+      }
+      bool busy = busy_vertex[c.vertex] || busy_vertex[a] || busy_vertex[b];
+      for (uint32_t f : c.edge_faces) {
+        busy = busy || busy_face[f];
+        // A face both on the edge and at u would fold.
+        for (uint32_t x : s.faces[f]) busy = busy || x == c.vertex;
+      }
+      if (busy) continue;
+      busy_vertex[c.vertex] = busy_vertex[a] = busy_vertex[b] = 1;
+      for (uint32_t f : c.edge_faces) busy_face[f] = 1;
+      apply.push_back(c);
+    }
+    const uint32_t n = ApplyWithoutClashes(apply, s, v, failed);
+    joined += n;
+    if (n == 0 && apply.size() == found.size()) break;
+  }
+  return joined;
+}
+
 uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps) {
   uint32_t joined = 0;
   for (int round = 0; round < 8 && !s.faces.empty(); ++round) {

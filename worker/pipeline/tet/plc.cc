@@ -251,11 +251,6 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   // A triangle the mends left with no area covers nothing and holds a corner on its own
   // long edge, which TetGen aborts on: it goes, and a vertex then left exactly on another
   // sheet's edge or face is joined to it.
-  // Two sheet segments leaving one vertex at under 10 degrees, which the moves before may
-  // leave or make (a wedge opened beside a junction), run as one.
-  if (options.contact_voxels > 0 && options.zip_rims) {
-    plc.joined_narrow_corners = JoinNarrowCorners(st, v, options.contact_voxels);
-  }
   plc.dropped_triangles += DropFlatTriangles(st, v, kTouchVoxels);
   plc.joined_touches = JoinTouches(st, v, kTouchVoxels);
   // Which box faces each vertex lies on, as the mends left it: a vertex moved onto another

@@ -202,14 +202,6 @@ uint32_t CloseCaps(SheetTriangles& s, std::vector<Vec3>& v, const std::vector<ui
 // corner on the long edge), which the mends can leave. Returns the number dropped.
 uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double eps);
 
-// Joins each sheet vertex u to a sheet edge x-y that leaves u's neighbour x within
-// kWedgeKeptDegrees of the edge x-u and passes within gap of u (u not joined to y): the
-// edge's faces split at u, which stays, so x-u is one segment of both. Two segments
-// meeting that narrowly admit no tetrahedron of that angle between them, and TetGen,
-// recovering one with no point on it (-Y), crashed there. Joins that make a clash are
-// left. Returns the number joined.
-uint32_t JoinNarrowCorners(SheetTriangles& s, std::vector<Vec3>& v, double gap);
-
 // Joins each sheet vertex that lies on another sheet triangle (within eps voxels of its
 // edge or its interior, a T that the mends before left or made) to it: the edge's faces,
 // or the face, split there. TetGen takes a vertex on a facet's edge for a crossing and

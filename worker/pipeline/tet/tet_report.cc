@@ -94,7 +94,6 @@ nlohmann::json PlcStats::Fields() const {
           {"mended_contacts", mended_contacts},
           {"mended_edge_contacts", mended_edge_contacts},
           {"unmended_contacts", unmended_contacts},
-          {"joined_narrow_corners", joined_narrow_corners},
           {"joined_touches", joined_touches},
           {"contact_places", places},
           {"box_points", box_points},

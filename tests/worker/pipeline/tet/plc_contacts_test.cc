@@ -324,41 +324,5 @@ TEST(PlcContactsTest, ACapHigherThanTheMoveAllowsOrOnTheBoxStays) {
   EXPECT_EQ(j.v[2].y, 10.1);
 }
 
-TEST(PlcContactsTest, AnEdgeLeavingAVertexWithinTenDegreesOfAnotherIsSplitOntoItsEnd) {
-  // Sheet A's triangle x, y, z in the plane z = 0; sheet B's triangle x, u, w leaves x
-  // with its edge x-u 0.32 voxels off A's edge x-y, 2.5 along it: 7.3 degrees.
-  auto sheets = [](double off) {
-    std::vector<Vec3> v = {
-        {0, 0, 0}, {6, 0, 0}, {3, -3, 0}, {2.5, off * 0.6, off * 0.8}, {1, 3, 2}};
-    SheetTriangles s;
-    s.faces = {{0, 1, 2}, {0, 3, 4}};
-    s.source = {0, 1};
-    s.piece = {0, 1};
-    s.thickness = {2, 2};
-    return std::make_pair(s, v);
-  };
-  auto [s, v] = sheets(0.32);
-  const std::vector<Vec3> before = v;
-  EXPECT_EQ(JoinNarrowCorners(s, v, 1.5), 1u);
-  EXPECT_EQ(v, before);  // u stays; A's edge comes to it
-  ASSERT_EQ(s.faces.size(), 3u);
-  // A is now (x, u, z) and (u, y, z), its piece kept; x-u is an edge of both sheets.
-  int a_faces = 0, at_u = 0;
-  for (size_t f = 0; f < s.faces.size(); ++f) {
-    if (s.piece[f] != 0) continue;
-    ++a_faces;
-    for (uint32_t x : s.faces[f]) at_u += x == 3;
-  }
-  EXPECT_EQ(a_faces, 2);
-  EXPECT_EQ(at_u, 2);
-  // 0.7 voxels off over 2.5 (15.6 degrees) is a wedge to keep; 0.32 off with a gap of 0.3
-  // is out of reach.
-  auto [wide, wv] = sheets(0.7);
-  EXPECT_EQ(JoinNarrowCorners(wide, wv, 1.5), 0u);
-  EXPECT_EQ(wide.faces.size(), 2u);
-  auto [far, fv] = sheets(0.32);
-  EXPECT_EQ(JoinNarrowCorners(far, fv, 0.3), 0u);
-}
-
 }  // namespace
 }  // namespace sheetmesh

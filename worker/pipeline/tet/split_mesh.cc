@@ -66,6 +66,30 @@ absl::StatusOr<SplitMesh> SplitAlongSheets(const TetMesh& m) {
     sheet_keys.insert(SortedFace(q[0], q[1], q[2]));
     for (uint32_t v : q) on_sheet[v] = 1;
   }
+  // The regions the sheets cut the mesh into: tetrahedra that reach each other across faces
+  // that are not sheet faces. A region of fewer than kGluedRegionTets tetrahedra (a sliver
+  // of rock that sheets crossing close together enclose: one tetrahedron on the sample
+  // phantom at r = 7) would float free in the split mesh, held by contact alone, and a
+  // static solve has no answer there (CalculiX: "too many cutbacks"): its faces stay glued
+  // to their neighbours, as rock.
+  constexpr size_t kGluedRegionTets = 8;
+  std::vector<uint32_t> region(m.tets.size());
+  std::iota(region.begin(), region.end(), 0u);
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      const int64_t u = index.across[4 * t + k];
+      if (u < 0 || sheet_keys.contains(TetFace(m.tets[t], k))) continue;
+      region[Find(region, static_cast<uint32_t>(t))] = Find(region, static_cast<uint32_t>(u));
+    }
+  }
+  std::vector<uint32_t> region_size(m.tets.size(), 0);
+  for (size_t t = 0; t < m.tets.size(); ++t) ++region_size[Find(region, static_cast<uint32_t>(t))];
+  std::vector<char> glued(m.tets.size(), 0);
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    const uint32_t root = Find(region, static_cast<uint32_t>(t));
+    glued[t] = region_size[root] < kGluedRegionTets;
+    if (glued[t] && root == t) ++out.stats.glued_regions;
+  }
   // The tetrahedra around each sheet node, in increasing order.
   std::vector<uint32_t> start(nv + 1, 0);
   for (const Tet& t : m.tets)
@@ -90,9 +114,10 @@ absl::StatusOr<SplitMesh> SplitAlongSheets(const TetMesh& m) {
     for (uint32_t i = 0; i < n; ++i) {
       const Tet& t = m.tets[tets[i]];
       for (int k = 0; k < 4; ++k) {
-        if (t[k] == v || sheet_keys.contains(TetFace(t, k))) continue;
+        if (t[k] == v) continue;
         const int64_t u = index.across[4 * size_t{tets[i]} + k];
         if (u < 0) continue;
+        if (sheet_keys.contains(TetFace(t, k)) && !glued[tets[i]] && !glued[u]) continue;
         const uint32_t* j = std::lower_bound(tets, tets + n, static_cast<uint32_t>(u));
         if (j != tets + n && *j == u) up[Find(up, i)] = Find(up, static_cast<uint32_t>(j - tets));
       }

@@ -37,6 +37,8 @@ struct SplitStats {
   size_t interfaces = 0;     // sheet faces split in two
   size_t closed_faces = 0;   // interfaces with no node copied
   size_t unsplit_faces = 0;  // sheet faces without a tetrahedron on each side: left whole
+  size_t glued_regions = 0;  // pieces of rock so small that the sheets around them stay
+                             // glued to them (fewer than 8 tetrahedra: they would float)
   nlohmann::json Fields() const;
 };
 

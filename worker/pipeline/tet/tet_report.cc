@@ -16,9 +16,10 @@ nlohmann::json QualityStat::Fields() const {
 }
 
 nlohmann::json SplitStats::Fields() const {
-  return {{"sheet_nodes", sheet_nodes},   {"rim_nodes", rim_nodes},
-          {"added_nodes", added_nodes},   {"interfaces", interfaces},
-          {"closed_faces", closed_faces}, {"unsplit_faces", unsplit_faces}};
+  return {{"sheet_nodes", sheet_nodes},    {"rim_nodes", rim_nodes},
+          {"added_nodes", added_nodes},    {"interfaces", interfaces},
+          {"closed_faces", closed_faces},  {"unsplit_faces", unsplit_faces},
+          {"glued_regions", glued_regions}};
 }
 
 nlohmann::json TetQuality::Fields() const {

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -73,6 +74,58 @@ SheetNodes NodesOf(const TetMesh& m) {
     if (n == 1) out.rim.insert({e.first, e.second});
   }
   return out;
+}
+
+TEST(SplitMeshTest, APieceOfRockTooSmallToHoldStaysGluedSoNothingFloats) {
+  // The sheet through the box, and one tetrahedron on it whose other three faces are made
+  // sheet faces too: sheets crossing close together enclose such a sliver of rock, which
+  // split free would float, held by contact alone (a static solve has no answer).
+  TetMesh m = Through();
+  std::optional<size_t> lone;
+  std::set<std::array<uint32_t, 3>> on_sheet;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (m.face_piece[f] < 0) continue;
+    std::array<uint32_t, 3> q = m.faces[f];
+    std::sort(q.begin(), q.end());
+    on_sheet.insert(q);
+  }
+  for (size_t t = 0; t < m.tets.size() && !lone; ++t) {
+    for (int k = 0; k < 4 && !lone; ++k) {
+      std::array<uint32_t, 3> q;
+      for (int i = 0, j = 0; i < 4; ++i)
+        if (i != k) q[j++] = m.tets[t][i];
+      std::sort(q.begin(), q.end());
+      if (!on_sheet.contains(q)) continue;
+      lone = t;
+      for (int other = 0; other < 4; ++other) {
+        if (other == k) continue;
+        std::array<uint32_t, 3> g;
+        for (int i = 0, j = 0; i < 4; ++i)
+          if (i != other) g[j++] = m.tets[t][i];
+        m.faces.push_back(g);
+        m.face_piece.push_back(0);
+        m.face_thickness_voxels.push_back(1);
+      }
+    }
+  }
+  ASSERT_TRUE(lone.has_value());
+  const SplitMesh s = Split(m);
+  EXPECT_EQ(s.stats.glued_regions, 1u);
+  // Every piece of the split mesh (tetrahedra sharing nodes) has 8 tetrahedra or more.
+  std::vector<uint32_t> up(s.mesh.nodes.size());
+  std::iota(up.begin(), up.end(), 0u);
+  auto find = [&](uint32_t i) {
+    while (up[i] != i) i = up[i] = up[up[i]];
+    return i;
+  };
+  for (const Tet& t : s.mesh.tets)
+    for (int k = 1; k < 4; ++k) up[find(t[k])] = find(t[0]);
+  std::map<uint32_t, size_t> tets_of;
+  for (const Tet& t : s.mesh.tets) ++tets_of[find(t[0])];
+  for (const auto& [root, n] : tets_of) EXPECT_GE(n, 8u) << "a piece of " << n << " floats";
+  // The sliver bonds the sheets round it where it sits, the through sheet too: one piece
+  // (without it, the two halves and the sliver).
+  EXPECT_EQ(tets_of.size(), 1u);
 }
 
 TEST(SplitMeshTest, ACrackInsideTheBoxCopiesEveryNodeButItsRims) {

@@ -11,9 +11,11 @@ there (or in ``$SHEETMESH_PYTHON_STUBS``).
 
 Errors are ``grpc.RpcError`` from the server (``e.code()``, ``e.details()`` name the field
 and value), ``ValueError`` for a parameter or format field the client cannot send (an unknown
-name, a value of the wrong type) and ``SheetmeshError`` for what else the client checks.
+name, a value of the wrong type), ``FileNotFoundError`` (``VolumeNotFoundError``) for a
+volume that is not there, and ``SheetmeshError`` for what else the client checks.
 """
 
+import errno
 import hashlib
 import json
 import os
@@ -58,6 +60,11 @@ _RETRYABLE = (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.DEADLINE_EXCEEDED, gr
 
 class SheetmeshError(Exception):
     """A failure the client detected: a job that failed, a download that did not verify."""
+
+
+class VolumeNotFoundError(SheetmeshError, FileNotFoundError):
+    """The volume given to ``mesh`` is no file or folder: a ``FileNotFoundError`` (as
+    ``open`` raises) and a ``SheetmeshError``, raised before anything is sent."""
 
 
 class AngleWarning(UserWarning):
@@ -369,7 +376,7 @@ class SheetmeshClient:
                                   volume_format=volume_format)
         else:
             if not volume.exists():
-                raise SheetmeshError("%s: no such file or folder" % volume)
+                raise VolumeNotFoundError(errno.ENOENT, "no such file or folder", str(volume))
             digest = self.upload(volume)
             job = self.create_job(volume_digest=digest, file_name=volume.name, parameters=fields,
                                   volume_format=volume_format)

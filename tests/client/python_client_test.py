@@ -215,9 +215,14 @@ class PythonClientTest(unittest.TestCase):
         self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
         report = json.loads((self.tmp / "slices_out" / "report.json").read_text())
         self.assertEqual(report["input"]["dims"], [64, 64, 64])
-        with self.assertRaises(SheetmeshError) as e:
+        # A missing volume is a FileNotFoundError (as open raises), and a SheetmeshError.
+        with self.assertRaises(FileNotFoundError) as e:
             self.client.mesh(self.tmp / "no_such_folder", self.tmp / "never")
-        self.assertIn("no_such_folder: no such file or folder", str(e.exception))
+        self.assertIsInstance(e.exception, SheetmeshError)
+        self.assertEqual(e.exception.filename, str(self.tmp / "no_such_folder"))
+        self.assertIn("no such file or folder", str(e.exception))
+        self.assertIn("no_such_folder", str(e.exception))
+        self.assertFalse((self.tmp / "never").exists())
 
     def test_failed_job_raises_with_the_readers_message(self):
         junk = self.tmp / "junk.nrrd"

@@ -17,7 +17,7 @@ import sys
 import grpc
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from sheetmesh_client import SheetmeshClient, SheetmeshError, state_name  # noqa: E402
+from sheetmesh_client import SheetmeshClient, SheetmeshError, progress_printer  # noqa: E402
 from sheetmesh.v1.parameters_pb2 import VolumeFormat  # noqa: E402
 
 
@@ -46,20 +46,10 @@ def main():
     if args.volume_mesh:
         parameters["volume_mesh"] = True
 
-    last = [None]
-
-    def show(job, heartbeat):
-        p = job.progress
-        line = state_name(job.state)
-        if job.state == 2 and p.stage_index:  # RUNNING
-            line += " stage %d/%d %s" % (p.stage_index, p.stage_count, p.stage)
-        if line != last[0]:
-            print(line, flush=True)
-            last[0] = line
-
     client = SheetmeshClient(args.server, token=args.token)
     try:
-        job = client.mesh(args.volume, args.out_dir, reference=args.reference, on_update=show,
+        job = client.mesh(args.volume, args.out_dir, reference=args.reference,
+                          on_update=progress_printer(sys.stdout),
                           volume_format=volume_format, **parameters)
     except grpc.RpcError as e:
         print("error: %s: %s" % (e.code().name, e.details()), file=sys.stderr)

@@ -112,6 +112,27 @@ def state_name(state):
     return jobs_pb2.JobState.Name(state)
 
 
+def progress_printer(stream=None):
+    """An ``on_update`` for ``watch`` and ``mesh`` that writes one line to ``stream``
+    (default ``sys.stderr``) each time the job's state or stage changes:
+    ``job-… RUNNING stage 3/12 separate``."""
+    last = [None]
+
+    def show(job, heartbeat):
+        line = "%s %s" % (job.name.rsplit("/", 1)[-1], state_name(job.state))
+        p = job.progress
+        if job.state == jobs_pb2.RUNNING and p.stage_index:
+            line += " stage %d/%d %s" % (p.stage_index, p.stage_count, p.stage)
+        if line != last[0]:
+            print(line, file=stream if stream is not None else sys.stderr, flush=True)
+            last[0] = line
+
+    return show
+
+
+_AUTO = object()  # mesh's on_update when none is given: progress on a terminal
+
+
 def connection_hint(error, address, tls=False):
     """A one-line hint for a grpc.RpcError that says the server at `address` could not be
     reached ("" for any other error), as the C++ client gives: a scheme in the address,
@@ -349,7 +370,7 @@ class SheetmeshClient:
             paths.append(self.download(a.digest, pathlib.Path(folder) / pathlib.Path(a.name).name))
         return paths
 
-    def mesh(self, volume, folder, reference=False, on_update=None, volume_format=None, **fields):
+    def mesh(self, volume, folder, reference=False, on_update=_AUTO, volume_format=None, **fields):
         """Uploads (or, with ``reference``, names) a volume, runs a job, waits for it and
         downloads its files into ``folder``. Returns the finished job; raises SheetmeshError
         when it did not succeed (its ``job``, and ``kept``: the paths of the files the run
@@ -358,7 +379,12 @@ class SheetmeshClient:
         ``fields`` are the job's parameters (``r=5``, ``extract=True``) and the volume
         format's fields (``dims="512x512x400"``, ``dtype="uint16"``, ``spacing=[0.005] * 3``,
         ``unit="mm"``) by name. A volume mesh whose smallest dihedral angle is under
-        ``tet_min_dihedral`` issues an :class:`AngleWarning` saying where and why."""
+        ``tet_min_dihedral`` issues an :class:`AngleWarning` saying where and why.
+        ``on_update(job, heartbeat)`` follows the job (see ``watch``); not given, the job's
+        stages are printed to ``sys.stderr`` when it is a terminal (:func:`progress_printer`),
+        and ``on_update=None`` prints nothing."""
+        if on_update is _AUTO:
+            on_update = progress_printer() if sys.stderr.isatty() else None
         volume = pathlib.Path(volume)
         main = fields.pop("main", "")
         formats = {k: fields.pop(k) for k in list(fields) if k in _FORMAT_FIELDS}

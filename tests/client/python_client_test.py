@@ -77,6 +77,30 @@ class PythonClientTest(unittest.TestCase):
             self.client.get_job("jobs/none")
         self.assertEqual(self.client.hint(e.exception), "", "only unreachable servers get a hint")
 
+    def test_mesh_prints_the_stages_on_a_terminal_and_nothing_elsewhere(self):
+        import io
+
+        class Terminal(io.StringIO):
+            def isatty(self):
+                return True
+
+        # (Radii no other test asks for: a job the server has already run comes back done.)
+        for stream, out, r in ((Terminal(), "tty_out", 6), (io.StringIO(), "pipe_out", 7)):
+            saved, sys.stderr = sys.stderr, stream
+            try:
+                job = self.client.mesh(self.volume, self.tmp / out, r=r)
+            finally:
+                sys.stderr = saved
+            self.assertEqual(job.state, jobs_pb2.SUCCEEDED)
+            lines = stream.getvalue().splitlines()
+            if isinstance(stream, Terminal):
+                # One line per change, the stages in order, the last the job's end.
+                self.assertTrue(any(" RUNNING stage " in x for x in lines), lines)
+                self.assertTrue(lines[-1].endswith("SUCCEEDED"), lines)
+                self.assertEqual(len(lines), len(set(lines)), lines)
+            else:
+                self.assertEqual(lines, [])
+
     def test_mesh_uploads_runs_and_downloads_verified_files(self):
         out = self.tmp / "mesh_out"
         stages = []

@@ -55,6 +55,9 @@ sed -n 's#^RUNNING stage \([0-9]*\)/.*#\1#p' "$tmp/mesh.txt" | sort -n -c 2> /de
   fail "mesh printed its stages out of order: $(cat "$tmp/mesh.txt")"
 grep -q "^SUCCEEDED" "$tmp/mesh.txt" || fail "mesh did not succeed"
 for f in surface.ply surface.vtp surface.obj report.json; do [ -f "$tmp/out/$f" ] || fail "mesh wrote no $f"; done
+# It ends with the job's figures from its report, as the offline CLI's summary has them.
+want=$(/usr/bin/python3 -c "import json,sys; r=json.load(open(sys.argv[1])); print('surface   %d triangles in %d piece%s, similarity %.4f' % (r['surface']['triangles'], len(r['pieces']), '' if len(r['pieces']) == 1 else 's', r['similarity']['similarity']))" "$tmp/out/report.json")
+grep -qxF "$want" "$tmp/mesh.txt" || fail "mesh printed no '$want': $(cat "$tmp/mesh.txt")"
 job=$(sed -n 's/^job \(jobs\/[^ ]*\).*/\1/p' "$tmp/mesh.txt")
 [ -n "$job" ] || fail "mesh named no job"
 
@@ -90,6 +93,8 @@ grep -q "volume of 2 files" "$tmp/nhdr.txt" || fail "nhdr upload: $(cat "$tmp/nh
 "$cli" mesh "$tmp/root/rock_64x64x64_u8.raw" -o "$tmp/aim" --r=5 --volume_mesh --tet_min_dihedral=20 $s \
   > "$tmp/aim.txt" || fail "mesh --volume_mesh: $(cat "$tmp/aim.txt")"
 worst=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['volume_mesh']['quality']['min_dihedral_degrees']['min'])" "$tmp/aim/report.json")
+want=$(/usr/bin/python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['volume_mesh']; q=v['quality']['min_dihedral_degrees']; print('volume    %d tetrahedra, min dihedral %.2f° (mean %.2f°)' % (v['tetrahedra'], q['min'], q['mean']))" "$tmp/aim/report.json")
+grep -qxF "$want" "$tmp/aim.txt" || fail "mesh --volume_mesh printed no '$want': $(cat "$tmp/aim.txt")"
 if /usr/bin/python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 20 else 1)" "$worst"; then
   grep -q "^warning   min dihedral .* under tet.min_dihedral = 20° at voxel (" "$tmp/aim.txt" ||
     fail "a minimum of $worst under 20 printed no warning: $(cat "$tmp/aim.txt")"

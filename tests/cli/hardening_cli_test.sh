@@ -66,7 +66,7 @@ case_ tiff_claiming_200000 2 "bomb200000.tif|200000" -- "$cli" info "$tmp/bomb20
 case_ nrrd_sizes_beyond_the_file 2 "huge.nrrd|100000" -- "$cli" info "$tmp/huge.nrrd"
 case_ raw_shorter_than_its_name 2 "short_128x112x96_u8.raw|truncated" -- "$cli" info "$tmp/short_128x112x96_u8.raw"
 case_ raw_type_i7 2 "'i7'" -- "$cli" info "$tmp/v_128x112x96_i7.raw"
-case_ grayscale_float_without_phase 2 "gray_24x24x24_f32.raw|input.window" -- "$cli" info "$tmp/gray_24x24x24_f32.raw"
+case_ grayscale_float_without_phase 2 "gray_24x24x24_f32.raw|--grey|input.window" -- "$cli" info "$tmp/gray_24x24x24_f32.raw"
 case_ nan_is_never_sheet 2 "nan_8x8x8_f32.raw|matched no voxel" -- "$cli" info "$tmp/nan_8x8x8_f32.raw" --window=-1e30:1e30
 case_ refine_close_radius_100000 2 "refine_close_radius|100000" -- "$cli" run "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --refine_close_radius=100000
 case_ triangles_0 2 "triangles|0" -- "$cli" surface "$tmp/s_128x112x96_u8.raw" -o "$tmp/x" --triangles=0

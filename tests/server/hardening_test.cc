@@ -157,7 +157,7 @@ std::vector<BadCase> Cases() {
                     "", StatusCode::kResourceExhausted, {"100000"}));
   c.push_back(Fails("grayscale_float_without_phase",
                     [](const std::string& d) { return WriteGrayscale(d, 24); }, "",
-                    StatusCode::kInvalidArgument, {"input.labels", "input.window"}));
+                    StatusCode::kInvalidArgument, {"--grey", "input.labels", "input.window"}));
   c.push_back(Fails(
       "nan_volume_window",
       [](const std::string& d) {

@@ -22,9 +22,11 @@ absl::Status CheckNotGrayscale(const SheetInput& input, const SheetPhase& phase)
       " volume read with the default sheet phase (every non-zero voxel) makes ",
       std::llround(100.0 * phase.stats.selected / voxels), "% of its ", voxels, " voxels sheet (",
       phase.stats.RangeText(),
-      "); a grayscale scan needs its sheet phase given: input.threshold, input.labels or "
-      "input.window (--threshold=otsu for the dark phase, with --threshold_above for the "
-      "bright; --threshold=V; --labels=V; --window=LO:HI)"));
+      "); a grayscale scan is meshed as it came with --grey (input.grey: sheets found on "
+      "the grey levels, apertures from the attenuation they miss; --grey_levels=VOID,ROCK "
+      "where they are known), or segmented with its sheet phase given: input.threshold, "
+      "input.labels or input.window (--threshold=otsu for the dark phase, with "
+      "--threshold_above for the bright; --threshold=V; --labels=V; --window=LO:HI)"));
 }
 
 // Otsu's threshold splits the histogram in two, and either side may be the larger: on a

@@ -73,6 +73,13 @@ Vec3 ClosestPointOnTriangle(const Vec3& p, const Triangle& t) {
   return a + ab * v + ac * w;
 }
 
+Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = b - a;
+  const double len2 = Norm2(d);
+  const double t = len2 > 0 ? std::clamp(Dot(p - a, d) / len2, 0.0, 1.0) : 0.0;
+  return a + d * t;
+}
+
 double PointTriangleDistance2(const Vec3& p, const Triangle& t) {
   return Norm2(p - ClosestPointOnTriangle(p, t));
 }

@@ -40,6 +40,9 @@ double AngleDegrees(const Vec3& a, const Vec3& b);
 // (ALGORITHM §5). Orientation-free. 180 when either triangle is degenerate.
 double DihedralAngleDegrees(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 
+// The point of the segment [a, b] nearest `p` (a when the segment has no length).
+Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b);
+
 // The point of the closed triangle nearest `p`, and the squared distance to it.
 Vec3 ClosestPointOnTriangle(const Vec3& p, const Triangle& t);
 double PointTriangleDistance2(const Vec3& p, const Triangle& t);

@@ -30,13 +30,6 @@ struct Contact {
   std::vector<uint32_t> edge_faces;  // kEdge: the faces on that edge, which split too
 };
 
-Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 d = b - a;
-  const double len2 = Norm2(d);
-  const double t = len2 > 0 ? std::clamp(Dot(p - a, d) / len2, 0.0, 1.0) : 0.0;
-  return a + d * t;
-}
-
 // The contact of p with triangle t, if p lies within gap of it: a corner within gap of p's
 // nearest point goes first, then an edge, else the interior.
 bool FindContact(const Vec3& p, const Triangle& t, double gap, Contact* c) {

@@ -79,13 +79,6 @@ void ForEachLevel(const Plc& plc, const LatticeLevels& levels, Candidates&& cand
 constexpr double kBeneathDegrees = 45;
 constexpr double kBeneathApart = 0.5;
 
-double PointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a;
-  const double len2 = Norm2(ab);
-  const double t = len2 > 0 ? std::clamp(Dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-  return Norm2(p - (a + ab * t));
-}
-
 void AddPointsBeneathSheets(const Plc& plc, double reach, std::vector<BoxPoint>* points) {
   const double apart = kBeneathApart * reach / kLatticeKeep;
   const double cos_max = std::cos(kBeneathDegrees * M_PI / 180.0);
@@ -117,13 +110,16 @@ void AddPointsBeneathSheets(const Plc& plc, double reach, std::vector<BoxPoint>*
       for (const BoxPoint& q : *points) {
         if (q.on_face & bit) keep(q.p);
       }
+      for (uint32_t v = 0; v < plc.vertices.size(); ++v) {
+        if (used[v] && std::abs(plc.vertices[v][k] - plane) < tol) keep(plc.vertices[v]);
+      }
       std::vector<std::pair<Vec3, Vec3>> traces;
       for (const Face& f : plc.sheet_triangles) {
         for (int e = 0; e < 3; ++e) {
           const Vec3 &p = plc.vertices[f[e]], &q = plc.vertices[f[(e + 1) % 3]];
-          if (std::abs(p[k] - plane) < tol && std::abs(q[k] - plane) < tol)
+          if (std::abs(p[k] - plane) < tol && std::abs(q[k] - plane) < tol) {
             traces.push_back({p, q});
-          if (std::abs(p[k] - plane) < tol) keep(p);
+          }
         }
       }
       SpatialGrid trace_grid(apart);
@@ -148,8 +144,8 @@ void AddPointsBeneathSheets(const Plc& plc, double reach, std::vector<BoxPoint>*
         near.Query(p - r, p + r,
                    [&](uint32_t i) { crowded = crowded || Norm2(taken[i] - p) < apart * apart; });
         trace_grid.Query(p - r, p + r, [&](uint32_t i) {
-          crowded = crowded ||
-                    PointSegmentDistance2(p, traces[i].first, traces[i].second) < apart * apart;
+          crowded = crowded || Norm2(p - ClosestOnSegment(p, traces[i].first, traces[i].second)) <
+                                   apart * apart;
         });
         if (crowded) continue;
         keep(p);

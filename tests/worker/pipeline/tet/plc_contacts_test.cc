@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
+#include "common/status_macros.h"
 #include "tests/testing/status_matchers.h"
 #include "tests/worker/pipeline/tet/tet_test_shapes.h"
 #include "worker/pipeline/mesh/mesh_topology.h"
@@ -35,6 +37,16 @@ TriangleMesh Diamond() {
   b.face_piece = {1, 1};
   b.face_thickness_voxels = {3, 3};
   return Append(Square(10, 50, 20, 4, 0), b);
+}
+
+// `sheets` meshed in a 60^3 box with `options`, and again with the contacts off.
+absl::StatusOr<std::pair<VolumeMeshResult, VolumeMeshResult>> MeshedWithAndWithoutContacts(
+    const TriangleMesh& sheets, const VolumeMeshOptions& options) {
+  VolumeMeshOptions apart = options;
+  apart.plc.contact_voxels = 0;
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult with, BuildVolumeMesh(sheets, {60, 60, 60}, {}, options));
+  SM_ASSIGN_OR_RETURN(VolumeMeshResult without, BuildVolumeMesh(sheets, {60, 60, 60}, {}, apart));
+  return std::make_pair(std::move(with), std::move(without));
 }
 
 TEST(PlcContactsTest, AVertexHalfAVoxelOffAnotherSheetsFaceMovesOntoItSplittingTheFace) {
@@ -75,11 +87,8 @@ TEST(PlcContactsTest, TheMendedContactMeshesWithoutSlivers) {
   joined.plc.grading = 0.4;  // the lattice this case was built at
   joined.sliver_rounds = 0;  // the mend alone
   joined.improve.sheet_move_voxels = 0;
-  VolumeMeshOptions apart = joined;
-  apart.plc.contact_voxels = 0;
-  const Dims dims{60, 60, 60};
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(Diamond(), dims, {}, joined));
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(Diamond(), dims, {}, apart));
+  SM_ASSERT_OK_AND_ASSIGN(const auto meshed, MeshedWithAndWithoutContacts(Diamond(), joined));
+  const auto& [r, s] = meshed;
   EXPECT_EQ(r.mended_contacts, 1u);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_EQ(r.conformity.orphan_faces, 0u);
@@ -174,11 +183,8 @@ TEST(PlcContactsTest, TheZippedRimMeshesAtTenDegrees) {
   // zipped, there is no gap.
   VolumeMeshOptions zipped;
   zipped.sliver_rounds = 0;
-  VolumeMeshOptions apart = zipped;
-  apart.plc.contact_voxels = 0;
-  const Dims dims{60, 60, 60};
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r, BuildVolumeMesh(RimOverA(), dims, {}, zipped));
-  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult s, BuildVolumeMesh(RimOverA(), dims, {}, apart));
+  SM_ASSERT_OK_AND_ASSIGN(const auto meshed, MeshedWithAndWithoutContacts(RimOverA(), zipped));
+  const auto& [r, s] = meshed;
   EXPECT_EQ(r.mended_edge_contacts, 5u);
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_GE(r.quality.min_dihedral.min, 10.0);

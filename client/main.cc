@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <initializer_list>
 #include <optional>
 #include <random>
 
@@ -58,46 +59,47 @@ ABSL_FLAG(bool, json, false, "print jobs as JSON");
 namespace sheetmesh::client {
 namespace {
 
-// The figures and the warnings a job's report carries, as the offline CLI prints them: a
-// volume mesh whose smallest dihedral angle is under tet.min_dihedral (where, and why). A
-// report that is missing or does not parse says nothing here (the files are the user's to
-// read).
+// A number of the report at the path of keys given, if it is there.
+std::optional<double> NumberAt(const nlohmann::json& report,
+                               std::initializer_list<const char*> path) {
+  const nlohmann::json* at = &report;
+  for (const char* key : path) {
+    if (!at->is_object()) return std::nullopt;
+    const auto it = at->find(key);
+    if (it == at->end()) return std::nullopt;
+    at = &*it;
+  }
+  if (!at->is_number()) return std::nullopt;
+  return at->get<double>();
+}
+
 // The job's figures from its report, as the offline CLI's summary gives them: the surface's
 // triangles, pieces and similarity, the volume mesh's tetrahedra and angles.
 void PrintFigures(const nlohmann::json& report) {
-  auto number = [&](const char* section, const char* key) -> std::optional<double> {
-    const auto s = report.find(section);
-    if (s == report.end() || !s->is_object()) return std::nullopt;
-    const auto v = s->find(key);
-    if (v == s->end() || !v->is_number()) return std::nullopt;
-    return v->get<double>();
-  };
-  const std::optional<double> triangles = number("surface", "triangles");
-  const std::optional<double> similarity = number("similarity", "similarity");
-  if (triangles) {
+  if (const std::optional<double> triangles = NumberAt(report, {"surface", "triangles"})) {
     std::cout << absl::StrFormat("surface   %.0f triangles", *triangles);
     const auto pieces = report.find("pieces");
     if (pieces != report.end() && pieces->is_array()) {
       std::cout << " in " << pieces->size() << (pieces->size() == 1 ? " piece" : " pieces");
     }
-    if (similarity) std::cout << absl::StrFormat(", similarity %.4f", *similarity);
+    if (const std::optional<double> s = NumberAt(report, {"similarity", "similarity"})) {
+      std::cout << absl::StrFormat(", similarity %.4f", *s);
+    }
     std::cout << "\n";
   }
-  const auto vm = report.find("volume_mesh");
-  if (vm != report.end() && vm->is_object() && (*vm)["tetrahedra"].is_number()) {
-    std::cout << absl::StrFormat("volume    %.0f tetrahedra", (*vm)["tetrahedra"].get<double>());
-    const auto q = vm->find("quality");
-    if (q != vm->end() && q->is_object() && q->contains("min_dihedral_degrees")) {
-      const nlohmann::json& d = (*q)["min_dihedral_degrees"];
-      if (d.is_object() && d["min"].is_number() && d["mean"].is_number()) {
-        std::cout << absl::StrFormat(", min dihedral %.2f° (mean %.2f°)", d["min"].get<double>(),
-                                     d["mean"].get<double>());
-      }
-    }
+  if (const std::optional<double> tets = NumberAt(report, {"volume_mesh", "tetrahedra"})) {
+    std::cout << absl::StrFormat("volume    %.0f tetrahedra", *tets);
+    const auto min = NumberAt(report, {"volume_mesh", "quality", "min_dihedral_degrees", "min"});
+    const auto mean = NumberAt(report, {"volume_mesh", "quality", "min_dihedral_degrees", "mean"});
+    if (min && mean) std::cout << absl::StrFormat(", min dihedral %.2f° (mean %.2f°)", *min, *mean);
     std::cout << "\n";
   }
 }
 
+// The figures and the warnings a job's report carries, as the offline CLI prints them: a
+// volume mesh whose smallest dihedral angle is under tet.min_dihedral (where, and why). A
+// report that is missing or does not parse says nothing here (the files are the user's to
+// read).
 void PrintWarnings(const std::string& dir) {
   absl::StatusOr<std::string> text = ReadFileToString(dir + "/report.json");
   if (!text.ok()) return;

@@ -97,7 +97,7 @@ code=0; "$cli" surface "$bad" --r 9 -o "$tmp/nonutf8" --similarity_hausdorff=fal
 "$cli" surface "$tmp/slab_48x48x52_u8.raw" --labels=255 --r=6 -o "$tmp/slab" --output_formats=ply \
   --similarity_hausdorff=false > "$tmp/slab.txt" || fail "surface of a thick slab"
 grep -q "^pieces as   1 of 1 meshed as closed surfaces" "$tmp/slab.txt" || fail "the thick slab is not a body"
-grep -qE "^            [0-9]+: body, as a body it scores [0-9.]+, as a sheet [0-9.]+" "$tmp/slab.txt" ||
+grep -qE "^            [0-9]+: body \(equivalent aperture [0-9.e+]+ voxels\), as a body it scores [0-9.]+, as a sheet [0-9.]+" "$tmp/slab.txt" ||
   fail "the slab's line does not say why it is a body: $(cat "$tmp/slab.txt")"
 /usr/bin/python3 -c "import json,sys; p=json.load(open(sys.argv[1]))['representation']['pieces']; sys.exit(0 if all(x['reason'] for x in p) else 1)" \
   "$tmp/slab/report.json" || fail "a piece of the report without its reason"

@@ -35,7 +35,8 @@ function representationTable(report) {
     el("thead", {}, el("tr", {}, ["piece", "as", "why"].map((h) => el("th", {}, h)))),
     el("tbody", {}, pieces.map((p) => el("tr", {},
       el("td", {}, p.part_of >= 0 ? `${p.piece} (a lens of ${p.part_of})` : p.piece),
-      el("td", { "data-key": "representation" }, p.representation),
+      el("td", { "data-key": "representation" }, p.representation === "body" && p.equivalent_aperture_voxels
+        ? `body (equivalent aperture ${fmt(p.equivalent_aperture_voxels, 3)} voxels)` : p.representation),
       el("td", {}, p.reason || "")))));
 }
 

@@ -56,7 +56,7 @@ ABSL_FLAG(
     std::string, out_format, "",
     "phantom and convert: raw, tiff, tiff-folder, nrrd, nrrd-gzip, vdb or hdf5 (default: by the "
     "output's extension, raw when it names none of them)");
-ABSL_FLAG(bool, markdown, false, "params: print README's markdown table");
+ABSL_FLAG(bool, markdown, false, "params: print the markdown table of docs/parameters.md");
 // phantom
 ABSL_FLAG(std::string, preset, "",
           "phantom: sample (the demo volume), paper (1012x1024x931), thick_slab, rough_network, "

@@ -92,15 +92,6 @@ void Principal(const Tensor3& t, std::array<double, 3>* values, std::array<Vec3,
   }
 }
 
-double MetresPerUnit(const std::string& unit) {
-  if (unit == "m") return 1;
-  if (unit == "cm") return 1e-2;
-  if (unit == "mm") return 1e-3;
-  if (unit == "um" || unit == "µm" || unit == "micron") return 1e-6;
-  if (unit == "nm") return 1e-9;
-  return 0;
-}
-
 absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
                                                      const FlowOptions& options,
                                                      const Progress& progress,
@@ -123,7 +114,7 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     return absl::InvalidArgumentError(absl::StrCat(
         "flow needs the volume's length unit to give a permeability in m², and this volume's is ",
         mesh.unit.empty() ? std::string("not known") : absl::StrCat("\"", mesh.unit, "\""),
-        ": give input.unit (m, cm, mm, um or nm) and input.spacing, e.g. --unit=um "
+        ": give input.unit (", kKnownLengthUnits, ") and input.spacing, e.g. --unit=um "
         "--spacing=5,5,5"));
   }
   const double m = out.metres_per_unit;

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
+#include "common/length_unit.h"
 #include "common/progress.h"
 #include "common/types.h"
 #include "worker/pipeline/tet/tet_mesh.h"
@@ -70,9 +71,6 @@ void Principal(const Tensor3& t, std::array<double, 3>* values, std::array<Vec3,
 
 // kInvalidArgument naming `field` and `k` unless 0 < k <= 1e-3 m².
 absl::Status CheckPermeability(double k, const char* field);
-
-// What one length unit ("m", "cm", "mm", "um", "µm", "nm") is in metres; 0 when unknown.
-double MetresPerUnit(const std::string& unit);
 
 // Solves the three problems on `mesh` and returns the tensor. kInvalidArgument for a
 // permeability that is not positive and finite or beyond 1e-3 m² (field and value named),

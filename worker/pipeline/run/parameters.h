@@ -1,6 +1,6 @@
 // The pipeline's parameters as one table: every setting of PipelineOptions under one name,
 // with its type, range, unit and a line of documentation. The JSON config reader, the
-// command-line flags, the service's proto mapping, the report, README's parameter list
+// command-line flags, the service's proto mapping, the report, docs/parameters.md
 // and the error messages all walk this table, so a setting is spelt one way everywhere:
 // the key path `separate.r` in a config file and the report, `--separate_r` (or
 // `--separate.r`) on a command line, `separate_r` in the proto. Keys of the `input` group
@@ -100,7 +100,7 @@ absl::Status CheckParameters(const PipelineOptions& options);
 // `include_local` false, kLocal parameters are left out (a job's form).
 std::string CanonicalParametersJson(const PipelineOptions& options, bool include_local);
 
-// README's parameter table (markdown): key, flag, type and range, default, doc.
+// docs/parameters.md's table (markdown): key, flag, type and range, default, doc.
 std::string ParametersMarkdown();
 
 }  // namespace sheetmesh

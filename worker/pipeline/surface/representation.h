@@ -68,6 +68,10 @@ struct PieceRepresentation {
   uint64_t body_triangles = 0;             // the body's faces, when tried
   uint64_t body_triangles_before = 0;      // at voxel resolution, before decimation
   bool body = false;                       // chosen as a body
+  // A body's equivalent aperture, 2 V / A of its closed surface (volume V, wall area A), in
+  // voxels: the thickness of a sheet with its voxels' volume over half its walls' area, the
+  // aperture the flow gives it (permeability.body 0: a²/12); 0 for a sheet.
+  double equivalent_aperture = 0;
   std::string reason;                      // why, in words (the report and the CLI say it)
 
   nlohmann::json Fields() const;

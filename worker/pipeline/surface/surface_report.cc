@@ -78,6 +78,7 @@ nlohmann::json PieceRepresentation::Fields() const {
                       {"sheet_triangles", sheet_triangles},
                       {"reason", reason}};
   if (sheet_similarity) j["sheet_similarity"] = *sheet_similarity;
+  if (body) j["equivalent_aperture_voxels"] = equivalent_aperture;
   if (body_similarity) {
     j["body_similarity"] = *body_similarity;
     j["body_triangles"] = body_triangles;

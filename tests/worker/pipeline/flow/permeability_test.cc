@@ -69,6 +69,20 @@ TEST(PermeabilityTest, APlanarFractureAddsTheCubicLawAlongItAndNothingAcross) {
   EXPECT_NEAR(std::abs(k.principal_directions[2].z), 1, 1e-6);
 }
 
+// A scan whose unit is the inch (ImageJ writes "inch" where a scanner's resolution is in
+// dots per inch) gives the same permeability in m² as the same rock in millimetres.
+TEST(PermeabilityTest, AMeshInInchesGivesThePermeabilityOfTheSameRockInMillimetres) {
+  const TetMesh mm = Mesh(Sheet([](double u, double v) { return Vec3(u, v, 9.5); }, 4, 0));
+  TetMesh inches = mm;
+  inches.unit = "inch";
+  for (Vec3& p : inches.nodes) p = p / 25.4;
+  inches.voxel_length /= 25.4;
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult a, SolvePermeability(mm, Options()));
+  SM_ASSERT_OK_AND_ASSIGN(const PermeabilityResult b, SolvePermeability(inches, Options()));
+  EXPECT_DOUBLE_EQ(b.metres_per_unit, 0.0254);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(b.tensor[i][i], a.tensor[i][i], 1e-6 * a.tensor[i][i]);
+}
+
 // The fields for volume.vtu: the pressure of the x solve is −x everywhere (the linear
 // solution), and the velocity along a sheet face is a²/12 along x, in the rock k_m.
 TEST(PermeabilityTest, TheFieldsAreTheLinearSolution) {

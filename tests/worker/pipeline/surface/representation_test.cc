@@ -164,6 +164,29 @@ TEST(RepresentationTest, ForcedEitherWay) {
   for (size_t f = 0; f < bodies.surface.mesh.num_faces(); ++f) {
     EXPECT_TRUE(bodies.surface.mesh.IsBodyFace(f));
   }
+  // Each body carries 2 V / A: the vug, a 40-voxel cube, 2 × 64,000 / 9,600; the sheet, 2 ×
+  // 45 × 100 voxels, 2 × 9,000 / (9,000 + its 580 of rim).
+  EXPECT_NEAR(r.pieces[0].equivalent_aperture, 2 * 64000.0 / 9600, 0.03 * 13.33);
+  EXPECT_NEAR(r.pieces[1].equivalent_aperture, 2 * 9000.0 / 9580, 0.03 * 1.88);
+  EXPECT_EQ(sheets.surface.mesh.body_pieces.size(), 0u);
+}
+
+// A slab 10 voxels thick from side to side of the box, as a body, has the aperture of the
+// gap between its walls: its faces in the box's faces are no walls (nor are they in the
+// volume mesh, whose flow gives a body the same 2 V / A).
+TEST(RepresentationTest, ASlabAcrossTheBoxAsABodyHasItsThicknessForAperture) {
+  SheetAnalysis sheet = *AnalyzeSheet(testing::ShapeSet(
+      {48, 40, 36}, [](double, double, double z) { return z >= 13 && z < 23; }));
+  SurfaceOptions s;
+  s.scvd.radius_voxels = 6;
+  SurfaceResult surface = *BuildSurface(sheet, s);
+  RepresentationOptions o;
+  o.mode = RepresentationMode::kBody;
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport r, ChooseRepresentation(sheet, {}, o, &surface.mesh));
+  ASSERT_EQ(r.pieces.size(), 1u);
+  ASSERT_TRUE(r.pieces[0].body);
+  EXPECT_NEAR(r.pieces[0].equivalent_aperture, 10, 0.3);
+  EXPECT_EQ(r.Fields()["pieces"][0]["equivalent_aperture_voxels"], r.pieces[0].equivalent_aperture);
 }
 
 // Three planar slabs of constant aperture 4, two crossing and one ending against both (a

@@ -1,11 +1,8 @@
 #include "common/length_unit.h"
 
 #include <array>
+#include <cctype>
 #include <string>
-
-#include "absl/strings/ascii.h"
-#include "absl/strings/match.h"
-#include "absl/strings/strip.h"
 
 namespace sheetmesh {
 namespace {
@@ -26,7 +23,7 @@ constexpr std::array<Unit, 12> kSymbols = {{{"km", 1e3},
                                             {"\xCE\xBCm", 1e-6},  // Greek small mu
                                             {"nm", 1e-9},
                                             {"pm", 1e-12},
-                                            {"\xC3\x85", 1e-10},      // Å, the letter
+                                            {"\xC3\x85", 1e-10},        // Å, the letter
                                             {"\xE2\x84\xAB", 1e-10}}};  // Å, the sign
 constexpr std::array<Unit, 16> kNames = {{{"kilometre", 1e3},
                                           {"metre", 1},
@@ -48,18 +45,24 @@ constexpr std::array<Unit, 16> kNames = {{{"kilometre", 1e3},
 }  // namespace
 
 double MetresPerUnit(std::string_view unit) {
-  unit = absl::StripAsciiWhitespace(unit);
-  absl::ConsumeSuffix(&unit, ".");  // "in.", "ft."
+  while (!unit.empty() && std::isspace(static_cast<unsigned char>(unit.front())))
+    unit.remove_prefix(1);
+  while (!unit.empty() && std::isspace(static_cast<unsigned char>(unit.back())))
+    unit.remove_suffix(1);
+  if (!unit.empty() && unit.back() == '.') unit.remove_suffix(1);  // "in.", "ft."
   for (const Unit& u : kSymbols)
     if (unit == u.name) return u.metres;
-  std::string name = absl::AsciiStrToLower(unit);
+  std::string name(unit);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   // American spellings and plurals: meter(s), inches, feet, microns, mils, thou.
   if (name == "feet") return 0.3048;
   if (name == "inches") return 0.0254;
   if (name == "thou") return 25.4e-6;
   if (name == "yd") return 0.9144;
   for (std::string_view us : {"meter", "meters"}) {
-    if (absl::EndsWith(name, us)) name.replace(name.size() - us.size(), 5, "metre");
+    if (name.size() >= us.size() && name.compare(name.size() - us.size(), us.size(), us) == 0) {
+      name.replace(name.size() - us.size(), 5, "metre");
+    }
   }
   std::string_view n = name;
   for (const Unit& u : kNames) {

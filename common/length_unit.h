@@ -15,7 +15,7 @@ namespace sheetmesh {
 double MetresPerUnit(std::string_view unit);
 
 // The units MetresPerUnit knows, in words for an error message.
-inline constexpr std::string_view kKnownLengthUnits =
+inline constexpr char kKnownLengthUnits[] =
     "m, cm, mm, um (µm, micron), nm, Å (angstrom), in (inch), ft (foot), mil or any of "
     "their names";
 

@@ -284,7 +284,8 @@ absl::Status BrickCommand(const std::vector<std::string>& args) {
   if (args.size() != 1) return Usage("brick PLAN_DIR --index=I");
   SM_ASSIGN_OR_RETURN(const int index, BrickIndex());
   const absl::Time start = absl::Now();
-  SM_ASSIGN_OR_RETURN(const BrickResult r, RunBrick(args[0], index, {}, {.child_reader = ChildReaders()}));
+  SM_ASSIGN_OR_RETURN(const BrickResult r,
+                      RunBrick(args[0], index, {}, {.child_reader = ChildReaders()}));
   std::cout << absl::StrFormat("brick       %d (%s): %d sheet voxels, %d bytes in %s, %.2f s\n",
                                index, r.core.ToString(), r.sheet.size(), r.file_bytes,
                                BrickFile(args[0], index),

@@ -208,12 +208,12 @@ void PrintRun(const PipelineReport& r, std::ostream& out) {
     out << absl::StrFormat("pieces as   %d of %d meshed as closed surfaces (piece: as what, why)\n",
                            r.representation->bodies, r.representation->pieces.size());
     for (const PieceRepresentation* p : largest) {
-      out << absl::StrFormat(
-          "            %d%s: %s, %s\n", p->piece,
-          p->part_of >= 0 ? absl::StrCat(" (a lens of ", p->part_of, ")") : "",
-          p->body ? absl::StrFormat("body (equivalent aperture %.3g voxels)", p->equivalent_aperture)
-                  : "sheet",
-          p->reason);
+      out << absl::StrFormat("            %d%s: %s, %s\n", p->piece,
+                             p->part_of >= 0 ? absl::StrCat(" (a lens of ", p->part_of, ")") : "",
+                             p->body ? absl::StrFormat("body (equivalent aperture %.3g voxels)",
+                                                       p->equivalent_aperture)
+                                     : "sheet",
+                             p->reason);
     }
   }
   const SimilarityReport& sim = *r.similarity;

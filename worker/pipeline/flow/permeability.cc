@@ -114,7 +114,8 @@ absl::StatusOr<PermeabilityResult> SolvePermeability(const TetMesh& mesh,
     return absl::InvalidArgumentError(absl::StrCat(
         "flow needs the volume's length unit to give a permeability in m², and this volume's is ",
         mesh.unit.empty() ? std::string("not known") : absl::StrCat("\"", mesh.unit, "\""),
-        ": give input.unit (", kKnownLengthUnits, ") and input.spacing, e.g. --unit=um "
+        ": give input.unit (", kKnownLengthUnits,
+        ") and input.spacing, e.g. --unit=um "
         "--spacing=5,5,5"));
   }
   const double m = out.metres_per_unit;

@@ -348,7 +348,8 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
                      "unit, which is ",
                      phase.info.placement.unit.empty() ? std::string("not known")
                                                        : "\"" + phase.info.placement.unit + "\"",
-                     ": give input.unit (", kKnownLengthUnits, ") and input.spacing, e.g. --unit=um "
+                     ": give input.unit (", kKnownLengthUnits,
+                     ") and input.spacing, e.g. --unit=um "
                      "--spacing=5,5,5"));
   }
   report.volume = phase.info;

@@ -72,7 +72,7 @@ struct PieceRepresentation {
   // voxels: the thickness of a sheet with its voxels' volume over half its walls' area, the
   // aperture the flow gives it (permeability.body 0: a²/12); 0 for a sheet.
   double equivalent_aperture = 0;
-  std::string reason;                      // why, in words (the report and the CLI say it)
+  std::string reason;  // why, in words (the report and the CLI say it)
 
   nlohmann::json Fields() const;
 };

@@ -65,6 +65,36 @@ bool FindContact(const Vec3& p, const Triangle& t, double gap, Contact* c) {
   return true;
 }
 
+// FindContact for vertex u on the box (on_face[u] != 0) against triangle t: only t's edges
+// lying in every box face u is on, and their corners, count, so that u moved there stays
+// on the box.
+bool FindContactOnBox(uint32_t u, const Face& t, const std::vector<Vec3>& v,
+                      const std::vector<uint8_t>& on_face, double gap, Contact* c) {
+  const uint8_t faces = on_face[u];
+  auto in_faces = [&](uint32_t x) { return (on_face[x] & faces) == faces; };
+  const Vec3& p = v[u];
+  double best = gap * gap;
+  int edge = -1;
+  Vec3 q;
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t a = t[k], b = t[(k + 1) % 3];
+    if (!in_faces(a) || !in_faces(b)) continue;
+    const Vec3 e = ClosestOnSegment(p, v[a], v[b]);
+    if (Norm2(e - p) < best) best = Norm2(e - p), q = e, edge = k;
+  }
+  if (edge < 0) return false;
+  for (const int k : {edge, (edge + 1) % 3}) {
+    if (Norm2(v[t[k]] - q) < gap * gap) {
+      c->kind = Contact::kCorner, c->k = k, c->at = v[t[k]];
+      c->distance = Norm(v[t[k]] - p);
+      return true;
+    }
+  }
+  c->kind = Contact::kEdge, c->k = edge, c->at = q;
+  c->distance = Norm(q - p);
+  return true;
+}
+
 // Appends a copy of face f's attributes for a new face.
 void AddFace(SheetTriangles& s, uint32_t f, const Face& face) {
   s.faces.push_back(face);
@@ -189,7 +219,7 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8
     const double wedge_sine = std::sin(kWedgeKeptDegrees * 3.14159265358979323846 / 180);
     std::vector<Contact> found;
     for (uint32_t u = 0; u < v.size(); ++u) {
-      if (faces_of[u].empty() || on_face[u] != 0 || failed[u]) continue;
+      if (faces_of[u].empty() || failed[u]) continue;
       if (u < held.size() && held[u]) continue;
       Contact best;
       best.distance = 1e300;
@@ -213,9 +243,14 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8
         const Face& t = s.faces[f];
         if (t[0] == u || t[1] == u || t[2] == u) return;
         Contact c;
-        if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, gap, &c) ||
-            !(c.distance < best.distance))
+        if (on_face[u] != 0) {
+          // A vertex on the box stays on it: it meets only t's corners and edges that lie in
+          // every box face it is on (two sheets' rims on a face passing close).
+          if (!FindContactOnBox(u, t, v, on_face, gap, &c) || !(c.distance < best.distance)) return;
+        } else if (!FindContact(v[u], {v[t[0]], v[t[1]], v[t[2]]}, gap, &c) ||
+                   !(c.distance < best.distance)) {
           return;
+        }
         // A rim vertex next to a joint, its faces all standing steeply on t, is no wedge
         // with t, however soon the sheets reach it through the joint: moving it lays the
         // rim on t at the faces' own angle. (Without the joint, rims near a junction moved
@@ -231,9 +266,20 @@ uint32_t MendContacts(SheetTriangles& s, std::vector<Vec3>& v, std::vector<uint8
           }
           reached = true;
         }
+        // On the box, a slit: u and t's edge there both reach a neighbour w of u, the two
+        // meeting at w under kWedgeKeptDegrees (a sheet's rim and its own triangle folded
+        // down to the box beside it, NETL at r = 2: 6 degrees). That is no wedge to keep.
+        bool slit = false;
+        if (on_face[u] != 0) {
+          for (uint32_t w : t) {
+            const Vec3 a = v[u] - v[w], b = c.at - v[w];
+            slit = slit || (joined(u, w) && Norm(Cross(a, b)) < wedge_sine * Norm(a) * Norm(b) &&
+                            Dot(a, b) > 0);
+          }
+        }
         for (uint32_t x : t) {
           const auto it = reach.find(x);
-          if (!steep && it != reach.end() &&
+          if (!steep && !slit && it != reach.end() &&
               it->second + Norm(v[x] - c.at) <= kReachFactor * c.distance / wedge_sine) {
             return;
           }

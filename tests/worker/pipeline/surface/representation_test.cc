@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "tests/testing/shapes.h"
 #include "tests/testing/status_matchers.h"
@@ -175,14 +176,15 @@ TEST(RepresentationTest, ForcedEitherWay) {
 // gap between its walls: its faces in the box's faces are no walls (nor are they in the
 // volume mesh, whose flow gives a body the same 2 V / A).
 TEST(RepresentationTest, ASlabAcrossTheBoxAsABodyHasItsThicknessForAperture) {
-  SheetAnalysis sheet = *AnalyzeSheet(testing::ShapeSet(
-      {48, 40, 36}, [](double, double, double z) { return z >= 13 && z < 23; }));
+  SheetAnalysis sheet = *AnalyzeSheet(
+      testing::ShapeSet({48, 40, 36}, [](double, double, double z) { return z >= 13 && z < 23; }));
   SurfaceOptions s;
   s.scvd.radius_voxels = 6;
   SurfaceResult surface = *BuildSurface(sheet, s);
   RepresentationOptions o;
   o.mode = RepresentationMode::kBody;
-  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport r, ChooseRepresentation(sheet, {}, o, &surface.mesh));
+  SM_ASSERT_OK_AND_ASSIGN(RepresentationReport r,
+                          ChooseRepresentation(sheet, {}, o, &surface.mesh));
   ASSERT_EQ(r.pieces.size(), 1u);
   ASSERT_TRUE(r.pieces[0].body);
   EXPECT_NEAR(r.pieces[0].equivalent_aperture, 10, 0.3);

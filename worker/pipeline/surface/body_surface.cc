@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <map>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
@@ -189,6 +191,35 @@ absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint
     out.decimation = Decimate(&mesh, d);
   }
   mesh.vertex_thickness_voxels.assign(mesh.vertices.size(), 0.0f);
+  return out;
+}
+
+std::map<int32_t, double> EquivalentApertures(const TriangleMesh& mesh, const Dims& dims) {
+  const std::array<double, 3> high = {dims.nx - 0.5, dims.ny - 0.5, dims.nz - 0.5};
+  auto on_box = [&](const std::array<Vec3, 3>& t) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double plane : {-0.5, high[axis]}) {
+        if (std::all_of(t.begin(), t.end(),
+                        [&](const Vec3& p) { return std::abs((&p.x)[axis] - plane) < 1e-6; })) {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  std::map<int32_t, std::array<double, 2>> volume_area;
+  for (size_t f = 0; f < mesh.faces.size() && f < mesh.face_piece.size(); ++f) {
+    const int32_t piece = mesh.face_piece[f];
+    if (!mesh.IsBody(piece)) continue;
+    const std::array<Vec3, 3> t = Corners(mesh, f);
+    auto& [volume, area] = volume_area[piece];
+    volume += Dot(t[0], Cross(t[1], t[2])) / 6;
+    if (!on_box(t)) area += 0.5 * Norm(Cross(t[1] - t[0], t[2] - t[0]));
+  }
+  std::map<int32_t, double> out;
+  for (const auto& [piece, va] : volume_area) {
+    if (va[1] > 0) out[piece] = 2 * std::abs(va[0]) / va[1];
+  }
   return out;
 }
 

@@ -6,6 +6,7 @@
 #define SHEETMESH_WORKER_PIPELINE_SURFACE_BODY_SURFACE_H_
 
 #include <cstdint>
+#include <map>
 #include <optional>
 
 #include "absl/status/statusor.h"
@@ -27,6 +28,14 @@ struct BodySurface {
 // box's face), then decimated to `triangles` when that is > 0 and fewer
 // than it has. Faces carry `piece` and thickness 0. kInvalidArgument for an empty set.
 absl::StatusOr<BodySurface> MeshBody(const VoxelSet& voxels, int32_t piece, uint64_t triangles);
+
+// Each body's equivalent aperture 2 V / A, in voxels, by piece (the pieces `mesh.body_pieces`
+// lists that have faces): V the volume its closed surface encloses (the divergence theorem;
+// its size, whichever way the faces turn), A the area of its walls, the faces lying in a
+// face of the box of `dims` left out, as the volume mesh and the flow leave them out (a slab
+// across the box has the aperture of the gap between its two walls). A body with no wall
+// area is left out.
+std::map<int32_t, double> EquivalentApertures(const TriangleMesh& mesh, const Dims& dims);
 
 }  // namespace sheetmesh
 

@@ -441,40 +441,6 @@ absl::Status TryLenses(const SheetAnalysis& sheet, const TriangleMesh& mesh, con
   return absl::OkStatus();
 }
 
-// Each body's 2 V / A from its closed surface in `mesh`: V the volume its faces enclose (the
-// divergence theorem; its size, whichever way the faces turn), A the area of its walls, the
-// faces lying in a face of the box of `dims` left out (as the volume mesh and the flow do:
-// a slab across the box has the aperture of its two walls' gap).
-void SetEquivalentApertures(const TriangleMesh& mesh, const Dims& dims,
-                            RepresentationReport* report) {
-  const std::array<double, 3> high = {dims.nx - 0.5, dims.ny - 0.5, dims.nz - 0.5};
-  auto on_box = [&](const std::array<Vec3, 3>& t) {
-    for (int axis = 0; axis < 3; ++axis) {
-      for (const double plane : {-0.5, high[axis]}) {
-        if (std::all_of(t.begin(), t.end(),
-                        [&](const Vec3& p) { return std::abs((&p.x)[axis] - plane) < 1e-6; })) {
-          return true;
-        }
-      }
-    }
-    return false;
-  };
-  std::map<int32_t, std::array<double, 2>> volume_area;
-  for (size_t f = 0; f < mesh.faces.size() && f < mesh.face_piece.size(); ++f) {
-    const int32_t piece = mesh.face_piece[f];
-    if (!mesh.IsBody(piece)) continue;
-    const std::array<Vec3, 3> t = Corners(mesh, f);
-    auto& [volume, area] = volume_area[piece];
-    volume += Dot(t[0], Cross(t[1], t[2])) / 6;
-    if (!on_box(t)) area += 0.5 * Norm(Cross(t[1] - t[0], t[2] - t[0]));
-  }
-  for (PieceRepresentation& p : report->pieces) {
-    const auto it = volume_area.find(p.piece);
-    if (!p.body || it == volume_area.end() || it->second[1] <= 0) continue;
-    p.equivalent_aperture = 2 * std::abs(it->second[0]) / it->second[1];
-  }
-}
-
 }  // namespace
 
 const char* RepresentationName(RepresentationMode mode) {
@@ -619,7 +585,11 @@ absl::StatusOr<RepresentationReport> ChooseRepresentation(const SheetAnalysis& s
       chosen.report.pieces.begin(), chosen.report.pieces.end(),
       [](const PieceRepresentation& a, const PieceRepresentation& b) { return a.piece < b.piece; });
   if (chosen.report.bodies > 0) *mesh = std::move(out);
-  SetEquivalentApertures(*mesh, sheet.set.dims(), &chosen.report);
+  const std::map<int32_t, double> apertures = EquivalentApertures(*mesh, sheet.set.dims());
+  for (PieceRepresentation& p : chosen.report.pieces) {
+    const auto it = apertures.find(p.piece);
+    if (p.body && it != apertures.end()) p.equivalent_aperture = it->second;
+  }
   return chosen.report;
 }
 

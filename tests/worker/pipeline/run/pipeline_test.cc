@@ -544,16 +544,18 @@ TEST(PipelineTest, NetlFractureVolumeMeshConformsWithoutFlatTetrahedra) {
 // improve.sheet_move_voxels (1) for the worst tetrahedra of their star: every angle is at
 // least 10 degrees, a handful of vertices moved, none farther than the reach, and the
 // volume mesh's sheets score within 0.02 of the unmoved ones.
-TEST(PipelineTest, NetlAtRadius11SheetVerticesMoveForTheSliversTheyPin) {
+// NETL at r = 11 once kept a sliver the improvement mended only by moving sheet vertices; the
+// PLC's contact mends now close that gap before TetGen (a rim on the box beside a triangle of
+// its sheet: 13.12 degrees with the vertices held, 10.85 with no contact mend at all). With
+// the mends off, the moves that remain are few, within a voxel, and cost the sheets little.
+TEST(PipelineTest, NetlAtRadius11MeshesAtTenDegreesWithFewBoundedSheetMoves) {
   SM_REQUIRE_SHARED_DATA("netl_binary_fracture_small.tif");
   TempDir tmp;
   PipelineOptions o = Netl(11);
   o.extract = false;
   o.score.grid_rates.clear();
   o.volume_mesh = true;
-  // The rims zipped onto the sheets they run along (the PLC's edge contacts) mend this gap
-  // on their own (10.36 degrees unmoved): off, to measure the moves.
-  o.volume.plc.zip_rims = false;
+  o.volume.plc.contact_voxels = 0;
   PipelineOptions fixed = o;
   fixed.volume.improve.sheet_move_voxels = 0;
   o.output.dir = tmp.File("moved");
@@ -563,15 +565,20 @@ TEST(PipelineTest, NetlAtRadius11SheetVerticesMoveForTheSliversTheyPin) {
   const VolumeMeshStats& m = *moved.volume_mesh;
   const VolumeMeshStats& k = *kept.volume_mesh;
   EXPECT_EQ(k.improvement.moved_sheet_vertices, 0u);
-  EXPECT_LT(k.quality.min_dihedral.min, 10.0);
   EXPECT_GE(m.quality.min_dihedral.min, 10.0);
-  EXPECT_GT(m.improvement.moved_sheet_vertices, 0u);
+  EXPECT_GE(m.quality.min_dihedral.min, k.quality.min_dihedral.min - 1.0);
   EXPECT_LT(m.improvement.moved_sheet_vertices, 40u);
   EXPECT_LE(m.improvement.max_sheet_move, 1.0 + 1e-9);
   EXPECT_EQ(m.conformity.conforming, m.conformity.sheet_triangles);
   EXPECT_EQ(m.quality.inverted, 0u);
   ASSERT_TRUE(m.delivered_similarity.has_value() && k.delivered_similarity.has_value());
   EXPECT_GT(*m.delivered_similarity, *k.delivered_similarity - 0.02);
+  // With the mends on (the default), the mesh holds its 10 degrees with the vertices held.
+  PipelineOptions mended = fixed;
+  mended.volume.plc.contact_voxels = PlcOptions().contact_voxels;
+  mended.output.dir = tmp.File("mended");
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport d, RunPipeline(mended));
+  EXPECT_GE(d.volume_mesh->quality.min_dihedral.min, 10.0);
 }
 
 }  // namespace

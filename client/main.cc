@@ -8,8 +8,8 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <iostream>
 #include <initializer_list>
+#include <iostream>
 #include <optional>
 #include <random>
 

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "absl/time/clock.h"
+#include "worker/pipeline/tet/tet_contraction.h"
 #include "worker/pipeline/tet/tet_flips.h"
 #include "worker/pipeline/tet/tet_insertion.h"
 #include "worker/pipeline/tet/tet_mesh_editor.h"
@@ -95,6 +96,10 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
       }
       if (ed.quality(t) < insert_below && fits(kInsertAdds) && inserter.InsertNear(t)) {
         ++report->inserted_vertices;
+        ++changes;
+      } else if (ed.alive(t) && ed.quality(t) < options.split_sheets_below_degrees &&
+                 ContractEdgeOf(ed, freedom, t)) {
+        ++report->contracted_edges;
         ++changes;
       }
     }

@@ -9,6 +9,32 @@
 
 namespace sheetmesh {
 
+uint32_t TetMesh::RemoveUnusedNodes() {
+  std::vector<uint32_t> id(nodes.size(), UINT32_MAX);
+  for (const Tet& t : tets) {
+    for (uint32_t v : t) id[v] = 0;
+  }
+  for (const auto& f : faces) {
+    for (uint32_t v : f) id[v] = 0;
+  }
+  uint32_t kept = 0;
+  for (size_t v = 0; v < nodes.size(); ++v) {
+    if (id[v] == UINT32_MAX) continue;
+    id[v] = kept;
+    nodes[kept++] = nodes[v];
+  }
+  const uint32_t removed = static_cast<uint32_t>(nodes.size()) - kept;
+  if (removed == 0) return 0;
+  nodes.resize(kept);
+  for (Tet& t : tets) {
+    for (uint32_t& v : t) v = id[v];
+  }
+  for (auto& f : faces) {
+    for (uint32_t& v : f) v = id[v];
+  }
+  return removed;
+}
+
 size_t TetMesh::num_sheet_faces() const {
   size_t n = 0;
   for (int32_t m : face_marker) n += m >= kFirstSheetMarker;

@@ -48,6 +48,10 @@ struct TetMesh {
     return static_cast<float>(face_thickness_voxels[f] * voxel_length);
   }
 
+  // Drops the nodes no tetrahedron or face uses (an improvement's contraction leaves them),
+  // numbering the rest in order; returns how many went.
+  uint32_t RemoveUnusedNodes();
+
   size_t num_sheet_faces() const;
   bool IsBody(int32_t piece) const {
     return std::binary_search(body_pieces.begin(), body_pieces.end(), piece);

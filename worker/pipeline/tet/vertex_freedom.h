@@ -26,6 +26,8 @@ class VertexFreedom {
                 double sheet_reach = 0);
 
   bool may_move(uint32_t v) const { return mask_[v] != 0 || slide_[v] != Slide::kNone; }
+  // Whether v lies inside the rock, on no facet: free in every direction (it may go).
+  bool interior(uint32_t v) const { return mask_[v] == 7 && slide_[v] == Slide::kNone; }
   // d restricted to the moves vertex v may make.
   Vec3 Constrain(uint32_t v, Vec3 d) const;
   // p put back exactly on v's plane or line (through its first position). Constrain alone

@@ -244,8 +244,19 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   double worst = MeasureQuality(r->mesh).min_dihedral.min;
   r->sliver_refinement.min_dihedral_before = worst;
   // Where the smallest angle is the input's own (two facets meeting in an edge at that
-  // angle), no round can raise it, and none would be kept: none is run.
-  const double wedge = MeasureWedges(*plc, aim).narrowest_degrees;
+  // angle), no round can raise it, and none would be kept: none is run. The wedge is the
+  // sheets' as the mesh has them: the improvement may have moved sheet vertices, opening a
+  // wedge of the PLC (the phantom sample at r = 2: 6.9° in the PLC, 19.5° in the mesh).
+  // The rounds start from the sheets where the mesh has them, so a wedge the moves opened
+  // stays open in the finer PLC.
+  Plc start = *plc;
+  if (r->improvement.moved_sheet_vertices > 0 &&
+      NodesFollowPlc(*plc, r->mesh, options.improve.sheet_move_voxels + 1e-6)) {
+    for (const Face& t : start.sheet_triangles) {
+      for (uint32_t v : t) start.vertices[v] = r->mesh.nodes[v];
+    }
+  }
+  const double wedge = MeasureWedges(start, aim).narrowest_degrees;
   if (aim > 0 && worst < aim && worst >= wedge - kWedgeTolerance) {
     r->sliver_refinement.stopped =
         absl::StrCat("the input's narrowest wedge (", wedge, " degrees) is the minimum");
@@ -254,9 +265,9 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   for (int round = 0; round < rounds && aim > 0 && worst < aim; ++round) {
     const Progress step = progress.Sub(double(round) / rounds, double(round + 1) / rounds);
     uint32_t slivers = 0;
-    const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(*plc, r->mesh, aim, &slivers);
+    const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(start, r->mesh, aim, &slivers);
     if (round == 0) r->sliver_refinement.slivers_on_sheets = slivers;
-    Plc finer = *plc;
+    Plc finer = start;
     const uint32_t split = RefineSheetTriangles(marked, &finer);
     if (split == 0) break;
     // A finer PLC meshes about as fast: TetGen's refinement that does not end on it (the
@@ -293,6 +304,7 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
       break;
     }
     worst = now;
+    start = finer;
     *plc = std::move(finer);
     r->mesh = *std::move(mesh);
     r->rederived_facets = rederived;
@@ -391,6 +403,8 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
         r.conformity.missing.empty() ? -1 : static_cast<int64_t>(r.conformity.missing[0]),
         ", area error ", r.conformity.worst_area_error, ")"));
   }
+  // Contracted edges leave nodes in no tetrahedron; a solver must not see them.
+  r.mesh.RemoveUnusedNodes();
   r.mesh.body_pieces = sheets.body_pieces;
   r.mesh.tet_region = AssignRegions(r.mesh, sheets, placement);
   for (const int32_t piece : sheets.body_pieces) r.bodies.push_back({piece, 0, 0.0});

@@ -12,6 +12,7 @@
 #include "absl/container/flat_hash_set.h"
 #include "tests/testing/status_matchers.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/tet_contraction.h"
 #include "worker/pipeline/tet/tet_mesh_editor.h"
 #include "worker/pipeline/tet/vertex_freedom.h"
 #include "worker/pipeline/tet/volume_mesher.h"
@@ -409,6 +410,80 @@ TEST(VertexFreedomTest, PlcSheetVerticesMoveOffTheBoxHalfAsFarAtJunctions) {
   fr.Freeze(v);
   EXPECT_FALSE(fr.in_ball(v));
   EXPECT_EQ(fr.in_balls(), static_cast<uint32_t>(balls - 1));
+}
+
+// Two tetrahedra on either side of the sheet face a-b-c (every hull face a sheet face, so
+// only the inner point moves), the upper split by a free point p just above a-b-c: the
+// tetrahedron a-b-c-p is a sliver that no flip removes (a-b-c is a facet face).
+TetMesh SplitBipyramid(const Vec3& p) {
+  TetMesh m = Bipyramid();
+  const uint32_t a = 0, b = 1, c = 2, u = 3, v = 4;
+  m.nodes.push_back(p);
+  const uint32_t q = 5;
+  m.tets = {{b, a, c, u}, {q, b, c, v}, {a, q, c, v}, {a, b, q, v}, {a, b, c, q}};
+  // Orient them all positively (the test's own layout, not the library's business).
+  for (Tet& t : m.tets) {
+    if (TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]) < 0) {
+      std::swap(t[0], t[1]);
+    }
+  }
+  m.faces.push_back({a, b, c});
+  m.face_marker.push_back(kFirstSheetMarker + 6);
+  m.face_piece.push_back(0);
+  m.face_thickness_voxels.push_back(1);
+  return m;
+}
+
+TEST(TetContractionTest, AFreePointPressedOntoASheetFaceMergesIntoACorner) {
+  TetMesh m = SplitBipyramid({0.1, 0.05, 0.02});
+  const double volume = Volume(m), before = Worst(m);
+  ASSERT_LT(before, 5) << "a sliver to begin with";
+  TetMeshEditor ed(&m);
+  VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5);
+  ASSERT_TRUE(freedom.interior(5));
+  ASSERT_FALSE(freedom.interior(0)) << "a sheet vertex never goes";
+  uint32_t sliver = 0;
+  for (uint32_t t = 0; t < m.tets.size(); ++t) {
+    if (ed.quality(t) < ed.quality(sliver)) sliver = t;
+  }
+  ASSERT_TRUE(ContractEdgeOf(ed, freedom, sliver));
+  ed.Finish();
+  EXPECT_EQ(m.tets.size(), 2u);
+  EXPECT_TRUE(ed.star(5).empty());
+  EXPECT_NEAR(Volume(m), volume, 1e-12);
+  EXPECT_GT(Worst(m), before + 10);
+  EXPECT_EQ(m.RemoveUnusedNodes(), 1u);
+  EXPECT_EQ(m.nodes.size(), 5u);
+  for (const Tet& t : m.tets) {
+    for (uint32_t v : t) EXPECT_LT(v, 5u);
+  }
+}
+
+TEST(TetContractionTest, APointOnASheetOrOneWhoseMergeWouldFoldStays) {
+  {
+    // p on a sheet face: not interior, never contracted.
+    TetMesh m = SplitBipyramid({0.1, 0.05, 0.02});
+    m.faces.push_back({0, 1, 5});
+    m.face_marker.push_back(kFirstSheetMarker + 7);
+    m.face_piece.push_back(0);
+    m.face_thickness_voxels.push_back(1);
+    TetMeshEditor ed(&m);
+    VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5);
+    for (uint32_t t = 0; t < m.tets.size(); ++t) EXPECT_FALSE(ContractEdgeOf(ed, freedom, t));
+  }
+  {
+    // Every tetrahedron good already: no contraction raises the worst of p's star.
+    TetMesh m = SplitBipyramid({0.0, 0.0, 0.25});
+    TetMeshEditor ed(&m);
+    VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5);
+    const double before = Worst(m);
+    bool any = false;
+    for (uint32_t t = 1; t < m.tets.size(); ++t) any |= ContractEdgeOf(ed, freedom, t);
+    if (any) {
+      ed.Finish();
+      EXPECT_GT(Worst(m), before) << "a contraction only where it raises the worst";
+    }
+  }
 }
 
 }  // namespace

@@ -247,16 +247,19 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   // angle), no round can raise it, and none would be kept: none is run. The wedge is the
   // sheets' as the mesh has them: the improvement may have moved sheet vertices, opening a
   // wedge of the PLC (the phantom sample at r = 2: 6.9° in the PLC, 19.5° in the mesh).
-  // The rounds start from the sheets where the mesh has them, so a wedge the moves opened
-  // stays open in the finer PLC.
-  Plc start = *plc;
-  if (r->improvement.moved_sheet_vertices > 0 &&
-      NodesFollowPlc(*plc, r->mesh, options.improve.sheet_move_voxels + 1e-6)) {
-    for (const Face& t : start.sheet_triangles) {
-      for (uint32_t v : t) start.vertices[v] = r->mesh.nodes[v];
+  // Each round starts from the sheets where the mesh has them, so a wedge the moves opened
+  // stays open in the finer PLC (each round's improvement may move them again as far).
+  auto as_meshed = [&](const Plc& from, const VolumeMeshResult& at) {
+    Plc out = from;
+    if (at.improvement.moved_sheet_vertices > 0 &&
+        NodesFollowPlc(from, at.mesh, options.improve.sheet_move_voxels + 1e-6)) {
+      for (const Face& t : out.sheet_triangles) {
+        for (uint32_t v : t) out.vertices[v] = at.mesh.nodes[v];
+      }
     }
-  }
-  const double wedge = MeasureWedges(start, aim).narrowest_degrees;
+    return out;
+  };
+  const double wedge = MeasureWedges(as_meshed(*plc, *r), aim).narrowest_degrees;
   if (aim > 0 && worst < aim && worst >= wedge - kWedgeTolerance) {
     r->sliver_refinement.stopped =
         absl::StrCat("the input's narrowest wedge (", wedge, " degrees) is the minimum");
@@ -265,9 +268,9 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   for (int round = 0; round < rounds && aim > 0 && worst < aim; ++round) {
     const Progress step = progress.Sub(double(round) / rounds, double(round + 1) / rounds);
     uint32_t slivers = 0;
-    const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(start, r->mesh, aim, &slivers);
+    const std::vector<uint8_t> marked = SheetTrianglesAtSlivers(*plc, r->mesh, aim, &slivers);
     if (round == 0) r->sliver_refinement.slivers_on_sheets = slivers;
-    Plc finer = start;
+    Plc finer = as_meshed(*plc, *r);
     const uint32_t split = RefineSheetTriangles(marked, &finer);
     if (split == 0) break;
     // A finer PLC meshes about as fast: TetGen's refinement that does not end on it (the
@@ -304,7 +307,6 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
       break;
     }
     worst = now;
-    start = finer;
     *plc = std::move(finer);
     r->mesh = *std::move(mesh);
     r->rederived_facets = rederived;
@@ -314,6 +316,25 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
     r->sliver_refinement.split_edges += split;
   }
   return absl::OkStatus();
+}
+
+// The sheet vertices of `surface` (the PLC as the surface made it; a sliver round keeps
+// their numbers) that the mesh has elsewhere, into r->improvement.
+void CountSheetMoves(const Plc& surface, VolumeMeshResult* r) {
+  std::vector<uint8_t> on_sheet(surface.vertices.size(), 0);
+  for (const Face& t : surface.sheet_triangles) {
+    for (uint32_t v : t) on_sheet[v] = 1;
+  }
+  uint32_t moved = 0;
+  double farthest = 0;
+  for (uint32_t v = 0; v < on_sheet.size(); ++v) {
+    const double d = on_sheet[v] ? Norm(r->mesh.nodes[v] - surface.vertices[v]) : 0.0;
+    if (!(d > 0)) continue;
+    ++moved;
+    farthest = std::max(farthest, d);
+  }
+  r->improvement.moved_sheet_vertices = moved;
+  r->improvement.max_sheet_move = farthest;
 }
 
 // BuildVolumeMesh in the units `placement` gives (see there).
@@ -359,6 +380,7 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   r.tetgen_tetrahedra = r.mesh.tets.size();
   const std::string limit_reached =
       absl::StrCat("tet.time_limit_seconds = ", options.tetgen.time_limit_seconds, " s");
+  const Plc surface_plc = plc;  // the sheets where the surface put them
   if (absl::Status st =
           Finish(plc, options, timed.Sub(0.9, 0.95), &r.mesh, &r.rederived_facets, &r.improvement);
       !st.ok()) {
@@ -380,6 +402,9 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
     const double worst = MeasureQuality(r.mesh).min_dihedral.min;
     if (worst < aim) r.improvement.returned_sheet_vertices += TakeBackSheetMoves(plc, worst, &r);
   }
+  // A kept sliver round began from the sheets as the improvement had moved them: the moves
+  // are counted from where the surface put them.
+  if (r.sliver_refinement.rounds > 0) CountSheetMoves(surface_plc, &r);
   // The improvement may have moved sheet vertices of the PLC within their reach
   // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
   if (moved) {

@@ -62,12 +62,14 @@ bool Blocks(const TetMeshEditor& ed, const FaceKey& face,
 // Whether face f of cavity tetrahedron x bounds the cavity: its neighbour is outside, or
 // it is a facet's face (the cavity can reach both sides of a sheet around its rim; such
 // a face must stay, so it bounds the cavity on both sides and one side then fails to see
-// the new vertex). Facets in `opened` are the ones the new vertex splits: they do not
-// bound the cavity.
+// the new vertex). Facets in `opened` are the ones the new vertex splits (a sheet's, or
+// the box's): they do not bound the cavity.
 bool OnCavityBoundary(const TetMeshEditor& ed, const IdSet& in, uint32_t x, int f,
                       const absl::flat_hash_set<FaceKey>& opened) {
   const uint32_t y = ed.Neighbor(x, f);
-  if (y == UINT32_MAX || !in.contains(y)) return true;
+  // A box face the new vertex splits: its pieces are faces of the fill, not it.
+  if (y == UINT32_MAX) return !opened.contains(TetFace(ed.tet(x), f));
+  if (!in.contains(y)) return true;
   return Blocks(ed, TetFace(ed.tet(x), f), opened);
 }
 

@@ -175,6 +175,7 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
     report->max_sheet_move = std::max(report->max_sheet_move, moved);
   }
   report->sheet_face_splits = inserter.facet_splits();
+  report->box_face_splits = inserter.box_splits();
   report->sheet_edge_splits = inserter.edge_splits();
   ed.Finish();
   report->seconds = absl::ToDoubleSeconds(absl::Now() - start);

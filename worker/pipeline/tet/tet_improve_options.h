@@ -72,6 +72,7 @@ struct TetImproveReport {
   uint64_t inserted_vertices = 0;        // new vertices (off slivers, or on sheets next to them)
   uint64_t sheet_face_splits = 0;        // of those, on a sheet face (splitting it in three)
   uint64_t sheet_edge_splits = 0;        // of those, on a sheet edge (splitting its faces in two)
+  uint64_t box_face_splits = 0;          // new vertices on a box face (splitting it in three)
   uint64_t contracted_edges = 0;         // slivers' free corners merged into another corner
   uint32_t moved_sheet_vertices = 0;     // PLC sheet vertices moved (sheet_move_voxels)
   double max_sheet_move = 0;             // the farthest of them moved, in the mesh's units

@@ -16,6 +16,14 @@ namespace {
 // Below this, insertion tries many more points (26 more directions and a closer one).
 constexpr double kWideSearchDegrees = 15.0;
 
+// The axis a box face lies across: the coordinate its three corners share.
+int BoxAxis(const TetMeshEditor& ed, const std::array<uint32_t, 3>& face) {
+  for (int k = 0; k < 3; ++k) {
+    if (ed.P(face[0])[k] == ed.P(face[1])[k] && ed.P(face[0])[k] == ed.P(face[2])[k]) return k;
+  }
+  return 0;  // not reached: a box face lies in a plane x_k = const
+}
+
 }  // namespace
 
 bool VertexInserter::InsertNear(uint32_t t) {
@@ -156,13 +164,28 @@ void VertexInserter::ConsiderSplit(Candidate c, const std::vector<uint32_t>& see
 
 void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
   const Tet tet = ed_.tet(t);
-  // Sheet faces holding an edge of t.
+  // Sheet faces holding an edge of t; and box faces of tetrahedra at t's corners holding
+  // one (a sheet vertex just inside the box under a box triangle: the tetrahedron between
+  // them is flat however the sheet vertex moves).
   std::vector<uint32_t> faces;
+  auto holds_edge = [&](const std::array<uint32_t, 3>& face) {
+    int shared = 0;
+    for (uint32_t w : face) shared += Has(tet, w);
+    return shared >= 2;
+  };
   for (uint32_t v : tet) {
     for (uint32_t f : ed_.sheet_faces_of(v)) {
-      int shared = 0;
-      for (uint32_t w : ed_.mesh().faces[f]) shared += Has(tet, w);
-      if (shared >= 2) faces.push_back(f);
+      if (holds_edge(ed_.mesh().faces[f])) faces.push_back(f);
+    }
+    for (uint32_t s : ed_.star(v)) {
+      for (int k = 0; k < 4; ++k) {
+        if (ed_.Neighbor(s, k) != UINT32_MAX) continue;
+        const uint32_t* index = ed_.FacetFaceIndex(TetFace(ed_.tet(s), k));
+        if (index != nullptr && ed_.mesh().face_piece[*index] < 0 &&
+            holds_edge(ed_.mesh().faces[*index])) {
+          faces.push_back(*index);
+        }
+      }
     }
   }
   std::sort(faces.begin(), faces.end());
@@ -178,7 +201,8 @@ void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
     for (uint32_t s : ed_.star(face[0])) {
       if (Has(ed_.tet(s), face[1]) && Has(ed_.tet(s), face[2])) seeds.push_back(s);
     }
-    if (seeds.size() != 2) continue;
+    const bool on_box = ed_.mesh().face_piece[f] < 0;  // one tetrahedron holds it
+    if (seeds.size() != (on_box ? 1u : 2u)) continue;
     // The sliver must go: it is a seed of the cavity too.
     if (seeds[0] != t && seeds[1] != t) seeds.push_back(t);
     // A grid of points well inside the face (barycentric sixths, none on an edge).
@@ -202,6 +226,8 @@ void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
     for (const Vec3& p : points) {
       Candidate cand;
       cand.p = p;
+      // On a box face the point keeps the face's coordinate exactly.
+      if (on_box) cand.p[BoxAxis(ed_, face)] = a[BoxAxis(ed_, face)];
       cand.split = {f};
       ConsiderSplit(std::move(cand), seeds, {key}, best);
     }
@@ -269,6 +295,9 @@ void VertexInserter::Apply(const Candidate& c) {
   const uint32_t v = ed_.AddNode(c.p);
   if (c.split.empty()) {
     fr_.AddFree(c.p);
+  } else if (c.edge[0] == UINT32_MAX && ed_.mesh().face_piece[c.split[0]] < 0) {
+    fr_.AddOnBox(c.p, BoxAxis(ed_, ed_.mesh().faces[c.split[0]]));
+    ++box_splits_;
   } else if (c.edge[0] == UINT32_MAX) {
     const auto& face = ed_.mesh().faces[c.split[0]];
     fr_.AddInPlane(
@@ -285,6 +314,7 @@ void VertexInserter::Apply(const Candidate& c) {
   }
   for (uint32_t f : c.split) {
     const std::array<uint32_t, 3> face = ed_.mesh().faces[f];
+    const bool on_sheet = ed_.mesh().face_piece[f] >= 0;
     ed_.EraseFacetFace(SortedFace(face[0], face[1], face[2]));
     for (uint32_t w : face) {
       auto& of = ed_.sheet_faces_of(w);
@@ -317,6 +347,7 @@ void VertexInserter::Apply(const Candidate& c) {
         m.face_thickness_voxels.push_back(thickness);
       }
       ed_.SetFacetFace(SortedFace(pieces[k][0], pieces[k][1], pieces[k][2]), index);
+      if (!on_sheet) continue;
       for (uint32_t w : pieces[k]) ed_.sheet_faces_of(w).push_back(index);
     }
   }

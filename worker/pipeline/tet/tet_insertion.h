@@ -37,6 +37,7 @@ class VertexInserter {
 
   uint64_t facet_splits() const { return facet_splits_; }  // new vertices on sheet faces
   uint64_t edge_splits() const { return edge_splits_; }    // on sheet edges
+  uint64_t box_splits() const { return box_splits_; }      // on box faces
 
  private:
   // A candidate new vertex: its cavity and fill; for a point on a sheet, the sheet faces it
@@ -75,7 +76,7 @@ class VertexInserter {
   VertexFreedom& fr_;
   const TetImproveOptions options_;
   const SmoothingOptions smoothing_;
-  uint64_t facet_splits_ = 0, edge_splits_ = 0;
+  uint64_t facet_splits_ = 0, edge_splits_ = 0, box_splits_ = 0;
 };
 
 }  // namespace sheetmesh

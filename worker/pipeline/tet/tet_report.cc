@@ -53,6 +53,7 @@ nlohmann::json TetImproveReport::Fields() const {
           {"inserted_vertices", inserted_vertices},
           {"sheet_face_splits", sheet_face_splits},
           {"sheet_edge_splits", sheet_edge_splits},
+          {"box_face_splits", box_face_splits},
           {"contracted_edges", contracted_edges},
           {"moved_sheet_vertices", moved_sheet_vertices},
           {"max_sheet_move_voxels", max_sheet_move},

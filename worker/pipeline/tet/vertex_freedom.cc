@@ -94,6 +94,13 @@ void VertexFreedom::AddInPlane(const Vec3& p, const Vec3& normal) {
   axis_.push_back(normal);
 }
 
+void VertexFreedom::AddOnBox(const Vec3& p, int k) {
+  anchor_.push_back(p);
+  mask_.push_back(static_cast<uint8_t>(7 & ~(1 << k)));
+  slide_.push_back(Slide::kNone);
+  axis_.push_back({0, 0, 0});
+}
+
 void VertexFreedom::AddOnLine(const Vec3& p, const Vec3& dir) {
   anchor_.push_back(p);
   mask_.push_back(0);

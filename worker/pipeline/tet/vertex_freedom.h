@@ -57,6 +57,8 @@ class VertexFreedom {
   void AddFree(const Vec3& p);
   void AddInPlane(const Vec3& p, const Vec3& normal);
   void AddOnLine(const Vec3& p, const Vec3& dir);
+  // ... or on a box face across axis k (0, 1, 2), sliding in it as the box's vertices do.
+  void AddOnBox(const Vec3& p, int k);
 
  private:
   // Either way a sliding vertex keeps the sheet's faces tiling the input triangles, as long

@@ -22,7 +22,8 @@ TetKey Sorted(Tet t) {
 
 bool ContractEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t) {
   const Tet tet = ed.tet(t);
-  uint32_t best_u = UINT32_MAX, best_w = UINT32_MAX;
+  uint32_t best_u = UINT32_MAX;
+  std::vector<Tet> best_fill, fill;
   double best = -1e300;
   for (const uint32_t u : tet) {
     if (!freedom.interior(u)) continue;
@@ -43,10 +44,12 @@ bool ContractEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t)
       }
       double now = 1e300, filled = 0;
       bool valid = true;
+      fill.clear();
       for (uint32_t s : star) {
         Tet x = ed.tet(s);
         if (Has(x, w)) continue;
         for (uint32_t& c : x) c = c == u ? w : c;
+        fill.push_back(x);
         const double v = TetVolume(ed.P(x[0]), ed.P(x[1]), ed.P(x[2]), ed.P(x[3]));
         if (!(v > 1e-12 * volume) || around_w.contains(Sorted(x))) {
           valid = false;
@@ -64,20 +67,13 @@ bool ContractEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t)
       if (!valid || !(std::abs(filled - volume) <= 1e-9 * volume)) continue;
       best = now;
       best_u = u;
-      best_w = w;
+      best_fill.swap(fill);
     }
   }
   if (best_u == UINT32_MAX) return false;
   const std::vector<uint32_t> star = ed.star(best_u);
-  std::vector<Tet> fill;
-  for (uint32_t s : star) {
-    Tet x = ed.tet(s);
-    if (Has(x, best_w)) continue;
-    for (uint32_t& c : x) c = c == best_u ? best_w : c;
-    fill.push_back(x);
-  }
   for (uint32_t s : star) ed.Kill(s);
-  for (const Tet& x : fill) ed.Add(x);
+  for (const Tet& x : best_fill) ed.Add(x);
   return true;
 }
 

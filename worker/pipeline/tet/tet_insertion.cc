@@ -203,6 +203,7 @@ void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
     }
     const bool on_box = ed_.mesh().face_piece[f] < 0;  // one tetrahedron holds it
     if (seeds.size() != (on_box ? 1u : 2u)) continue;
+    const int box_axis = on_box ? BoxAxis(ed_, face) : -1;
     // The sliver must go: it is a seed of the cavity too.
     if (seeds[0] != t && seeds[1] != t) seeds.push_back(t);
     // A grid of points well inside the face (barycentric sixths, none on an edge).
@@ -227,7 +228,7 @@ void VertexInserter::SplitFaceCandidates(uint32_t t, Candidate* best) const {
       Candidate cand;
       cand.p = p;
       // On a box face the point keeps the face's coordinate exactly.
-      if (on_box) cand.p[BoxAxis(ed_, face)] = a[BoxAxis(ed_, face)];
+      if (on_box) cand.p[box_axis] = a[box_axis];
       cand.split = {f};
       ConsiderSplit(std::move(cand), seeds, {key}, best);
     }

@@ -173,8 +173,7 @@ uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult*
     }
     return w;
   };
-  uint32_t returned = 0, moved = 0;
-  double farthest = 0;
+  uint32_t returned = 0;
   for (uint32_t v = 0; v < n; ++v) {
     const Vec3 now = m.nodes[v], anchor = plc.vertices[v];
     if (!on_sheet[v] || now == anchor) continue;
@@ -185,17 +184,33 @@ uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult*
         m.nodes[v] = now;
       }
     }
-    const double d = Norm(m.nodes[v] - anchor);
-    if (d > 0) {
-      ++moved;
-      farthest = std::max(farthest, d);
-    } else {
-      ++returned;
-    }
+    returned += m.nodes[v] == anchor;
   }
-  r->improvement.moved_sheet_vertices = moved;
-  r->improvement.max_sheet_move = farthest;
+  CountSheetMoves(plc, m, &r->improvement);
   return returned;
+}
+
+void CountSheetMoves(const Plc& from, const TetMesh& mesh, TetImproveReport* report) {
+  std::vector<uint8_t> on_sheet(from.vertices.size(), 0);
+  for (const Face& t : from.sheet_triangles) {
+    for (uint32_t v : t) on_sheet[v] = 1;
+  }
+  uint32_t moved = 0;
+  double farthest = 0;
+  for (uint32_t v = 0; v < on_sheet.size() && v < mesh.nodes.size(); ++v) {
+    const double d = on_sheet[v] ? Norm(mesh.nodes[v] - from.vertices[v]) : 0.0;
+    if (!(d > 0)) continue;
+    ++moved;
+    farthest = std::max(farthest, d);
+  }
+  report->moved_sheet_vertices = moved;
+  report->max_sheet_move = farthest;
+}
+
+void SheetVerticesFromMesh(const TetMesh& mesh, Plc* plc) {
+  for (const Face& t : plc->sheet_triangles) {
+    for (uint32_t v : t) plc->vertices[v] = mesh.nodes[v];
+  }
 }
 
 AngleWarning DescribeWorst(const TetMesh& mesh, double worst, double aim, double wedge,

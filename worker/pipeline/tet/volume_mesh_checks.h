@@ -33,6 +33,15 @@ uint32_t RederiveFacetFaces(const Plc& plc, TetMesh* mesh);
 // went all the way back.
 uint32_t TakeBackSheetMoves(const Plc& plc, double keep_above, VolumeMeshResult* r);
 
+// Sets report->moved_sheet_vertices and max_sheet_move: the sheet vertices of `from` that
+// `mesh` has elsewhere (REQUIRES: the mesh's nodes number them as `from` does, as
+// NodesFollowPlc checks).
+void CountSheetMoves(const Plc& from, const TetMesh& mesh, TetImproveReport* report);
+
+// Puts the PLC's sheet vertices where the mesh has them (the improvement may have moved
+// them; REQUIRES as for CountSheetMoves).
+void SheetVerticesFromMesh(const TetMesh& mesh, Plc* plc);
+
 // The warning for a minimum `worst` under the aim: where the worst tetrahedron is (in the
 // units of `placement`; the caller places it), how many of its corners the sheets hold,
 // and why (`wedge`: the input's narrowest wedge).

@@ -253,9 +253,7 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
     Plc out = from;
     if (at.improvement.moved_sheet_vertices > 0 &&
         NodesFollowPlc(from, at.mesh, options.improve.sheet_move_voxels + 1e-6)) {
-      for (const Face& t : out.sheet_triangles) {
-        for (uint32_t v : t) out.vertices[v] = at.mesh.nodes[v];
-      }
+      SheetVerticesFromMesh(at.mesh, &out);
     }
     return out;
   };
@@ -318,25 +316,6 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   return absl::OkStatus();
 }
 
-// The sheet vertices of `surface` (the PLC as the surface made it; a sliver round keeps
-// their numbers) that the mesh has elsewhere, into r->improvement.
-void CountSheetMoves(const Plc& surface, VolumeMeshResult* r) {
-  std::vector<uint8_t> on_sheet(surface.vertices.size(), 0);
-  for (const Face& t : surface.sheet_triangles) {
-    for (uint32_t v : t) on_sheet[v] = 1;
-  }
-  uint32_t moved = 0;
-  double farthest = 0;
-  for (uint32_t v = 0; v < on_sheet.size(); ++v) {
-    const double d = on_sheet[v] ? Norm(r->mesh.nodes[v] - surface.vertices[v]) : 0.0;
-    if (!(d > 0)) continue;
-    ++moved;
-    farthest = std::max(farthest, d);
-  }
-  r->improvement.moved_sheet_vertices = moved;
-  r->improvement.max_sheet_move = farthest;
-}
-
 // BuildVolumeMesh in the units `placement` gives (see there).
 absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, const Dims& dims,
                                                   const Placement& placement,
@@ -396,22 +375,20 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   // lift its minimum go back (the improvement keeps those that lift a sliver towards the
   // aim, for the rounds that may follow).
   const double aim = options.tetgen.min_dihedral_degrees;
-  const bool moved = r.improvement.moved_sheet_vertices > 0 &&
-                     NodesFollowPlc(plc, r.mesh, options.improve.sheet_move_voxels + 1e-6);
+  const bool follows = NodesFollowPlc(plc, r.mesh, options.improve.sheet_move_voxels + 1e-6);
+  const bool moved = r.improvement.moved_sheet_vertices > 0 && follows;
   if (moved && aim > 0 && !r.mesh.tets.empty()) {
     const double worst = MeasureQuality(r.mesh).min_dihedral.min;
     if (worst < aim) r.improvement.returned_sheet_vertices += TakeBackSheetMoves(plc, worst, &r);
   }
   // A kept sliver round began from the sheets as the improvement had moved them: the moves
-  // are counted from where the surface put them.
-  if (r.sliver_refinement.rounds > 0) CountSheetMoves(surface_plc, &r);
+  // are counted from where the surface put them (a round keeps those vertices' numbers).
+  if (r.sliver_refinement.rounds > 0 && follows) {
+    CountSheetMoves(surface_plc, r.mesh, &r.improvement);
+  }
   // The improvement may have moved sheet vertices of the PLC within their reach
   // (improve.sheet_move_voxels): the PLC is what the mesh has, for the checks below.
-  if (moved) {
-    for (const Face& t : plc.sheet_triangles) {
-      for (uint32_t v : t) plc.vertices[v] = r.mesh.nodes[v];
-    }
-  }
+  if (moved) SheetVerticesFromMesh(r.mesh, &plc);
   static_cast<PlcStats&>(r) = plc;
   r.wedges = MeasureWedges(plc, options.tetgen.min_dihedral_degrees);
   r.conformity = CheckConformity(plc, r.mesh);

@@ -5,7 +5,7 @@ meshed at r = 2 ... 15 by each surface method; per run the junction as the mesh 
 
     /usr/bin/python3 bench/junction_sweep.py BUILD [--angles 15,30,60,90] [--kinds x,t]
         [--seeds 1,2,3] [--rs 2,4,7,11,15] [--methods scvd,midsurface] [--dims 96]
-        [--volume_mesh] [--extract]
+        [--volume_mesh] [--extract] [--flags "--plc_junction_voxels=0 ..."] [--tag T]
 
 Per run: S (formula 5), triangles, pieces per plane, the junction's edges (edges between
 faces of different pieces, or of three or more faces), the largest distance of their
@@ -147,7 +147,7 @@ def true_wedge(vol, truth):
     return round(narrowest, 2)
 
 
-def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract):
+def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract, flags=(), tag=""):
     cli = str(pathlib.Path(build) / "worker" / "pipeline" / "sheetmesh-pipeline")
     vol = folder / ("j%d%s_s%d_%dx%dx%d_u8.raw" % (angle, kind, seed, dims, dims, dims))
     if not vol.exists():
@@ -155,13 +155,15 @@ def run(build, folder, angle, kind, seed, r, method, dims, volume_mesh, extract)
                         "--junction_degrees=%d" % angle, "--junction=" + kind, "--seed=%d" % seed,
                         "-o", str(vol)], check=True, stdout=subprocess.DEVNULL)
     truth = json.loads(pathlib.Path(str(vol) + ".truth.json").read_text())
-    out = folder / ("out_%d%s_s%d_r%g_%s%s" % (angle, kind, seed, r, method,
-                                               "_extract" if extract else ""))
+    out = folder / ("out_%d%s_s%d_r%g_%s%s%s" % (angle, kind, seed, r, method,
+                                                 "_extract" if extract else "",
+                                                 "_" + tag if tag else ""))
     cmd = [cli, "run" if extract else "surface", str(vol), "-o", str(out), "--r=%g" % r,
            "--surface_mesher=" + method, "--surface_representation=sheet",
            "--similarity_hausdorff=false"]
     if volume_mesh:
         cmd.append("--volume_mesh")
+    cmd += list(flags)
     p = subprocess.run(cmd, capture_output=True, text=True)
     row = {"angle": angle, "kind": kind, "seed": seed, "r": r, "method": method}
     if p.returncode != 0:
@@ -190,6 +192,8 @@ def main():
     ap.add_argument("--dims", type=int, default=96)
     ap.add_argument("--volume_mesh", action="store_true")
     ap.add_argument("--extract", action="store_true", help="run (extraction) rather than surface")
+    ap.add_argument("--flags", default="", help="more flags for every run, space-separated")
+    ap.add_argument("--tag", default="", help="appended to each run's output folder")
     args = ap.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     for angle in [int(a) for a in args.angles.split(",")]:
@@ -198,7 +202,7 @@ def main():
                 for r in [float(x) for x in args.rs.split(",")]:
                     for method in args.methods.split(","):
                         row = run(args.build, OUT, angle, kind, seed, r, method, args.dims,
-                                  args.volume_mesh, args.extract)
+                                  args.volume_mesh, args.extract, args.flags.split(), args.tag)
                         print(json.dumps(row), flush=True)
 
 

@@ -55,6 +55,11 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "(0: never)"));
   rows.push_back(Number("plc.wedge_voxels", SM_MEMBER(volume.plc.wedge_voxels), "[0, 5]", "voxels",
                         "the farthest a vertex moves to open a wedge"));
+  rows.push_back(Number("plc.junction_voxels", SM_MEMBER(volume.plc.junction_voxels), "[0, 5]",
+                        "voxels",
+                        "the farthest a junction vertex moves onto the line between its "
+                        "neighbours on the junction, where a wedge there is under "
+                        "plc.wedge_degrees (0: never)"));
   rows.push_back(Number("plc.short_edge_voxels", SM_MEMBER(volume.plc.short_edge_voxels), "[0, 5]",
                         "voxels",
                         "collapse sheet edges shorter than this where that makes no fold or "

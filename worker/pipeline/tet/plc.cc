@@ -238,6 +238,13 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
       plc.contact_places.push_back(placement.ToPhysical(unmended[i]));
     }
   }
+  if (options.wedge_degrees > 0 && options.junction_voxels > 0) {
+    plc.straightened_junctions =
+        StraightenJunctions(st, v, on_face, options.wedge_degrees, options.junction_voxels);
+    on_face.resize(v.size(), 0);
+    plc.opened_dihedral_wedges =
+        OpenDihedralWedges(st, v, on_face, options.wedge_degrees, options.junction_voxels);
+  }
   if (options.wedge_degrees > 0 && options.wedge_voxels > 0) {
     plc.opened_wedges = OpenWedges(st, on_face, options.wedge_degrees, options.wedge_voxels, v);
   }

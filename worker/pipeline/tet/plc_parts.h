@@ -157,6 +157,23 @@ uint32_t DropOverlaps(SheetTriangles& s, const std::vector<Vec3>& v,
 // wedge at r = 5, bench/RESULTS.md issue 64). Returns the number of vertices moved.
 uint32_t OpenWedges(const SheetTriangles& st, const std::vector<uint8_t>& on_face,
                     double min_degrees, double max_move, std::vector<Vec3>& v);
+// Straightens junction lines (chains of edges of three or more sheet triangles) where they
+// zig-zag (plc_junctions.cc): a vertex u of a chain between a and c, off the box, with a
+// wedge under min_degrees at an edge of its faces, moves onto the segment a-c (at most
+// max_move) where that widens the narrowest wedge there; the triangle (a, u, c) goes and
+// the faces on edge a-c are split at u. Changes whose faces clash are left out. Returns
+// the number of vertices moved.
+// Opens wedges under min_degrees between two faces on an edge (sheets meeting, or one
+// folding, at a narrow angle there): one face's far corner turns about the edge's line away
+// from the other, by at most max_move from where it began, where that widens the narrowest
+// wedge around it; vertices on the box stay; moves whose faces clash are left out. Returns
+// the number of vertices moved.
+uint32_t OpenDihedralWedges(SheetTriangles& st, std::vector<Vec3>& v,
+                            const std::vector<uint8_t>& on_face, double min_degrees,
+                            double max_move);
+uint32_t StraightenJunctions(SheetTriangles& st, std::vector<Vec3>& v,
+                             const std::vector<uint8_t>& on_face, double min_degrees,
+                             double max_move);
 
 // A point on the box's surface: on the faces whose bits are set (bit `face`, as on_face).
 struct BoxPoint {

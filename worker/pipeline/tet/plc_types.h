@@ -33,51 +33,55 @@ inline constexpr double kSeedJitterVoxels = 1e-4;
 
 // What building the PLC changed, for the report.
 struct PlcStats {
-  uint32_t snapped_vertices = 0;      // moved onto a box face
-  uint32_t snap_held_vertices = 0;    // within snap_clear_voxels of a box face, left off
-                                      // it since snapping them made a clash
-  uint32_t merged_vertices = 0;       // merged into a near-duplicate
-  uint32_t dropped_triangles = 0;     // degenerate after snapping, or lying in a box face
-  uint32_t repaired_triangles = 0;    // removed because they clashed after untangling
-                                      // (PlcOptions::repair)
-  double repaired_area_voxels = 0;    // their area, voxels^2
-  uint32_t clashing_pairs = 0;        // sheet triangle pairs that cut through each other
-                                      // before untangling
-  uint32_t untangle_moves = 0;        // vertices moved to untangle them (PlcOptions::
-                                      // untangle_voxels)
-  uint32_t untangle_flips = 0;        // edges flipped to untangle them
-  uint32_t untangle_splits = 0;       // crossing pairs split to meet in an edge
-  uint32_t untangle_thin_splits = 0;  // of those, split as a last resort with thin pieces
-  uint32_t untangle_patches = 0;      // patches re-triangulated to untangle them
-  double untangle_max_move = 0;       // the largest of those moves, voxels
-  uint32_t flipped_edges = 0;         // sheet edges flipped for better triangles
-  uint32_t dropped_caps = 0;          // flat rim triangles dropped
-  uint32_t dropped_overlaps = 0;      // rim triangles dropped for lying on another sheet
-  uint32_t closed_slits = 0;          // slits framed by three rim edges closed by
-                                      // splitting a face (PlcOptions::cap_degrees)
-  uint32_t closed_caps = 0;           // sheet triangles with a corner over cap_degrees left
-                                      // by the mends, closed onto their long edge (CloseCaps)
-  uint32_t opened_wedges = 0;         // sheet vertices moved off a sheet face's plane
-                                      // to open a narrow wedge (PlcOptions::wedge_degrees)
-  uint32_t collapsed_edges = 0;       // sheet edges shorter than
-                                      // PlcOptions::short_edge_voxels, collapsed
-  uint32_t mended_contacts = 0;       // sheet vertices moved onto another sheet they
-                                      // nearly touched (PlcOptions::contact_voxels)
-  uint32_t mended_edge_contacts = 0;  // pairs of sheet edges passing that close, joined
-                                      // where they pass closest (MendEdgeContacts)
-  uint32_t unmended_contacts = 0;     // such vertices left where they are: the move made
-                                      // a clash, or a rim along another sheet stayed
-  std::vector<Vec3> contact_places;   // where the first of those are, physical units
-  uint32_t joined_touches = 0;        // sheet vertices lying on another sheet triangle's
-                                      // edge or face, joined to it (JoinTouches)
-  uint32_t box_points = 0;            // points seeded on the box's edges and faces
-                                      // (PlcOptions::seed_box), after the sheets' vertices
-  uint32_t seed_points = 0;           // lattice points seeded off the sheets (the last
-                                      // vertices, on no facet)
-  double lattice_spacing = 0;         // physical units, the finest level's; 0 without
-                                      // seeding
-  uint32_t lattice_levels = 0;        // levels of the graded lattice used
-  double lattice_coarsest = 0;        // the last level's spacing, physical units
+  uint32_t snapped_vertices = 0;        // moved onto a box face
+  uint32_t snap_held_vertices = 0;      // within snap_clear_voxels of a box face, left off
+                                        // it since snapping them made a clash
+  uint32_t merged_vertices = 0;         // merged into a near-duplicate
+  uint32_t dropped_triangles = 0;       // degenerate after snapping, or lying in a box face
+  uint32_t repaired_triangles = 0;      // removed because they clashed after untangling
+                                        // (PlcOptions::repair)
+  double repaired_area_voxels = 0;      // their area, voxels^2
+  uint32_t clashing_pairs = 0;          // sheet triangle pairs that cut through each other
+                                        // before untangling
+  uint32_t untangle_moves = 0;          // vertices moved to untangle them (PlcOptions::
+                                        // untangle_voxels)
+  uint32_t untangle_flips = 0;          // edges flipped to untangle them
+  uint32_t untangle_splits = 0;         // crossing pairs split to meet in an edge
+  uint32_t untangle_thin_splits = 0;    // of those, split as a last resort with thin pieces
+  uint32_t untangle_patches = 0;        // patches re-triangulated to untangle them
+  double untangle_max_move = 0;         // the largest of those moves, voxels
+  uint32_t flipped_edges = 0;           // sheet edges flipped for better triangles
+  uint32_t dropped_caps = 0;            // flat rim triangles dropped
+  uint32_t dropped_overlaps = 0;        // rim triangles dropped for lying on another sheet
+  uint32_t closed_slits = 0;            // slits framed by three rim edges closed by
+                                        // splitting a face (PlcOptions::cap_degrees)
+  uint32_t closed_caps = 0;             // sheet triangles with a corner over cap_degrees left
+                                        // by the mends, closed onto their long edge (CloseCaps)
+  uint32_t straightened_junctions = 0;  // junction vertices moved onto the line between
+                                        // their neighbours (PlcOptions::junction_voxels)
+  uint32_t opened_dihedral_wedges = 0;  // sheet vertices turned about an edge to open a
+                                        // narrow wedge between two faces there
+  uint32_t opened_wedges = 0;           // sheet vertices moved off a sheet face's plane
+                                        // to open a narrow wedge (PlcOptions::wedge_degrees)
+  uint32_t collapsed_edges = 0;         // sheet edges shorter than
+                                        // PlcOptions::short_edge_voxels, collapsed
+  uint32_t mended_contacts = 0;         // sheet vertices moved onto another sheet they
+                                        // nearly touched (PlcOptions::contact_voxels)
+  uint32_t mended_edge_contacts = 0;    // pairs of sheet edges passing that close, joined
+                                        // where they pass closest (MendEdgeContacts)
+  uint32_t unmended_contacts = 0;       // such vertices left where they are: the move made
+                                        // a clash, or a rim along another sheet stayed
+  std::vector<Vec3> contact_places;     // where the first of those are, physical units
+  uint32_t joined_touches = 0;          // sheet vertices lying on another sheet triangle's
+                                        // edge or face, joined to it (JoinTouches)
+  uint32_t box_points = 0;              // points seeded on the box's edges and faces
+                                        // (PlcOptions::seed_box), after the sheets' vertices
+  uint32_t seed_points = 0;             // lattice points seeded off the sheets (the last
+                                        // vertices, on no facet)
+  double lattice_spacing = 0;           // physical units, the finest level's; 0 without
+                                        // seeding
+  uint32_t lattice_levels = 0;          // levels of the graded lattice used
+  double lattice_coarsest = 0;          // the last level's spacing, physical units
 
   // The figures by name (snapped_vertices, ..., lattice_spacing), for the report.
   nlohmann::json Fields() const;
@@ -140,6 +144,13 @@ struct PlcOptions {
   // box face the same way. 0 for either: no moves.
   double wedge_degrees = 12.0;
   double wedge_voxels = 1.0;
+  // A junction line (edges of three or more sheet triangles) that zig-zags lays a triangle
+  // between two of its links onto one of the sheets at a degree or two; where a wedge
+  // around a junction vertex is under wedge_degrees, the vertex moves onto the line between
+  // its two neighbours on the junction, by at most junction_voxels, where that widens the
+  // wedge and makes no clash: the triangle between the links goes (StraightenJunctions).
+  // 0: none.
+  double junction_voxels = 2.0;
   // A sheet vertex within this many voxels of another sheet's triangle (off its own) moves
   // onto it: onto its corner, merging the two; onto its edge or into it, splitting the
   // triangles there. Left apart, the two sheets pin a layer of tetrahedra as flat as the

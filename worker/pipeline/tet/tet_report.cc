@@ -91,6 +91,8 @@ nlohmann::json PlcStats::Fields() const {
           {"dropped_caps", dropped_caps},
           {"dropped_overlaps", dropped_overlaps},
           {"closed_slits", closed_slits},
+          {"straightened_junctions", straightened_junctions},
+          {"opened_dihedral_wedges", opened_dihedral_wedges},
           {"opened_wedges", opened_wedges},
           {"closed_caps", closed_caps},
           {"collapsed_edges", collapsed_edges},

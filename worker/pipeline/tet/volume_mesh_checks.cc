@@ -244,7 +244,8 @@ AngleWarning DescribeWorst(const TetMesh& mesh, double worst, double aim, double
   if (worst >= wedge - kWedgeTolerance) {
     w.cause = absl::StrFormat(
         "two facets of the input meet there at %.2f degrees (sheets, or a sheet and the box): no "
-        "conforming mesh does better (plc.wedge_degrees opens such wedges up to plc.wedge_voxels)",
+        "conforming mesh does better (plc.wedge_degrees opens such wedges up to plc.wedge_voxels, "
+        "and at junctions up to plc.junction_voxels)",
         wedge);
   } else if (w.corners_on_sheets >= 3) {
     w.cause = absl::StrFormat(

@@ -10,6 +10,7 @@
 
 #include "common/status_macros.h"
 #include "tests/testing/status_matchers.h"
+#include "tests/worker/pipeline/tet/tet_test_shapes.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/tet/plc.h"
 #include "worker/pipeline/tet/plc_parts.h"
@@ -103,6 +104,51 @@ TEST(PlcJunctionsTest, TheVolumeMeshOfAStraightenedJunctionIsNotPinnedByTheZigZa
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult mesh, BuildVolumeMesh(Crossing(true), dims, {}, {}));
   EXPECT_GT(mesh.wedges.narrowest_degrees, 89);
   EXPECT_GE(mesh.quality.min_dihedral.min, 10);
+}
+
+// Sheet A, 40 x 40 in the plane z = 15 (edges 5), and sheet B branching off it along its
+// line y = 15 at `degrees`, 24 voxels wide (rows of 4): a T-junction whose stem leans onto
+// the top, its far rim 2.1 voxels over A at 5 degrees.
+TriangleMesh NarrowT(double degrees) {
+  TriangleMesh b;
+  const Vec3 out(0, std::cos(degrees * kDeg), std::sin(degrees * kDeg));
+  for (int row = 0; row <= 6; ++row) {
+    for (int col = 0; col <= 8; ++col)
+      b.vertices.push_back(Vec3(5 + 5 * col, 15, 15) + out * (4 * row));
+  }
+  for (uint32_t row = 0; row < 6; ++row) {
+    for (uint32_t col = 0; col < 8; ++col) {
+      const uint32_t v = row * 9 + col;
+      b.faces.push_back({v, v + 1, v + 10});
+      b.faces.push_back({v, v + 10, v + 9});
+    }
+  }
+  b.face_piece.assign(b.faces.size(), 1);
+  b.face_thickness_voxels.assign(b.faces.size(), 3);
+  return testing::Append(testing::Square(5, 45, 15, 8, 0), b);
+}
+
+TEST(PlcJunctionsTest, ASheetBranchingOffAnotherAtFiveDegreesIsMeshedAtTenOrMore) {
+  const Dims dims{50, 50, 50};
+  // Held as the surface made it (no turn, no move of sheet vertices by the improvement):
+  // the junction's 5 degrees bound every tetrahedron there, and the report warns.
+  VolumeMeshOptions held;
+  held.plc.junction_voxels = 0;
+  held.plc.wedge_degrees = 0;
+  held.improve.sheet_move_voxels = 0;
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult kept, BuildVolumeMesh(NarrowT(5), dims, {}, held));
+  EXPECT_NEAR(kept.wedges.narrowest_degrees, 5, 1e-6);
+  EXPECT_LE(kept.quality.min_dihedral.min, 5 + 1e-6);
+  ASSERT_TRUE(kept.angle_warning.has_value());
+  EXPECT_LE(kept.angle_warning->degrees, 5 + 1e-6);
+  // By default the stem's first row turns off the top to plc.wedge_degrees (each corner
+  // 4 voxels out moves 0.49 voxel), and the mesh has no angle under 10 degrees.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult mesh, BuildVolumeMesh(NarrowT(5), dims, {}, {}));
+  EXPECT_GT(mesh.opened_dihedral_wedges, 0u);
+  EXPECT_GE(mesh.wedges.narrowest_degrees, 10);
+  EXPECT_GE(mesh.quality.min_dihedral.min, 10);
+  EXPECT_FALSE(mesh.angle_warning.has_value());
+  EXPECT_EQ(mesh.conformity.conforming, mesh.conformity.sheet_triangles);
 }
 
 // Faces on the edge a-b: two pairs, each two faces at `degrees` to each other, the pairs

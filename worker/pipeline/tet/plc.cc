@@ -183,6 +183,23 @@ void MoveSeeds(uint32_t salt, double voxels, Plc* plc) {
   }
 }
 
+void JitterSheetVertices(uint32_t salt, double voxels, Plc* plc) {
+  std::vector<uint8_t> on_sheet(plc->vertices.size(), 0);
+  for (const Face& t : plc->sheet_triangles) {
+    for (uint32_t v : t) on_sheet[v] = 1;
+  }
+  const uint64_t offset = (uint64_t{salt} << 40) + 2 * plc->vertices.size();
+  for (size_t i = 0; i < plc->vertices.size(); ++i) {
+    if (!on_sheet[i]) continue;
+    Vec3& p = plc->vertices[i];
+    for (int k = 0; k < 3; ++k) {
+      // A coordinate on a box face stays on it exactly.
+      if (p[k] == plc->box_lo[k] || p[k] == plc->box_hi[k]) continue;
+      p[k] += voxels * plc->voxel_length * Jitter(offset + i, k);
+    }
+  }
+}
+
 absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
                              const Placement& placement, const PlcOptions& options,
                              std::vector<Clash>* clashes) {

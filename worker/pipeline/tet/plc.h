@@ -53,6 +53,12 @@ uint32_t DropSheetTriangles(const std::vector<uint8_t>& drop, Plc* plc);
 // crashes on some PLCs (a segfault while recovering facets with -Y) and meshes the same
 // sheets with the seeds a thousandth of a voxel elsewhere; where the seeds go is free.
 void MoveSeeds(uint32_t salt, double voxels, Plc* plc);
+// Moves each sheet vertex by a fixed pseudo-random offset of at most voxels / 2 per
+// coordinate, drawn for `salt`, but not off a box face it lies on: TetGen 1.5 crashes on some
+// PLCs whatever the seeds (DPM at r = 3: a segfault recovering segments with -Y) and meshes
+// them with the sheet vertices a millionth of a voxel elsewhere (a degenerate configuration
+// of the sheets' own vertices, gone at that size).
+void JitterSheetVertices(uint32_t salt, double voxels, Plc* plc);
 
 }  // namespace sheetmesh
 

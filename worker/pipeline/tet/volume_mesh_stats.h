@@ -70,10 +70,11 @@ struct VolumeMeshStats : PlcStats {
   // TetGen runs that crashed or failed before the one that made the mesh: their switches
   // and errors (RunTetgenRecovering).
   std::vector<std::string> tetgen_recovery;
-  uint32_t seed_moves = 0;            // times the lattice seeds were moved for TetGen to try again
-  double tetgen_seconds = 0;          // the last TetGen run's
-  uint64_t tetgen_tetrahedra = 0;     // TetGen's, before the improvement
-  uint64_t max_tetrahedra = 0;        // the budget asked for (0: none)
+  uint32_t seed_moves = 0;         // times the lattice seeds (last, the sheet vertices) were moved
+                                   // for TetGen to try again
+  double tetgen_seconds = 0;       // the last TetGen run's
+  uint64_t tetgen_tetrahedra = 0;  // TetGen's, before the improvement
+  uint64_t max_tetrahedra = 0;     // the budget asked for (0: none)
   uint64_t predicted_tetrahedra = 0;  // 6 per PLC point: TetGen's count on a lattice
   uint32_t sizing_predictions = 0;    // PLCs built to bring the prediction within a budget
   uint32_t sizing_attempts = 0;       // TetGen runs: more than one when the budget coarsened

@@ -52,6 +52,8 @@ absl::Status CheckMaxVolume(const TetgenOptions& o, double box_volume, const Dim
 // it crashed on.
 constexpr uint32_t kSeedMoves = 2;
 constexpr double kSeedMoveVoxels = 2e-3;
+// After the seeds, the sheet vertices themselves, this far (JitterSheetVertices).
+constexpr double kSheetJitterVoxels = 2e-6;
 
 // TetGen 1.5 can crash, or give up recovering a facet, on a PLC it meshes with other
 // switches: asked to add no point on the facets (-Y), it segfaults where recovering a sheet
@@ -65,7 +67,8 @@ constexpr double kSeedMoveVoxels = 2e-3;
 // through each other though sheetmesh's checks passed them (a sheet crumpled within a
 // voxel, nearly flat on itself: the rough network at r = 3): the smaller of each pair is
 // removed from *plc, counted with the PLC's repairs, and the tries run again. A try that
-// crashed runs again with the lattice seeds moved first (kSeedMoves). What failed is said
+// crashed runs again with the lattice seeds moved (kSeedMoves), then with the sheet vertices
+// moved a millionth of a voxel (JitterSheetVertices). What failed is said
 // in r->tetgen_recovery; the PLC it failed on is kept (TetgenOptions::failed_plc_path).
 absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& options, bool repair,
                                             const Progress& progress, VolumeMeshResult* r) {
@@ -82,11 +85,13 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& optio
   absl::Status last;
   for (int round = 0; round <= kRepairRounds; ++round) {
     for (size_t i = 0; i < tries.size(); ++i) {
-      for (uint32_t moved = 0; moved <= kSeedMoves; ++moved) {
-        if (moved > 0) {
-          if (plc->seed_points == 0) break;
+      for (uint32_t moved = 0; moved <= kSeedMoves + 1; ++moved) {
+        const bool jitter = moved == kSeedMoves + 1;
+        if (moved > 0 && !jitter) {
+          if (plc->seed_points == 0) continue;
           MoveSeeds(++r->seed_moves, kSeedMoveVoxels, plc);
         }
+        if (jitter) JitterSheetVertices(++r->seed_moves, kSheetJitterVoxels, plc);
         absl::StatusOr<TetMesh> mesh = RunTetgen(*plc, tries[i], progress);
         // Only a crash or an error of TetGen's own is tried again; limits and cancels are
         // final.
@@ -96,8 +101,10 @@ absl::StatusOr<TetMesh> RunTetgenRecovering(Plc* plc, const TetgenOptions& optio
         }
         last = mesh.status();
         r->tetgen_recovery.push_back(absl::StrCat(TetgenSwitches(tries[i]),
-                                                  moved > 0 ? " (lattice seeds moved)" : "", ": ",
-                                                  last.message().substr(0, 160)));
+                                                  jitter      ? " (sheet vertices moved)"
+                                                  : moved > 0 ? " (lattice seeds moved)"
+                                                              : "",
+                                                  ": ", last.message().substr(0, 160)));
         // An error TetGen reports (an exit code) is the PLC's, wherever the seeds are.
         if (!absl::StrContains(last.message(), "crashed with signal")) break;
       }

@@ -59,13 +59,18 @@ class ScaleOutTest(unittest.TestCase):
     def server(self, name):
         port = self.tmp / ("%s.port" % name)
         port.unlink(missing_ok=True)
+        log = open(self.tmp / ("%s.log" % name), "a")
         p = subprocess.Popen([SERVER_BIN, "--address=127.0.0.1:0", "--data_dir=%s" % (self.tmp / "shared"),
                               "--scratch_dir=%s" % (self.tmp / ("scratch-" + name)), "--postgres=%s" % self.conninfo,
                               "--port_file=%s" % port, "--allowed_root=%s" % self.root, "--local_workers=false",
                               "--worker_token_file=%s" % (self.tmp / "wtoken"), "--lease_seconds=3",
-                              "--heartbeat_seconds=1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                              "--heartbeat_seconds=1"], stdout=subprocess.DEVNULL, stderr=log)
+        log.close()  # the server has its own copy
         self.procs.append(p)
-        return p, "127.0.0.1:%d" % wait_port_file(port, p, "server " + name)
+        # A server that exits before serving says why in its log (under load one of the
+        # hundred-job test's servers once did, unexplained).
+        return p, "127.0.0.1:%d" % wait_port_file(port, p, "server " + name,
+                                                   log=self.tmp / ("%s.log" % name))
 
     def worker(self, name, address):
         p = subprocess.Popen([WORKER_BIN, "--server=%s" % address, "--token_file=%s" % (self.tmp / "wtoken"),

@@ -86,19 +86,22 @@ TEST(TetgenRunnerTest, ATetgenCrashIsRecoveredWithOtherSwitchesAndReported) {
       FakeTetgen(tmp, "case \"$1\" in *q*Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
                           BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
-  // The same switches first run again twice with the lattice seeds moved (kSeedMoves).
-  ASSERT_EQ(r.tetgen_recovery.size(), 3u);
+  // The same switches first run again twice with the lattice seeds moved (kSeedMoves), then
+  // with the sheet vertices moved.
+  ASSERT_EQ(r.tetgen_recovery.size(), 4u);
   EXPECT_THAT(r.tetgen_recovery[0], HasSubstr("-pzQq1.5/10O2/3Y: TetGen crashed with signal 11"));
   EXPECT_THAT(r.tetgen_recovery[1],
               HasSubstr("-pzQq1.5/10O2/3Y (lattice seeds moved): TetGen crashed with signal 11"));
-  EXPECT_EQ(r.seed_moves, 2u);
+  EXPECT_THAT(r.tetgen_recovery[3],
+              HasSubstr("-pzQq1.5/10O2/3Y (sheet vertices moved): TetGen crashed with signal 11"));
+  EXPECT_EQ(r.seed_moves, 3u);
   EXPECT_EQ(r.tetgen_switches, "-pzQO2/3Y");
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_TRUE(std::filesystem::exists(tmp.File("failed.poly")));
   // Crashing under -Y whatever the rest: TetGen may then add points on the sheets.
   o.tetgen.program = FakeTetgen(tmp, "case \"$1\" in *Y*) kill -11 $$;; esac\nexec tetgen \"$@\"");
   SM_ASSERT_OK_AND_ASSIGN(r, BuildVolumeMesh(Square(4, 15, 10, 2), {20, 20, 20}, {}, o));
-  EXPECT_EQ(r.tetgen_recovery.size(), 6u);
+  EXPECT_EQ(r.tetgen_recovery.size(), 8u);
   EXPECT_EQ(r.tetgen_switches, "-pzQO2/3");
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   // Crashing whatever: the last error is returned.

@@ -508,19 +508,23 @@ uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double
   return n;
 }
 
+std::array<Face, 2> HalvesAt(const Face& t, uint32_t a, uint32_t b, uint32_t w) {
+  // (.. a .. b ..) -> (.. a .. w ..) and (.. w .. b ..): the same orientation.
+  Face first = t, second = t;
+  for (int k = 0; k < 3; ++k) {
+    if (t[k] == b) first[k] = w;
+    if (t[k] == a) second[k] = w;
+  }
+  return {first, second};
+}
+
 void SplitEdgeFaces(uint32_t a, uint32_t b, uint32_t w, const std::vector<uint32_t>& on_edge,
                     int by, SheetTriangles& s, std::vector<int>& owner) {
   for (uint32_t f : on_edge) {
-    // (.. a .. b ..) -> (.. a .. w ..) and (.. w .. b ..): the same orientation.
-    const Face g = s.faces[f];
-    const int ia = g[0] == a ? 0 : g[1] == a ? 1 : 2;
-    const int ib = g[0] == b ? 0 : g[1] == b ? 1 : 2;
-    Face first = g, second = g;
-    first[ib] = w;
-    second[ia] = w;
-    s.faces[f] = first;
+    const std::array<Face, 2> halves = HalvesAt(s.faces[f], a, b, w);
+    s.faces[f] = halves[0];
     owner[f] = by;
-    AddFace(s, f, second);
+    AddFace(s, f, halves[1]);
     owner.push_back(by);
   }
 }

@@ -8,7 +8,6 @@
 // goes, the faces on edge a-c are split at u, and the sheets then meet on a straight line
 // at the angle their faces give.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -58,22 +57,13 @@ void WedgesAround(uint32_t a, uint32_t b, const std::vector<Face>& faces,
   const Vec3 e = Normalized(v[b] - v[a]);
   std::vector<Vec3> sides;
   for (const Face& t : faces) {
-    const uint32_t o = t[0] != a && t[0] != b ? t[0] : t[1] != a && t[1] != b ? t[1] : t[2];
-    const Vec3 s = v[o] - v[a];
+    const Vec3 s = v[Opposite(t, a, b)] - v[a];
     const Vec3 across = s - e * Dot(s, e);
     const double len = Norm(across);
     if (!(len > 1e-9 * std::max(1.0, Norm(s)))) continue;
     sides.push_back(across / len);
   }
-  if (sides.size() < 2) return;
-  const Vec3 x = sides[0], y = Cross(e, x);
-  std::vector<double> angle;
-  for (const Vec3& s : sides) angle.push_back(std::atan2(Dot(s, y), Dot(s, x)));
-  std::sort(angle.begin(), angle.end());
-  for (size_t i = 0; i < angle.size(); ++i) {
-    const double to = i + 1 < angle.size() ? angle[i + 1] : angle[0] + 2 * std::numbers::pi;
-    out->Add((to - angle[i]) * kDegrees, aim);
-  }
+  for (const EdgeWedge& w : WedgesAroundEdge(e, sides)) out->Add(w.degrees, aim);
 }
 
 // The narrowest wedge between faces on the edge a-b, degrees (360: fewer than two).
@@ -117,17 +107,6 @@ Wedges WedgesAt(const std::vector<Face>& around, const std::vector<Face>& added,
 }
 
 bool Holds(const Face& t, uint32_t x) { return t[0] == x || t[1] == x || t[2] == x; }
-
-// Face t split at w on its edge a-b, keeping its orientation: the half with a, the half
-// with b.
-std::array<Face, 2> SplitAt(const Face& t, uint32_t a, uint32_t b, uint32_t w) {
-  Face first = t, second = t;
-  for (int k = 0; k < 3; ++k) {
-    if (t[k] == b) first[k] = w;
-    if (t[k] == a) second[k] = w;
-  }
-  return {first, second};
-}
 
 }  // namespace
 
@@ -181,7 +160,7 @@ uint32_t StraightenJunctions(SheetTriangles& st, std::vector<Vec3>& v,
         }
       }
       for (uint32_t f : s.split) {
-        for (const Face& half : SplitAt(st.faces[f], a, c, u)) halves.push_back(half);
+        for (const Face& half : HalvesAt(st.faces[f], a, c, u)) halves.push_back(half);
       }
       new_faces.insert(new_faces.end(), halves.begin(), halves.end());
       std::vector<uint32_t> gone = s.drop;
@@ -225,18 +204,9 @@ uint32_t StraightenJunctions(SheetTriangles& st, std::vector<Vec3>& v,
             moved[s.u] = s.to;
             for (uint32_t f : index.faces_of[s.u]) owner[f] = by;
             for (uint32_t f : s.drop) drop[f] = 1;
-            for (uint32_t f : s.split) {
-              const std::array<Face, 2> halves = SplitAt(out.faces[f], s.a, s.c, s.u);
-              out.faces[f] = halves[0];
-              owner[f] = by;
-              out.faces.push_back(halves[1]);
-              out.source.push_back(out.source[f]);
-              out.piece.push_back(out.piece[f]);
-              out.thickness.push_back(out.thickness[f]);
-              owner.push_back(by);
-              drop.push_back(0);
-            }
+            SplitEdgeFaces(s.a, s.c, s.u, s.split, by, out, owner);
           }
+          drop.resize(out.faces.size(), 0);
           std::vector<int> kept_owner;
           for (size_t f = 0; f < out.faces.size(); ++f) {
             if (!drop[f]) kept_owner.push_back(owner[f]);
@@ -294,10 +264,7 @@ uint32_t OpenDihedralWedges(SheetTriangles& st, std::vector<Vec3>& v,
       const Vec3 e = Normalized(v[b] - v[a]);
       // The far corners of the faces on the edge, with their sides' directions.
       std::vector<uint32_t> far;
-      for (uint32_t f : index.edge_faces.at(key)) {
-        const Face& t = st.faces[f];
-        far.push_back(t[0] != a && t[0] != b ? t[0] : t[1] != a && t[1] != b ? t[1] : t[2]);
-      }
+      for (uint32_t f : index.edge_faces.at(key)) far.push_back(Opposite(st.faces[f], a, b));
       auto side = [&](const Vec3& p) {
         const Vec3 s = p - v[a];
         const Vec3 across = s - e * Dot(s, e);

@@ -4,6 +4,7 @@
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_PLC_PARTS_H_
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <utility>
@@ -59,6 +60,22 @@ struct SheetIndex {
   SpatialGrid grid{1.0};
 };
 SheetIndex IndexSheets(const SheetTriangles& s, const std::vector<Vec3>& v, double grow);
+
+// The corner of face t that is not on its edge a-b.
+inline uint32_t Opposite(const Face& t, uint32_t a, uint32_t b) {
+  return t[0] != a && t[0] != b ? t[0] : t[1] != a && t[1] != b ? t[1] : t[2];
+}
+// Face t split at w on its edge a-b, keeping its orientation: the half with a, then the
+// half with b.
+std::array<Face, 2> HalvesAt(const Face& t, uint32_t a, uint32_t b, uint32_t w);
+// The wedges between the facets on an edge of direction e, given the unit directions across
+// the edge into each (`sides`): going round the edge from one side to the next, each gap in
+// degrees with the unit direction halfway through it.
+struct EdgeWedge {
+  double degrees = 0;
+  Vec3 middle;
+};
+std::vector<EdgeWedge> WedgesAroundEdge(const Vec3& e, const std::vector<Vec3>& sides);
 
 // Splits each face of on_edge (the faces on edge a-b) at vertex w, keeping its orientation:
 // the face keeps the half with a, the half with b is appended with its attributes; both

@@ -9,6 +9,7 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/plc_parts.h"
 
 namespace sheetmesh {
 namespace {
@@ -19,6 +20,23 @@ struct EdgeFans {
 };
 
 }  // namespace
+
+std::vector<EdgeWedge> WedgesAroundEdge(const Vec3& e, const std::vector<Vec3>& sides) {
+  std::vector<EdgeWedge> out;
+  if (sides.size() < 2) return out;
+  constexpr double kDegrees = 180.0 / std::numbers::pi;
+  const Vec3 x = sides[0], y = Cross(e, x);
+  std::vector<double> angle;
+  for (const Vec3& s : sides) angle.push_back(std::atan2(Dot(s, y), Dot(s, x)));
+  std::sort(angle.begin(), angle.end());
+  for (size_t i = 0; i < angle.size(); ++i) {
+    const double from = angle[i];
+    const double to = i + 1 < angle.size() ? angle[i + 1] : angle[0] + 2 * std::numbers::pi;
+    const double mid = 0.5 * (from + to);
+    out.push_back({(to - from) * kDegrees, x * std::cos(mid) + y * std::sin(mid)});
+  }
+  return out;
+}
 
 WedgeBound MeasureWedges(const Plc& plc, double below_degrees) {
   WedgeBound bound;
@@ -63,26 +81,16 @@ WedgeBound MeasureWedges(const Plc& plc, double below_degrees) {
       }
     }
   }
-  constexpr double kDegrees = 180.0 / std::numbers::pi;
   for (const auto& [key, fan] : fans) {
     if (fan.sides.size() < 2) continue;  // a rim edge: the sheet alone there
     const Vec3 lo = v[key >> 32], hi = v[key & 0xffffffffu];
-    const Vec3 e = Normalized(hi - lo);
-    const Vec3 x = fan.sides[0], y = Cross(e, x);
-    std::vector<double> angle;
-    for (const Vec3& s : fan.sides) angle.push_back(std::atan2(Dot(s, y), Dot(s, x)));
-    std::sort(angle.begin(), angle.end());
     double narrowest = 360;
-    for (size_t i = 0; i < angle.size(); ++i) {
-      const double from = angle[i];
-      double to = i + 1 < angle.size() ? angle[i + 1] : angle[0] + 2 * std::numbers::pi;
-      const double gap = (to - from) * kDegrees;
-      if (gap <= 1e-9) continue;  // one facet's side twice (a box face and a sheet in it)
-      const double mid = 0.5 * (from + to);
-      const Vec3 dir = x * std::cos(mid) + y * std::sin(mid);
+    for (const EdgeWedge& w : WedgesAroundEdge(Normalized(hi - lo), fan.sides)) {
+      // One facet's side twice (a box face and a sheet in it) makes no wedge.
+      if (w.degrees <= 1e-9) continue;
       bool outside = false;
-      for (const Vec3& n : fan.outwards) outside = outside || Dot(dir, n) > 0;
-      if (!outside) narrowest = std::min(narrowest, gap);
+      for (const Vec3& n : fan.outwards) outside = outside || Dot(w.middle, n) > 0;
+      if (!outside) narrowest = std::min(narrowest, w.degrees);
     }
     bound.narrowest_degrees = std::min(bound.narrowest_degrees, narrowest);
     if (narrowest < below_degrees) ++bound.narrow_edges;

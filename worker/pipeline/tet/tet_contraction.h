@@ -1,7 +1,7 @@
 // Edge contraction for the improvement of a tetrahedral mesh: a sliver with a corner inside
-// the rock (on no facet, free to go) whose neighbourhood is better without that corner,
-// merged into one of the sliver's other corners. Flips cannot remove a vertex and smoothing
-// cannot take it out of a gap it is trapped in (an inserted point pressed between two
+// the rock (on no facet, free to go) or one the sheets can do without, whose neighbourhood
+// is better without that corner, merged into another vertex. Flips cannot remove a vertex and
+// smoothing cannot take it out of a gap it is trapped in (an inserted point pressed between two
 // sheets, a lattice seed beside a sheet vertex); contraction can. Internal to the
 // improvement.
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_CONTRACTION_H_
@@ -21,6 +21,15 @@ namespace sheetmesh {
 // u's star filled. No facet face is removed (u lies on none). Returns whether it contracted
 // (u is then in no tetrahedron; TetMesh's nodes keep it until RemoveUnusedNodes).
 bool ContractEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t);
+
+// Merges a sheet vertex u of t's that TetGen or the improvement added (sliding in its sheet
+// triangle or along its sheet edge) into a neighbour w along the sheets, where the sheets
+// keep their shape exactly: w lies in the plane of every sheet face at u it enters (a
+// corner of u's fan in its triangle; the next vertex along u's edge), each such face keeps
+// its side. The sheet faces holding (u, w) go, the rest take w for u; the tetrahedra as
+// ContractEdgeOf. The improvement's own splits leave clusters of such vertices a tenth of
+// a voxel apart whose slivers no move or insertion mends. Returns whether it contracted.
+bool ContractSheetEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t);
 
 }  // namespace sheetmesh
 

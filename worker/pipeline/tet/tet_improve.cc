@@ -94,7 +94,12 @@ absl::Status ImproveTetMesh(TetMesh* mesh, const Vec3& box_lo, const Vec3& box_h
         }
         remember_failure(worst_tried, t);
       }
-      if (ed.quality(t) < insert_below && fits(kInsertAdds) && inserter.InsertNear(t)) {
+      // A sheet vertex the sheets can do without goes before another is added beside it.
+      if (ed.quality(t) < options.split_sheets_below_degrees &&
+          ContractSheetEdgeOf(ed, freedom, t)) {
+        ++report->contracted_sheet_edges;
+        ++changes;
+      } else if (ed.quality(t) < insert_below && fits(kInsertAdds) && inserter.InsertNear(t)) {
         ++report->inserted_vertices;
         ++changes;
       } else if (ed.alive(t) && ed.quality(t) < options.split_sheets_below_degrees &&

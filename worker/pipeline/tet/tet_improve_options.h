@@ -74,6 +74,7 @@ struct TetImproveReport {
   uint64_t sheet_edge_splits = 0;        // of those, on a sheet edge (splitting its faces in two)
   uint64_t box_face_splits = 0;          // new vertices on a box face (splitting it in three)
   uint64_t contracted_edges = 0;         // slivers' free corners merged into another corner
+  uint64_t contracted_sheet_edges = 0;   // added sheet vertices merged along their sheet
   uint32_t moved_sheet_vertices = 0;     // PLC sheet vertices moved (sheet_move_voxels)
   double max_sheet_move = 0;             // the farthest of them moved, in the mesh's units
   uint32_t returned_sheet_vertices = 0;  // moved, then taken back all the way (not counted above)

@@ -148,12 +148,49 @@ double TetMeshEditor::StarMin(uint32_t v) const {
   return mn;
 }
 
+void TetMeshEditor::ContractSheetFaces(uint32_t v, uint32_t w) {
+  const std::vector<uint32_t> at_v = sheet_faces_of_[v];
+  face_gone_.resize(m_.faces.size(), 0);
+  for (const uint32_t f : at_v) {
+    std::array<uint32_t, 3> face = m_.faces[f];
+    constrained_.erase(SortedFace(face[0], face[1], face[2]));
+    for (const uint32_t x : face) {
+      auto& of = sheet_faces_of_[x];
+      of.erase(std::remove(of.begin(), of.end(), f), of.end());
+    }
+    if (face[0] == w || face[1] == w || face[2] == w) {
+      face_gone_[f] = 1;
+      continue;
+    }
+    for (uint32_t& x : face) x = x == v ? w : x;
+    m_.faces[f] = face;
+    constrained_[SortedFace(face[0], face[1], face[2])] = f;
+    for (const uint32_t x : face) sheet_faces_of_[x].push_back(f);
+  }
+}
+
 void TetMeshEditor::Finish() {
   size_t out = 0;
   for (size_t t = 0; t < m_.tets.size(); ++t) {
     if (!dead_[t]) m_.tets[out++] = m_.tets[t];
   }
   m_.tets.resize(out);
+  face_gone_.resize(m_.faces.size(), 0);
+  if (std::find(face_gone_.begin(), face_gone_.end(), 1) == face_gone_.end()) return;
+  // Every per-face array the mesh has (a test's may lack the thickness).
+  const size_t n = m_.faces.size();
+  auto compact = [&](auto& a) {
+    if (a.size() != n) return;
+    size_t kept = 0;
+    for (size_t f = 0; f < n; ++f) {
+      if (!face_gone_[f]) a[kept++] = a[f];
+    }
+    a.resize(kept);
+  };
+  compact(m_.face_marker);
+  compact(m_.face_piece);
+  compact(m_.face_thickness_voxels);
+  compact(m_.faces);
 }
 
 }  // namespace sheetmesh

@@ -65,6 +65,10 @@ class TetMeshEditor {
   // The sheet faces (indices into mesh().faces) at vertex v.
   std::vector<uint32_t>& sheet_faces_of(uint32_t v) { return sheet_faces_of_[v]; }
   const std::vector<uint32_t>& sheet_faces_of(uint32_t v) const { return sheet_faces_of_[v]; }
+  // Sheet vertex v merged into w (an edge contraction along the sheets): a sheet face
+  // holding both goes, every other one at v takes w for v. Faces that went leave
+  // mesh().faces at Finish. REQUIRES: v on no box face.
+  void ContractSheetFaces(uint32_t v, uint32_t w);
 
   // The tetrahedron sharing face f (opposite tet[f]) of t, or UINT32_MAX on the boundary.
   // Remembered once found: a remembered neighbour is checked (alive, holding the face) and
@@ -91,7 +95,7 @@ class TetMeshEditor {
     return changed_[t[0]] <= s && changed_[t[1]] <= s && changed_[t[2]] <= s && changed_[t[3]] <= s;
   }
 
-  // Writes the live tetrahedra back into the mesh, in order.
+  // Writes the live tetrahedra and facet faces back into the mesh, in order.
   void Finish();
 
  private:
@@ -114,6 +118,7 @@ class TetMeshEditor {
   mutable std::vector<std::array<uint32_t, 4>> neighbor_;
   absl::flat_hash_map<FaceKey, uint32_t> constrained_;  // facets' faces -> index in m_.faces
   std::vector<std::vector<uint32_t>> sheet_faces_of_;   // vertex -> its sheet faces
+  std::vector<uint8_t> face_gone_;                      // per face: contracted away
 };
 
 }  // namespace sheetmesh

@@ -55,6 +55,7 @@ nlohmann::json TetImproveReport::Fields() const {
           {"sheet_edge_splits", sheet_edge_splits},
           {"box_face_splits", box_face_splits},
           {"contracted_edges", contracted_edges},
+          {"contracted_sheet_edges", contracted_sheet_edges},
           {"moved_sheet_vertices", moved_sheet_vertices},
           {"max_sheet_move_voxels", max_sheet_move},
           {"returned_sheet_vertices", returned_sheet_vertices},

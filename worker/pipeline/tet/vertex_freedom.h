@@ -28,6 +28,9 @@ class VertexFreedom {
   bool may_move(uint32_t v) const { return mask_[v] != 0 || slide_[v] != Slide::kNone; }
   // Whether v lies inside the rock, on no facet: free in every direction (it may go).
   bool interior(uint32_t v) const { return mask_[v] == 7 && slide_[v] == Slide::kNone; }
+  // Whether v is a sheet vertex TetGen or the improvement added, sliding within its sheet
+  // triangle or along its sheet edge: the sheets keep their shape without it.
+  bool slides(uint32_t v) const { return slide_[v] == Slide::kPlane || slide_[v] == Slide::kLine; }
   // d restricted to the moves vertex v may make.
   Vec3 Constrain(uint32_t v, Vec3 d) const;
   // p put back exactly on v's plane or line (through its first position). Constrain alone

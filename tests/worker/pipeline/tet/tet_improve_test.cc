@@ -8,6 +8,7 @@
 #include <cmath>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "absl/container/flat_hash_set.h"
 #include "tests/testing/status_matchers.h"
@@ -207,34 +208,52 @@ TEST(TetImproveTest, ImprovesTetgensMeshKeepingSheetsAndBox) {
   EXPECT_NEAR(after.quality.volume, after.box_volume, 1e-9 * after.box_volume);
   EXPECT_EQ(after.conformity.conforming, after.conformity.sheet_triangles);
   EXPECT_EQ(after.conformity.orphan_faces, 0u);
-  // TetGen's nodes come first in both. The PLC's own sheet vertices did not move; the
-  // sheet vertices TetGen added may slide, but stay on their input triangle (within it, as
-  // the area check of the conformity test above shows). Box nodes stayed on the faces they
-  // were on.
+  // The PLC's nodes come first in both and none goes: its own sheet vertices did not move.
+  // The sheet vertices TetGen added may slide, but stay on their input triangle (within it,
+  // as the area check of the conformity test above shows), or go where the sheets can do
+  // without them (contracted: the nodes after are TetGen's, plus those inserted, less those
+  // contracted, numbered again in order). Box faces stay on the box.
   SM_ASSERT_OK_AND_ASSIGN(const Plc plc, BuildPlc(sheet, dims, {}, on.plc));
-  ASSERT_GE(after.mesh.nodes.size(), before.mesh.nodes.size());
-  EXPECT_EQ(after.mesh.nodes.size() - before.mesh.nodes.size(), r.inserted_vertices);
+  EXPECT_EQ(after.mesh.nodes.size() + r.contracted_edges + r.contracted_sheet_edges,
+            before.mesh.nodes.size() + r.inserted_vertices);
   EXPECT_GT(r.sliding_vertices, 0u);
+  absl::flat_hash_set<std::tuple<double, double, double>> tetgen_put;
+  for (const Vec3& q : before.mesh.nodes) tetgen_put.insert({q.x, q.y, q.z});
+  Vec3 lo = before.mesh.nodes[0], hi = lo;
+  for (const Vec3& q : before.mesh.nodes) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], q[k]);
+      hi[k] = std::max(hi[k], q[k]);
+    }
+  }
   absl::flat_hash_set<uint32_t> slid;
   for (size_t f = 0; f < after.mesh.faces.size(); ++f) {
-    for (uint32_t v : after.mesh.faces[f]) {
-      ASSERT_LT(v, before.mesh.nodes.size());
-      const Vec3 &p = after.mesh.nodes[v], &q = before.mesh.nodes[v];
-      if (after.mesh.face_piece[f] >= 0) {
-        if (v < plc.vertices.size()) {
-          EXPECT_EQ(p, q) << "PLC sheet vertex " << v;
-          continue;
+    const auto& face = after.mesh.faces[f];
+    if (after.mesh.face_piece[f] < 0) {
+      int on_a_box_plane = 0;
+      for (int k = 0; k < 3; ++k) {
+        bool all = true;
+        for (const double side : {lo[k], hi[k]}) {
+          all = true;
+          for (uint32_t v : face) all = all && after.mesh.nodes[v][k] == side;
+          if (all) break;
         }
-        if (p != q) slid.insert(v);
-        const Face& t = plc.sheet_triangles[after.mesh.face_marker[f] - kFirstSheetMarker];
-        const Vec3 n = Normalized(Cross(plc.vertices[t[1]] - plc.vertices[t[0]],
-                                        plc.vertices[t[2]] - plc.vertices[t[0]]));
-        EXPECT_NEAR(Dot(p - plc.vertices[t[0]], n), 0, 1e-9) << "sheet node " << v;
-      } else {
-        for (int k = 0; k < 3; ++k) {
-          if (q[k] == 0 || q[k] == 20) EXPECT_EQ(p[k], q[k]) << "box node " << v;
-        }
+        on_a_box_plane += all;
       }
+      EXPECT_EQ(on_a_box_plane, 1) << "box face " << f;
+      continue;
+    }
+    for (uint32_t v : face) {
+      const Vec3& p = after.mesh.nodes[v];
+      if (v < plc.vertices.size()) {
+        EXPECT_EQ(p, before.mesh.nodes[v]) << "PLC sheet vertex " << v;
+        continue;
+      }
+      if (!tetgen_put.contains({p.x, p.y, p.z})) slid.insert(v);
+      const Face& t = plc.sheet_triangles[after.mesh.face_marker[f] - kFirstSheetMarker];
+      const Vec3 n = Normalized(
+          Cross(plc.vertices[t[1]] - plc.vertices[t[0]], plc.vertices[t[2]] - plc.vertices[t[0]]));
+      EXPECT_NEAR(Dot(p - plc.vertices[t[0]], n), 0, 1e-9) << "sheet node " << v;
     }
   }
   EXPECT_GT(slid.size(), 0u);
@@ -483,6 +502,82 @@ TEST(TetContractionTest, APointOnASheetOrOneWhoseMergeWouldFoldStays) {
       ed.Finish();
       EXPECT_GT(Worst(m), before) << "a contraction only where it raises the worst";
     }
+  }
+}
+
+// The bipyramid's middle face a-b-c a sheet triangle of its own (marker 20) that an added
+// sheet vertex q splits in three, q a short way from corner a: the pieces at a are needles
+// and the tetrahedra on them slivers. `input_nodes` says whether q is the PLC's own.
+TetMesh SheetSplitNearCorner() {
+  TetMesh m = Bipyramid();
+  const uint32_t a = 0, b = 1, c = 2, u = 3, v = 4, q = 5;
+  m.nodes.push_back(m.nodes[a] * 0.96 + m.nodes[b] * 0.025 + m.nodes[c] * 0.015);
+  m.tets = {{a, b, q, v}, {b, c, q, v}, {c, a, q, v}, {b, a, q, u}, {c, b, q, u}, {a, c, q, u}};
+  for (Tet& t : m.tets) {
+    if (TetVolume(m.nodes[t[0]], m.nodes[t[1]], m.nodes[t[2]], m.nodes[t[3]]) < 0) {
+      std::swap(t[0], t[1]);
+    }
+  }
+  for (const std::array<uint32_t, 3>& f :
+       {std::array<uint32_t, 3>{a, b, q}, {b, c, q}, {c, a, q}}) {
+    m.faces.push_back(f);
+    m.face_marker.push_back(kFirstSheetMarker + 20);
+    m.face_piece.push_back(1);
+    m.face_thickness_voxels.push_back(2);
+  }
+  return m;
+}
+
+TEST(TetContractionTest, AnAddedSheetVertexByACornerMergesIntoItAlongItsSheet) {
+  TetMesh m = SheetSplitNearCorner();
+  const double volume = Volume(m), before = Worst(m);
+  ASSERT_LT(before, 5) << "slivers on the needles to begin with";
+  TetMeshEditor ed(&m);
+  VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5);
+  ASSERT_TRUE(freedom.slides(5)) << "q slides within its sheet triangle";
+  ASSERT_FALSE(freedom.interior(5));
+  EXPECT_FALSE(ContractEdgeOf(ed, freedom, 0)) << "not a free corner";
+  uint32_t sliver = 0;
+  for (uint32_t t = 0; t < m.tets.size(); ++t) {
+    if (ed.quality(t) < ed.quality(sliver)) sliver = t;
+  }
+  ASSERT_TRUE(ContractSheetEdgeOf(ed, freedom, sliver));
+  ed.Finish();
+  // The bipyramid again: two tetrahedra on the one sheet face a-b-c, which keeps its marker,
+  // piece and thickness; the six hull faces as they were.
+  EXPECT_EQ(m.tets.size(), 2u);
+  EXPECT_NEAR(Volume(m), volume, 1e-12);
+  EXPECT_GT(Worst(m), before + 20);
+  ASSERT_EQ(m.faces.size(), 7u);
+  ASSERT_EQ(m.face_marker.size(), 7u);
+  ASSERT_EQ(m.face_piece.size(), 7u);
+  ASSERT_EQ(m.face_thickness_voxels.size(), 7u);
+  EXPECT_EQ(SortedFace(m.faces[6][0], m.faces[6][1], m.faces[6][2]), SortedFace(0, 1, 2));
+  EXPECT_EQ(m.face_marker[6], kFirstSheetMarker + 20);
+  EXPECT_EQ(m.face_piece[6], 1);
+  EXPECT_EQ(m.face_thickness_voxels[6], 2.0f);
+  for (size_t f = 0; f < 6; ++f) EXPECT_EQ(m.face_marker[f], kFirstSheetMarker + int32_t(f));
+  EXPECT_EQ(m.RemoveUnusedNodes(), 1u);
+}
+
+TEST(TetContractionTest, ThePlcsOwnSheetVerticesAndMergesOffTheSheetStay) {
+  {
+    // q one of the PLC's vertices: the sheets as the surface gave them, never merged.
+    TetMesh m = SheetSplitNearCorner();
+    TetMeshEditor ed(&m);
+    VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 6);
+    ASSERT_FALSE(freedom.slides(5));
+    for (uint32_t t = 0; t < m.tets.size(); ++t) EXPECT_FALSE(ContractSheetEdgeOf(ed, freedom, t));
+  }
+  {
+    // b-c-q of another input triangle: q is a corner where two input triangles meet, on
+    // no one line, and slides in neither; it stays.
+    TetMesh m = SheetSplitNearCorner();
+    m.face_marker[7] = kFirstSheetMarker + 21;
+    TetMeshEditor ed(&m);
+    VertexFreedom freedom(m, {-0.5, -1, -0.6}, {1, 1, 0.6}, 5);
+    EXPECT_FALSE(freedom.slides(5));
+    for (uint32_t t = 0; t < m.tets.size(); ++t) EXPECT_FALSE(ContractSheetEdgeOf(ed, freedom, t));
   }
 }
 

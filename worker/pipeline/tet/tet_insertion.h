@@ -35,6 +35,9 @@ class VertexInserter {
   // is not tried again.
   bool InsertNear(uint32_t t);
 
+  // Whether a new vertex may go on a sheet face or edge (where no point off them will do).
+  void AllowSheetSplits(bool allow) { sheet_splits_ = allow; }
+
   uint64_t facet_splits() const { return facet_splits_; }  // new vertices on sheet faces
   uint64_t edge_splits() const { return edge_splits_; }    // on sheet edges
   uint64_t box_splits() const { return box_splits_; }      // on box faces
@@ -75,6 +78,7 @@ class VertexInserter {
   TetMeshEditor& ed_;
   VertexFreedom& fr_;
   const TetImproveOptions options_;
+  bool sheet_splits_ = true;
   const SmoothingOptions smoothing_;
   uint64_t facet_splits_ = 0, edge_splits_ = 0, box_splits_ = 0;
 };

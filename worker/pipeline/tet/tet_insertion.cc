@@ -119,7 +119,8 @@ bool VertexInserter::InsertNear(uint32_t t) {
   // Where no point off the sheets lifts the sliver above options_.split_sheets_below_degrees, its
   // corners are pinned by the sheets around it; a point on a sheet face or edge near it may do
   // better.
-  if (sheet_splits_ && (best.cavity.empty() || !(gain(best) > kGain) ||
+  if (sheet_splits_ &&
+      (best.cavity.empty() || !(gain(best) > kGain) ||
        best.quality < options_.split_sheets_below_degrees) &&
       ed_.quality(t) < options_.split_sheets_below_degrees) {
     Candidate split = BestSheetSplit(t);

@@ -154,6 +154,11 @@ nlohmann::json VolumeMeshStats::Fields() const {
                             {"rounds", sliver_refinement.rounds},
                             {"split_edges", sliver_refinement.split_edges},
                             {"stopped", sliver_refinement.stopped}};
+  j["second_try"] = {{"tried", second_try.tried},
+                     {"min_dihedral_first", second_try.min_dihedral_first},
+                     {"min_dihedral_second", second_try.min_dihedral_second},
+                     {"kept", second_try.kept},
+                     {"stopped", second_try.stopped}};
   j["input_wedges"] = {{"narrowest_degrees", wedges.narrowest_degrees},
                        {"under_min_dihedral", wedges.narrow_edges}};
   return j;

@@ -96,6 +96,15 @@ struct VolumeMeshStats : PlcStats {
     uint32_t split_edges = 0;        // sheet edges bisected in them
     std::string stopped;             // why a round was not kept, if one was not
   } sliver_refinement;
+  // Where the mesh stayed under tet.min_dihedral, TetGen, the improvement and the sliver
+  // rounds ran once more from the lattice seeds moved; the better mesh was kept.
+  struct SecondTry {
+    bool tried = false;
+    double min_dihedral_first = 0;   // degrees, the first mesh's
+    double min_dihedral_second = 0;  // the second's (0: it did not finish)
+    bool kept = false;               // the second mesh is the one written
+    std::string stopped;             // why it did not finish, if it did not
+  } second_try;
 
   // Every figure by name, the quality and conformity nested, for the report.
   nlohmann::json Fields() const;

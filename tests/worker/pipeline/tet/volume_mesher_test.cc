@@ -498,6 +498,34 @@ TEST(VolumeMesherTest, ASimpleClashIsUntangledOrWithoutThatRepairedByRemoval) {
   EXPECT_EQ(r.conformity.sheet_triangles, 8u);
 }
 
+TEST(VolumeMesherTest, AMeshUnderTheAimTheInputDoesNotForceIsMadeAgainAndTheBetterKept) {
+  // A flat sheet (the input's narrowest wedge 90 degrees) and an aim no mesh of this
+  // lattice reaches: TetGen, the improvement and the sliver rounds run again from the
+  // lattice seeds moved, and the mesh written is the better of the two.
+  VolumeMeshOptions o;
+  o.tetgen.min_dihedral_degrees = 40;
+  o.tetgen.max_radius_edge_ratio = 0;  // TetGen's own refinement to 40 degrees would not end
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult r,
+                          BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, o));
+  ASSERT_TRUE(r.second_try.tried);
+  EXPECT_TRUE(r.second_try.stopped.empty()) << r.second_try.stopped;
+  EXPECT_GT(r.second_try.min_dihedral_first, 0);
+  EXPECT_GT(r.second_try.min_dihedral_second, 0);
+  EXPECT_LT(r.quality.min_dihedral.min, 40);
+  EXPECT_NEAR(
+      r.quality.min_dihedral.min,
+      r.second_try.kept ? r.second_try.min_dihedral_second : r.second_try.min_dihedral_first, 1e-9);
+  EXPECT_GE(r.quality.min_dihedral.min,
+            std::max(r.second_try.min_dihedral_first, r.second_try.min_dihedral_second) - 0.1);
+  EXPECT_NEAR(r.quality.volume, r.box_volume, 1e-9 * r.box_volume);
+  EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
+  // At the default aim the mesh reaches it the first time: no second try.
+  SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult d,
+                          BuildVolumeMesh(Square(4, 15, 10, 4), {20, 20, 20}, {}, {}));
+  EXPECT_GE(d.quality.min_dihedral.min, 10);
+  EXPECT_FALSE(d.second_try.tried);
+}
+
 TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   // Two sheets meeting in an edge at 5 degrees: the tetrahedra in that wedge can do no
   // better, the report says so, and no refinement round is spent on it.
@@ -525,6 +553,7 @@ TEST(VolumeMesherTest, SliversTheInputForcesAreReportedAndNotRefined) {
   EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
   EXPECT_EQ(r.sliver_refinement.rounds, 0u);
   EXPECT_THAT(r.sliver_refinement.stopped, HasSubstr("narrowest wedge"));
+  EXPECT_FALSE(r.second_try.tried) << "no other mesh of this input does better";
   // Never silent: the report and the CLI say the angle, where and why.
   ASSERT_TRUE(r.angle_warning.has_value());
   EXPECT_DOUBLE_EQ(r.angle_warning->degrees, r.quality.min_dihedral.min);

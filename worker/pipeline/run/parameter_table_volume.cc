@@ -25,7 +25,8 @@ std::vector<ParamRow> VolumeMeshRows() {
   rows.push_back(Number("tet.time_limit_seconds", SM_MEMBER(volume.tetgen.time_limit_seconds),
                         "(0, 86400]", "seconds",
                         "the volume stage's time: TetGen is stopped beyond it (an error: no "
-                        "mesh), the improvement and the sliver rounds keep what they reached"));
+                        "mesh), the improvement and the sliver rounds keep what they reached; "
+                        "a second try from moved seeds runs only where half of it is left"));
   rows.push_back(Integer("tet.memory_limit_bytes", SM_MEMBER(volume.tetgen.memory_limit_bytes),
                          "[67108864, 1099511627776]", "bytes", "TetGen's memory limit"));
   rows.push_back(Local(Text("tet.program", SM_MEMBER(volume.tetgen.program),

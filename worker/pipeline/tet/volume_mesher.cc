@@ -407,6 +407,7 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
   // rounds (the improvement alone ran 43 s past a 20 s limit). The improvement and a round
   // stop between operations, so a mesh cut short there is whole and kept; TetGen cut short
   // leaves none.
+  const absl::Time start = absl::Now();
   DeadlineObserver clock(progress.observer(),
                          absl::Now() + absl::Seconds(options.tetgen.time_limit_seconds));
   const Progress timed = progress.WithObserver(&clock);
@@ -439,9 +440,15 @@ absl::StatusOr<VolumeMeshResult> BuildInPlacement(const TriangleMesh& surface, c
     if (!at_limit(st)) return st;
     r.sliver_refinement.stopped = limit_reached;
   }
-  if (absl::Status st =
-          TryAgainFromMovedSeeds(surface_plc, options, timed.Sub(0.99, 0.995), &plc, &r);
-      !st.ok()) {
+  // A second try is made only where the time limit leaves room for one as long as the first.
+  const absl::Duration took = absl::Now() - start;
+  if (took > absl::Seconds(options.tetgen.time_limit_seconds) - took) {
+    if (MeasureQuality(r.mesh).min_dihedral.min < options.tetgen.min_dihedral_degrees) {
+      r.second_try.stopped = absl::StrCat("no room for it within ", limit_reached);
+    }
+  } else if (absl::Status st =
+                 TryAgainFromMovedSeeds(surface_plc, options, timed.Sub(0.99, 0.995), &plc, &r);
+             !st.ok()) {
     if (!at_limit(st)) return st;
     r.second_try.stopped = limit_reached;
   }

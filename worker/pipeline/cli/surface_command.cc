@@ -56,6 +56,16 @@ void PrintVolumeMesh(const VolumeMeshStats& v, std::ostream& out) {
   } else if (absl::StartsWith(v.sliver_refinement.stopped, "tet.time_limit_seconds")) {
     out << "  warning   the sliver rounds stopped at tet.time_limit_seconds\n";
   }
+  if (v.second_try.tried) {
+    out << absl::StrFormat("  2nd try   from moved lattice seeds: min %.2f° then %s; %s kept\n",
+                           v.second_try.min_dihedral_first,
+                           v.second_try.stopped.empty()
+                               ? absl::StrFormat("%.2f°", v.second_try.min_dihedral_second)
+                               : absl::StrCat("not finished (", v.second_try.stopped, ")"),
+                           v.second_try.kept ? "the second" : "the first");
+  } else if (!v.second_try.stopped.empty()) {
+    out << "  2nd try   not made: " << v.second_try.stopped << "\n";
+  }
   if (v.delivered_similarity) {
     out << absl::StrFormat("  sheets    as the volume mesh has them: similarity %.4f\n",
                            *v.delivered_similarity);

@@ -4,10 +4,13 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <random>
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
+#include "absl/time/clock.h"
+#include "absl/time/time.h"
 
 namespace sheetmesh::server {
 
@@ -76,7 +79,17 @@ absl::StatusOr<PgResult> PgConnection::Query(const std::string& sql,
   if (state != nullptr && std::strcmp(state, "23505") == 0) {
     return absl::AlreadyExistsError(absl::StrCat(where(), ": ", msg));
   }
+  // deadlock_detected, serialization_failure: the transaction was rolled back and may run
+  // again (PgPool::Transaction does).
+  if (state != nullptr && (std::strcmp(state, "40P01") == 0 || std::strcmp(state, "40001") == 0)) {
+    return absl::AbortedError(absl::StrCat(where(), ": ", msg, " (in: ", sql.substr(0, 120), ")"));
+  }
   return absl::InternalError(absl::StrCat(where(), ": ", msg, " (in: ", sql.substr(0, 120), ")"));
+}
+
+void PgPool::PauseBeforeAttempt(int attempt) {
+  static thread_local std::minstd_rand gen(std::random_device{}());
+  absl::SleepFor(absl::Milliseconds(std::uniform_real_distribution<double>(5, 20)(gen) * attempt));
 }
 
 absl::StatusOr<std::unique_ptr<PgPool>> PgPool::Open(const std::string& conninfo, int size) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/status/status.h"
 #include "absl/status/statusor.h"
 
 typedef struct pg_conn PGconn;
@@ -92,9 +93,30 @@ class PgPool {
   };
   absl::StatusOr<Lease> Get();
 
-  // Runs `body` in a transaction (BEGIN ... COMMIT, ROLLBACK on error).
+  // Runs `body` in a transaction (BEGIN ... COMMIT, ROLLBACK on error). Where PostgreSQL
+  // rolls it back as a deadlock's victim or for a serialization failure (kAborted from
+  // Query: two replicas finishing and requeueing the same jobs), the whole transaction runs
+  // again, up to kTransactionAttempts times, a little later each time: `body` must set what
+  // it hands out afresh on every run.
   template <class F>
   absl::Status Transaction(F&& body) {
+    absl::Status st;
+    for (int attempt = 0; attempt < kTransactionAttempts; ++attempt) {
+      if (attempt > 0) PauseBeforeAttempt(attempt);
+      st = TransactionOnce(body);
+      if (!absl::IsAborted(st)) return st;
+    }
+    return st;
+  }
+  static constexpr int kTransactionAttempts = 5;
+
+  const std::string& where() const { return where_; }
+
+ private:
+  PgPool(std::string conninfo, std::string where, int size)
+      : conninfo_(std::move(conninfo)), where_(std::move(where)), size_(size) {}
+  template <class F>
+  absl::Status TransactionOnce(F& body) {
     absl::StatusOr<Lease> c = Get();
     if (!c.ok()) return c.status();
     if (absl::Status st = (*c)->Exec("BEGIN"); !st.ok()) return st;
@@ -105,12 +127,9 @@ class PgPool {
     }
     return (*c)->Exec("COMMIT");
   }
-
-  const std::string& where() const { return where_; }
-
- private:
-  PgPool(std::string conninfo, std::string where, int size)
-      : conninfo_(std::move(conninfo)), where_(std::move(where)), size_(size) {}
+  // Sleeps a few milliseconds, more for each attempt and drawn at random, so two replicas
+  // that deadlocked do not meet again at once.
+  static void PauseBeforeAttempt(int attempt);
   absl::StatusOr<std::unique_ptr<PgConnection>> Connect();
   void Return(std::unique_ptr<PgConnection> c);
 

@@ -36,7 +36,11 @@ class VertexInserter {
   bool InsertNear(uint32_t t);
 
   // Whether a new vertex may go on a sheet face or edge (where no point off them will do).
-  void AllowSheetSplits(bool allow) { sheet_splits_ = allow; }
+  // Allowing them forgets the insertions that failed without them.
+  void AllowSheetSplits(bool allow) {
+    if (allow && !sheet_splits_) ed_.ClearFailed();
+    sheet_splits_ = allow;
+  }
 
   uint64_t facet_splits() const { return facet_splits_; }  // new vertices on sheet faces
   uint64_t edge_splits() const { return edge_splits_; }    // on sheet edges

@@ -5,6 +5,7 @@
 #ifndef SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_EDITOR_H_
 #define SHEETMESH_WORKER_PIPELINE_TET_TET_MESH_EDITOR_H_
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <utility>
@@ -49,6 +50,8 @@ class TetMeshEditor {
   // Whether an insertion was tried at t and failed since t last changed.
   bool failed(uint32_t t) const { return failed_[t]; }
   void set_failed(uint32_t t) { failed_[t] = 1; }
+  // Forgets every failed insertion (when the insertion may do more than it could).
+  void ClearFailed() { std::fill(failed_.begin(), failed_.end(), 0); }
   const std::vector<uint32_t>& star(uint32_t v) const { return star_[v]; }
   double Quality(const Tet& t) const;
 

@@ -323,9 +323,9 @@ absl::Status RefineAtSlivers(const VolumeMeshOptions& options, const Progress& p
   return absl::OkStatus();
 }
 
-// Where the mesh stays under tet.min_dihedral and the input does not force it (its
-// narrowest wedge is wider), TetGen, the improvement and the sliver rounds run once more on
-// the PLC TetGen began with, its lattice seeds moved (a twentieth of a voxel: the lattice's
+// Where the mesh stays under tet.min_dihedral, the improvement is on and the input does not
+// force it (its narrowest wedge is wider), TetGen, the improvement and the sliver rounds run once
+// more on the PLC TetGen began with, its lattice seeds moved (a twentieth of a voxel: the lattice's
 // points lie on common spheres, so TetGen's mesh of them changes throughout), and the
 // better mesh is kept. What the improvement reaches turns on details no rule foresees (the
 // rough network at r = 4: 12.8° from one mesh of its PLC, 5.9° from another), so a second
@@ -340,7 +340,8 @@ absl::Status TryAgainFromMovedSeeds(const Plc& first_plc, const VolumeMeshOption
   constexpr double kWedgeTolerance = 1e-6;
   const double aim = options.tetgen.min_dihedral_degrees;
   const double first = MeasureQuality(r->mesh).min_dihedral.min;
-  if (!(aim > 0) || !(first < aim) || first_plc.seed_points == 0 || r->mesh.tets.empty()) {
+  if (!(aim > 0) || !(first < aim) || first_plc.seed_points == 0 || r->mesh.tets.empty() ||
+      options.improve.passes == 0) {
     return absl::OkStatus();
   }
   if (first >= MeasureWedges(first_plc, aim).narrowest_degrees - kWedgeTolerance) {

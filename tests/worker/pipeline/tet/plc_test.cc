@@ -467,7 +467,7 @@ TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
   MeshWithAndWithout(m, {40, 40, 22}, with, without, &r, &off);
   EXPECT_EQ(off.sliver_refinement.rounds, 0u);
   EXPECT_LT(off.quality.min_dihedral.min, 10);
-  EXPECT_GE(r.sliver_refinement.rounds, 1u);
+  EXPECT_GE(r.sliver_refinement.rounds, 1u) << r.sliver_refinement.stopped;
   EXPECT_GT(r.sliver_refinement.split_edges, 0u);
   EXPECT_GT(r.sliver_refinement.slivers_on_sheets, 0u);
   EXPECT_DOUBLE_EQ(r.sliver_refinement.min_dihedral_before, off.quality.min_dihedral.min);
@@ -480,7 +480,9 @@ TEST(PlcTest, SliversPinnedBetweenTwoSheetsAreRefinedAway) {
   SM_ASSERT_OK_AND_ASSIGN(const VolumeMeshResult moved,
                           BuildVolumeMesh(m, {40, 40, 22}, {}, moving));
   EXPECT_GT(moved.improvement.moved_sheet_vertices, 0u);
-  EXPECT_LE(moved.improvement.max_sheet_move, 1 + 1e-9);
+  // (1 voxel, and that again for each sliver round kept: each starts from the sheets as the
+  // improvement left them.)
+  EXPECT_LE(moved.improvement.max_sheet_move, (1 + moved.sliver_refinement.rounds) * (1 + 1e-9));
   EXPECT_GT(moved.quality.min_dihedral.min, off.quality.min_dihedral.min + 2);
   EXPECT_EQ(moved.conformity.conforming, moved.conformity.sheet_triangles);
 }

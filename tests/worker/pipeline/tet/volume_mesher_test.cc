@@ -123,8 +123,8 @@ TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsSt
   split.plc.wedge_degrees = 0;
   split.plc.zip_rims = false;
   split.improve.sheet_move_voxels = 0;
-  split.plc.grading = 0.4;   // the lattice this case was built at
-  split.sliver_rounds = 0;   // the improvement's splits alone
+  split.plc.grading = 0.4;  // the lattice this case was built at
+  split.sliver_rounds = 0;  // the improvement's splits alone
   VolumeMeshOptions whole = split;
   whole.improve.split_sheets_below_degrees = 0;
   SM_ASSERT_OK_AND_ASSIGN(VolumeMeshResult a, BuildVolumeMesh(sheets, dims, {}, whole));

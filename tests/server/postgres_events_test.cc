@@ -84,23 +84,9 @@ TEST(PgEventRelayTest, AnUnreachableDatabaseIsAClearError) {
   EXPECT_THAT(relay.status().message(), HasSubstr("unreachable"));
 }
 
-class PgEventRelayClusterTest : public ::testing::Test {
+class PgEventRelayClusterTest : public sheetmesh::testing::ClusterDatabaseTest {
  protected:
-  void SetUp() override {
-    cluster_ = ClusterConninfo();
-    if (cluster_.empty()) GTEST_SKIP() << sheetmesh::testing::kNoClusterMessage;
-    static std::atomic<int> n{0};
-    db_ = absl::StrCat("events_", getpid(), "_", n++);
-    std::string error;
-    ASSERT_TRUE(Admin(cluster_, "CREATE DATABASE " + db_, &error)) << error;
-    conninfo_ = absl::StrCat(cluster_, " dbname=", db_);
-  }
-  void TearDown() override {
-    if (db_.empty()) return;
-    std::string error;
-    EXPECT_TRUE(Admin(cluster_, "DROP DATABASE " + db_ + " WITH (FORCE)", &error)) << error;
-  }
-  std::string cluster_, db_, conninfo_;
+  PgEventRelayClusterTest() : ClusterDatabaseTest("events") {}
 };
 
 TEST_F(PgEventRelayClusterTest, WhatOneServerNotifiesTheOthersWatchersHearWithItsStages) {

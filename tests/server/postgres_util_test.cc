@@ -5,7 +5,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <thread>
@@ -17,27 +16,11 @@
 namespace sheetmesh::server {
 namespace {
 
-using sheetmesh::testing::Admin;
-using sheetmesh::testing::ClusterConninfo;
 using ::testing::HasSubstr;
 
-class PgPoolClusterTest : public ::testing::Test {
+class PgPoolClusterTest : public sheetmesh::testing::ClusterDatabaseTest {
  protected:
-  void SetUp() override {
-    cluster_ = ClusterConninfo();
-    if (cluster_.empty()) GTEST_SKIP() << sheetmesh::testing::kNoClusterMessage;
-    static std::atomic<int> n{0};
-    db_ = absl::StrCat("pool_", getpid(), "_", n++);
-    std::string error;
-    ASSERT_TRUE(Admin(cluster_, "CREATE DATABASE " + db_, &error)) << error;
-    conninfo_ = absl::StrCat(cluster_, " dbname=", db_);
-  }
-  void TearDown() override {
-    if (db_.empty()) return;
-    std::string error;
-    EXPECT_TRUE(Admin(cluster_, "DROP DATABASE " + db_ + " WITH (FORCE)", &error)) << error;
-  }
-  std::string cluster_, db_, conninfo_;
+  PgPoolClusterTest() : ClusterDatabaseTest("pool") {}
 };
 
 TEST_F(PgPoolClusterTest, ADeadlocksVictimRunsAgainAndBothTransactionsCommit) {

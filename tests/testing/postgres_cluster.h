@@ -4,11 +4,15 @@
 #ifndef SHEETMESH_TESTS_TESTING_POSTGRES_CLUSTER_H_
 #define SHEETMESH_TESTS_TESTING_POSTGRES_CLUSTER_H_
 
+#include <gtest/gtest.h>
 #include <libpq-fe.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <utility>
 
 namespace sheetmesh::testing {
 
@@ -41,6 +45,31 @@ inline bool Admin(const std::string& conninfo, const std::string& sql, std::stri
   PQfinish(c);
   return ok;
 }
+
+// A fresh database of the cluster for each test, named from `prefix`, dropped after; the
+// test skips without the cluster. conninfo_ reaches it.
+class ClusterDatabaseTest : public ::testing::Test {
+ protected:
+  explicit ClusterDatabaseTest(std::string prefix) : prefix_(std::move(prefix)) {}
+  void SetUp() override {
+    cluster_ = ClusterConninfo();
+    if (cluster_.empty()) GTEST_SKIP() << kNoClusterMessage;
+    static std::atomic<int> n{0};
+    db_ = prefix_ + "_" + std::to_string(getpid()) + "_" + std::to_string(n++);
+    std::string error;
+    ASSERT_TRUE(Admin(cluster_, "CREATE DATABASE " + db_, &error)) << error;
+    conninfo_ = cluster_ + " dbname=" + db_;
+  }
+  void TearDown() override {
+    if (db_.empty()) return;
+    std::string error;
+    EXPECT_TRUE(Admin(cluster_, "DROP DATABASE " + db_ + " WITH (FORCE)", &error)) << error;
+  }
+  std::string cluster_, db_, conninfo_;
+
+ private:
+  const std::string prefix_;
+};
 
 }  // namespace sheetmesh::testing
 

@@ -136,37 +136,48 @@ bool SheetFacesFollow(const TetMeshEditor& ed, uint32_t u, uint32_t w) {
   return true;
 }
 
+// The best of the contractions tried (the one whose new tetrahedra have the best worst),
+// and its making: u's star goes, the fill comes.
+struct BestContraction {
+  uint32_t u = UINT32_MAX, w = UINT32_MAX;
+  double worst = -1e300;
+  std::vector<Tet> fill, trial;
+
+  void Consider(const TetMeshEditor& ed, uint32_t from, uint32_t to, const Star& star) {
+    const double now = Contracted(ed, from, to, star, worst, &trial);
+    if (now < 0) return;
+    worst = now;
+    u = from;
+    w = to;
+    fill.swap(trial);
+  }
+  bool Apply(TetMeshEditor& ed) const {
+    if (u == UINT32_MAX) return false;
+    const std::vector<uint32_t> star = ed.star(u);
+    for (uint32_t s : star) ed.Kill(s);
+    for (const Tet& x : fill) ed.Add(x);
+    return true;
+  }
+};
+
 }  // namespace
 
 bool ContractEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t) {
   const Tet tet = ed.tet(t);
-  uint32_t best_u = UINT32_MAX;
-  std::vector<Tet> best_fill, fill;
-  double best = -1e300;
+  BestContraction best;
   for (const uint32_t u : tet) {
     if (!freedom.interior(u)) continue;
     const Star star = StarOf(ed, u);
     for (const uint32_t w : tet) {
-      if (w == u) continue;
-      const double now = Contracted(ed, u, w, star, best, &fill);
-      if (now < 0) continue;
-      best = now;
-      best_u = u;
-      best_fill.swap(fill);
+      if (w != u) best.Consider(ed, u, w, star);
     }
   }
-  if (best_u == UINT32_MAX) return false;
-  const std::vector<uint32_t> star = ed.star(best_u);
-  for (uint32_t s : star) ed.Kill(s);
-  for (const Tet& x : best_fill) ed.Add(x);
-  return true;
+  return best.Apply(ed);
 }
 
 bool ContractSheetEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32_t t) {
   const Tet tet = ed.tet(t);
-  uint32_t best_u = UINT32_MAX, best_w = UINT32_MAX;
-  std::vector<Tet> best_fill, fill;
-  double best = -1e300;
+  BestContraction best;
   for (const uint32_t u : tet) {
     if (!freedom.slides(u)) continue;
     const Star star = StarOf(ed, u);
@@ -179,20 +190,11 @@ bool ContractSheetEdgeOf(TetMeshEditor& ed, const VertexFreedom& freedom, uint32
     std::sort(link.begin(), link.end());
     link.erase(std::unique(link.begin(), link.end()), link.end());
     for (const uint32_t w : link) {
-      if (!SheetFacesFollow(ed, u, w)) continue;
-      const double now = Contracted(ed, u, w, star, best, &fill);
-      if (now < 0) continue;
-      best = now;
-      best_u = u;
-      best_w = w;
-      best_fill.swap(fill);
+      if (SheetFacesFollow(ed, u, w)) best.Consider(ed, u, w, star);
     }
   }
-  if (best_u == UINT32_MAX) return false;
-  const std::vector<uint32_t> star = ed.star(best_u);
-  for (uint32_t s : star) ed.Kill(s);
-  for (const Tet& x : best_fill) ed.Add(x);
-  ed.ContractSheetFaces(best_u, best_w);
+  if (!best.Apply(ed)) return false;
+  ed.ContractSheetFaces(best.u, best.w);
   return true;
 }
 

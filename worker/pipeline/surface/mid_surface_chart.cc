@@ -69,6 +69,17 @@ bool Chart::InBox(int32_t i, int32_t j) const {
   return a >= 0 && b >= 0 && a < extent[(info_.axis + 1) % 3] && b < extent[(info_.axis + 2) % 3];
 }
 
+bool Chart::OnBoxFace(const Vec3& p) const {
+  const double extent[3] = {static_cast<double>(dims_.nx), static_cast<double>(dims_.ny),
+                            static_cast<double>(dims_.nz)};
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(p[k] + 0.5) < kOnBoxFace || std::abs(p[k] - extent[k] + 0.5) < kOnBoxFace) {
+      return true;
+    }
+  }
+  return false;
+}
+
 bool Chart::HasAll4(int32_t i, int32_t j) const {
   return At(i - 1, j) && At(i + 1, j) && At(i, j - 1) && At(i, j + 1);
 }
@@ -429,18 +440,8 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
   // chart's own towards the line, within the junction's extent and the line's own grid box.
   // An end of the line on the box bounds nothing: the box does (the face it ends on need
   // not be across the line).
-  auto on_box = [&](const Vec3& p) {
-    const double extent[3] = {static_cast<double>(dims_.nx), static_cast<double>(dims_.ny),
-                              static_cast<double>(dims_.nz)};
-    for (int k = 0; k < 3; ++k) {
-      if (std::abs(p[k] + 0.5) < 1e-6 || std::abs(p[k] - extent[k] + 0.5) < 1e-6) {
-        return true;
-      }
-    }
-    return false;
-  };
-  const bool open0 = on_box(line.point + line.direction * line.t0);
-  const bool open1 = on_box(line.point + line.direction * line.t1);
+  const bool open0 = OnBoxFace(line.point + line.direction * line.t0);
+  const bool open1 = OnBoxFace(line.point + line.direction * line.t1);
   auto in_extent = [&](int32_t i, int32_t j) {
     const double s = here.Side(i, j);
     if (s < kZipGap || s > band || !InBox(i, j)) return false;

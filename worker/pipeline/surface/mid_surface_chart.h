@@ -134,14 +134,20 @@ class Chart {
 
  private:
   // Joins a chain of rim vertices (t along the line, vertex) to the line's samples over the
-  // same stretch by a strip, each step taking the shorter next diagonal.
-  static void ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const JunctionLine& line,
-                        const std::function<uint32_t(int)>& sample,
-                        const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
-                        TriangleMesh* mesh);
+  // same stretch by a strip, each step taking the shorter next diagonal; an end of the line
+  // on the box that the chain stops short of by less than a step and a voxel is taken too.
+  void ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const JunctionLine& line,
+                 const std::function<uint32_t(int)>& sample,
+                 const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
+                 TriangleMesh* mesh) const;
   bool HasAll4(int32_t i, int32_t j) const;
   // Whether grid position (i, j) lies within the volume across the axis.
   bool InBox(int32_t i, int32_t j) const;
+  // Whether p lies on a face of the box [-0.5, n - 0.5] (a junction line's end there),
+  // within kOnBoxFace: lines merged from an X's halves end that near it, and the mesh's
+  // clip to the box puts such a vertex on the face.
+  static constexpr double kOnBoxFace = 0.1;
+  bool OnBoxFace(const Vec3& p) const;
   // Grows the grid to hold grid positions lo..hi (which may be negative: the origin moves).
   void Grow(int32_t lo_i, int32_t lo_j, int32_t hi_i, int32_t hi_j);
   void Columns(std::vector<Index3> voxels);

@@ -150,16 +150,25 @@ void Chart::Mesh(std::vector<JunctionLine>* lines, TriangleMesh* mesh) {
 void Chart::ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const JunctionLine& line,
                       const std::function<uint32_t(int)>& sample,
                       const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
-                      TriangleMesh* mesh) {
+                      TriangleMesh* mesh) const {
   if (rim.size() < 2) return;
   // The chain runs as the chart's faces' boundary edges do; the strip takes each such edge
   // reversed. Along the line the chain may run either way.
   const bool reversed = rim.front().first > rim.back().first;
   if (reversed) std::reverse(rim.begin(), rim.end());
-  const int k0 = std::clamp(static_cast<int>(std::ceil((rim.front().first - line.t0) / line.step)),
-                            0, line.samples() - 1);
-  const int k1 = std::clamp(static_cast<int>(std::floor((rim.back().first - line.t0) / line.step)),
-                            0, line.samples() - 1);
+  int k0 = std::clamp(static_cast<int>(std::ceil((rim.front().first - line.t0) / line.step)), 0,
+                      line.samples() - 1);
+  int k1 = std::clamp(static_cast<int>(std::floor((rim.back().first - line.t0) / line.step)), 0,
+                      line.samples() - 1);
+  // Where the line ends on the box, the sheets meet the face there: a rim that stops short of
+  // the end by less than a step and a voxel (its last column's corner) runs on to it, so the
+  // junction reaches the face rather than ending a fraction of a voxel inside, beside the
+  // rim's own vertex on the face (a needle the volume mesh keeps as a sliver).
+  const int last = line.samples() - 1;
+  if (k0 > 0 && OnBoxFace(line.At(0)) && rim.front().first - line.t0 <= line.step + 1.0) k0 = 0;
+  if (k1 < last && OnBoxFace(line.At(last)) && line.t1 - rim.back().first <= line.step + 1.0) {
+    k1 = last;
+  }
   if (k1 < k0) return;
   // The strip, oriented as the chart's faces are: (rim r + 1, rim r, sample) on the chain's
   // own run.

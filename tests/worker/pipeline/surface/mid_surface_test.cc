@@ -123,6 +123,18 @@ TEST_P(JunctionTest, TheSheetsMeetOnTheTrueLineAtTheirAngle) {
   }
   std::set<int32_t> on_line(line.pieces.begin(), line.pieces.end());
   EXPECT_EQ(on_line.size(), t_junction ? 3u : 4u);
+  // The line runs through the box: both its ends are vertices of the mesh on faces of the
+  // box, where the sheets meet the face (not a fraction of a voxel inside).
+  for (const int k : {0, line.samples() - 1}) {
+    ASSERT_NE(line.vertex_of[k], UINT32_MAX) << "end " << k << " is no vertex of the mesh";
+    const Vec3& end = mid->mesh.vertices[line.vertex_of[k]];
+    double off = 1e300;
+    for (int a = 0; a < 3; ++a) {
+      const double x = a == 0 ? end.x : a == 1 ? end.y : end.z;
+      off = std::min({off, std::abs(x + 0.5), std::abs(x - (n - 0.5))});
+    }
+    EXPECT_LT(off, 1e-9) << "end " << k << " at " << end.x << " " << end.y << " " << end.z;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Steep, JunctionTest,

@@ -90,6 +90,54 @@ TEST(SurfaceBuilderTest, TiltedSlabKeepsEveryVertexOnTheSheet) {
   EXPECT_GE(b.score.similarity, 0.9);
 }
 
+TEST(SurfaceBuilderTest, AMidSurfaceDecimatedToAFewTrianglesKeepsTheCornersOfItsOutline) {
+  // A tilted slab cut by the box: its outline is a polygon whose corners lie on edges of the
+  // box. However few the triangles, each corner stays, so the sheet keeps its whole area.
+  const Vec3 n = Normalized(Vec3(1, 0.5, 1.5));
+  const Vec3 c(23.5, 20.0, 26.0);
+  const VoxelSet set = ShapeSet(Dims{48, 48, 48}, [&](double x, double y, double z) {
+    return std::abs(Dot(Vec3(x, y, z) - c, n)) <= 2.0;
+  });
+  SurfaceOptions o;
+  o.method = SurfaceMethod::kMid;
+  o.triangles = 100000;  // no decimation
+  const Built whole = Build(set, 4, o);
+  o.triangles = 12;
+  const Built coarse = Build(set, 4, o);
+  ASSERT_LE(coarse.surface.mesh.num_faces(), 14u);
+  auto area = [](const TriangleMesh& m) {
+    double a = 0;
+    for (size_t f = 0; f < m.num_faces(); ++f) a += Area(Corners(m, f));
+    return a;
+  };
+  // The box faces a point lies on, as bits (x low, x high, y low, ...).
+  auto faces_of = [](const Vec3& v) {
+    int bits = 0, k = 0;
+    for (const double x : {v.x, v.y, v.z}) {
+      bits |= (std::abs(x + 0.5) < 1e-6 ? 1 : 0) << (2 * k);
+      bits |= (std::abs(x - 47.5) < 1e-6 ? 1 : 0) << (2 * k + 1);
+      ++k;
+    }
+    return bits;
+  };
+  auto two_or_more = [](int bits) { return bits != 0 && (bits & (bits - 1)) != 0; };
+  int corners = 0;
+  for (const Vec3& c : whole.surface.mesh.vertices) {
+    const int at = faces_of(c);
+    if (!two_or_more(at)) continue;
+    ++corners;
+    // The corner stays on its edge of the box (the fits may slide it along the edge).
+    const auto& vs = coarse.surface.mesh.vertices;
+    EXPECT_TRUE(
+        std::any_of(vs.begin(), vs.end(),
+                    [&](const Vec3& v) { return (faces_of(v) & at) == at && Norm(v - c) < 1.0; }))
+        << "corner " << c.x << "," << c.y << "," << c.z << " cut off";
+  }
+  EXPECT_GE(corners, 2);
+  EXPECT_NEAR(area(coarse.surface.mesh), area(whole.surface.mesh), 0.01 * area(whole.surface.mesh));
+  EXPECT_GE(coarse.score.similarity, whole.score.similarity - 0.02);
+}
+
 TEST(SurfaceBuilderTest, CylindricalShellKeepsEveryVertexOnTheSheet) {
   const double r = 30, t = 5;
   const Built b = Build(testing::CylinderShell({80, 80, 40}, 40, 40, r, t, 3, 37), 7);

@@ -79,7 +79,7 @@ std::vector<ParamRow> VolumeMeshRows() {
   rows.push_back(Number("plc.lattice", SM_MEMBER(volume.plc.lattice), "0 | [0.25, 8]", "",
                         "seed a graded lattice off the sheets, spaced this many median sheet "
                         "edges (0: none)"));
-  rows.push_back(Number("plc.grading", SM_MEMBER(volume.plc.grading), "[0.1, 2]", "",
+  rows.push_back(Number("plc.grading", SM_MEMBER(volume.plc.grading), "[0.1, 4]", "",
                         "how fast the lattice's spacing grows away from the sheets (it doubles "
                         "every 1 / grading spacings)"));
   rows.push_back(Integer("improve.passes", SM_MEMBER(volume.improve.passes), "[0, 100]", "",

@@ -19,17 +19,15 @@ namespace {
 // as the sheet triangles and their refinement decide.
 //
 // Each change of level leaves a layer of worse tetrahedra where the two spacings meet,
-// and so does each box face, where the face's points meet the lattice's rows. At the
-// default grading the band is 2.5 spacings wide, not 2, so fewer levels meet within the
-// box (radius aspect mean, DPM, `volume` path: 0.832 -> 0.845 for 11% more tetrahedra;
-// bench/RESULTS.md). A level whose spacing is over a quarter of the box's thinnest side is
-// not used (its finer neighbour fills the rest): between the margins on both sides it
-// would have room for a row or two only, and the box's points and those rows, far apart,
-// make poor tetrahedra across the whole thin side (NETL, 42 voxels thick: 0.826 -> 0.843).
-// Otherwise the levels go on to the box's scale.
+// and so does each box face, where the face's points meet the lattice's rows. A level
+// whose spacing is over half the box's thinnest side is not used (its finer neighbour
+// fills the rest): between the margins on both sides it would have room for a row or two
+// only. Earlier a quarter: NETL's box is 42 voxels thick, and at a quarter its lattice had
+// one level, 36 tetrahedra per sheet triangle at r = 5; at half, 15 with the same smallest
+// angle (bench/RESULTS.md, issue 65). Otherwise the levels go on to the box's scale.
 constexpr double kLatticeKeep = 0.6;
 constexpr int kLatticeMaxLevels = 20;
-constexpr double kLatticeFit = 4;  // a level's spacing fits this many times in the box
+constexpr double kLatticeFit = 2;  // a level's spacing fits this many times in the box
 
 // Walks the seeding's levels, finest first: calls candidates(h, in_band) with level l's
 // spacing h, where in_band(p) tells whether p's distance to the sheets lies in that

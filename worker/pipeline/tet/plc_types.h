@@ -176,9 +176,11 @@ struct PlcOptions {
   // How fast the lattice's spacing grows with the distance from the sheets: each level
   // doubles the spacing after 1 / grading spacings of its own (1: every spacing). Higher
   // grades faster, with fewer tetrahedra and a wider layer of worse ones where two levels
-  // meet. At 1 the benchmark volumes take about 40% fewer tetrahedra than at 0.4 (the
-  // earlier default), their mean dihedral angle still over 50° (bench/RESULTS.md, issue 41).
-  double grading = 1.0;
+  // meet. At 1 the benchmark volumes took about 40% fewer tetrahedra than at 0.4 (issue
+  // 41); at 2, with fewer vertices inserted by the improvement, the volume mesh sweep's
+  // median went from 21 to 12 tetrahedra per sheet triangle, every run's smallest angle
+  // still at 10° or more where it was (bench/RESULTS.md, issue 65).
+  double grading = 2.0;
   // Seeds the box's edges and faces with points, graded like the lattice (its spacing, or
   // the median edge without one), embedded in the box facets. For a TetGen that may add
   // no points on facets (-Y), which would otherwise keep each box face as two triangles.

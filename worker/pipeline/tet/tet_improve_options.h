@@ -18,13 +18,18 @@ struct TetImproveOptions {
   // that raises the worst tetrahedron of the cavity. This mends slivers whose vertices all
   // lie on sheets, which neither flips nor smoothing can, and raises the mean most of all
   // the operations (DPM: mean 44.4° at 20, 48.4° at 50, for 32% more tetrahedra and 4×
-  // the time; bench/RESULTS.md). Lower is faster with fewer tetrahedra.
-  double insert_below_degrees = 50.0;
+  // the time; bench/RESULTS.md). Lower is faster with fewer tetrahedra: at 40 (and 25
+  // after the first pass) with the lattice graded at 2, the volume mesh sweep's median fell
+  // from 21 to 13 tetrahedra per sheet triangle and the stage from 29x to 18x TetGen's
+  // time, every run that reached 10 degrees still there, the median mean dihedral 47.9
+  // degrees against 50.9 (bench/RESULTS.md, issue 65).
+  double insert_below_degrees = 40.0;
   // After the first pass, only tetrahedra below this (or insert_below_degrees, if lower)
   // get a new vertex. Most later tries fail: on the 192³ phantom 1 in 77 between 40° and 50°
   // in the second pass, against 1 in 28 in the first; stopping them there takes a quarter off
-  // the improvement's time for 0.06°–0.25° of mean (bench/RESULTS.md).
-  double insert_again_below_degrees = 40.0;
+  // the improvement's time for 0.06°–0.25° of mean (bench/RESULTS.md); 25 with the
+  // defaults above.
+  double insert_again_below_degrees = 25.0;
   // Smoothing first raises the worst tetrahedron of a vertex's star, then moves the vertex
   // to raise the star's mean shape (towards the volume-weighted mean of the circumcentres,
   // as in optimal Delaunay smoothing, and up the mean's gradient; see radius_weight). A

@@ -139,6 +139,7 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
   const TriangleMesh sheet = Square(10, 50, 30, 8);
   PlcOptions o;
   o.lattice = 1.0;
+  o.grading = 1.0;
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {60, 60, 60}, {}, o));
   EXPECT_NEAR(plc.lattice_spacing, 5.0, 1e-9);
   ASSERT_GT(plc.seed_points, 0u);
@@ -149,9 +150,10 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
       for (uint32_t v : poly) EXPECT_LT(v, first_seed) << "a seed on a facet";
     }
   }
-  // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); level 0 (spacing
-  // 5) reaches 0.6 * 5 + 2.5 * 5 = 15.5 from the sheet, level 1 (spacing 10) fills the rest
-  // (level 2's spacing, 20, is over a quarter of the box's 60).
+  // Seeds stay 0.6 spacings off the sheet and the box (box [-0.5, 59.5]^3); at grading 1
+  // level 0 (spacing 5) reaches 0.6 * 5 + 5 = 8 from the sheet, levels 1 and 2 (spacings 10
+  // and 20) fill the rest (level 3's spacing, 40, is over half the box's 60): beyond 15.5
+  // every seed is theirs.
   std::vector<Vec3> near, far;
   for (size_t i = first_seed; i < plc.vertices.size(); ++i) {
     const Vec3& p = plc.vertices[i];
@@ -177,29 +179,30 @@ TEST(PlcTest, LatticeSeedsKeepOffTheSheetsAndTheBoxAndCoarsenAway) {
 }
 
 TEST(PlcTest, TheGradedLatticeDoublesItsSpacingEveryBandOutToTheBoxScale) {
-  // Spacing 5 in a 200^3 box: levels of spacing 5, 10, 20 and 40 (80 is over a quarter
-  // of 200). Level 0 starts 0.6 spacings (3) off the sheets; each band is 1 / grading of
-  // its own spacings wide.
+  // Spacing 5 in a 200^3 box: levels of spacing 5, 10, 20, 40 and 80 (160 is over half of
+  // 200). Level 0 starts 0.6 spacings (3) off the sheets; each band is 1 / grading of its
+  // own spacings wide.
   const Vec3 lo{-0.5, -0.5, -0.5}, hi{199.5, 199.5, 199.5};
   const LatticeLevels slow = GradeLattice(lo, hi, 5, 0.4);
-  EXPECT_THAT(slow.spacing, ElementsAre(5, 10, 20, 40));
-  EXPECT_THAT(slow.inner, ElementsAre(3, 15.5, 40.5, 90.5));
+  EXPECT_THAT(slow.spacing, ElementsAre(5, 10, 20, 40, 80));
+  EXPECT_THAT(slow.inner, ElementsAre(3, 15.5, 40.5, 90.5, 190.5));
   EXPECT_DOUBLE_EQ(slow.SpacingAt(2.9), 0);  // TetGen's, next to the sheets
   EXPECT_DOUBLE_EQ(slow.SpacingAt(10), 5);
   EXPECT_DOUBLE_EQ(slow.SpacingAt(20), 10);
   EXPECT_DOUBLE_EQ(slow.SpacingAt(60), 20);
   EXPECT_DOUBLE_EQ(slow.SpacingAt(95), 40);
-  EXPECT_DOUBLE_EQ(slow.SpacingAt(1000), 40);
-  // Grading 1: each band one spacing wide, [3, 8), [8, 18), [18, 38), [38, ...).
+  EXPECT_DOUBLE_EQ(slow.SpacingAt(200), 80);
+  EXPECT_DOUBLE_EQ(slow.SpacingAt(1000), 80);
+  // Grading 1: each band one spacing wide, [3, 8), [8, 18), [18, 38), [38, 78), [78, ...).
   const LatticeLevels fast = GradeLattice(lo, hi, 5, 1.0);
-  EXPECT_THAT(fast.inner, ElementsAre(3, 8, 18, 38));
+  EXPECT_THAT(fast.inner, ElementsAre(3, 8, 18, 38, 78));
   EXPECT_DOUBLE_EQ(fast.SpacingAt(10), 10);
   EXPECT_DOUBLE_EQ(fast.SpacingAt(30), 20);
   EXPECT_DOUBLE_EQ(fast.SpacingAt(50), 40);
-  // A box 2000 across has room for 7 levels (320 fits 4 times in 2000, 640 does not).
+  // A box 2000 across has room for 8 levels (640 fits twice in 2000, 1280 does not).
   const LatticeLevels big = GradeLattice(lo, {1999.5, 1999.5, 1999.5}, 5, 1.0);
-  ASSERT_EQ(big.spacing.size(), 7u);
-  EXPECT_DOUBLE_EQ(big.spacing.back(), 320);
+  ASSERT_EQ(big.spacing.size(), 8u);
+  EXPECT_DOUBLE_EQ(big.spacing.back(), 640);
   // No lattice without a spacing or a grading.
   EXPECT_TRUE(GradeLattice(lo, hi, 0, 1.0).spacing.empty());
   EXPECT_TRUE(GradeLattice(lo, hi, 5, 0).spacing.empty());
@@ -208,28 +211,29 @@ TEST(PlcTest, TheGradedLatticeDoublesItsSpacingEveryBandOutToTheBoxScale) {
 
 TEST(PlcTest, TheSeededLatticeHasTheGradedSpacingAtEachDistance) {
   // The 40 x 40 sheet (median edge 5) at the middle of a 200^3 box, lattice spacing 5 at
-  // grading 1: the seeds beyond 38 voxels belong to the coarsest level (spacing 40), those
+  // grading 1: the seeds between 38 and 78 voxels belong to level 3 (spacing 40), those
   // between 8 and 18 to level 1 (spacing 10); a BCC lattice's nearest neighbours are
-  // sqrt(3)/2 spacings apart.
+  // sqrt(3)/2 spacings apart. (The coarsest level, 80, keeps 48 off the box: it has no
+  // room beyond 78 from this sheet.)
   const TriangleMesh sheet = Square(80, 120, 100, 8);
   PlcOptions o;
   o.lattice = 1.0;
   o.grading = 1.0;
   SM_ASSERT_OK_AND_ASSIGN(Plc plc, BuildPlc(sheet, {200, 200, 200}, {}, o));
-  EXPECT_EQ(plc.lattice_levels, 4u);
+  EXPECT_EQ(plc.lattice_levels, 5u);
   EXPECT_DOUBLE_EQ(plc.lattice_spacing, 5);
-  EXPECT_DOUBLE_EQ(plc.lattice_coarsest, 40);
-  std::vector<Vec3> level1, coarsest;
+  EXPECT_DOUBLE_EQ(plc.lattice_coarsest, 80);
+  std::vector<Vec3> level1, level3;
   for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
     const double d = DistanceToSheets(plc, plc.vertices[i]);
     EXPECT_GT(d, 3.0 - kSlack);
     if (d >= 8 && d < 18) level1.push_back(plc.vertices[i]);
-    if (d >= 38) coarsest.push_back(plc.vertices[i]);
+    if (d >= 38 && d < 78) level3.push_back(plc.vertices[i]);
   }
   ASSERT_GE(level1.size(), 2u);
-  ASSERT_GE(coarsest.size(), 2u);
+  ASSERT_GE(level3.size(), 2u);
   EXPECT_NEAR(ClosestPair(level1), std::sqrt(3.0) / 2 * 10, kSlack);
-  EXPECT_NEAR(ClosestPair(coarsest), std::sqrt(3.0) / 2 * 40, kSlack);
+  EXPECT_NEAR(ClosestPair(level3), std::sqrt(3.0) / 2 * 40, kSlack);
   // A grading of 0.4 keeps each level 2.5 of its spacings wide: more seeds.
   o.grading = 0.4;
   SM_ASSERT_OK_AND_ASSIGN(Plc slow, BuildPlc(sheet, {200, 200, 200}, {}, o));
@@ -237,12 +241,13 @@ TEST(PlcTest, TheSeededLatticeHasTheGradedSpacingAtEachDistance) {
 }
 
 TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
-  // The same sheet at z = 10 in a box 80 x 80 x 20 ([-0.5, 19.5] in z): level 1's spacing,
-  // 10, is over a quarter of 20, so level 0 (spacing 5) fills the whole box, out to 27
-  // voxels from the sheet, where the box 40 thick below has level 1's spacing 10.
+  // The same sheet at z = 10 in a box 80 x 80 x 16 ([-0.5, 15.5] in z): level 1's spacing,
+  // 10, is over half of 16, so level 0 (spacing 5) fills the whole box, out to 27 voxels
+  // from the sheet, where the box 40 thick below has level 1's spacing 10.
   PlcOptions o;
   o.lattice = 1.0;
-  // The seeds beyond level 0's band (15.5 from the sheet).
+  o.grading = 1.0;
+  // The seeds beyond 15.5 from the sheet.
   auto far_seeds = [](const Plc& plc) {
     std::vector<Vec3> far;
     for (size_t i = plc.vertices.size() - plc.seed_points; i < plc.vertices.size(); ++i) {
@@ -250,16 +255,16 @@ TEST(PlcTest, AThinBoxKeepsTheLatticeAtTheSpacingsThatFitIt) {
     }
     return far;
   };
-  SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 20}, {}, o));
+  SM_ASSERT_OK_AND_ASSIGN(Plc thin, BuildPlc(Square(10, 50, 10, 8), {80, 80, 16}, {}, o));
   ASSERT_GT(thin.seed_points, 0u);
   for (size_t i = thin.vertices.size() - thin.seed_points; i < thin.vertices.size(); ++i) {
     EXPECT_GE(thin.vertices[i].z, -0.5 + 3.0 - kSlack);
-    EXPECT_LE(thin.vertices[i].z, 19.5 - 3.0 + kSlack);
+    EXPECT_LE(thin.vertices[i].z, 15.5 - 3.0 + kSlack);
   }
   std::vector<Vec3> far = far_seeds(thin);
   ASSERT_GE(far.size(), 2u);
   EXPECT_NEAR(ClosestPair(far), std::sqrt(3.0) / 2 * 5, kSlack);
-  // A box 40 thick has room for level 1 (4 x 10 = 40): coarser seeds out there.
+  // A box 40 thick has room for level 1 (2 x 10 = 20 <= 40): coarser seeds out there.
   SM_ASSERT_OK_AND_ASSIGN(Plc thick, BuildPlc(Square(10, 50, 10, 8), {80, 80, 40}, {}, o));
   far = far_seeds(thick);
   ASSERT_GE(far.size(), 2u);

@@ -330,9 +330,10 @@ TEST(TetImproveTest, SmoothingForTheBlendedShapeLiftsTheRadiusAspect) {
   EXPECT_EQ(VolumeMeshOptions().improve.radius_weight, 0.5);
   EXPECT_GT(r[1].quality.radius_aspect.mean, r[0].quality.radius_aspect.mean + 0.005);
   EXPECT_GT(r[2].quality.radius_aspect.mean, r[1].quality.radius_aspect.mean);
-  // The dihedral mean gives up little for it.
+  // The dihedral mean gives up little for it, and stays over the 45 degrees the defaults
+  // keep.
   EXPECT_GT(r[1].quality.min_dihedral.mean, r[0].quality.min_dihedral.mean - 1.0);
-  EXPECT_GT(r[1].quality.min_dihedral.mean, 50.0);
+  EXPECT_GT(r[1].quality.min_dihedral.mean, 45.0);
 }
 
 TEST(TetImproveTest, ZeroPassesLeavesTheMeshAsItIs) {

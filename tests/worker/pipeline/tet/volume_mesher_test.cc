@@ -99,11 +99,13 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
   // 2i + b - 2 triangles, which over the 6 faces sums to 2 x (box points) + 12.
   EXPECT_GE(r.mesh.nodes.size(), 8u + 25u + r.box_points + r.seed_points);
   EXPECT_EQ(r.mesh.faces.size() - r.mesh.num_sheet_faces(), 12u + 2u * r.box_points);
-  // The angle asked of TetGen (10 degrees) holds, and the mean is well above TetGen's ~40
-  // (measured 54.0 degrees, radius aspect 0.85).
+  // The angle asked of TetGen (10 degrees) holds, and the mean is above TetGen's ~40 and
+  // the 45 degrees the economical defaults keep (measured 49.1 degrees, radius aspect 0.74;
+  // 54.0 and 0.85 with the lattice graded at 1 and new vertices below 50 degrees, for more
+  // tetrahedra: bench/RESULTS.md, issue 65).
   EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
-  EXPECT_GT(r.quality.min_dihedral.mean, 50.0);
-  EXPECT_GT(r.quality.radius_aspect.mean, 0.82);
+  EXPECT_GT(r.quality.min_dihedral.mean, 45.0);
+  EXPECT_GT(r.quality.radius_aspect.mean, 0.70);
   // With TetGen free to split facets, it does split the sheet triangles.
   VolumeMeshOptions free;
   free.tetgen.steiner_on_sheets = true;
@@ -123,7 +125,9 @@ TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsSt
   split.plc.wedge_degrees = 0;
   split.plc.zip_rims = false;
   split.improve.sheet_move_voxels = 0;
-  split.plc.grading = 0.4;  // the lattice this case was built at
+  split.plc.grading = 0.4;  // the lattice and the improvement this case was built at
+  split.improve.insert_below_degrees = 50;
+  split.improve.insert_again_below_degrees = 40;
   split.sliver_rounds = 0;  // the improvement's splits alone
   VolumeMeshOptions whole = split;
   whole.improve.split_sheets_below_degrees = 0;
@@ -372,9 +376,9 @@ TEST(VolumeMesherTest, LatticeSeededMeshConformsFillsTheBoxAndIsBetterShaped) {
 
 TEST(VolumeMesherTest, APlanarSheetsMeshHasTheCountAndSizesItsSizingPredicts) {
   // A 60 x 60 sheet of 12 x 12 quads (median edge 5) across a 120^3 box: the lattice's
-  // spacing is 4.25 next to it and 17 from 15.3 voxels off it at grading 1 (bands 4.25 and
-  // 8.5 wide; 34 is over a quarter of the box). TetGen makes about 6 tetrahedra per PLC
-  // point.
+  // spacing is 4.25 next to it, 17 from 15.3 voxels off it and 34 from 32.3 at grading 1
+  // (bands 4.25, 8.5 and 17 wide; 68 is over half the box). TetGen makes about 6 tetrahedra
+  // per PLC point.
   const TriangleMesh sheet = Square(30, 90, 60, 12);
   const Dims dims{120, 120, 120};
   for (const double grading : {0.4, 1.0}) {
@@ -385,14 +389,14 @@ TEST(VolumeMesherTest, APlanarSheetsMeshHasTheCountAndSizesItsSizingPredicts) {
     EXPECT_EQ(r.predicted_tetrahedra, 6 * (8 + 169 + r.box_points + r.seed_points));
     EXPECT_NEAR(double(r.tetgen_tetrahedra) / r.predicted_tetrahedra, 1.0, 0.1);
     EXPECT_NEAR(double(r.mesh.tets.size()) / r.predicted_tetrahedra, 1.05, 0.15);
-    EXPECT_EQ(r.lattice_levels, 3u);
-    EXPECT_DOUBLE_EQ(r.lattice_coarsest, 17);
+    EXPECT_EQ(r.lattice_levels, 4u);
+    EXPECT_DOUBLE_EQ(r.lattice_coarsest, 34);
     EXPECT_EQ(r.conformity.conforming, r.conformity.sheet_triangles);
     EXPECT_GE(r.quality.min_dihedral.min, 10.0);
-    EXPECT_GT(r.quality.min_dihedral.mean, 50.0);
+    EXPECT_GT(r.quality.min_dihedral.mean, 45.0);
     if (grading != 1.0) continue;
-    // Far from the sheet the edges are the coarsest level's: a BCC lattice's are h and
-    // sqrt(3)/2 h long (17 and 14.7).
+    // Far from the sheet the edges are the two coarsest levels': a BCC lattice's are h and
+    // sqrt(3)/2 h long (17 and 14.7, 34 and 29.4).
     std::vector<double> far_edges;
     for (const Tet& t : r.mesh.tets) {
       Vec3 c;
@@ -409,7 +413,7 @@ TEST(VolumeMesherTest, APlanarSheetsMeshHasTheCountAndSizesItsSizingPredicts) {
     std::nth_element(far_edges.begin(), far_edges.begin() + far_edges.size() / 2, far_edges.end());
     const double median = far_edges[far_edges.size() / 2];
     EXPECT_GT(median, 0.9 * 14.7);
-    EXPECT_LT(median, 1.1 * 17);
+    EXPECT_LT(median, 1.1 * 34);
   }
 }
 

@@ -86,8 +86,18 @@ class Decimator {
   ApertureDecimateStats Run() {
     ApertureDecimateStats s;
     s.faces_before = live_faces_;
+    shaped_ = o_.min_angle_degrees > 0;
     for (uint32_t v = 0; v < pos_.size(); ++v) PushAround(v);
-    while (live_faces_ > o_.triangles && !heap_.empty()) {
+    while (live_faces_ > o_.triangles) {
+      if (heap_.empty()) {
+        if (!shaped_) break;
+        // Short of the target with the angle bound: the rest without it.
+        shaped_ = false;
+        for (uint32_t v = 0; v < pos_.size(); ++v) {
+          if (!gone_[v]) PushAround(v);
+        }
+        continue;
+      }
       const Candidate c = heap_.top();
       heap_.pop();
       if (gone_[c.u] || gone_[c.v] || stamp_[c.u] != c.stamp_u || stamp_[c.v] != c.stamp_v) {
@@ -96,6 +106,7 @@ class Decimator {
       if (c.cost > o_.max_error) break;
       if (!Collapse(c)) continue;
       ++s.collapses;
+      if (!shaped_ && o_.min_angle_degrees > 0) ++s.unshaped_collapses;
       s.largest_error = std::max(s.largest_error, c.cost);
     }
     Compact();
@@ -241,8 +252,8 @@ class Decimator {
     P4 at_v = pos_[v];
     // At v's place, the thickness that costs least.
     if (q.A(3, 3) > 0) {
-      const double s = -(q.A(3, 0) * at_v[0] + q.A(3, 1) * at_v[1] + q.A(3, 2) * at_v[2] + q.b(3)) /
-                       q.A(3, 3);
+      const double s =
+          -(q.A(3, 0) * at_v[0] + q.A(3, 1) * at_v[1] + q.A(3, 2) * at_v[2] + q.b(3)) / q.A(3, 3);
       at_v[3] = std::max(0.0, s);
     }
     options.push_back(at_v);
@@ -290,6 +301,12 @@ class Decimator {
         const double nb = Norm(before), na = Norm(after);
         if (!(na > 1e-9 * (nb + 1e-12)) || na < 1e-6) return false;
         if (Dot(before, after) < cos_turn * nb * na) return false;
+        if (shaped_) {
+          const double now = MinAngleDegrees(c);
+          if (now < o_.min_angle_degrees && now < MinAngleDegrees(Corners(mesh_, f))) {
+            return false;
+          }
+        }
       }
     }
     return true;
@@ -373,6 +390,7 @@ class Decimator {
   absl::flat_hash_set<uint64_t> rim_edges_, feature_edges_;
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<Candidate>> heap_;
   uint64_t live_faces_ = 0;
+  bool shaped_ = false;  // the angle bound holds
 };
 
 }  // namespace

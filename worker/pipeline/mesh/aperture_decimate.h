@@ -16,11 +16,17 @@
 namespace sheetmesh {
 
 struct ApertureDecimateOptions {
-  uint64_t triangles = 0;        // collapse until at most this many faces remain
-  double boundary_weight = 8.0;  // weight of the planes across rim edges (per length²)
-  double feature_weight = 64.0;  // weight of the planes along feature lines (per length²)
+  uint64_t triangles = 0;         // collapse until at most this many faces remain
+  double boundary_weight = 8.0;   // weight of the planes across rim edges (per length²)
+  double feature_weight = 64.0;   // weight of the planes along feature lines (per length²)
   double max_normal_turn = 60.0;  // degrees a face's normal may turn in one collapse
   double max_error = 1e300;       // stop once the cheapest collapse costs more (voxels²)
+  // A collapse may not leave a face with an angle under this many degrees, unless the face
+  // had one as small before; once no other collapse is left short of the target, the rest
+  // are made without it. Flat sheets decimate freely (any collapse in a plane costs
+  // nothing), and needles of a fraction of a voxel across pin a volume mesh's slivers.
+  // 0: no bound.
+  double min_angle_degrees = 0;
   // Per vertex, 1 where it lies on a feature line that must stay (a junction curve); empty:
   // none beyond edges of three or more faces, which are feature lines always.
   std::vector<uint8_t> feature;
@@ -32,7 +38,8 @@ struct ApertureDecimateStats {
   uint64_t faces_before = 0;
   uint64_t faces_after = 0;
   uint64_t collapses = 0;
-  double largest_error = 0;  // the cost of the dearest collapse made (voxels²)
+  uint64_t unshaped_collapses = 0;  // made after the angle bound had to be let go
+  double largest_error = 0;         // the cost of the dearest collapse made (voxels²)
 };
 
 // Decimates `mesh` in place. REQUIRES: mesh->vertex_thickness_voxels has one value per

@@ -226,6 +226,9 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
     // Where a sheet's outline turns from one face of the box to another it has a corner
     // that no budget may cut off.
     d.pinned = OnTwoBoxFaces(out.mesh.vertices, sheet.set.dims());
+    // Triangles fit for a volume mesh: no collapse leaves an angle under 10 degrees while
+    // another can still be made.
+    d.min_angle_degrees = 10;
     const ApertureDecimateStats s = DecimateWithAperture(&out.mesh, d);
     out.decimation = DecimateStats{s.faces_before, s.faces_after, s.collapses, s.largest_error};
   }

@@ -99,10 +99,8 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
   // 2i + b - 2 triangles, which over the 6 faces sums to 2 x (box points) + 12.
   EXPECT_GE(r.mesh.nodes.size(), 8u + 25u + r.box_points + r.seed_points);
   EXPECT_EQ(r.mesh.faces.size() - r.mesh.num_sheet_faces(), 12u + 2u * r.box_points);
-  // The angle asked of TetGen (10 degrees) holds, and the mean is above TetGen's ~40 and
-  // the 45 degrees the economical defaults keep (measured 49.1 degrees, radius aspect 0.74;
-  // 54.0 and 0.85 with the lattice graded at 1 and new vertices below 50 degrees, for more
-  // tetrahedra: bench/RESULTS.md, issue 65).
+  // The angle asked of TetGen (10 degrees) holds, the mean over the defaults' 45 (measured
+  // 49.1 degrees, radius aspect 0.74; 54.0 and 0.85 at grading 1 and 50/40: RESULTS).
   EXPECT_GE(r.quality.min_dihedral.min, 10.0 - 1e-6);
   EXPECT_GT(r.quality.min_dihedral.mean, 45.0);
   EXPECT_GT(r.quality.radius_aspect.mean, 0.70);

@@ -11,6 +11,14 @@
 
 namespace sheetmesh {
 
+// How many faces of the box [-0.5, n - 0.5] of `dims` the point p lies on, within `within`
+// voxels.
+int BoxFacesAt(const Vec3& p, const Dims& dims, double within);
+
+// Per vertex, 1 where it lies on two or more faces of the box of `dims`: where a sheet's
+// outline turns from one face to another, a corner no decimation may cut off.
+std::vector<uint8_t> OutlineCornersOnBox(const std::vector<Vec3>& vertices, const Dims& dims);
+
 // Clips `mesh` to the box [-0.5, n - 0.5] of `dims` on each axis: a vertex within 0.2 voxel
 // of a face's plane is put on it, a triangle across it cut there (its cut's vertices shared
 // by the triangles on the edge, their thickness interpolated), the parts outside dropped.

@@ -9,6 +9,8 @@
 #include <set>
 #include <tuple>
 
+#include "worker/pipeline/surface/mid_surface_box.h"
+
 namespace sheetmesh {
 void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -69,16 +71,7 @@ bool Chart::InBox(int32_t i, int32_t j) const {
   return a >= 0 && b >= 0 && a < extent[(info_.axis + 1) % 3] && b < extent[(info_.axis + 2) % 3];
 }
 
-bool Chart::OnBoxFace(const Vec3& p) const {
-  const double extent[3] = {static_cast<double>(dims_.nx), static_cast<double>(dims_.ny),
-                            static_cast<double>(dims_.nz)};
-  for (int k = 0; k < 3; ++k) {
-    if (std::abs(p[k] + 0.5) < kOnBoxFace || std::abs(p[k] - extent[k] + 0.5) < kOnBoxFace) {
-      return true;
-    }
-  }
-  return false;
-}
+bool Chart::OnBoxFace(const Vec3& p) const { return BoxFacesAt(p, dims_, kOnBoxFace) > 0; }
 
 bool Chart::HasAll4(int32_t i, int32_t j) const {
   return At(i - 1, j) && At(i + 1, j) && At(i, j - 1) && At(i, j + 1);

@@ -186,23 +186,6 @@ uint64_t TrianglesOfRadius(uint64_t voxels, double mean_thickness, double r) {
   return std::max<uint64_t>(2, static_cast<uint64_t>(std::llround(2.0 * voxels / cell)));
 }
 
-// Per vertex, 1 where it lies on two or more faces of the box [-0.5, n - 0.5] of `dims` (a
-// sheet's outline turns there).
-std::vector<uint8_t> OnTwoBoxFaces(const std::vector<Vec3>& vertices, const Dims& dims) {
-  const double extent[3] = {static_cast<double>(dims.nx), static_cast<double>(dims.ny),
-                            static_cast<double>(dims.nz)};
-  std::vector<uint8_t> out(vertices.size(), 0);
-  for (size_t v = 0; v < vertices.size(); ++v) {
-    int faces = 0;
-    for (int k = 0; k < 3; ++k) {
-      faces += std::abs(vertices[v][k] + 0.5) < 1e-6 ||
-               std::abs(vertices[v][k] - extent[k] + 0.5) < 1e-6;
-    }
-    out[v] = faces >= 2;
-  }
-  return out;
-}
-
 // The mid-surface of each piece with its aperture, decimated to the budget (options.triangles,
 // else what r gives the SCVD), then the fits the SCVD's surface gets.
 absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
@@ -223,9 +206,7 @@ absl::StatusOr<SurfaceResult> BuildMidSurfaceResult(const SheetAnalysis& sheet,
   if (out.mesh.faces.size() > target) {
     ApertureDecimateOptions d;
     d.triangles = target;
-    // Where a sheet's outline turns from one face of the box to another it has a corner
-    // that no budget may cut off.
-    d.pinned = OnTwoBoxFaces(out.mesh.vertices, sheet.set.dims());
+    d.pinned = OutlineCornersOnBox(out.mesh.vertices, sheet.set.dims());
     // Triangles fit for a volume mesh: no collapse leaves an angle under 10 degrees while
     // another can still be made.
     d.min_angle_degrees = 10;

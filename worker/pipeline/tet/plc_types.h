@@ -178,7 +178,7 @@ struct PlcOptions {
   // grades faster, with fewer tetrahedra and a wider layer of worse ones where two levels
   // meet. At 1 the benchmark volumes took about 40% fewer tetrahedra than at 0.4 (issue
   // 41); at 2, with fewer vertices inserted by the improvement, the volume mesh sweep's
-  // median went from 21 to 12 tetrahedra per sheet triangle, every run's smallest angle
+  // median went from 21 to 13 tetrahedra per sheet triangle, every run's smallest angle
   // still at 10° or more where it was (bench/RESULTS.md, issue 65).
   double grading = 2.0;
   // Seeds the box's edges and faces with points, graded like the lattice (its spacing, or

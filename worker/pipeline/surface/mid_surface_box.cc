@@ -12,17 +12,6 @@
 
 namespace sheetmesh {
 
-int BoxFacesAt(const Vec3& p, const Dims& dims, double within) {
-  const double extent[3] = {static_cast<double>(dims.nx), static_cast<double>(dims.ny),
-                            static_cast<double>(dims.nz)};
-  int faces = 0;
-  for (int k = 0; k < 3; ++k) {
-    faces += std::abs(p[k] + 0.5) < within;
-    faces += std::abs(p[k] - extent[k] + 0.5) < within;
-  }
-  return faces;
-}
-
 std::vector<uint8_t> OutlineCornersOnBox(const std::vector<Vec3>& vertices, const Dims& dims) {
   std::vector<uint8_t> out(vertices.size(), 0);
   for (size_t v = 0; v < vertices.size(); ++v) out[v] = BoxFacesAt(vertices[v], dims, 1e-6) >= 2;

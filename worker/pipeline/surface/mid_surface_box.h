@@ -11,10 +11,6 @@
 
 namespace sheetmesh {
 
-// How many faces of the box [-0.5, n - 0.5] of `dims` the point p lies on, within `within`
-// voxels.
-int BoxFacesAt(const Vec3& p, const Dims& dims, double within);
-
 // Per vertex, 1 where it lies on two or more faces of the box of `dims`: where a sheet's
 // outline turns from one face to another, a corner no decimation may cut off.
 std::vector<uint8_t> OutlineCornersOnBox(const std::vector<Vec3>& vertices, const Dims& dims);

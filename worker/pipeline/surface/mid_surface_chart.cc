@@ -9,8 +9,6 @@
 #include <set>
 #include <tuple>
 
-#include "worker/pipeline/surface/mid_surface_box.h"
-
 namespace sheetmesh {
 void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -69,6 +67,17 @@ bool Chart::InBox(int32_t i, int32_t j) const {
   const int64_t extent[3] = {dims_.nx, dims_.ny, dims_.nz};
   const int64_t a = i0_ + i, b = j0_ + j;
   return a >= 0 && b >= 0 && a < extent[(info_.axis + 1) % 3] && b < extent[(info_.axis + 2) % 3];
+}
+
+int BoxFacesAt(const Vec3& p, const Dims& dims, double within) {
+  const double extent[3] = {static_cast<double>(dims.nx), static_cast<double>(dims.ny),
+                            static_cast<double>(dims.nz)};
+  int faces = 0;
+  for (int k = 0; k < 3; ++k) {
+    faces += std::abs(p[k] + 0.5) < within;
+    faces += std::abs(p[k] - extent[k] + 0.5) < within;
+  }
+  return faces;
 }
 
 bool Chart::OnBoxFace(const Vec3& p) const { return BoxFacesAt(p, dims_, kOnBoxFace) > 0; }

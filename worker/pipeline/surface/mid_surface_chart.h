@@ -162,6 +162,10 @@ class Chart {
   std::vector<ChartCut> cuts_;
 };
 
+// How many faces of the box [-0.5, n - 0.5] of `dims` the point p lies on, within `within`
+// voxels.
+int BoxFacesAt(const Vec3& p, const Dims& dims, double within);
+
 // The least-squares plane of `points` (centroid and unit normal of least spread).
 void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal);
 

@@ -298,10 +298,13 @@ absl::StatusOr<std::vector<int32_t>> MidSurfacePieces(
     if (voxels[p].size() < 3) continue;
     std::vector<Index3> junction;
     double share = 1;
-    const uint64_t min_layer = MinLayerVoxels(voxels[p].size());
+    const uint64_t piece_voxels = voxels[p].size();
+    const uint64_t min_layer = MinLayerVoxels(piece_voxels);
     const std::vector<std::vector<Index3>> layers =
         SplitPiece(std::move(voxels[p]), min_layer, &junction, &share);
-    clean[p] = share >= kClean;
+    // A piece whose layers leave a third of its voxels to their junctions (a sheet standing
+    // across the axis, all long runs) is not a height field there, however clean the rest.
+    clean[p] = share >= kClean && 3 * junction.size() <= piece_voxels;
     // Layers whose planes differ by more than a shallow crossing: separation sees their folds.
     std::vector<Vec3> normals;
     for (const std::vector<Index3>& layer : layers) {

@@ -39,6 +39,9 @@ struct ChartVoxel {
 // zipped to it.
 inline constexpr double kZipGap = 1.0;
 inline constexpr double kZipReach = kZipGap + 1.5;
+// The farthest a zipped rim vertex lies from its line (voxels): the rim's columns within
+// kZipReach of the trace, tilted up to 60 degrees, and their corners' half diagonal.
+inline constexpr double kZipSpan = 2 * kZipReach + 1.0;
 
 struct MidSurfaceChart {
   int32_t piece = 0;

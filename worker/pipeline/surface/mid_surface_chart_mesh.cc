@@ -152,6 +152,30 @@ void Chart::ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const Juncti
                       const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
                       TriangleMesh* mesh) const {
   if (rim.size() < 2) return;
+  // Only the stretch of the rim along the line is zipped to it: where a junction ends inside
+  // the box (a sheet that ends on another, or sheets that curve apart), the rim beyond its
+  // end stays open rather than fanning to the end sample over the chart's own columns.
+  // So does a rim that lies off the line (a curved sheet whose trace of a straight junction
+  // runs away from it): the strip spans only the gap the cut left.
+  const double reach = line.step + 1.0;
+  auto along = [&](const std::pair<double, uint32_t>& e) {
+    if (e.first < line.t0 - reach || e.first > line.t1 + reach) return false;
+    const Vec3 off = mesh->vertices[e.second] - line.point;
+    return Norm2(off - line.direction * Dot(off, line.direction)) <= kZipSpan * kZipSpan;
+  };
+  if (!std::all_of(rim.begin(), rim.end(), along)) {
+    for (size_t a = 0; a < rim.size();) {
+      size_t b = a;
+      while (b < rim.size() && along(rim[b])) ++b;
+      if (b - a >= 2) {
+        ZipToLine({rim.begin() + static_cast<std::ptrdiff_t>(a),
+                   rim.begin() + static_cast<std::ptrdiff_t>(b)},
+                  line, sample, emit, mesh);
+      }
+      a = b + 1;
+    }
+    return;
+  }
   // The chain runs as the chart's faces' boundary edges do; the strip takes each such edge
   // reversed. Along the line the chain may run either way.
   const bool reversed = rim.front().first > rim.back().first;

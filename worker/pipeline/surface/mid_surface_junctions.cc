@@ -2,10 +2,12 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 
 #include "absl/container/flat_hash_map.h"
+#include "absl/container/flat_hash_set.h"
 
 namespace sheetmesh {
 namespace {
@@ -174,13 +176,108 @@ bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
   }
   for (size_t p = 0; p < partners.size(); ++p) {
     for (size_t q = p + 1; q < partners.size(); ++q) {
+      // A band is a strip along the junction, about as large as the sheets on either side
+      // at most (at 15 degrees a merge of two 3-voxel sheets is 23 voxels wide): a sheet
+      // more than twice as large as one of them is a sheet (the fragments a junction's cut
+      // leaves beside it may be tilted between it and the other).
+      const uint64_t own = charts[c]->info().voxels;
+      if (own > 2 * charts[partners[p]]->info().voxels ||
+          own > 2 * charts[partners[q]]->info().voxels) {
+        continue;
+      }
       const double between = degrees(partners[p], partners[q]);
-      const double off = std::max(degrees(c, partners[p]), degrees(c, partners[q]));
-      // A band lies along both (they ran together there at a shallow angle); a sheet that
-      // meets two others steeply is a sheet of a network, whatever the angles between.
-      if (between > off + 3 && between > options.min_degrees && off <= kBandDegrees) {
+      const double to_p = degrees(c, partners[p]), to_q = degrees(c, partners[q]);
+      const double off = std::max(to_p, to_q);
+      // A band lies along both (they ran together there at a shallow angle): its plane is
+      // nearer each than they are to one another, or lies in their pencil strictly between
+      // them (its angles to the two sum to theirs, as the plane of two merged sheets' voxels
+      // does, however unequal their shares); a sheet that meets two others steeply is a
+      // sheet of a network, whatever the angles between, and one along either is that
+      // sheet's continuation.
+      const bool nearer = between > off + 3;
+      const bool in_pencil = to_p + to_q <= between + 3 && std::min(to_p, to_q) >= 2;
+      if ((nearer || in_pencil) && between > options.min_degrees && off <= kBandDegrees) {
         return true;
       }
+    }
+  }
+  return false;
+}
+
+// A chart far smaller than every chart it meets (a twentieth or less) is a fragment the
+// separation cut off at their junction, not a sheet: a chart of it would meet them in lines
+// of its own beside the true one.
+constexpr uint64_t kFragmentRatio = 20;
+
+bool Fragment(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
+              const std::map<std::pair<int32_t, int32_t>, Contact>& contacts,
+              const JunctionOptions& options) {
+  bool meets = false;
+  for (const auto& [pair, contact] : contacts) {
+    if (contact.count < options.min_contact || (pair.first != c && pair.second != c)) continue;
+    const int32_t other = pair.first == c ? pair.second : pair.first;
+    if (charts[c]->info().voxels * kFragmentRatio > charts[other]->info().voxels) return false;
+    meets = true;
+  }
+  return meets;
+}
+
+// The chart other than `self` that `voxels` touch (6-neighbours) whose plane is within
+// `degrees` of theirs, the one they touch most; -1 when none.
+int32_t CoplanarNeighbour(const std::vector<Index3>& voxels, int32_t self,
+                          const std::vector<std::unique_ptr<Chart>>& charts, double degrees) {
+  auto key = [](const Index3& p) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(p.x)) << 42) ^
+           (static_cast<uint64_t>(static_cast<uint32_t>(p.y)) << 21) ^
+           static_cast<uint64_t>(static_cast<uint32_t>(p.z));
+  };
+  absl::flat_hash_set<uint64_t> own;
+  std::vector<Vec3> points;
+  for (const Index3& p : voxels) {
+    own.insert(key(p));
+    points.emplace_back(p.x, p.y, p.z);
+  }
+  Vec3 centroid, normal;
+  FitPlanePoints(points, &centroid, &normal);
+  int32_t best = -1;
+  uint64_t most = 0;
+  for (int32_t k = 0; k < static_cast<int32_t>(charts.size()); ++k) {
+    if (k == self || !charts[k]) continue;
+    if (std::abs(Dot(charts[k]->info().normal, normal)) < std::cos(degrees * kPi / 180)) continue;
+    uint64_t touching = 0;
+    charts[k]->ForEachVoxel([&](const Index3& p, bool) {
+      for (const auto& [dx, dy, dz] :
+           {std::array{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}) {
+        if (own.contains(key(Index3{p.x + dx, p.y + dy, p.z + dz}))) {
+          ++touching;
+          break;
+        }
+      }
+    });
+    if (touching > most) {
+      most = touching;
+      best = k;
+    }
+  }
+  return best;
+}
+
+// Whether `chart` ends at `line`: nine in ten of its columns on one side, and one of them
+// within the junction's extent no farther from the line than a zipped rim may lie.
+bool EndsAt(const Chart& chart, const JunctionLine& line, int index) {
+  const ChartCut trace = chart.Trace(line, index, chart.info().centroid);
+  uint64_t kept = 0, beyond = 0;
+  chart.Sides(trace, &kept, &beyond);
+  if (std::min(kept, beyond) * 10 > kept + beyond) return false;
+  const double side = kept >= beyond ? 1 : -1;
+  for (int32_t i = 0; i < chart.ni(); ++i) {
+    for (int32_t j = 0; j < chart.nj(); ++j) {
+      const ChartColumn* c = chart.At(i, j);
+      if (c == nullptr || c->filled || side * trace.Side(i, j) < 0) continue;
+      const Vec3 w = chart.Point(i, j, c->mid()) - line.point;
+      const double t = Dot(w, line.direction);
+      if (t < line.t0 || t > line.t1) continue;
+      if (Norm2(w - line.direction * t) <= kZipSpan * kZipSpan) return true;
     }
   }
   return false;
@@ -213,6 +310,7 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       tb = std::max(tb, Dot(p - c, d));
     }
     constexpr double kRadius = 24;
+    constexpr double kEndMargin = 2;
     Found f;
     const int32_t ids[2] = {pair.first, pair.second};
     // First the planes near the contact; then again away from the line they give, by a
@@ -273,8 +371,15 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       t0 = std::min(t0, t);
       t1 = std::max(t1, t);
     }
-    f.line.t0 = t0 - kRadius;
-    f.line.t1 = t1 + kRadius;
+    // The line runs on to the box where the contact stops short of it by less than the
+    // planes' reach (the voxels at a face of the box are often cut or merged away), and
+    // otherwise ends a little past the contact: where sheets end inside the box, or curve
+    // away from the planes fitted near it, a line run on past the contact would lie off the
+    // charts it cuts, and their fills up to it would fold over their own columns.
+    double box0 = t0 - kRadius, box1 = t1 + kRadius;
+    if (!ClipToBox(f.line.point, u, dims, &box0, &box1)) continue;
+    f.line.t0 = box0 > t0 - kRadius ? box0 : t0 - kEndMargin;
+    f.line.t1 = box1 < t1 + kRadius ? box1 : t1 + kEndMargin;
     if (!ClipToBox(f.line.point, u, dims, &f.line.t0, &f.line.t1)) continue;
     f.line.step = options.sample_step;
     f.line.charts = {ids[0], ids[1]};
@@ -355,12 +460,16 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
   LineSet set;
   for (int round = 0;; ++round) {
     std::map<std::pair<int32_t, int32_t>, Contact> contacts = FindContacts(*charts, loose, dims);
-    // Merge bands out, then the contacts again.
-    std::vector<int32_t> bands;
-    for (int32_t c = 0; c < static_cast<int32_t>(charts->size()); ++c) {
-      if (MergeBand(c, *charts, contacts, options)) bands.push_back(c);
-    }
-    if (!bands.empty()) {
+    // Merge bands and fragments out, then the contacts again (a fragment may show only once
+    // the bands it touched are junction voxels).
+    for (int pass = 0; pass < 3; ++pass) {
+      std::vector<int32_t> bands;
+      for (int32_t c = 0; c < static_cast<int32_t>(charts->size()); ++c) {
+        if (MergeBand(c, *charts, contacts, options) || Fragment(c, *charts, contacts, options)) {
+          bands.push_back(c);
+        }
+      }
+      if (bands.empty()) break;
       for (int32_t c : bands) {
         (*charts)[c]->ForEachVoxel([&](const Index3& p, bool) { loose.push_back(p); });
         (*charts)[c].reset();
@@ -380,8 +489,34 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         if (beyond * 10 <= kept + beyond || beyond < 32) continue;
         std::vector<Index3> rest = chart.TakeBeyond(trace);
         if (rest.size() < 3) continue;
-        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++, dims));
         split = true;
+        // What lies beyond only within the width over which two sheets of their thickness
+        // run together at the line's angle is the other sheet's edge or the merge, not a
+        // sheet: it joins the junction's voxels (a chart of it would be a sliver tilted
+        // between the two, meeting both in lines of its own beside the true one).
+        const JunctionLine& line = set.lines[l];
+        double thick = 1;
+        for (double t : set.thickness[l]) thick = std::max(thick, t);
+        const double sine = std::max(0.1, std::sin(line.degrees * kPi / 180));
+        const double merge = std::min(40.0, 1.5 * thick / sine + 2);
+        double farthest = 0;
+        for (const Index3& p : rest) {
+          const Vec3 w = Vec3(p.x, p.y, p.z) - line.point;
+          farthest = std::max(farthest, Norm(w - line.direction * Dot(w, line.direction)));
+        }
+        if (farthest <= merge) {
+          loose.insert(loose.end(), rest.begin(), rest.end());
+          continue;
+        }
+        // What lies beyond along the plane of a chart it touches there is that sheet's (the
+        // separation drew their border off the junction): it joins it.
+        if (const int32_t k = CoplanarNeighbour(rest, c, *charts, options.min_degrees); k >= 0) {
+          (*charts)[k]->ForEachVoxel([&](const Index3& p, bool) { rest.push_back(p); });
+          const int32_t piece = (*charts)[k]->info().piece;
+          (*charts)[k] = std::make_unique<Chart>(std::move(rest), piece, dims);
+          continue;
+        }
+        charts->push_back(std::make_unique<Chart>(std::move(rest), (*next_piece)++, dims));
       }
     }
     if (!split) break;
@@ -403,6 +538,27 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
     for (auto& [chart, plane] : cuts) {
       const Vec3 n = plane.second - line.direction * Dot(plane.second, line.direction);
       if (Norm2(n) > 1e-12) plane = {line.point, Normalized(n)};
+    }
+    // A chart along the plane of one that ends here and that ends here too is cut and
+    // zipped to the line as well: the separation drew the border between two parts of one
+    // sheet off the junction, and the part that reached it went to the other.
+    const size_t meeting = cuts.size();
+    for (int32_t k = 0; k < static_cast<int32_t>(charts->size()); ++k) {
+      if (std::any_of(cuts.begin(), cuts.end(), [&](const auto& c) { return c.first == k; })) {
+        continue;
+      }
+      const Chart& chart = *(*charts)[k];
+      for (size_t m = 0; m < meeting; ++m) {
+        const Chart& along = *(*charts)[cuts[m].first];
+        if (std::abs(Dot(chart.info().normal, along.info().normal)) <
+            std::cos(options.min_degrees * kPi / 180)) {
+          continue;
+        }
+        if (!EndsAt(chart, line, static_cast<int>(l))) continue;
+        cuts.push_back({k, cuts[m].second});
+        thick.push_back(thick[m]);
+        break;
+      }
     }
     for (size_t k = 0; k < cuts.size(); ++k) {
       Chart& chart = *(*charts)[cuts[k].first];

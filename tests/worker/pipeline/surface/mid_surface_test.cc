@@ -98,13 +98,35 @@ TEST(MidSurfaceTest, APlanarSlabIsItsMidPlaneWithItsThicknessAndEndsOnTheBox) {
   EXPECT_TRUE(mid->junctions.empty());
 }
 
-class JunctionTest : public ::testing::TestWithParam<std::tuple<double, bool>> {};
+// A junction of known angle: the first sheet's normal `a` and the line's direction `u`
+// (perpendicular), the second sheet at `degrees` from the first about the line.
+struct JunctionCase {
+  double degrees;
+  bool t_junction;
+  Vec3 a, u;
+};
+
+// Orientations: the line across the box's axes with the first sheet upright, and two of the
+// bench's (bench/junction_sweep.py, seeds 2 and 3), whose sheets stand near a tie between two
+// axes (the two halves of one sheet may then be charted along different axes).
+const Vec3 kAcross = Normalized(Vec3(0.15, -0.8, 0.55));
+const JunctionCase Across(double degrees, bool t) {
+  return {degrees, t, Normalized(Cross(kAcross, Vec3(0, 0, 1))), kAcross};
+}
+const JunctionCase Seed2(double degrees, bool t) {
+  return {degrees, t, Vec3(0.52628, -0.60279, 0.59973), Vec3(-0.81594, -0.15950, 0.55569)};
+}
+const JunctionCase Seed3(double degrees, bool t) {
+  return {degrees, t, Vec3(-0.73216, -0.55990, 0.38789), Vec3(0.55526, -0.16078, 0.81599)};
+}
+
+class JunctionTest : public ::testing::TestWithParam<JunctionCase> {};
 
 TEST_P(JunctionTest, TheSheetsMeetOnTheTrueLineAtTheirAngle) {
-  const auto [degrees, t_junction] = GetParam();
+  const auto [degrees, t_junction, a_in, u_in] = GetParam();
   const int n = 64;
-  const Vec3 u = Normalized(Vec3(0.15, -0.8, 0.55));  // the junction's direction
-  const Vec3 a = Normalized(Cross(u, Vec3(0, 0, 1)));
+  const Vec3 u = Normalized(u_in);
+  const Vec3 a = Normalized(a_in - u * Dot(a_in, u));
   const Vec3 b = Turned(a, u, 180 - degrees);
   const VoxelSet set = Junction(n, a, b, 3.0, t_junction);
   const std::vector<int32_t> pieces = Pieces(set);
@@ -138,15 +160,62 @@ TEST_P(JunctionTest, TheSheetsMeetOnTheTrueLineAtTheirAngle) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Steep, JunctionTest,
-                         ::testing::Combine(::testing::Values(60.0, 90.0), ::testing::Bool()));
-INSTANTIATE_TEST_SUITE_P(ShallowT, JunctionTest,
-                         ::testing::Combine(::testing::Values(30.0), ::testing::Values(true)));
+                         ::testing::Values(Across(60, false), Across(60, true), Across(90, false),
+                                           Across(90, true), Seed2(60, false), Seed2(90, true),
+                                           Seed3(60, true), Seed3(90, false)));
+INSTANTIATE_TEST_SUITE_P(Shallow, JunctionTest,
+                         ::testing::Values(Across(30, true), Across(30, false), Seed2(30, true),
+                                           Seed3(30, true), Seed3(30, false)));
 // Not yet within the aim in this 64^3 box (bench/RESULTS.md, issue 64): at 15 degrees the
-// line's samples lie up to 0.55 (X) and 1.1 voxels (T) off the true line, and the X at 30
-// degrees gives two lines where there is one.
+// line's samples lie up to 0.55 (X) and 0.8 voxels (T) off the true line, or (the X of
+// seed 2) the crossing gives two lines where there is one; the X at 30 degrees of seed 2
+// gives two.
 INSTANTIATE_TEST_SUITE_P(DISABLED_Shallow, JunctionTest,
-                         ::testing::Values(std::tuple{15.0, false}, std::tuple{15.0, true},
-                                           std::tuple{30.0, false}));
+                         ::testing::Values(Across(15, false), Across(15, true), Seed2(30, false),
+                                           Seed3(15, false), Seed2(15, true), Seed2(15, false)));
+
+// A junction that ends inside the box: a strip of a second sheet, 24 voxels wide along the
+// line, crossing a whole one. Beyond the line's ends the charts are not zipped to it: no fan
+// of long triangles from a line's end over a chart's own columns, no edge that one piece's
+// faces fold over (three or more of them on it), and no piece that lost its voxels.
+TEST(MidSurfaceTest, AJunctionEndingInsideTheBoxFoldsNoChartOverItself) {
+  const int n = 64;
+  const Vec3 u = Normalized(Vec3(0.15, -0.8, 0.55));
+  const Vec3 a = Normalized(Cross(u, Vec3(0, 0, 1)));
+  const Vec3 b = Turned(a, u, 180 - 60);
+  const Vec3 c(n / 2.0 - 0.5, n / 2.0 - 0.5, n / 2.0 - 0.5);
+  const VoxelSet set = ShapeSet(Dims{n, n, n}, [=](double x, double y, double z) {
+    const Vec3 p = Vec3(x, y, z) - c;
+    if (std::abs(Dot(p, a)) <= 1.5) return true;
+    return std::abs(Dot(p, b)) <= 1.5 && std::abs(Dot(p, u)) <= 12;
+  });
+  const std::vector<int32_t> pieces = Pieces(set);
+  auto mid = BuildMidSurface(set, pieces);
+  ASSERT_TRUE(mid.ok()) << mid.status();
+  const TriangleMesh& m = mid->mesh;
+  ASSERT_FALSE(mid->junctions.empty());
+  std::map<std::pair<uint32_t, uint32_t>, std::map<int32_t, int>> faces_of_edge;
+  double longest = 0;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = m.faces[f][k], q = m.faces[f][(k + 1) % 3];
+      ++faces_of_edge[{std::min(p, q), std::max(p, q)}][m.face_piece[f]];
+      longest = std::max(longest, Norm(m.vertices[p] - m.vertices[q]));
+    }
+  }
+  int folded = 0;
+  for (const auto& [edge, by_piece] : faces_of_edge) {
+    for (const auto& [piece, count] : by_piece) folded += count > 2;
+  }
+  EXPECT_EQ(folded, 0);
+  EXPECT_LT(longest, 8.0);
+  // Both sheets keep their area: the whole one about n^2 (it stands across x), the strip
+  // about 24 n more.
+  double area = 0;
+  for (size_t f = 0; f < m.faces.size(); ++f) area += Area(Corners(m, f));
+  EXPECT_GT(area, 1.2 * n * n);
+  EXPECT_LT(area, 1.6 * n * n);
+}
 
 TEST(MidSurfacePiecesTest, AFlatSheetStaysWholeAndASteepCrossingAsksSeparation) {
   const int n = 48;

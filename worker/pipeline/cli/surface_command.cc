@@ -186,6 +186,14 @@ void PrintRun(const PipelineReport& r, std::ostream& out) {
       "(%d voxels) too small for a triangle\n",
       m.topology.boundary_loops, m.topology.nonmanifold_edges, m.topology.connected_parts,
       m.skipped_components, m.skipped_voxels);
+  if (m.mesher_choice) {
+    const MesherChoiceStats& c = *m.mesher_choice;
+    out << absl::StrFormat(
+        "mesher      %s (auto): the mid-surface scores %.4f, the SCVD %.4f; %s\n",
+        c.kept_mid ? "midsurface" : "scvd", c.mid_similarity, c.scvd_similarity,
+        c.kept_mid ? "its junctions are at the rock's angles"
+                   : absl::StrFormat("more than %.2f above the mid-surface's", c.margin));
+  }
   if (m.apertures) {
     const FaceApertureStats& a = *m.apertures;
     out << absl::StrFormat(

@@ -396,10 +396,14 @@ std::vector<ParamRow> SurfaceRows() {
                         "what the SCVD grows over: voxels, columns across the thickness, or auto "
                         "(columns where cells would stack)"));
   rows.push_back(Choice("surface.mesher", SM_MEMBER(surface.method),
-                        {{"scvd", SurfaceMethod::kScvd}, {"midsurface", SurfaceMethod::kMid}},
+                        {{"scvd", SurfaceMethod::kScvd},
+                         {"midsurface", SurfaceMethod::kMid},
+                         {"auto", SurfaceMethod::kAuto}},
                         "how a sheet's triangles are made: the SCVD's dual triangles (the "
                         "paper), or its mid-surface at voxel resolution with the aperture, "
-                        "decimated to the triangles r (or surface.triangles) gives"));
+                        "decimated to the triangles r (or surface.triangles) gives, its "
+                        "junctions at the rock's angles; auto: both, the mid-surface kept "
+                        "unless it scores more than 0.01 below the SCVD's"));
   rows.push_back(
       Choice("surface.placement", SM_MEMBER(surface.placement),
              {{"generator", VertexPlacement::kGenerator}, {"centroid", VertexPlacement::kCentroid}},

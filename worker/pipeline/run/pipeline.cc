@@ -30,6 +30,9 @@
 namespace sheetmesh {
 namespace {
 
+// surface.mesher auto keeps the mid-surface down to this far below the SCVD's similarity.
+constexpr double kMesherMargin = 0.01;
+
 // Times a stage and appends it to the report.
 class StageTimer {
  public:
@@ -382,8 +385,11 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   report.thickness = sheet.thickness_stats;
   report.thickness.histogram.clear();
   report.components = sheet.components.count();
-  if (!options.extract && options.surface.method == SurfaceMethod::kMid &&
+  // With surface.mesher auto, the SCVD's pieces where the mid-surface's are cut anew.
+  std::vector<int32_t> scvd_pieces;
+  if (!options.extract && options.surface.method != SurfaceMethod::kScvd &&
       options.extraction.separate) {
+    scvd_pieces = piece_of_voxel;
     // A mid-surface is a height field per piece: each component of the phase whose layers
     // are not (a steep crossing) as separation (Algorithm 2) cuts it, the cells cut away the
     // junctions between its sheets.
@@ -417,22 +423,59 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     // (bench/RESULTS.md, issue 42); where a volume mesh follows, its angles come first.
     surface.fit_vertices = MeshesVolume(options) ? VertexFit::kNone : VertexFit::kRim;
   }
+  // The surface of one mesher (the search hands back the surface it chose).
+  auto build = [&](const SurfaceOptions& o, std::span<const int32_t> pieces,
+                   const Progress& p) -> absl::StatusOr<RadiusSearchResult> {
+    RadiusSearchResult built;
+    if (options.search_radius) {
+      SM_ASSIGN_OR_RETURN(built, SearchRadius(sheet, o, options.radius_search, pieces, p));
+    } else {
+      SM_ASSIGN_OR_RETURN(built.surface, BuildRequestedSurface(sheet, o, pieces, p));
+    }
+    return built;
+  };
   SurfaceResult result;
-  if (options.search_radius) {
-    // The search hands back the surface it chose.
-    StageTimer t(&report, "search-r");
-    SM_ASSIGN_OR_RETURN(RadiusSearchResult found,
-                        SearchRadius(sheet, surface, options.radius_search, piece_of_voxel,
-                                     progress.Stage("search-r")));
-    surface.scvd.radius_voxels = found.choice.radius;
-    surface.triangles = found.choice.decimated_to;
-    report.options.surface.scvd.radius_voxels = found.choice.radius;
-    report.radius_choice = std::move(found.choice);
+  {
+    StageTimer t(&report, options.search_radius ? "search-r" : "surface");
+    const Progress p = progress.Stage(options.search_radius ? "search-r" : "surface");
+    RadiusSearchResult found;
+    if (surface.method != SurfaceMethod::kAuto) {
+      SM_ASSIGN_OR_RETURN(found, build(surface, piece_of_voxel, p));
+    } else {
+      // Both meshers; the mid-surface's junctions are at the rock's angles and the SCVD's are
+      // not, so it is kept unless it scores clearly below (the margin).
+      SurfaceOptions o = surface;
+      o.method = SurfaceMethod::kScvd;
+      const std::span<const int32_t> scvd_labels =
+          options.extract ? std::span<const int32_t>(piece_of_voxel) : scvd_pieces;
+      SM_ASSIGN_OR_RETURN(RadiusSearchResult scvd, build(o, scvd_labels, p.Sub(0, 0.5)));
+      o.method = SurfaceMethod::kMid;
+      SM_ASSIGN_OR_RETURN(RadiusSearchResult mid, build(o, piece_of_voxel, p.Sub(0.5, 1)));
+      MesherChoiceStats c;
+      c.margin = kMesherMargin;
+      for (auto [built, score] :
+           {std::pair{&scvd, &c.scvd_similarity}, {&mid, &c.mid_similarity}}) {
+        SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizeMesh(built->surface.mesh, sheet.set.dims(),
+                                                         options.score.height));
+        *score = ScoreModel(model, sheet.set).similarity;
+      }
+      c.kept_mid =
+          !mid.surface.mesh.faces.empty() && c.mid_similarity >= c.scvd_similarity - kMesherMargin;
+      if (c.kept_mid) {
+        found = std::move(mid);
+      } else {
+        found = std::move(scvd);
+        if (!options.extract) piece_of_voxel = std::move(scvd_pieces);
+      }
+      found.surface.mesher_choice = c;
+    }
+    if (options.search_radius) {
+      surface.scvd.radius_voxels = found.choice.radius;
+      surface.triangles = found.choice.decimated_to;
+      report.options.surface.scvd.radius_voxels = found.choice.radius;
+      report.radius_choice = std::move(found.choice);
+    }
     result = std::move(found.surface);
-  } else {
-    StageTimer t(&report, "surface");
-    SM_ASSIGN_OR_RETURN(
-        result, BuildRequestedSurface(sheet, surface, piece_of_voxel, progress.Stage("surface")));
   }
   if (result.mesh.num_faces() == 0) {
     // An empty mesh scores 0 and would give a volume mesh of the box alone: not a result.

@@ -331,6 +331,7 @@ SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& place
   s.apertures = result.apertures;
   s.smoothed_vertices = result.smoothed_vertices;
   s.error_density = result.error_density;
+  s.mesher_choice = result.mesher_choice;
   s.generators = result.scvd.num_generators();
   s.lloyd_iterations = result.scvd.iterations;
   s.lloyd_converged = result.scvd.converged;

@@ -31,6 +31,14 @@ struct ErrorDensityStats {
   bool kept_weighted = false;
 };
 
+// What surface.mesher auto did: both surfaces' formula-5 scores and which was kept.
+struct MesherChoiceStats {
+  double scvd_similarity = 0;
+  double mid_similarity = 0;
+  bool kept_mid = false;
+  double margin = 0;  // the mid-surface is kept down to this much below the SCVD's score
+};
+
 // A component that gave no triangle: too small for three cells at this r.
 struct SkippedComponent {
   uint32_t component = 0;
@@ -46,6 +54,7 @@ struct SurfaceResult {
   std::optional<FaceApertureStats> apertures;      // when fit_walls fitted the heights
   size_t smoothed_vertices = 0;                    // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;  // when options.error_density was > 0
+  std::optional<MesherChoiceStats> mesher_choice;  // with surface.mesher auto
   Scvd scvd;
   DualTriangleStats triangle_stats;
   // With bricks: how many held sheet, the halo used, seam faces or vertices the bricks
@@ -86,6 +95,7 @@ struct SurfaceStats {
   std::optional<FaceApertureStats> apertures;
   uint64_t smoothed_vertices = 0;  // vertices the thick-sheet smoothing moved
   std::optional<ErrorDensityStats> error_density;
+  std::optional<MesherChoiceStats> mesher_choice;
 
   // The figures by name, the SCVD's and the topology nested, for the report.
   nlohmann::json Fields() const;
@@ -94,10 +104,11 @@ struct SurfaceStats {
 // The stats of `result`, its lengths made physical by `placement`.
 SurfaceStats DescribeSurface(const SurfaceResult& result, const Placement& placement);
 
-// Meshes `sheet` with one SCVD (options.error_density is BuildRequestedSurface's, in
-// error_density.h). `piece_of_voxel`, when not empty, labels each voxel with its object id
-// (faces take their vertices' majority); otherwise faces carry their component id.
-// Errors of BuildScvd pass through (kInvalidArgument for r <= 0 or r beyond the volume);
+// Meshes `sheet` with one SCVD, or its mid-surface with options.method kMid (kAuto is the
+// pipeline's: it builds both and keeps one; here it is the SCVD) (options.error_density is
+// BuildRequestedSurface's, in error_density.h). `piece_of_voxel`, when not empty, labels each voxel
+// with its object id (faces take their vertices' majority); otherwise faces carry their component
+// id. Errors of BuildScvd pass through (kInvalidArgument for r <= 0 or r beyond the volume);
 // kCancelled if asked.
 absl::StatusOr<SurfaceResult> BuildSurface(const SheetAnalysis& sheet,
                                            const SurfaceOptions& options,

@@ -46,6 +46,8 @@ enum class SurfaceMethod {
   kScvd,  // the paper's: the dual triangles of the SCVD of radius r
   kMid,   // the mid-surface at voxel resolution with its aperture, decimated to the budget
           // (mid_surface.h, aperture_decimate.h; beyond the paper)
+  kAuto,  // both, and the mid-surface kept unless it scores below the SCVD's (its junctions
+          // are at the rock's angles, the SCVD's are not)
 };
 
 struct SurfaceOptions {

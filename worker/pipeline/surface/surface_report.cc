@@ -26,6 +26,12 @@ nlohmann::json SurfaceStats::Fields() const {
                           {"weighted_similarity", error_density->weighted_similarity},
                           {"kept_weighted", error_density->kept_weighted}};
   }
+  if (mesher_choice) {
+    j["mesher_choice"] = {{"scvd_similarity", mesher_choice->scvd_similarity},
+                          {"midsurface_similarity", mesher_choice->mid_similarity},
+                          {"kept", mesher_choice->kept_mid ? "midsurface" : "scvd"},
+                          {"margin", mesher_choice->margin}};
+  }
   if (decimation) {
     j["decimation"] = {{"dual_triangles", decimation->faces_before},
                        {"collapses", decimation->collapses},

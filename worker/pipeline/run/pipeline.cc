@@ -21,6 +21,7 @@
 #include "worker/pipeline/run/parameters.h"
 #include "worker/pipeline/run/pipeline_outputs.h"
 #include "worker/pipeline/surface/error_density.h"
+#include "worker/pipeline/surface/mesher_choice.h"
 #include "worker/pipeline/surface/mid_surface.h"
 #include "worker/pipeline/tet/volume_mesh_io.h"
 #include "worker/pipeline/volume/vdb_io.h"
@@ -29,9 +30,6 @@
 
 namespace sheetmesh {
 namespace {
-
-// surface.mesher auto keeps the mid-surface down to this far below the SCVD's similarity.
-constexpr double kMesherMargin = 0.01;
 
 // Times a stage and appends it to the report.
 class StageTimer {
@@ -426,12 +424,9 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   // The surface of one mesher (the search hands back the surface it chose).
   auto build = [&](const SurfaceOptions& o, std::span<const int32_t> pieces,
                    const Progress& p) -> absl::StatusOr<RadiusSearchResult> {
+    if (options.search_radius) return SearchRadius(sheet, o, options.radius_search, pieces, p);
     RadiusSearchResult built;
-    if (options.search_radius) {
-      SM_ASSIGN_OR_RETURN(built, SearchRadius(sheet, o, options.radius_search, pieces, p));
-    } else {
-      SM_ASSIGN_OR_RETURN(built.surface, BuildRequestedSurface(sheet, o, pieces, p));
-    }
+    SM_ASSIGN_OR_RETURN(built.surface, BuildRequestedSurface(sheet, o, pieces, p));
     return built;
   };
   SurfaceResult result;
@@ -442,32 +437,21 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
     if (surface.method != SurfaceMethod::kAuto) {
       SM_ASSIGN_OR_RETURN(found, build(surface, piece_of_voxel, p));
     } else {
-      // Both meshers; the mid-surface's junctions are at the rock's angles and the SCVD's are
-      // not, so it is kept unless it scores clearly below (the margin).
-      SurfaceOptions o = surface;
-      o.method = SurfaceMethod::kScvd;
-      const std::span<const int32_t> scvd_labels =
-          options.extract ? std::span<const int32_t>(piece_of_voxel) : scvd_pieces;
-      SM_ASSIGN_OR_RETURN(RadiusSearchResult scvd, build(o, scvd_labels, p.Sub(0, 0.5)));
-      o.method = SurfaceMethod::kMid;
-      SM_ASSIGN_OR_RETURN(RadiusSearchResult mid, build(o, piece_of_voxel, p.Sub(0.5, 1)));
-      MesherChoiceStats c;
-      c.margin = kMesherMargin;
-      for (auto [built, score] :
-           {std::pair{&scvd, &c.scvd_similarity}, {&mid, &c.mid_similarity}}) {
-        SM_ASSIGN_OR_RETURN(VoxelSet model, VoxelizeMesh(built->surface.mesh, sheet.set.dims(),
-                                                         options.score.height));
-        *score = ScoreModel(model, sheet.set).similarity;
+      // Both meshers, each with its own pieces (without extraction the mid-surface's were
+      // cut anew); the one kept carries on with its pieces.
+      SM_ASSIGN_OR_RETURN(found, BuildWithBothMeshers(
+                                     sheet, options.score.height,
+                                     [&](SurfaceMethod method, const Progress& q) {
+                                       SurfaceOptions o = surface;
+                                       o.method = method;
+                                       const bool own =
+                                           method == SurfaceMethod::kMid || options.extract;
+                                       return build(o, own ? piece_of_voxel : scvd_pieces, q);
+                                     },
+                                     p));
+      if (!found.surface.mesher_choice->kept_mid && !options.extract) {
+        piece_of_voxel = std::move(scvd_pieces);
       }
-      c.kept_mid =
-          !mid.surface.mesh.faces.empty() && c.mid_similarity >= c.scvd_similarity - kMesherMargin;
-      if (c.kept_mid) {
-        found = std::move(mid);
-      } else {
-        found = std::move(scvd);
-        if (!options.extract) piece_of_voxel = std::move(scvd_pieces);
-      }
-      found.surface.mesher_choice = c;
     }
     if (options.search_radius) {
       surface.scvd.radius_voxels = found.choice.radius;

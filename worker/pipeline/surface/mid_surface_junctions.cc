@@ -196,7 +196,12 @@ bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
       // sheet's continuation.
       const bool nearer = between > off + 3;
       const bool in_pencil = to_p + to_q <= between + 3 && std::min(to_p, to_q) >= 2;
-      if ((nearer || in_pencil) && between > options.min_degrees && off <= kBandDegrees) {
+      // A small one in the pencil is a band however unequal its angles to the two (at 30
+      // degrees the merge of two sheets may lie 24 degrees from one of them).
+      const bool small = 4 * own <= std::min(charts[partners[p]]->info().voxels,
+                                             charts[partners[q]]->info().voxels);
+      if ((nearer || in_pencil) && between > options.min_degrees &&
+          (off <= kBandDegrees || (in_pencil && small))) {
         return true;
       }
     }

@@ -250,8 +250,7 @@ uint64_t MinLayerVoxels(uint64_t piece_voxels) { return std::max<uint64_t>(64, p
 uint64_t FlattenAtJunctions(TriangleMesh* mesh, const std::vector<JunctionLine>& lines) {
   constexpr double kOnLine = 0.05;  // voxels: a vertex this near a line lies on it
   auto on = [&](const Vec3& p, const JunctionLine& l) {
-    const Vec3 w = p - l.point;
-    return Norm2(w - l.direction * Dot(w, l.direction)) < kOnLine * kOnLine;
+    return l.Distance2(p) < kOnLine * kOnLine;
   };
   uint64_t moved = 0;
   std::vector<uint8_t> done(mesh->vertices.size(), 0);

@@ -160,8 +160,7 @@ void Chart::ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const Juncti
   const double reach = line.step + 1.0;
   auto along = [&](const std::pair<double, uint32_t>& e) {
     if (e.first < line.t0 - reach || e.first > line.t1 + reach) return false;
-    const Vec3 off = mesh->vertices[e.second] - line.point;
-    return Norm2(off - line.direction * Dot(off, line.direction)) <= kZipSpan * kZipSpan;
+    return line.Distance2(mesh->vertices[e.second]) <= kZipSpan * kZipSpan;
   };
   if (!std::all_of(rim.begin(), rim.end(), along)) {
     for (size_t a = 0; a < rim.size();) {

@@ -27,6 +27,11 @@ struct JunctionLine {
   std::vector<Vec3> plane_points, plane_normals;
   int samples() const { return static_cast<int>(std::floor((t1 - t0) / step + 1e-6)) + 1; }
   Vec3 At(int k) const { return point + direction * (t0 + k * step); }
+  // The squared distance of p from the (unbounded) line.
+  double Distance2(const Vec3& p) const {
+    const Vec3 w = p - point;
+    return Norm2(w - direction * Dot(w, direction));
+  }
 };
 
 }  // namespace sheetmesh

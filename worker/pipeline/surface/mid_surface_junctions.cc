@@ -2,9 +2,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
@@ -14,6 +14,21 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr size_t kMaxContactPoints = 4000;  // a line's fit needs no more
+
+// A voxel's index in a box of `dims`, and its six neighbours' steps.
+uint64_t VoxelKey(const Index3& p, const Dims& dims) {
+  return static_cast<uint64_t>(p.x) +
+         static_cast<uint64_t>(dims.nx) *
+             (static_cast<uint64_t>(p.y) + static_cast<uint64_t>(dims.ny) * p.z);
+}
+constexpr int kStep[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+
+// How far from their junction two sheets of `thickness` meeting at an angle of this sine
+// run together (their runs merge): the planes near a contact are fitted beyond it, and
+// what a cut leaves beyond a line within it is the junction's.
+double MergeWidth(double thickness, double sine) {
+  return std::min(40.0, 1.5 * thickness / std::max(0.1, sine) + 2);
+}
 
 // Where two charts meet: the voxels by which they do.
 struct Contact {
@@ -77,11 +92,7 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
     const std::vector<std::unique_ptr<Chart>>& charts_in, const std::vector<Index3>& loose,
     const Dims& dims) {
   const std::vector<std::unique_ptr<Chart>>* charts = &charts_in;
-  auto key = [&](const Index3& p) -> uint64_t {
-    return static_cast<uint64_t>(p.x) +
-           static_cast<uint64_t>(dims.nx) *
-               (static_cast<uint64_t>(p.y) + static_cast<uint64_t>(dims.ny) * p.z);
-  };
+  auto key = [&](const Index3& p) { return VoxelKey(p, dims); };
   auto inside = [&](const Index3& p) {
     return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < dims.nx && p.y < dims.ny && p.z < dims.nz;
   };
@@ -92,8 +103,6 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
         [&](const Index3& p, bool) { owner[key(p)] = static_cast<int32_t>(c); });
   }
   for (const Index3& p : loose) owner.try_emplace(key(p), -1);
-  static constexpr int kStep[6][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
-                                      {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
   std::map<std::pair<int32_t, int32_t>, Contact> contacts;
   // Charts that touch.
   for (size_t c = 0; c < charts->size(); ++c) {
@@ -132,7 +141,8 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
         }
       }
     }
-    absl::flat_hash_map<uint32_t, std::vector<int32_t>> charts_of;
+    // By root in order: a contact's points, and so its line, come out the same every run.
+    std::map<uint32_t, std::vector<int32_t>> charts_of;
     absl::flat_hash_map<uint32_t, std::vector<uint32_t>> members;
     for (uint32_t k = 0; k < loose.size(); ++k) {
       const uint32_t root = find(k);
@@ -230,16 +240,12 @@ bool Fragment(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
 // The chart other than `self` that `voxels` touch (6-neighbours) whose plane is within
 // `degrees` of theirs, the one they touch most; -1 when none.
 int32_t CoplanarNeighbour(const std::vector<Index3>& voxels, int32_t self,
-                          const std::vector<std::unique_ptr<Chart>>& charts, double degrees) {
-  auto key = [](const Index3& p) {
-    return (static_cast<uint64_t>(static_cast<uint32_t>(p.x)) << 42) ^
-           (static_cast<uint64_t>(static_cast<uint32_t>(p.y)) << 21) ^
-           static_cast<uint64_t>(static_cast<uint32_t>(p.z));
-  };
+                          const std::vector<std::unique_ptr<Chart>>& charts, const Dims& dims,
+                          double degrees) {
   absl::flat_hash_set<uint64_t> own;
   std::vector<Vec3> points;
   for (const Index3& p : voxels) {
-    own.insert(key(p));
+    own.insert(VoxelKey(p, dims));
     points.emplace_back(p.x, p.y, p.z);
   }
   Vec3 centroid, normal;
@@ -251,9 +257,8 @@ int32_t CoplanarNeighbour(const std::vector<Index3>& voxels, int32_t self,
     if (std::abs(Dot(charts[k]->info().normal, normal)) < std::cos(degrees * kPi / 180)) continue;
     uint64_t touching = 0;
     charts[k]->ForEachVoxel([&](const Index3& p, bool) {
-      for (const auto& [dx, dy, dz] :
-           {std::array{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}) {
-        if (own.contains(key(Index3{p.x + dx, p.y + dy, p.z + dz}))) {
+      for (const auto& s : kStep) {
+        if (own.contains(VoxelKey(Index3{p.x + s[0], p.y + s[1], p.z + s[2]}, dims))) {
           ++touching;
           break;
         }
@@ -279,10 +284,10 @@ bool EndsAt(const Chart& chart, const JunctionLine& line, int index) {
     for (int32_t j = 0; j < chart.nj(); ++j) {
       const ChartColumn* c = chart.At(i, j);
       if (c == nullptr || c->filled || side * trace.Side(i, j) < 0) continue;
-      const Vec3 w = chart.Point(i, j, c->mid()) - line.point;
-      const double t = Dot(w, line.direction);
+      const Vec3 p = chart.Point(i, j, c->mid());
+      const double t = Dot(p - line.point, line.direction);
       if (t < line.t0 || t > line.t1) continue;
-      if (Norm2(w - line.direction * t) <= kZipSpan * kZipSpan) return true;
+      if (line.Distance2(p) <= kZipSpan * kZipSpan) return true;
     }
   }
   return false;
@@ -353,7 +358,7 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
         lb = std::max(lb, t);
       }
       const double thick = std::max({f.thickness[0], f.thickness[1], 1.0});
-      inner = std::min(40.0, 1.5 * thick / std::max(0.1, sine) + 2);
+      inner = MergeWidth(thick, sine);
     }
     if (!ok) continue;
     const Vec3& na = f.plane_normal[0];
@@ -458,7 +463,12 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
 std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts,
                                      const std::vector<Index3>& loose_in, const Dims& dims,
                                      const JunctionOptions& options, int32_t* next_piece) {
+  // In order (the layers' junctions arrive in a hash map's): the components of the loose
+  // voxels and their contacts the same every run.
   std::vector<Index3> loose = loose_in;
+  std::sort(loose.begin(), loose.end(), [](const Index3& a, const Index3& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
   // Lines first, and the charts they run through split there (a chart that is two sheets
   // folded at a T gives a line between its planes' mixture and the next: once split, its
   // parts' planes give the line again, better), until none is split.
@@ -502,20 +512,19 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         const JunctionLine& line = set.lines[l];
         double thick = 1;
         for (double t : set.thickness[l]) thick = std::max(thick, t);
-        const double sine = std::max(0.1, std::sin(line.degrees * kPi / 180));
-        const double merge = std::min(40.0, 1.5 * thick / sine + 2);
-        double farthest = 0;
+        const double merge = MergeWidth(thick, std::sin(line.degrees * kPi / 180));
+        double farthest2 = 0;
         for (const Index3& p : rest) {
-          const Vec3 w = Vec3(p.x, p.y, p.z) - line.point;
-          farthest = std::max(farthest, Norm(w - line.direction * Dot(w, line.direction)));
+          farthest2 = std::max(farthest2, line.Distance2(Vec3(p.x, p.y, p.z)));
         }
-        if (farthest <= merge) {
+        if (farthest2 <= merge * merge) {
           loose.insert(loose.end(), rest.begin(), rest.end());
           continue;
         }
         // What lies beyond along the plane of a chart it touches there is that sheet's (the
         // separation drew their border off the junction): it joins it.
-        if (const int32_t k = CoplanarNeighbour(rest, c, *charts, options.min_degrees); k >= 0) {
+        if (const int32_t k = CoplanarNeighbour(rest, c, *charts, dims, options.min_degrees);
+            k >= 0) {
           (*charts)[k]->ForEachVoxel([&](const Index3& p, bool) { rest.push_back(p); });
           const int32_t piece = (*charts)[k]->info().piece;
           (*charts)[k] = std::make_unique<Chart>(std::move(rest), piece, dims);

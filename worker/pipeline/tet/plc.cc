@@ -31,12 +31,11 @@ double Jitter(uint64_t i, int k) {
 
 // The sheets' median edge sets the spacing of the seeded points, so that the tetrahedra
 // off the sheets are about as large as those on them. 0 without sheets.
-double MedianEdge(const Plc& plc) {
-  if (plc.sheet_triangles.empty()) return 0;
+double MedianEdge(const SheetTriangles& st, const std::vector<Vec3>& v) {
+  if (st.faces.empty()) return 0;
   std::vector<double> edges;
-  for (const Face& f : plc.sheet_triangles) {
-    for (int k = 0; k < 3; ++k)
-      edges.push_back(Norm(plc.vertices[f[(k + 1) % 3]] - plc.vertices[f[k]]));
+  for (const Face& f : st.faces) {
+    for (int k = 0; k < 3; ++k) edges.push_back(Norm(v[f[(k + 1) % 3]] - v[f[k]]));
   }
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
   return edges[edges.size() / 2];
@@ -277,6 +276,11 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
   // sheet's edge or face is joined to it.
   plc.dropped_triangles += DropFlatTriangles(st, v, kTouchVoxels);
   plc.joined_touches = JoinTouches(st, v, kTouchVoxels);
+  // The lattice's spacing follows the sheets' median edge as the mends left it; edges far
+  // over it are then halved (the split shortens no edge the lattice was sized from).
+  const double median_edge_voxels = MedianEdge(st, v);
+  plc.split_long_edges =
+      SplitLongSheetEdges(options.long_edge_factor * median_edge_voxels, &v, &on_face, &st);
   // Which box faces each vertex lies on, as the mends left it: a vertex moved onto another
   // sheet where that sheet meets the box lies on the box too, and its edges there must be
   // segments of the box's facet (else TetGen sees a sheet triangle cut the box face and
@@ -317,7 +321,7 @@ absl::StatusOr<Plc> BuildPlc(const TriangleMesh& sheets, const Dims& dims,
     plc.sheet_piece.push_back(st.piece[f]);
     plc.sheet_thickness.push_back(st.thickness[f]);
   }
-  const double median_edge = MedianEdge(plc);
+  const double median_edge = PhysicalLength(median_edge_voxels, placement);
   // Points of the box's surface, when TetGen may add none there.
   std::vector<BoxPoint> box_points;
   const uint32_t first_box_point = static_cast<uint32_t>(plc.vertices.size());

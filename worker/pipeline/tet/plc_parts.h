@@ -242,6 +242,13 @@ uint32_t DropFlatTriangles(SheetTriangles& s, const std::vector<Vec3>& v, double
 // aborts. Returns the number joined.
 uint32_t JoinTouches(SheetTriangles& s, std::vector<Vec3>& v, double eps);
 
+// Bisects sheet triangles (conforming longest-edge bisection, each new vertex an edge's
+// midpoint, so the sheets keep their shape) until no edge is longer than max_edge (voxels).
+// A midpoint lies on the box faces both ends of its edge lie on (on_face grows with v).
+// Returns the number of edges split; none for max_edge <= 0.
+uint32_t SplitLongSheetEdges(double max_edge, std::vector<Vec3>* vertices,
+                             std::vector<uint8_t>* on_face, SheetTriangles* st);
+
 // Collapses sheet edges shorter than max_length (voxels), shortest first, each to its
 // midpoint (or onto its end on the box), where that makes no fold or hole and turns no
 // face by over 30 degrees (one on a junction by over 1); a vertex on a junction stays, or

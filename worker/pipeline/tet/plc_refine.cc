@@ -13,6 +13,7 @@
 
 #include "absl/container/flat_hash_map.h"
 #include "worker/pipeline/tet/plc.h"
+#include "worker/pipeline/tet/plc_parts.h"
 
 namespace sheetmesh {
 namespace {
@@ -29,12 +30,24 @@ bool OnBoxFace(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
   return false;
 }
 
-}  // namespace
+// Conforming longest-edge bisection of `tris` (an edge is split in every triangle on it):
+// each triangle is refined until its longest edge is no longer than its target (squared;
+// infinite: none), which both halves of a split keep. An edge is split once it is the
+// longest edge of every triangle on it (each triangle with a longer edge is refined along
+// that one first), so that no split narrows a triangle's angles to less than half of what
+// they were. `hooks.midpoint(a, b)` adds the new vertex and returns it; `hooks.split(f,
+// added)` is told that triangle `added` (appended) was cut from f; an edge for which
+// `hooks.may_split` says false is not split, and a triangle whose chain reaches one stays.
+struct BisectionHooks {
+  std::function<double(uint32_t, uint32_t)> length2;
+  std::function<bool(uint32_t, uint32_t)> may_split;
+  std::function<uint32_t(uint32_t, uint32_t)> midpoint;
+  std::function<void(uint32_t, uint32_t)> split;
+};
 
-uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
-  std::vector<Face>& tris = plc->sheet_triangles;
-  const size_t vertices_before = plc->vertices.size();
-  const size_t first_sheet_facet = plc->facets.size() - tris.size();
+uint32_t Bisect(std::vector<Face>* triangles, std::vector<double> target,
+                const BisectionHooks& hooks) {
+  std::vector<Face>& tris = *triangles;
   // Each edge's triangles, kept up to date as they split.
   absl::flat_hash_map<uint64_t, std::vector<uint32_t>> faces_of;
   auto link = [&](uint32_t t, bool add) {
@@ -51,9 +64,7 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
   using Edge = std::pair<uint32_t, uint32_t>;
   // Edges in a strict order: by length, ties by their corners, so that every triangle has
   // one longest edge and a chain of ever longer edges ends.
-  auto length2 = [&](const Edge& e) {
-    return Norm2(plc->vertices[e.second] - plc->vertices[e.first]);
-  };
+  auto length2 = [&](const Edge& e) { return hooks.length2(e.first, e.second); };
   auto longer = [&](const Edge& e, const Edge& f) {
     const double le = length2(e), lf = length2(f);
     return le != lf ? le > lf : e > f;
@@ -67,14 +78,10 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
     }
     return best;
   };
-  // The longest edge each triangle is to be refined to (squared; infinite: none), which
-  // both halves of a split keep.
-  std::vector<double> target(tris.size(), std::numeric_limits<double>::infinity());
   auto bisect = [&](const Edge& e) {
     const auto [a, b] = e;
     const std::vector<uint32_t> on_edge = faces_of[EdgeKey(a, b)];
-    const uint32_t m = static_cast<uint32_t>(plc->vertices.size());
-    plc->vertices.push_back((plc->vertices[a] + plc->vertices[b]) * 0.5);
+    const uint32_t m = hooks.midpoint(a, b);
     for (const uint32_t f : on_edge) {
       // (.. a .. b ..) -> (.. a .. m ..) and (.. m .. b ..): the same orientation.
       const Face g = tris[f];
@@ -85,27 +92,17 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
       second[ia] = m;
       link(f, false);
       tris[f] = first;
-      plc->facets[first_sheet_facet + f].polygons = {{first[0], first[1], first[2]}};
       link(f, true);
       const uint32_t added = static_cast<uint32_t>(tris.size());
       tris.push_back(second);
-      plc->sheet_piece.push_back(plc->sheet_piece[f]);
-      plc->sheet_thickness.push_back(plc->sheet_thickness[f]);
-      plc->facets.push_back(
-          {{{second[0], second[1], second[2]}}, kFirstSheetMarker + static_cast<int32_t>(added)});
       target.push_back(target[f]);
       link(added, true);
+      hooks.split(f, added);
     }
   };
   uint32_t split = 0;
-  // Longest-edge bisection: `e` is split once it is the longest edge of every triangle on it
-  // (each triangle with a longer edge is refined along that one first), so that no split
-  // narrows a triangle's angles to less than half of what they were. An edge in a box face
-  // is not split (the face's facet would need the point too): false, and the chain stops.
   std::function<bool(const Edge&)> refine = [&](const Edge& e) {
-    if (OnBoxFace(plc->vertices[e.first], plc->vertices[e.second], plc->box_lo, plc->box_hi)) {
-      return false;
-    }
+    if (!hooks.may_split(e.first, e.second)) return false;
     for (;;) {
       const std::vector<uint32_t>& on_edge = faces_of[EdgeKey(e.first, e.second)];
       if (on_edge.empty()) return false;
@@ -124,11 +121,6 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
     ++split;
     return true;
   };
-  // Each marked triangle is bisected until its longest edge is half what it was (twice for
-  // a well-shaped one), the pieces its neighbours' splits cut from it included.
-  for (uint32_t t = 0; t < std::min(marked.size(), tris.size()); ++t) {
-    if (marked[t]) target[t] = 0.25 * length2(longest_edge(t));
-  }
   for (bool again = true; again;) {
     again = false;
     for (uint32_t t = 0; t < tris.size(); ++t) {
@@ -136,10 +128,53 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
       if (refine(longest_edge(t))) {
         again = true;
       } else {
-        target[t] = std::numeric_limits<double>::infinity();  // its chain reaches the box
+        target[t] = std::numeric_limits<double>::infinity();  // its chain reaches a fixed edge
       }
     }
   }
+  return split;
+}
+
+double LongestEdge2(const Face& f, const std::vector<Vec3>& v) {
+  double longest = 0;
+  for (int k = 0; k < 3; ++k) longest = std::max(longest, Norm2(v[f[(k + 1) % 3]] - v[f[k]]));
+  return longest;
+}
+
+}  // namespace
+
+uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
+  std::vector<Face>& tris = plc->sheet_triangles;
+  const size_t vertices_before = plc->vertices.size();
+  const size_t first_sheet_facet = plc->facets.size() - tris.size();
+  // Each marked triangle is bisected until its longest edge is half what it was (twice for
+  // a well-shaped one), the pieces its neighbours' splits cut from it included.
+  std::vector<double> target(tris.size(), std::numeric_limits<double>::infinity());
+  for (uint32_t t = 0; t < std::min(marked.size(), tris.size()); ++t) {
+    if (marked[t]) target[t] = 0.25 * LongestEdge2(tris[t], plc->vertices);
+  }
+  BisectionHooks hooks;
+  hooks.length2 = [&](uint32_t a, uint32_t b) {
+    return Norm2(plc->vertices[b] - plc->vertices[a]);
+  };
+  // An edge in a box face is not split (the face's facet would need the point too).
+  hooks.may_split = [&](uint32_t a, uint32_t b) {
+    return !OnBoxFace(plc->vertices[a], plc->vertices[b], plc->box_lo, plc->box_hi);
+  };
+  hooks.midpoint = [&](uint32_t a, uint32_t b) {
+    plc->vertices.push_back((plc->vertices[a] + plc->vertices[b]) * 0.5);
+    return static_cast<uint32_t>(plc->vertices.size() - 1);
+  };
+  hooks.split = [&](uint32_t f, uint32_t added) {
+    const Face& first = tris[f];
+    const Face& second = tris[added];
+    plc->facets[first_sheet_facet + f].polygons = {{first[0], first[1], first[2]}};
+    plc->sheet_piece.push_back(plc->sheet_piece[f]);
+    plc->sheet_thickness.push_back(plc->sheet_thickness[f]);
+    plc->facets.push_back(
+        {{{second[0], second[1], second[2]}}, kFirstSheetMarker + static_cast<int32_t>(added)});
+  };
+  const uint32_t split = Bisect(&tris, std::move(target), hooks);
   // The lattice seeds stay the last vertices (MoveSeeds moves those, and they are on no
   // facet): the midpoints go before them.
   const size_t seeds = plc->seed_points;
@@ -161,6 +196,28 @@ uint32_t RefineSheetTriangles(const std::vector<uint8_t>& marked, Plc* plc) {
     }
   }
   return split;
+}
+
+uint32_t SplitLongSheetEdges(double max_edge, std::vector<Vec3>* vertices,
+                             std::vector<uint8_t>* on_face, SheetTriangles* st) {
+  if (!(max_edge > 0)) return 0;
+  std::vector<Vec3>& v = *vertices;
+  on_face->resize(v.size(), 0);
+  BisectionHooks hooks;
+  hooks.length2 = [&](uint32_t a, uint32_t b) { return Norm2(v[b] - v[a]); };
+  hooks.may_split = [](uint32_t, uint32_t) { return true; };
+  hooks.midpoint = [&](uint32_t a, uint32_t b) {
+    v.push_back((v[a] + v[b]) * 0.5);
+    // On the box faces both ends are on (an edge along the box keeps its midpoint on it).
+    on_face->push_back((*on_face)[a] & (*on_face)[b]);
+    return static_cast<uint32_t>(v.size() - 1);
+  };
+  hooks.split = [&](uint32_t f, uint32_t) {
+    st->source.push_back(st->source[f]);
+    st->piece.push_back(st->piece[f]);
+    st->thickness.push_back(st->thickness[f]);
+  };
+  return Bisect(&st->faces, std::vector<double>(st->faces.size(), max_edge * max_edge), hooks);
 }
 
 uint32_t DropSheetTriangles(const std::vector<uint8_t>& drop, Plc* plc) {

@@ -63,6 +63,8 @@ struct PlcStats {
                                         // narrow wedge between two faces there
   uint32_t opened_wedges = 0;           // sheet vertices moved off a sheet face's plane
                                         // to open a narrow wedge (PlcOptions::wedge_degrees)
+  uint32_t split_long_edges = 0;        // sheet edges halved for being over long_edge_factor
+                                        // median edges
   uint32_t collapsed_edges = 0;         // sheet edges shorter than
                                         // PlcOptions::short_edge_voxels, collapsed
   uint32_t mended_contacts = 0;         // sheet vertices moved onto another sheet they
@@ -167,6 +169,12 @@ struct PlcOptions {
   // no fold, hole or clash: TetGen must keep every sheet edge, and one of 1.7 voxels among
   // edges of 25 (the paper phantom at r = 15) pins a tetrahedron of 5.55°. 0: none.
   double short_edge_voxels = 2.0;
+  // Sheet edges longer than this many times the sheets' median edge are halved (in their
+  // triangle's plane, so the sheets keep their shape) before TetGen, which may split none
+  // (-Y): a mid-surface keeps its flat regions in triangles tens of voxels long, whose
+  // edges run past the finely spaced points near junctions and the box and pin slivers
+  // there (DPM at r = 3: a sheet edge 100 voxels long along the box, 3.5°). 0: none.
+  double long_edge_factor = 2.0;
   // Seeds TetGen with a graded body-centred cubic lattice of points off the sheets, its
   // spacing this many times the sheets' median edge next to them, growing outward at
   // `grading` (never past a quarter of the box's thinnest side). The lattice's tetrahedra

@@ -97,6 +97,7 @@ nlohmann::json PlcStats::Fields() const {
           {"opened_wedges", opened_wedges},
           {"closed_caps", closed_caps},
           {"collapsed_edges", collapsed_edges},
+          {"split_long_edges", split_long_edges},
           {"mended_contacts", mended_contacts},
           {"mended_edge_contacts", mended_edge_contacts},
           {"unmended_contacts", unmended_contacts},

@@ -115,9 +115,8 @@ TEST(PlcTest, FlipsKeepPiecesFoldsAndCanBeTurnedOff) {
   SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(ThinPair(0, 0, 0), {40, 20, 40}, {}, off));
   EXPECT_EQ(kept.flipped_edges, 0u);
   EXPECT_TRUE(HasEdge(kept, {10, 10, 20}, {30, 10, 20}));
-  // Two pieces meeting along an edge keep it.
   SM_ASSERT_OK_AND_ASSIGN(Plc pieces, BuildPlc(ThinPair(0, 0, 1, 2.5), {40, 20, 40}, {}));
-  EXPECT_EQ(pieces.flipped_edges, 0u);
+  EXPECT_EQ(pieces.flipped_edges, 0u);  // two pieces meeting along an edge keep it
   EXPECT_TRUE(HasEdge(pieces, {10, 10, 20}, {30, 10, 20}));
   // A fold (d lifted 3 voxels: the normals are ~60 degrees apart) is a shape, not noise.
   SM_ASSERT_OK_AND_ASSIGN(Plc fold, BuildPlc(ThinPair(3, 0, 0, 2.5), {40, 20, 40}, {}));
@@ -191,10 +190,10 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
   EXPECT_EQ(plc.dropped_overlaps, 1u);
   ASSERT_EQ(plc.sheet_triangles.size(), 32u);
   for (int32_t piece : plc.sheet_piece) EXPECT_EQ(piece, 0);
-  // Off: kept (and TetGen meshes the wedge).
-  PlcOptions keep;
+  PlcOptions keep;  // off: kept (and TetGen meshes the wedge)
   keep.overlap_voxels = 0;
   keep.contact_voxels = 0;
+  keep.long_edge_factor = 0;  // the fragment's long edge kept whole
   SM_ASSERT_OK_AND_ASSIGN(Plc kept, BuildPlc(m, {20, 20, 20}, {}, keep));
   EXPECT_EQ(kept.dropped_overlaps, 0u);
   EXPECT_EQ(kept.sheet_triangles.size(), 33u);
@@ -208,6 +207,7 @@ TEST(PlcTest, AFragmentLyingOnASheetIsDropped) {
                             VolumeMeshOptions o;
                             o.plc.overlap_voxels = 0;
                             o.plc.contact_voxels = 0;
+                            o.plc.long_edge_factor = 0;
                             o.improve.sheet_move_voxels = 0;
                             o.sliver_rounds = 0;
                             return o;
@@ -580,6 +580,7 @@ TEST(PlcTest, RepairSparesABodysWalls) {
   o.short_edge_voxels = 0;
   o.flip_fold_degrees = 0;
   o.lattice = 0;
+  o.long_edge_factor = 0;
   m.body_pieces = {5};
   SM_ASSERT_OK_AND_ASSIGN(Plc with_body, BuildPlc(m, {24, 24, 24}, {}, o));
   EXPECT_GE(with_body.repaired_triangles, 1u);

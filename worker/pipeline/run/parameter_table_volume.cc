@@ -65,6 +65,10 @@ std::vector<ParamRow> VolumeMeshRows() {
                         "voxels",
                         "collapse sheet edges shorter than this where that makes no fold or "
                         "clash (0: none)"));
+  rows.push_back(Number("plc.long_edge_factor", SM_MEMBER(volume.plc.long_edge_factor),
+                        "0 | [1.5, 20]", "",
+                        "sheet edges longer than this many times the sheets' median edge are "
+                        "halved in their plane before TetGen (0: none)"));
   rows.push_back(Number("plc.untangle_voxels", SM_MEMBER(volume.plc.untangle_voxels), "[0, 3]",
                         "voxels",
                         "sheet triangles that cut through each other are untangled by moving a "

@@ -197,6 +197,11 @@ std::vector<std::string> PlannedStages(const PipelineOptions& options) {
     if (e.recover) stages.push_back("recover");
   }
   stages.push_back("analyze");
+  if (SeparatesWithoutExtraction(options)) {
+    stages.push_back("separate");
+    if (options.extraction.remove_minor) stages.push_back("remove_minor");
+    if (options.extraction.recover) stages.push_back("recover");
+  }
   // The search builds the surface it chooses.
   stages.push_back(options.search_radius ? "search-r" : "surface");
   if (options.representation.mode != RepresentationMode::kSheet) stages.push_back("representation");
@@ -385,12 +390,10 @@ absl::StatusOr<PipelineReport> RunStages(const PipelineOptions& options, const P
   report.components = sheet.components.count();
   // With surface.mesher auto, the SCVD's pieces where the mid-surface's are cut anew.
   std::vector<int32_t> scvd_pieces;
-  if (!options.extract && options.surface.method != SurfaceMethod::kScvd &&
-      options.extraction.separate) {
+  if (SeparatesWithoutExtraction(options)) {
     scvd_pieces = piece_of_voxel;
-    // A mid-surface is a height field per piece: each component of the phase whose layers
-    // are not (a steep crossing) as separation (Algorithm 2) cuts it, the cells cut away the
-    // junctions between its sheets.
+    // A mid-surface is a height field per piece: a component whose layers are not (a steep
+    // crossing) is cut as separation (Algorithm 2) cuts it, the junctions cut away.
     StageTimer t(&report, "separate");
     const std::vector<uint32_t> components = sheet.components.VoxelLabels(sheet.set);
     const std::vector<int32_t> whole(components.begin(), components.end());

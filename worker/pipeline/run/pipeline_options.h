@@ -82,6 +82,13 @@ inline bool MeshesVolume(const PipelineOptions& o) {
   return o.volume_mesh || o.flow.enabled || o.output.split;
 }
 
+// Whether a run without the extraction still separates the sheet phase into pieces, as
+// stages of its own after "analyze": a mid-surface (surface.mesher midsurface or auto) is a
+// height field per piece.
+inline bool SeparatesWithoutExtraction(const PipelineOptions& o) {
+  return !o.extract && o.surface.method != SurfaceMethod::kScvd && o.extraction.separate;
+}
+
 }  // namespace sheetmesh
 
 #endif  // SHEETMESH_WORKER_PIPELINE_RUN_PIPELINE_OPTIONS_H_

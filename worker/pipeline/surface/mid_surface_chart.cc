@@ -10,7 +10,11 @@
 #include <tuple>
 
 namespace sheetmesh {
-void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal) {
+namespace {
+
+// The centroid of `points` and the unit eigenvector of their scatter matrix in column k
+// (0: the direction of least spread, 2: of most).
+Vec3 ScatterAxis(const std::vector<Vec3>& points, int k, Vec3* centroid) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const Vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
   mean /= static_cast<double>(std::max<size_t>(1, points.size()));
@@ -20,9 +24,36 @@ void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* norma
     cov += d * d.transpose();
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  const Eigen::Vector3d n = eig.eigenvectors().col(0);  // the least spread
+  const Eigen::Vector3d n = eig.eigenvectors().col(k);
   *centroid = Vec3(mean.x(), mean.y(), mean.z());
-  *normal = Normalized(Vec3(n.x(), n.y(), n.z()));
+  return Normalized(Vec3(n.x(), n.y(), n.z()));
+}
+
+}  // namespace
+
+void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal) {
+  *normal = ScatterAxis(points, 0, centroid);
+}
+
+void PrincipalLine(const std::vector<Vec3>& points, Vec3* centroid, Vec3* direction) {
+  *direction = ScatterAxis(points, 2, centroid);
+}
+
+bool ClipToBox(const Vec3& p, const Vec3& u, const Dims& dims, double* t0, double* t1) {
+  const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
+  const double pp[3] = {p.x, p.y, p.z}, uu[3] = {u.x, u.y, u.z};
+  for (int k = 0; k < 3; ++k) {
+    const double lo = -0.5, hi = n[k] - 0.5;
+    if (std::abs(uu[k]) < 1e-12) {
+      if (pp[k] < lo || pp[k] > hi) return false;
+      continue;
+    }
+    double a = (lo - pp[k]) / uu[k], b = (hi - pp[k]) / uu[k];
+    if (a > b) std::swap(a, b);
+    *t0 = std::max(*t0, a);
+    *t1 = std::min(*t1, b);
+  }
+  return *t1 > *t0;
 }
 
 Chart::Chart(std::vector<Index3> voxels, int32_t piece, const Dims& dims) : dims_(dims) {
@@ -217,6 +248,21 @@ bool Chart::LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, doubl
   const double tilt = std::abs((*normal)[info_.axis]);
   *thickness = near_length / near.size() * tilt;
   return true;
+}
+
+double Chart::ReachAlong(const Vec3& a, const Vec3& d, double from, double radius, int sign) const {
+  double reach = from;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      const ChartColumn* c = At(i, j);
+      if (c == nullptr || c->filled) continue;
+      const Vec3 p = Point(i, j, c->mid());
+      const double t = Dot(p - a, d);
+      if (sign * (t - reach) <= 0) continue;
+      if (Norm2(p - (a + d * t)) <= radius * radius) reach = t;
+    }
+  }
+  return reach;
 }
 
 ChartCut Chart::Trace(const JunctionLine& line, int index, const Vec3& towards) const {

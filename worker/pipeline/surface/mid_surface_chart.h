@@ -90,6 +90,11 @@ class Chart {
   bool LocalPlane(const Vec3& a, const Vec3& d, double ta, double tb, double inner, double outer,
                   Vec3* centroid, Vec3* normal, double* thickness) const;
 
+  // How far along the line a + t d (in the direction of `sign`, +1 or -1) the chart's
+  // columns within `radius` of it reach past t = from: the farthest such t, or `from`
+  // where none lies beyond.
+  double ReachAlong(const Vec3& a, const Vec3& d, double from, double radius, int sign) const;
+
   // Keeps the side `cut` names: columns beyond the line go, columns between the chart and
   // the line within `band` of it and along the junction's extent are filled on the plane
   // (`plane_point`, `plane_normal`) with `thickness`, and those within `band` lie on it.
@@ -171,6 +176,13 @@ int BoxFacesAt(const Vec3& p, const Dims& dims, double within);
 
 // The least-squares plane of `points` (centroid and unit normal of least spread).
 void FitPlanePoints(const std::vector<Vec3>& points, Vec3* centroid, Vec3* normal);
+
+// The principal direction of `points` (unit, of most spread) and their centroid.
+void PrincipalLine(const std::vector<Vec3>& points, Vec3* centroid, Vec3* direction);
+
+// The part t in [*t0, *t1] of the line p + t u inside the box [-0.5, n - 0.5] on each axis;
+// false when none is.
+bool ClipToBox(const Vec3& p, const Vec3& u, const Dims& dims, double* t0, double* t1);
 
 }  // namespace sheetmesh
 

@@ -1,6 +1,5 @@
 #include "worker/pipeline/surface/mid_surface_junctions.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -42,41 +41,6 @@ struct Contact {
     ++count;
   }
 };
-
-// The principal direction of `points` and their centroid.
-void PrincipalLine(const std::vector<Vec3>& points, Vec3* centroid, Vec3* direction) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const Vec3& p : points) mean += Eigen::Vector3d(p.x, p.y, p.z);
-  mean /= static_cast<double>(points.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Vec3& p : points) {
-    const Eigen::Vector3d d = Eigen::Vector3d(p.x, p.y, p.z) - mean;
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  const Eigen::Vector3d v = eig.eigenvectors().col(2);
-  *centroid = Vec3(mean.x(), mean.y(), mean.z());
-  *direction = Normalized(Vec3(v.x(), v.y(), v.z()));
-}
-
-// The part t in [*t0, *t1] of the line p + t u inside the box [-0.5, n - 0.5] on each axis;
-// false when none is.
-bool ClipToBox(const Vec3& p, const Vec3& u, const Dims& dims, double* t0, double* t1) {
-  const double n[3] = {double(dims.nx), double(dims.ny), double(dims.nz)};
-  const double pp[3] = {p.x, p.y, p.z}, uu[3] = {u.x, u.y, u.z};
-  for (int k = 0; k < 3; ++k) {
-    const double lo = -0.5, hi = n[k] - 0.5;
-    if (std::abs(uu[k]) < 1e-12) {
-      if (pp[k] < lo || pp[k] > hi) return false;
-      continue;
-    }
-    double a = (lo - pp[k]) / uu[k], b = (hi - pp[k]) / uu[k];
-    if (a > b) std::swap(a, b);
-    *t0 = std::max(*t0, a);
-    *t1 = std::min(*t1, b);
-  }
-  return *t1 > *t0;
-}
 
 // A junction found between charts, before lines along one another are merged.
 struct Found {
@@ -321,6 +285,7 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
     }
     constexpr double kRadius = 24;
     constexpr double kEndMargin = 2;
+    constexpr double kBoxGap = 3;  // a chart reaching this near the box reaches it
     Found f;
     const int32_t ids[2] = {pair.first, pair.second};
     // First the planes near the contact; then again away from the line they give, by a
@@ -382,14 +347,23 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       t1 = std::max(t1, t);
     }
     // The line runs on to the box where the contact stops short of it by less than the
-    // planes' reach (the voxels at a face of the box are often cut or merged away), and
-    // otherwise ends a little past the contact: where sheets end inside the box, or curve
-    // away from the planes fitted near it, a line run on past the contact would lie off the
-    // charts it cuts, and their fills up to it would fold over their own columns.
+    // planes' reach (the voxels at a face of the box are often cut or merged away) and both
+    // charts reach the box there; otherwise it ends a little past the contact: where sheets
+    // end inside the box (10 voxels short of it: a line run on made flaps with no aperture),
+    // or curve away from the planes fitted near it, a line run on past the contact would lie
+    // off the charts it cuts, and their fills up to it would fold over their own columns.
     double box0 = t0 - kRadius, box1 = t1 + kRadius;
     if (!ClipToBox(f.line.point, u, dims, &box0, &box1)) continue;
-    f.line.t0 = box0 > t0 - kRadius ? box0 : t0 - kEndMargin;
-    f.line.t1 = box1 < t1 + kRadius ? box1 : t1 + kEndMargin;
+    auto reaches = [&](double from, double box, int sign) {
+      for (const int32_t id : ids) {
+        const double reach =
+            (*charts)[id]->ReachAlong(f.line.point, u, from, inner + kRadius, sign);
+        if (sign * (box - reach) > kBoxGap) return false;
+      }
+      return true;
+    };
+    f.line.t0 = box0 > t0 - kRadius && reaches(t0, box0, -1) ? box0 : t0 - kEndMargin;
+    f.line.t1 = box1 < t1 + kRadius && reaches(t1, box1, 1) ? box1 : t1 + kEndMargin;
     if (!ClipToBox(f.line.point, u, dims, &f.line.t0, &f.line.t1)) continue;
     f.line.step = options.sample_step;
     f.line.charts = {ids[0], ids[1]};
@@ -436,9 +410,11 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
       const Vec3 point = g.point + (off - g.direction * Dot(off, g.direction)) * (w1 / (w0 + w1));
       const double s = Dot(g.point - point, direction);
       const double a0 = g.t0 + s, a1 = g.t1 + s;
-      const double sf = Dot(p1 - point, direction) * (Dot(u, f.line.direction) < 0 ? -1 : 1);
-      double b0 = sf + (Dot(u, f.line.direction) < 0 ? -f.line.t1 : f.line.t0);
-      double b1 = sf + (Dot(u, f.line.direction) < 0 ? -f.line.t0 : f.line.t1);
+      // f's points p1 + t f.direction lie at sf + t along `direction`, or sf - t reversed.
+      const double sf = Dot(p1 - point, direction);
+      const bool flipped = Dot(u, f.line.direction) < 0;
+      double b0 = sf + (flipped ? -f.line.t1 : f.line.t0);
+      double b1 = sf + (flipped ? -f.line.t0 : f.line.t1);
       g.point = point;
       g.direction = direction;
       g.t0 = std::min(a0, b0);

@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
+#include "common/progress.h"
 #include "tests/testing/shapes.h"
 #include "tests/testing/status_matchers.h"
 #include "worker/pipeline/run/pipeline.h"
@@ -33,6 +36,15 @@ PipelineOptions AutoMesher(double r) {
   return o;
 }
 
+// The stages a run reports, each once in order.
+struct Stages : ProgressObserver {
+  bool OnProgress(absl::string_view stage, double, absl::string_view) override {
+    if (seen.empty() || seen.back() != stage) seen.emplace_back(stage);
+    return true;
+  }
+  std::vector<std::string> seen;
+};
+
 TEST(SurfaceMesherChoiceTest, TwoPlanesCrossingKeepTheMidSurface) {
   // Two 3-voxel planes crossing at 60 degrees along a line across the box's axes: the
   // mid-surface meets on the true line and scores at least the SCVD's.
@@ -45,7 +57,11 @@ TEST(SurfaceMesherChoiceTest, TwoPlanesCrossingKeepTheMidSurface) {
     const Vec3 p = Vec3(x, y, z) - c;
     return std::abs(Dot(p, a)) <= 1.5 || std::abs(Dot(p, b)) <= 1.5;
   });
-  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r, RunPipelineOnPhase(AutoMesher(4), Phase(set)));
+  Stages stages;
+  SM_ASSERT_OK_AND_ASSIGN(PipelineReport r,
+                          RunPipelineOnPhase(AutoMesher(4), Phase(set), Progress(&stages, "")));
+  // Without the extraction the mid-surface's separation runs as stages of its own, planned.
+  EXPECT_EQ(stages.seen, PlannedStages(AutoMesher(4)));
   ASSERT_TRUE(r.surface->mesher_choice.has_value());
   const MesherChoiceStats& choice = *r.surface->mesher_choice;
   EXPECT_TRUE(choice.kept_mid);

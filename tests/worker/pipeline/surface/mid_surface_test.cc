@@ -229,6 +229,28 @@ TEST(MidSurfaceTest, AJunctionEndingInsideTheBoxFoldsNoChartOverItself) {
   EXPECT_LT(area, 1.6 * n * n);
 }
 
+TEST(MidSurfaceTest, SheetsEndingInsideTheBoxEndTheirJunctionWhereTheyEnd) {
+  // Two 4-voxel slabs crossing at right angles, both ending 10 voxels inside the box (y in
+  // [10, 53]): the junction line and every triangle stop where the sheets do. A line run on
+  // to the box left flaps with no aperture reaching the faces y = -0.5 and y = 63.5 (the
+  // planar junction phantom at r = 5: 25 triangles beyond its slabs).
+  const int n = 64;
+  const VoxelSet set = ShapeSet(Dims{n, n, n}, [=](double x, double y, double z) {
+    if (y < 10 || y > 53 || x < 10 || x > 53 || z < 10 || z > 53) return false;
+    return (z >= 30 && z <= 33) || (x >= 30 && x <= 33);
+  });
+  auto mid = BuildMidSurface(set, Pieces(set));
+  ASSERT_TRUE(mid.ok()) << mid.status();
+  ASSERT_FALSE(mid->junctions.empty());
+  double lo = n, hi = -1;
+  for (const Vec3& p : mid->mesh.vertices) {
+    lo = std::min(lo, p.y);
+    hi = std::max(hi, p.y);
+  }
+  EXPECT_GT(lo, 10 - 3.5);
+  EXPECT_LT(hi, 53 + 3.5);
+}
+
 TEST(MidSurfacePiecesTest, AFlatSheetStaysWholeAndASteepCrossingAsksSeparation) {
   const int n = 48;
   const Vec3 u = Normalized(Vec3(0.1, -0.7, 0.7));

@@ -116,14 +116,14 @@ TEST(VolumeMesherTest, ByDefaultEachSheetTriangleStaysOneFaceAndTheBoxIsSeeded) 
 TEST(VolumeMesherTest, ASliverPinnedBySheetsSplitsASheetFaceOrEdgeAndTheSheetsStillTile) {
   const TriangleMesh sheets = PhantomJunction();
   const Dims dims{56, 56, 56};
-  // The PLC's wedge opening and edge contacts and the improvement's sheet vertex moves
-  // (tested on their own) would move the sheets here (the edge contacts alone: 11.9
-  // degrees); kept still, the splits are what mends the sliver.
+  // The PLC's wedge opening and edge contacts and the improvement's sheet vertex moves would
+  // move the sheets here (the edge contacts alone: 11.9°); kept still, splits mend it.
   VolumeMeshOptions split;
   split.plc.wedge_degrees = 0;
   split.plc.zip_rims = false;
   split.improve.sheet_move_voxels = 0;
-  split.plc.grading = 0.4;  // the lattice and the improvement this case was built at
+  split.plc.grading = 0.4;  // the lattice, edges and improvement this case was built at
+  split.plc.long_edge_factor = 0;
   split.improve.insert_below_degrees = 50;
   split.improve.insert_again_below_degrees = 40;
   split.sliver_rounds = 0;  // the improvement's splits alone

@@ -373,11 +373,6 @@ LineSet MakeLines(const std::vector<std::unique_ptr<Chart>>& charts_in,
   // Lines along one another (an X's four halves meet pairwise) are one.
   LineSet set;
   std::vector<JunctionLine>& lines = set.lines;
-  // Samples evenly spaced from end to end, so that a line's end on the box is a sample.
-  for (JunctionLine& line : lines) {
-    const double length = line.t1 - line.t0;
-    line.step = length / std::max(1.0, std::round(length / options.sample_step));
-  }
   auto& planes = set.planes;
   auto& thickness = set.thickness;
   std::vector<uint64_t> weight;

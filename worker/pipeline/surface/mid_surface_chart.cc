@@ -316,6 +316,30 @@ void Chart::Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const {
   }
 }
 
+bool Chart::AlongLine(const JunctionLine& line, double i, double j, double h) const {
+  const double t = Dot(Point(i, j, h) - line.point, line.direction);
+  return (t >= line.t0 - 0.5 || OnBoxFace(line.point + line.direction * line.t0)) &&
+         (t <= line.t1 + 0.5 || OnBoxFace(line.point + line.direction * line.t1));
+}
+
+Chart::StripSides Chart::SidesAlong(const ChartCut& cut, const JunctionLine& line) const {
+  StripSides out;
+  for (int32_t i = 0; i < ni_; ++i) {
+    for (int32_t j = 0; j < nj_; ++j) {
+      const ChartColumn* c = At(i, j);
+      if (c == nullptr || c->filled || !AlongLine(line, i, j, c->mid())) continue;
+      const double s = cut.Side(i, j);
+      if (s >= 0) {
+        ++out.kept;
+      } else {
+        ++out.beyond;
+        out.farthest_beyond = std::max(out.farthest_beyond, -s);
+      }
+    }
+  }
+  return out;
+}
+
 std::vector<Index3> Chart::TakeBeyond(const ChartCut& cut) {
   std::vector<Index3> out;
   for (int32_t i = 0; i < ni_; ++i) {
@@ -478,10 +502,16 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
   Grow(static_cast<int32_t>(lo_i), static_cast<int32_t>(lo_j), static_cast<int32_t>(hi_i),
        static_cast<int32_t>(hi_j));
   const ChartCut& here = cuts_.back();
-  // Beyond the line: the other charts' side.
+  // Beyond the line along its extent: the other charts' side. Past an end inside the box
+  // the sheet goes on (a line ending inside a sheet cuts only its strip).
   for (int32_t i = 0; i < ni_; ++i) {
     for (int32_t j = 0; j < nj_; ++j) {
-      if (here.Side(i, j) < kZipGap) Cell(i, j) = ChartColumn{};
+      const ChartColumn& c = Cell(i, j);
+      const double h = c.present ? c.mid() : plane_height(i, j);
+      if (here.Side(i, j) < kZipGap && AlongLine(line, i, j, h)) {
+        Cell(i, j) = ChartColumn{};
+        Cell(i, j).cut_away = true;
+      }
     }
   }
   // Up to the line: the band's columns between the chart and the line, grown from the
@@ -495,7 +525,10 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
     if (s < kZipGap || s > band || !InBox(i, j)) return false;
     const Vec3 p = Point(i, j, plane_height(i, j));
     const double t = Dot(p - line.point, line.direction);
-    return (open0 || t >= line.t0 - 0.5) && (open1 || t <= line.t1 + 0.5);
+    // Short of an end on another line: that line's charts are cut and zipped there.
+    const double end0 = line.node0 ? line.t0 + kZipGap : line.t0 - 0.5;
+    const double end1 = line.node1 ? line.t1 - kZipGap : line.t1 + 0.5;
+    return (open0 || t >= end0) && (open1 || t <= end1);
   };
   std::vector<std::pair<int32_t, int32_t>> front;
   for (int32_t i = 0; i < ni_; ++i) {
@@ -509,7 +542,10 @@ void Chart::Cut(const ChartCut& cut, const JunctionLine& line, double band, cons
     for (const auto& [i, j] : front) {
       for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
         const int32_t a = i + di, b = j + dj;
-        if (a < 0 || b < 0 || a >= ni_ || b >= nj_ || At(a, b) || !in_extent(a, b)) continue;
+        if (a < 0 || b < 0 || a >= ni_ || b >= nj_ || At(a, b) || Cell(a, b).cut_away ||
+            !in_extent(a, b)) {
+          continue;
+        }
         // Only towards the line: a filled column is nearer to it than the one it grew from.
         if (here.Side(a, b) > here.Side(i, j) + 1e-9) continue;
         ChartColumn& c = Cell(a, b);

@@ -21,6 +21,7 @@ namespace sheetmesh {
 struct ChartColumn {
   bool present = false;
   bool filled = false;     // added up to a junction line: its walls the sheet's plane's there
+  bool cut_away = false;   // (not present) beyond a junction line: no fill takes it again
   int32_t lo = 0, hi = 0;  // first and last voxel centre of the run
   double wall_lo = 0, wall_hi = 0;
   double mid() const { return 0.5 * (wall_lo + wall_hi); }
@@ -106,6 +107,14 @@ class Chart {
   double Gap(const ChartCut& cut, const JunctionLine& line) const;
   // The fraction of the chart's columns on each side of `cut` (s >= 0, s < 0).
   void Sides(const ChartCut& cut, uint64_t* kept, uint64_t* beyond) const;
+  // The chart's columns along `line`'s extent (its strip: the line's ends there, open where
+  // an end lies on the box) on each side of `cut`, and how far beyond it the farthest lies
+  // (grid units; 0 when none). A line that ends inside a sheet cuts only its strip.
+  struct StripSides {
+    uint64_t kept = 0, beyond = 0;
+    double farthest_beyond = 0;
+  };
+  StripSides SidesAlong(const ChartCut& cut, const JunctionLine& line) const;
   // The trace of `line` in this chart, keeping the side towards `towards` (a voxel-coordinate
   // point of the chart).
   ChartCut Trace(const JunctionLine& line, int index, const Vec3& towards) const;
@@ -149,6 +158,9 @@ class Chart {
                  const std::function<void(uint32_t, uint32_t, uint32_t)>& emit,
                  TriangleMesh* mesh) const;
   bool HasAll4(int32_t i, int32_t j) const;
+  // Whether grid position (i, j) at height h lies along `line`'s extent (within half a
+  // voxel of its ends; unbounded past an end on the box).
+  bool AlongLine(const JunctionLine& line, double i, double j, double h) const;
   // Whether grid position (i, j) lies within the volume across the axis.
   bool InBox(int32_t i, int32_t j) const;
   // Whether p lies on a face of the box [-0.5, n - 0.5] (a junction line's end there),

@@ -14,14 +14,9 @@
 
 #include "common/types.h"
 #include "worker/pipeline/surface/mid_surface_chart.h"
+#include "worker/pipeline/surface/mid_surface_junction_line.h"
 
 namespace sheetmesh {
-
-struct JunctionOptions {
-  double min_degrees = 4;     // planes closer to parallel meet in no junction (a near contact)
-  uint64_t min_contact = 12;  // voxels of contact for a junction
-  double sample_step = 1.0;   // voxels between the line's vertices
-};
 
 // Finds the junctions of `charts` (their voxels, with `loose` the voxels in none) in a box of
 // `dims`, cuts and fills the charts there, splits those a line runs through (appending the

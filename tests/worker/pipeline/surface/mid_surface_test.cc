@@ -12,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "tests/testing/shapes.h"
 #include "worker/pipeline/extract/extraction.h"
+#include "worker/pipeline/mesh/mesh_topology.h"
 #include "worker/pipeline/mesh/triangle_geometry.h"
 #include "worker/pipeline/voxel/components.h"
 
@@ -249,6 +250,40 @@ TEST(MidSurfaceTest, SheetsEndingInsideTheBoxEndTheirJunctionWhereTheyEnd) {
   }
   EXPECT_GT(lo, 10 - 3.5);
   EXPECT_LT(hi, 53 + 3.5);
+}
+
+TEST(MidSurfaceTest, ATJunctionEndingAtACrossingCutsNoSheetBeyondItsEnd) {
+  // The planar junction phantom at half size: slabs x and z (4 voxels) cross along y, both
+  // ending 6 voxels inside the box, and a slab y stands on both in the quadrant x, z > 33
+  // only, meeting each in a T that ends at the crossing. The half of slab z at x < 30 meets
+  // the T's line only at its end: it stays one sheet, and no chart lies over another (the
+  // T's line cut it along its whole length, and the part beyond, joined to the other
+  // half's, overlapped its neighbours: 40 clashing face pairs at r = 5 on the phantom, 238
+  // at r = 3).
+  const int n = 96;
+  const VoxelSet set = ShapeSet(Dims{n, n, n}, [=](double x, double y, double z) {
+    const bool x_slab = x >= 46 && x <= 49 && y >= 8 && y <= 87 && z >= 8 && z <= 87;
+    const bool z_slab = z >= 46 && z <= 49 && y >= 8 && y <= 87 && x >= 8 && x <= 87;
+    const bool y_slab = y >= 22 && y <= 25 && x > 49 && x <= 87 && z > 49 && z <= 87;
+    return x_slab || z_slab || y_slab;
+  });
+  auto mid = BuildMidSurface(set, Pieces(set));
+  ASSERT_TRUE(mid.ok()) << mid.status();
+  const TriangleMesh& m = mid->mesh;
+  EXPECT_GE(mid->junctions.size(), 3u);
+  // No chart lies over another's (a fold of one chart at a line's end is left: issue 64).
+  int between_pieces = 0;
+  for (const auto& [f, g] : FindSelfIntersections(m, 1000)) {
+    between_pieces += m.face_piece[f] != m.face_piece[g];
+  }
+  EXPECT_EQ(between_pieces, 0);
+  std::set<int32_t> pieces_of_the_half;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    const Vec3 c =
+        (m.vertices[m.faces[f][0]] + m.vertices[m.faces[f][1]] + m.vertices[m.faces[f][2]]) / 3.0;
+    if (std::abs(c.z - 47.5) < 1 && c.x < 42) pieces_of_the_half.insert(m.face_piece[f]);
+  }
+  EXPECT_EQ(pieces_of_the_half.size(), 1u);
 }
 
 TEST(MidSurfacePiecesTest, AFlatSheetStaysWholeAndASteepCrossingAsksSeparation) {

@@ -149,20 +149,23 @@ bool AcrossLine(const std::vector<Index3>& voxels, const Chart& chart, const Jun
   return 2 * across_count > voxels.size();
 }
 
-// What a split takes beyond a line, as parts: the voxels within `core` of the line (where
-// two sheets' voxels are one: the junction's, and the cut fills the chart up to the line), and
+// What a split takes beyond a line, as parts: the voxels within `core` of the line along its
+// extent and `merge` past its ends (where two sheets' voxels are one: the junction's, and the
+// cut fills the chart up to the line; farther past the ends the sheet goes on whole), and
 // the 6-connected components of the others (a separation's part may hold a strip along the
 // line and a patch of a sheet far from it, joined only through the junction). The first
 // part is the near voxels.
 constexpr size_t kMinPart = 32;  // voxels: a smaller part beyond a line is the junction's
 
 std::vector<std::vector<Index3>> PartsBeyond(std::vector<Index3> voxels, const JunctionLine& line,
-                                             double core, const Dims& dims) {
+                                             double core, double merge, const Dims& dims) {
   std::vector<std::vector<Index3>> parts(1);
   absl::flat_hash_map<uint64_t, uint32_t> far;
   std::vector<Index3> kept;
   for (const Index3& p : voxels) {
-    if (line.Distance2(Vec3(p.x, p.y, p.z)) <= core * core) {
+    const Vec3 q(p.x, p.y, p.z);
+    const double t = Dot(q - line.point, line.direction);
+    if (line.Distance2(q) <= core * core && t >= line.t0 - merge && t <= line.t1 + merge) {
       parts[0].push_back(p);
     } else {
       far.emplace(VoxelKey(p, dims), static_cast<uint32_t>(kept.size()));
@@ -288,7 +291,8 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         // Otherwise its parts beyond the junction's core (where the two sheets' voxels are
         // one), each a sheet.
         const double core = std::min(merge, 0.5 * thick / std::max(0.1, sine) + 1.5);
-        std::vector<std::vector<Index3>> parts = PartsBeyond(std::move(rest), line, core, dims);
+        std::vector<std::vector<Index3>> parts =
+            PartsBeyond(std::move(rest), line, core, merge, dims);
         for (size_t q = 0; q < parts.size(); ++q) {
           std::vector<Index3>& part = parts[q];
           // A part within the merge of the line is the merge's (as a rest would be).

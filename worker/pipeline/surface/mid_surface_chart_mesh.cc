@@ -157,9 +157,13 @@ void Chart::ZipToLine(std::vector<std::pair<double, uint32_t>> rim, const Juncti
   // end stays open rather than fanning to the end sample over the chart's own columns.
   // So does a rim that lies off the line (a curved sheet whose trace of a straight junction
   // runs away from it): the strip spans only the gap the cut left.
+  // At an end on another line the rim's corner there is that line's to zip (zipped to both,
+  // the two strips folded over each other).
   const double reach = line.step + 1.0;
+  const double from = line.node0 ? line.t0 + kZipGap : line.t0 - reach;
+  const double to = line.node1 ? line.t1 - kZipGap : line.t1 + reach;
   auto along = [&](const std::pair<double, uint32_t>& e) {
-    if (e.first < line.t0 - reach || e.first > line.t1 + reach) return false;
+    if (e.first < from || e.first > to) return false;
     return line.Distance2(mesh->vertices[e.second]) <= kZipSpan * kZipSpan;
   };
   if (!std::all_of(rim.begin(), rim.end(), along)) {

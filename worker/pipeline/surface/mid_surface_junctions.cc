@@ -53,11 +53,9 @@ bool MergeBand(int32_t c, const std::vector<std::unique_ptr<Chart>>& charts,
       // them (its angles to the two sum to theirs, as the plane of two merged sheets' voxels
       // does, however unequal their shares); a sheet that meets two others steeply is a
       // sheet of a network, whatever the angles between, and one along either is that
-      // sheet's continuation (within a tenth of their angle of it: the plane of a small
-      // patch of a sheet beside a steep crossing is fitted a few degrees off).
+      // sheet's continuation.
       const bool nearer = between > off + 3;
-      const bool in_pencil =
-          to_p + to_q <= between + 3 && std::min(to_p, to_q) >= std::max(2.0, 0.1 * between);
+      const bool in_pencil = to_p + to_q <= between + 3 && std::min(to_p, to_q) >= 2;
       // A small one in the pencil is a band however unequal its angles to the two (at 30
       // degrees the merge of two sheets may lie 24 degrees from one of them).
       const bool small = 4 * own <= std::min(charts[partners[p]]->info().voxels,

@@ -9,6 +9,8 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/container/flat_hash_set.h"
 #include "worker/pipeline/surface/mid_surface_lines.h"
+#include "worker/pipeline/voxel/components.h"
+#include "worker/pipeline/voxel/voxel_set.h"
 
 namespace sheetmesh {
 namespace {
@@ -147,6 +149,15 @@ bool AcrossLine(const std::vector<Index3>& voxels, const Chart& chart, const Jun
   return 2 * across_count > voxels.size();
 }
 
+// The squared distance from `line` of the farthest of `voxels` (0: none).
+double Farthest2(const std::vector<Index3>& voxels, const JunctionLine& line) {
+  double farthest2 = 0;
+  for (const Index3& p : voxels) {
+    farthest2 = std::max(farthest2, line.Distance2(Vec3(p.x, p.y, p.z)));
+  }
+  return farthest2;
+}
+
 // What a split takes beyond a line, as parts: the voxels within `core` of the line along its
 // extent and `merge` past its ends (where two sheets' voxels are one: the junction's, and the
 // cut fills the chart up to the line; farther past the ends the sheet goes on whole), and
@@ -158,42 +169,25 @@ constexpr size_t kMinPart = 32;  // voxels: a smaller part beyond a line is the 
 std::vector<std::vector<Index3>> PartsBeyond(std::vector<Index3> voxels, const JunctionLine& line,
                                              double core, double merge, const Dims& dims) {
   std::vector<std::vector<Index3>> parts(1);
-  absl::flat_hash_map<uint64_t, uint32_t> far;
-  std::vector<Index3> kept;
+  std::vector<Index3> far;
   for (const Index3& p : voxels) {
     const Vec3 q(p.x, p.y, p.z);
     const double t = Dot(q - line.point, line.direction);
-    if (line.Distance2(q) <= core * core && t >= line.t0 - merge && t <= line.t1 + merge) {
-      parts[0].push_back(p);
-    } else {
-      far.emplace(VoxelKey(p, dims), static_cast<uint32_t>(kept.size()));
-      kept.push_back(p);
-    }
+    (line.Distance2(q) <= core * core && t >= line.t0 - merge && t <= line.t1 + merge ? parts[0]
+                                                                                      : far)
+        .push_back(p);
   }
-  std::vector<uint8_t> seen(kept.size(), 0);
-  for (uint32_t s = 0; s < kept.size(); ++s) {
-    if (seen[s]) continue;
-    std::vector<Index3> part;
-    std::vector<uint32_t> stack = {s};
-    seen[s] = 1;
-    while (!stack.empty()) {
-      const Index3 p = kept[stack.back()];
-      stack.pop_back();
-      part.push_back(p);
-      for (const auto& st : kStep) {
-        const Index3 q{p.x + st[0], p.y + st[1], p.z + st[2]};
-        if (q.x < 0 || q.y < 0 || q.z < 0 || q.x >= dims.nx || q.y >= dims.ny || q.z >= dims.nz) {
-          continue;
-        }
-        const auto it = far.find(VoxelKey(q, dims));
-        if (it != far.end() && !seen[it->second]) {
-          seen[it->second] = 1;
-          stack.push_back(it->second);
-        }
-      }
-    }
-    parts.push_back(std::move(part));
+  const VoxelSet set = VoxelSet::FromIndices(dims, std::move(far));
+  const absl::StatusOr<Components> components = LabelComponents(set, Connectivity::k6);
+  if (!components.ok()) {  // cannot fail without a progress to cancel: one part then
+    parts.push_back(set.ToIndices());
+    return parts;
   }
+  const std::vector<uint32_t> label = components->VoxelLabels(set);
+  parts.resize(1 + components->count());
+  set.ForEachVoxel([&](uint64_t index, int32_t x, int32_t y, int32_t z) {
+    parts[1 + label[index]].push_back({x, y, z});
+  });
   return parts;
 }
 
@@ -278,11 +272,7 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         for (double t : set.thickness[l]) thick = std::max(thick, t);
         const double sine = std::sin(line.degrees * kPi / 180);
         const double merge = MergeWidth(thick, sine);
-        double farthest2 = 0;
-        for (const Index3& p : rest) {
-          farthest2 = std::max(farthest2, line.Distance2(Vec3(p.x, p.y, p.z)));
-        }
-        if (farthest2 <= merge * merge) {
+        if (Farthest2(rest, line) <= merge * merge) {
           loose.insert(loose.end(), rest.begin(), rest.end());
           continue;
         }
@@ -294,11 +284,7 @@ std::vector<JunctionLine> JoinCharts(std::vector<std::unique_ptr<Chart>>* charts
         for (size_t q = 0; q < parts.size(); ++q) {
           std::vector<Index3>& part = parts[q];
           // A part within the merge of the line is the merge's (as a rest would be).
-          double part_farthest2 = 0;
-          for (const Index3& p : part) {
-            part_farthest2 = std::max(part_farthest2, line.Distance2(Vec3(p.x, p.y, p.z)));
-          }
-          if (q == 0 || part.size() < kMinPart || part_farthest2 <= merge * merge) {
+          if (q == 0 || part.size() < kMinPart || Farthest2(part, line) <= merge * merge) {
             loose.insert(loose.end(), part.begin(), part.end());
             continue;
           }

@@ -77,9 +77,7 @@ std::map<std::pair<int32_t, int32_t>, Contact> FindContacts(
     const Dims& dims) {
   const std::vector<std::unique_ptr<Chart>>* charts = &charts_in;
   auto key = [&](const Index3& p) { return VoxelKey(p, dims); };
-  auto inside = [&](const Index3& p) {
-    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < dims.nx && p.y < dims.ny && p.z < dims.nz;
-  };
+  auto inside = [&](const Index3& p) { return dims.Contains(p.x, p.y, p.z); };
   // Who holds each voxel: a chart, or none of them (-1).
   absl::flat_hash_map<uint64_t, int32_t> owner;
   for (size_t c = 0; c < charts->size(); ++c) {
